@@ -1,0 +1,737 @@
+//! Anura3D geometry files (`.GOM`, `.GOM_stageN`): reader and writer.
+//!
+//! Layout: a version line `### Anura3D_20XX ###`, then `$$KEYWORD` lines each followed by their
+//! data lines (free format), then `$$FINISH`. Node `i` is the i-th line after `$$STARTNODES`,
+//! element `e` the e-th after `$$STARTELEMCON` (both 1-based). See DESIGN §2.1.
+//!
+//! The reader validates counts and id ranges and reports the file, line and section of the
+//! first problem. The writer keeps the section order of the model, writes one blank between
+//! values, integers as integers and reals in shortest round-trip form, so `read(write(m)) == m`.
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Location, Result};
+use crate::model::{
+    classify, Body, Dimension, ElementType, Kind, LineEnding, Model, Refs, Section, Table, Token,
+};
+use crate::text::{self, Lines, Tokens};
+
+/// One raw section found by the first pass: keyword and the byte range of its data lines.
+struct RawSection<'a> {
+    keyword: &'a str,
+    /// Line number of the `$$KEYWORD` line.
+    line: usize,
+    /// The data lines (up to the next keyword).
+    body: &'a [u8],
+    /// Line number of the first data line.
+    body_line: usize,
+}
+
+/// Sections larger than this many bytes are parsed in parallel chunks.
+const PARALLEL_BYTES: usize = 1 << 20;
+
+/// Reads a GOM from memory. `file` names the input in error messages.
+pub fn read(data: &[u8], file: &str) -> Result<Model> {
+    let at = |line: usize, section: Option<&str>| Location::new(file, line, section);
+    let mut lines = Lines::new(data, 1);
+
+    // Version line.
+    let (version, line_ending) = loop {
+        let Some((n, l)) = lines.next() else {
+            return Err(Error::format(at(0, None), "empty file: expected a GOM version line such as '### Anura3D_2021 ###'"));
+        };
+        if text::is_blank(l) {
+            continue;
+        }
+        let t = text::trim(l);
+        if !t.starts_with(b"###") {
+            return Err(Error::format(
+                at(n, None),
+                format!(
+                    "expected a GOM version line such as '### Anura3D_2021 ###', found {}",
+                    text::show(l)
+                ),
+            ));
+        }
+        let crlf = data.get(lines.offset().wrapping_sub(2)) == Some(&b'\r');
+        let ending = if crlf { LineEnding::CrLf } else { LineEnding::Lf };
+        break (String::from_utf8_lossy(t).into_owned(), ending);
+    };
+
+    // First pass: split into sections.
+    let mut raw: Vec<RawSection> = Vec::new();
+    let mut finished = false;
+    while let Some((n, l)) = lines.next() {
+        let t = text::trim(l);
+        if let Some(kw) = t.strip_prefix(b"$$") {
+            let keyword = std::str::from_utf8(kw).map_err(|_| {
+                Error::format(at(n, None), "keyword is not valid UTF-8 text")
+            })?;
+            if let Some(prev) = raw.last_mut() {
+                let start = prev.body.as_ptr() as usize - data.as_ptr() as usize;
+                let end = lines.offset() - l.len() - line_terminator_len(data, lines.offset());
+                prev.body = &data[start..end.max(start)];
+            }
+            if keyword == "FINISH" {
+                finished = true;
+                break;
+            }
+            if keyword.is_empty() {
+                return Err(Error::format(at(n, None), "empty keyword '$$'"));
+            }
+            raw.push(RawSection {
+                keyword,
+                line: n,
+                body: &data[lines.offset()..],
+                body_line: n + 1,
+            });
+        } else if raw.is_empty() && !text::is_blank(l) {
+            return Err(Error::format(
+                at(n, None),
+                format!("expected a '$$KEYWORD' line, found {}", text::show(l)),
+            ));
+        }
+    }
+    if !finished {
+        let section = raw.last().map(|s| format!("$${}", s.keyword));
+        return Err(Error::format(
+            at(lines.line_number(), section.as_deref()),
+            "file ends without '$$FINISH' (truncated?)",
+        ));
+    }
+
+    // Geometry header first: it decides how the other sections are read.
+    let find = |k: &str| raw.iter().find(|s| s.keyword == k);
+    let need = |k: &str| {
+        find(k).ok_or_else(|| {
+            Error::format(at(0, None), format!("required section '$${k}' is missing"))
+        })
+    };
+    let dim_raw = need("DIMENSION")?;
+    let dim_value = single_value(dim_raw, file)?;
+    let dimension = Dimension::from_keyword(&dim_value).ok_or_else(|| {
+        Error::format(
+            at(dim_raw.body_line, Some("$$DIMENSION")),
+            format!("expected 2D-plane_strain, 2D-axisymmetric, 3D-cartesian or 3D-cylindric, found '{dim_value}'"),
+        )
+    })?;
+    let et_raw = need("ELEMENTTYPE")?;
+    let et_value = single_value(et_raw, file)?;
+    let element_type = ElementType::from_keyword(&et_value).ok_or_else(|| Error::Unsupported {
+        at: at(et_raw.body_line, Some("$$ELEMENTTYPE")),
+        message: format!(
+            "element type '{et_value}' (supported: triangular_3-noded, tetrahedral_4-noded, tetrahedral_old)"
+        ),
+    })?;
+    if element_type.dim() != dimension.coords() {
+        return Err(Error::invalid(
+            at(et_raw.body_line, Some("$$ELEMENTTYPE")),
+            format!(
+                "element type {} does not fit dimension {}",
+                element_type.keyword(),
+                dimension.keyword()
+            ),
+        ));
+    }
+    let counters = need("STARTCOUNTERS")?;
+    let (n_el, n_nodes) = read_counters(counters, file)?;
+
+    let mut coords = Vec::new();
+    let mut connectivity = Vec::new();
+    let mut sections = Vec::with_capacity(raw.len());
+    let mut seen_geometry = [false; 5];
+    for s in &raw {
+        let kind = classify(s.keyword, element_type);
+        let sec = Some(format!("$${}", s.keyword));
+        let sec = sec.as_deref();
+        let body = match kind {
+            Kind::Dimension => once(&mut seen_geometry[0], s, file, Body::Dimension)?,
+            Kind::ElementType => once(&mut seen_geometry[1], s, file, Body::ElementType)?,
+            Kind::Counters => once(&mut seen_geometry[2], s, file, Body::Counters)?,
+            Kind::Nodes => {
+                let b = once(&mut seen_geometry[3], s, file, Body::Nodes)?;
+                coords = read_reals(s, dimension.coords(), n_nodes, file)?;
+                b
+            }
+            Kind::Connectivity => {
+                let b = once(&mut seen_geometry[4], s, file, Body::Connectivity)?;
+                connectivity = read_ids(s, element_type.nodes(), n_el, n_nodes, file)?;
+                b
+            }
+            Kind::PerElement => {
+                let rows = read_rows(s, file, None, n_el, n_nodes)?;
+                if rows.len() != n_el {
+                    return Err(Error::invalid(
+                        at(s.line, sec),
+                        format!(
+                            "expected one line per element ({n_el} from $$STARTCOUNTERS), found {}",
+                            rows.len()
+                        ),
+                    ));
+                }
+                Body::PerElement(rows)
+            }
+            Kind::Counted(refs) => {
+                let (count, count_line, rest, rest_line) = count_line(s, file)?;
+                let sub = RawSection {
+                    keyword: s.keyword,
+                    line: s.line,
+                    body: rest,
+                    body_line: rest_line,
+                };
+                let rows = read_rows(&sub, file, Some(refs), n_el, n_nodes)?;
+                if rows.len() != count {
+                    return Err(Error::invalid(
+                        at(count_line, sec),
+                        format!("count line says {count} entries, found {}", rows.len()),
+                    ));
+                }
+                Body::Table {
+                    counted: true,
+                    refs,
+                    rows,
+                }
+            }
+            Kind::Uncounted(refs) => Body::Table {
+                counted: false,
+                refs,
+                rows: read_rows(s, file, Some(refs), n_el, n_nodes)?,
+            },
+            Kind::Text => Body::Text(text_lines(s.body)),
+            Kind::Opaque => Body::Opaque(text_lines(s.body)),
+        };
+        sections.push(Section {
+            keyword: s.keyword.to_string(),
+            body,
+        });
+    }
+    if !seen_geometry[3] || !seen_geometry[4] {
+        let k = if seen_geometry[3] { "STARTELEMCON" } else { "STARTNODES" };
+        return Err(Error::format(
+            at(0, None),
+            format!("required section '$${k}' is missing"),
+        ));
+    }
+    Ok(Model {
+        version,
+        line_ending,
+        dimension,
+        element_type,
+        coords,
+        connectivity,
+        sections,
+    })
+}
+
+/// Length of the terminator of the line that ends right before `offset`.
+fn line_terminator_len(data: &[u8], offset: usize) -> usize {
+    if offset == 0 || data[offset - 1] != b'\n' {
+        0
+    } else if offset >= 2 && data[offset - 2] == b'\r' {
+        2
+    } else {
+        1
+    }
+}
+
+fn once(seen: &mut bool, s: &RawSection, file: &str, body: Body) -> Result<Body> {
+    if *seen {
+        return Err(Error::format(
+            Location::new(file, s.line, Some(&format!("$${}", s.keyword))),
+            "section appears twice",
+        ));
+    }
+    *seen = true;
+    Ok(body)
+}
+
+/// The first non-blank data line of a one-value section, trimmed.
+fn single_value(s: &RawSection, file: &str) -> Result<String> {
+    Lines::new(s.body, s.body_line)
+        .find(|(_, l)| !text::is_blank(l))
+        .map(|(_, l)| String::from_utf8_lossy(text::trim(l)).into_owned())
+        .ok_or_else(|| {
+            Error::format(
+                Location::new(file, s.line, Some(&format!("$${}", s.keyword))),
+                "expected a value line after the keyword",
+            )
+        })
+}
+
+fn read_counters(s: &RawSection, file: &str) -> Result<(usize, usize)> {
+    let at = |n| Location::new(file, n, Some("$$STARTCOUNTERS"));
+    let (n, l) = Lines::new(s.body, s.body_line)
+        .find(|(_, l)| !text::is_blank(l))
+        .ok_or_else(|| Error::format(at(s.line), "expected a line 'NEl NNodes'"))?;
+    let mut t = Tokens::new(l);
+    let mut next = |what: &str| {
+        let tok = t.next().ok_or_else(|| {
+            Error::format(at(n), format!("expected 'NEl NNodes', missing {what}"))
+        })?;
+        text::parse_u32(tok).map(|v| v as usize).ok_or_else(|| {
+            Error::format(
+                at(n),
+                format!("expected {what} as a non-negative integer, found {}", text::show(tok)),
+            )
+        })
+    };
+    let n_el = next("the element count")?;
+    let n_nodes = next("the node count")?;
+    Ok((n_el, n_nodes))
+}
+
+/// Splits a counted section into its count and the rows that follow.
+fn count_line<'a>(s: &RawSection<'a>, file: &str) -> Result<(usize, usize, &'a [u8], usize)> {
+    let mut lines = Lines::new(s.body, s.body_line);
+    for (n, l) in lines.by_ref() {
+        if text::is_blank(l) {
+            continue;
+        }
+        let mut toks = Tokens::new(l);
+        let tok = toks.next().unwrap_or_default();
+        let count = text::parse_u32(tok).ok_or_else(|| {
+            Error::format(
+                Location::new(file, n, Some(&format!("$${}", s.keyword))),
+                format!("expected the number of entries, found {}", text::show(l)),
+            )
+        })?;
+        let off = lines.offset();
+        return Ok((count as usize, n, &s.body[off..], n + 1));
+    }
+    Err(Error::format(
+        Location::new(file, s.line, Some(&format!("$${}", s.keyword))),
+        "expected a count line after the keyword",
+    ))
+}
+
+fn text_lines(body: &[u8]) -> Vec<String> {
+    Lines::new(body, 1)
+        .filter(|(_, l)| !text::is_blank(l))
+        .map(|(_, l)| {
+            let end = l.iter().rposition(|&b| !text::is_separator(b)).map_or(0, |e| e + 1);
+            String::from_utf8_lossy(&l[..end]).into_owned()
+        })
+        .collect()
+}
+
+/// Splits `body` into pieces of about `PARALLEL_BYTES` at line boundaries, each with the number
+/// of its first line.
+fn chunks(body: &[u8], first_line: usize) -> Vec<(&[u8], usize)> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    let mut line = first_line;
+    while start < body.len() {
+        let mut end = (start + PARALLEL_BYTES).min(body.len());
+        if end < body.len() {
+            end = match memchr::memchr(b'\n', &body[end..]) {
+                Some(i) => end + i + 1,
+                None => body.len(),
+            };
+        }
+        let piece = &body[start..end];
+        out.push((piece, line));
+        line += memchr::memchr_iter(b'\n', piece).count();
+        start = end;
+    }
+    out
+}
+
+/// Reads `count` lines of exactly `width` reals (node coordinates).
+fn read_reals(s: &RawSection, width: usize, count: usize, file: &str) -> Result<Vec<f64>> {
+    let sec = format!("$${}", s.keyword);
+    let parse_piece = |(piece, first): (&[u8], usize)| -> Result<Vec<f64>> {
+        let mut out = Vec::with_capacity(piece.len() / 8);
+        for (n, l) in Lines::new(piece, first) {
+            let before = out.len();
+            for tok in Tokens::new(l) {
+                let v = text::parse_real(tok).ok_or_else(|| {
+                    Error::format(
+                        Location::new(file, n, Some(&sec)),
+                        format!("expected a coordinate (real number), found {}", text::show(tok)),
+                    )
+                })?;
+                out.push(v);
+            }
+            let got = out.len() - before;
+            if got != 0 && got != width {
+                return Err(Error::format(
+                    Location::new(file, n, Some(&sec)),
+                    format!("expected {width} coordinates per node, found {got}"),
+                ));
+            }
+        }
+        Ok(out)
+    };
+    let parts: Vec<Vec<f64>> = if s.body.len() > PARALLEL_BYTES {
+        chunks(s.body, s.body_line)
+            .into_par_iter()
+            .map(parse_piece)
+            .collect::<Result<_>>()?
+    } else {
+        vec![parse_piece((s.body, s.body_line))?]
+    };
+    let out = concat(parts);
+    if out.len() != count * width {
+        return Err(Error::invalid(
+            Location::new(file, s.line, Some(&sec)),
+            format!(
+                "expected {count} nodes (from $$STARTCOUNTERS), found {}",
+                out.len() / width
+            ),
+        ));
+    }
+    Ok(out)
+}
+
+/// Reads `count` lines of exactly `width` 1-based node ids, returned 0-based.
+fn read_ids(
+    s: &RawSection,
+    width: usize,
+    count: usize,
+    n_nodes: usize,
+    file: &str,
+) -> Result<Vec<u32>> {
+    let sec = format!("$${}", s.keyword);
+    let parse_piece = |(piece, first): (&[u8], usize)| -> Result<Vec<u32>> {
+        let mut out = Vec::with_capacity(piece.len() / 5);
+        for (n, l) in Lines::new(piece, first) {
+            let before = out.len();
+            for tok in Tokens::new(l) {
+                let id = text::parse_u32(tok).ok_or_else(|| {
+                    Error::format(
+                        Location::new(file, n, Some(&sec)),
+                        format!("expected a node id (positive integer), found {}", text::show(tok)),
+                    )
+                })?;
+                if id == 0 || id as usize > n_nodes {
+                    return Err(Error::invalid(
+                        Location::new(file, n, Some(&sec)),
+                        format!("node id {id} out of range 1..={n_nodes}"),
+                    ));
+                }
+                out.push(id - 1);
+            }
+            let got = out.len() - before;
+            if got != 0 && got != width {
+                return Err(Error::format(
+                    Location::new(file, n, Some(&sec)),
+                    format!("expected {width} node ids per element, found {got}"),
+                ));
+            }
+        }
+        Ok(out)
+    };
+    let parts: Vec<Vec<u32>> = if s.body.len() > PARALLEL_BYTES {
+        chunks(s.body, s.body_line)
+            .into_par_iter()
+            .map(parse_piece)
+            .collect::<Result<_>>()?
+    } else {
+        vec![parse_piece((s.body, s.body_line))?]
+    };
+    let out = concat(parts);
+    if out.len() != count * width {
+        return Err(Error::invalid(
+            Location::new(file, s.line, Some(&sec)),
+            format!(
+                "expected {count} elements (from $$STARTCOUNTERS), found {}",
+                out.len() / width
+            ),
+        ));
+    }
+    Ok(out)
+}
+
+fn concat<T: Copy>(parts: Vec<Vec<T>>) -> Vec<T> {
+    if parts.len() == 1 {
+        return parts.into_iter().next().expect("one part");
+    }
+    let mut out = Vec::with_capacity(parts.iter().map(Vec::len).sum());
+    for p in parts {
+        out.extend_from_slice(&p);
+    }
+    out
+}
+
+/// Reads every non-blank line as a row of tokens; when `refs` is given, checks that the id
+/// columns are integers in range.
+fn read_rows(
+    s: &RawSection,
+    file: &str,
+    refs: Option<Refs>,
+    n_el: usize,
+    n_nodes: usize,
+) -> Result<Table> {
+    let sec = format!("$${}", s.keyword);
+    let parse_piece = |(piece, first): (&[u8], usize)| -> Result<Table> {
+        let mut t = Table::with_capacity(piece.len() / 4, 2);
+        for (n, l) in Lines::new(piece, first) {
+            if text::is_blank(l) {
+                continue;
+            }
+            let row: Vec<Token> = Tokens::new(l).map(Token::parse).collect();
+            if let Some(refs) = refs {
+                check_ids(&row, refs, n_el, n_nodes)
+                    .map_err(|m| Error::invalid(Location::new(file, n, Some(&sec)), m))?;
+            }
+            t.push_row(row);
+        }
+        Ok(t)
+    };
+    if s.body.len() > PARALLEL_BYTES {
+        let parts: Vec<Table> = chunks(s.body, s.body_line)
+            .into_par_iter()
+            .map(parse_piece)
+            .collect::<Result<_>>()?;
+        let mut t = Table::with_capacity(parts.iter().map(Table::len).sum(), 2);
+        for p in parts {
+            for r in p.rows() {
+                t.push_row(r.iter().cloned());
+            }
+        }
+        Ok(t)
+    } else {
+        parse_piece((s.body, s.body_line))
+    }
+}
+
+fn check_ids(row: &[Token], refs: Refs, n_el: usize, n_nodes: usize) -> Result<(), String> {
+    let (cols, max, what) = match refs {
+        Refs::Nodes(k) => (k, n_nodes, "node"),
+        Refs::Element => (1, n_el, "element"),
+    };
+    if row.len() < cols {
+        return Err(format!(
+            "expected at least {cols} {what} id(s) at the start of the line, found {} value(s)",
+            row.len()
+        ));
+    }
+    for t in &row[..cols] {
+        match t {
+            Token::Int(i) if *i >= 1 && (*i as usize) <= max => {}
+            Token::Int(i) => return Err(format!("{what} id {i} out of range 1..={max}")),
+            other => {
+                return Err(format!(
+                    "expected a {what} id (integer), found {}",
+                    token_text(other)
+                ))
+            }
+        }
+    }
+    Ok(())
+}
+
+fn token_text(t: &Token) -> String {
+    let mut v = Vec::new();
+    t.push_to(&mut v);
+    format!("'{}'", String::from_utf8_lossy(&v))
+}
+
+/// Writes a model in GOM layout.
+pub fn write(model: &Model) -> Vec<u8> {
+    let eol = model.line_ending.bytes();
+    let estimate = model.coords.len() * 20 + model.connectivity.len() * 8 + 4096;
+    let mut out = Vec::with_capacity(estimate);
+    out.extend_from_slice(model.version.as_bytes());
+    out.extend_from_slice(eol);
+    for s in &model.sections {
+        out.extend_from_slice(b"$$");
+        out.extend_from_slice(s.keyword.as_bytes());
+        out.extend_from_slice(eol);
+        match &s.body {
+            Body::Dimension => line(&mut out, model.dimension.keyword().as_bytes(), eol),
+            Body::ElementType => line(&mut out, model.element_type.keyword().as_bytes(), eol),
+            Body::Counters => {
+                text::push_int(&mut out, model.element_count());
+                out.push(b' ');
+                text::push_int(&mut out, model.node_count());
+                out.extend_from_slice(eol);
+            }
+            Body::Nodes => write_nodes(&mut out, model, eol),
+            Body::Connectivity => write_connectivity(&mut out, model, eol),
+            Body::Table { counted, rows, .. } => {
+                if *counted {
+                    text::push_int(&mut out, rows.len());
+                    out.extend_from_slice(eol);
+                }
+                write_rows(&mut out, rows, eol);
+            }
+            Body::PerElement(rows) => write_rows(&mut out, rows, eol),
+            Body::Text(lines) | Body::Opaque(lines) => {
+                for l in lines {
+                    line(&mut out, l.as_bytes(), eol);
+                }
+            }
+        }
+    }
+    out.extend_from_slice(b"$$FINISH");
+    out.extend_from_slice(eol);
+    out
+}
+
+fn line(out: &mut Vec<u8>, l: &[u8], eol: &[u8]) {
+    out.extend_from_slice(l);
+    out.extend_from_slice(eol);
+}
+
+/// Rows per parallel formatting task.
+const WRITE_CHUNK: usize = 1 << 15;
+
+fn write_nodes(out: &mut Vec<u8>, model: &Model, eol: &[u8]) {
+    let d = model.dimension.coords();
+    let fmt = |nodes: &[f64]| {
+        let mut buf = Vec::with_capacity(nodes.len() * 20);
+        for node in nodes.chunks_exact(d) {
+            for (j, &c) in node.iter().enumerate() {
+                if j > 0 {
+                    buf.push(b' ');
+                }
+                text::push_real(&mut buf, c);
+            }
+            buf.extend_from_slice(eol);
+        }
+        buf
+    };
+    if model.coords.len() > WRITE_CHUNK * d {
+        let parts: Vec<Vec<u8>> = model.coords.par_chunks(WRITE_CHUNK * d).map(fmt).collect();
+        parts.iter().for_each(|p| out.extend_from_slice(p));
+    } else {
+        out.extend_from_slice(&fmt(&model.coords));
+    }
+}
+
+fn write_connectivity(out: &mut Vec<u8>, model: &Model, eol: &[u8]) {
+    let w = model.element_type.nodes();
+    let fmt = |ids: &[u32]| {
+        let mut buf = Vec::with_capacity(ids.len() * 8);
+        for el in ids.chunks_exact(w) {
+            for (j, &id) in el.iter().enumerate() {
+                if j > 0 {
+                    buf.push(b' ');
+                }
+                text::push_int(&mut buf, id + 1);
+            }
+            buf.extend_from_slice(eol);
+        }
+        buf
+    };
+    if model.connectivity.len() > WRITE_CHUNK * w {
+        let parts: Vec<Vec<u8>> = model
+            .connectivity
+            .par_chunks(WRITE_CHUNK * w)
+            .map(fmt)
+            .collect();
+        parts.iter().for_each(|p| out.extend_from_slice(p));
+    } else {
+        out.extend_from_slice(&fmt(&model.connectivity));
+    }
+}
+
+fn write_rows(out: &mut Vec<u8>, rows: &Table, eol: &[u8]) {
+    let fmt = |range: std::ops::Range<usize>| {
+        let mut buf = Vec::with_capacity(range.len() * 8);
+        for i in range {
+            for (j, t) in rows.row(i).iter().enumerate() {
+                if j > 0 {
+                    buf.push(b' ');
+                }
+                t.push_to(&mut buf);
+            }
+            buf.extend_from_slice(eol);
+        }
+        buf
+    };
+    let n = rows.len();
+    if n > WRITE_CHUNK {
+        let parts: Vec<Vec<u8>> = (0..n.div_ceil(WRITE_CHUNK))
+            .into_par_iter()
+            .map(|c| fmt(c * WRITE_CHUNK..((c + 1) * WRITE_CHUNK).min(n)))
+            .collect();
+        parts.iter().for_each(|p| out.extend_from_slice(p));
+    } else {
+        out.extend_from_slice(&fmt(0..n));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SMALL: &str = "### Anura3D_2021 ###   \n$$DIMENSION\n2D-plane_strain\n$$ELEMENTTYPE\ntriangular_3-noded\n$$FORMULATION\nsingle-point\n$$STARTCOUNTERS\n2 4\n$$STARTNODES\n0 0\n1.0 0\n1 1\n0 1\n$$STARTELEMCON\n1 2 3\n1 3 4\n$$START_FIXITY_LINE_SOLID\n2\n1 1 1\n2 0 1\n$$START_BODY_CONTACT_2D\n1\n2 1 \"Column\" 0.2 0.0 \"NAN\" 0.0 0.0\n$$NUMBER_OF_MATERIALS\n1\n$$MATERIAL_INDEX\n1\n$$MATERIAL_NAME\nSandy soil\n$$MATERIAL_TYPE\ndry_material\n$$YOUNG_MODULUS\n1.0E+004\n$$STARTELMMAT\n1\n1\n$$START_NUMBER_OF_MATERIAL_POINTS\n3 0\n3 0\n\n$$FINISH\n";
+
+    #[test]
+    fn reads_a_small_model() {
+        let m = read(SMALL.as_bytes(), "small.gom").unwrap();
+        assert_eq!(m.version, "### Anura3D_2021 ###");
+        assert_eq!(m.node_count(), 4);
+        assert_eq!(m.element_count(), 2);
+        assert_eq!(m.element(1), &[0, 2, 3]);
+        assert_eq!(m.node(1), &[1.0, 0.0]);
+        let fix = m.table("START_FIXITY_LINE_SOLID").unwrap();
+        assert_eq!(fix.row(1), &[Token::Int(2), Token::Int(0), Token::Int(1)]);
+        let mats = m.materials();
+        assert_eq!(mats.len(), 1);
+        assert_eq!(mats[0].name, "Sandy soil");
+        assert_eq!(mats[0].get_f64("YOUNG_MODULUS"), Some(1e4));
+        assert_eq!(m.material_points_per_element(), Some(vec![3, 3]));
+        assert_eq!(m.first_unremappable(), None);
+    }
+
+    #[test]
+    fn round_trips_and_writes_deterministically() {
+        let m = read(SMALL.as_bytes(), "small.gom").unwrap();
+        let w1 = write(&m);
+        let m2 = read(&w1, "w1").unwrap();
+        assert_eq!(m, m2);
+        assert_eq!(w1, write(&m2));
+        let s = String::from_utf8(w1).unwrap();
+        assert!(s.starts_with("### Anura3D_2021 ###\n$$DIMENSION\n2D-plane_strain\n"));
+        assert!(s.contains("$$STARTNODES\n0.0 0.0\n1.0 0.0\n"));
+        assert!(s.contains("$$START_FIXITY_LINE_SOLID\n2\n1 1 1\n2 0 1\n"));
+        assert!(s.contains("2 1 \"Column\" 0.2 0.0 \"NAN\" 0.0 0.0\n"));
+        assert!(s.ends_with("3 0\n$$FINISH\n"));
+    }
+
+    #[test]
+    fn keeps_crlf() {
+        let crlf = SMALL.replace('\n', "\r\n");
+        let m = read(crlf.as_bytes(), "crlf.gom").unwrap();
+        assert_eq!(m.line_ending, LineEnding::CrLf);
+        let w = write(&m);
+        assert!(w.ends_with(b"$$FINISH\r\n"));
+        assert_eq!(read(&w, "w").unwrap(), m);
+    }
+
+    fn err(src: &str) -> String {
+        read(src.as_bytes(), "bad.gom").unwrap_err().to_string()
+    }
+
+    #[test]
+    fn errors_name_file_line_and_section() {
+        let e = err(&SMALL.replace("1 3 4\n", "1 3 9\n"));
+        assert!(e.contains("bad.gom:17 (in $$STARTELEMCON): node id 9 out of range"), "{e}");
+        let e = err(&SMALL.replace("1.0 0\n", "1.0 x\n"));
+        assert!(e.contains("bad.gom:12 (in $$STARTNODES)"), "{e}");
+        let e = err(&SMALL.replace("$$FINISH\n", ""));
+        assert!(e.contains("without '$$FINISH'"), "{e}");
+        let e = err(&SMALL.replace("2\n1 1 1\n", "3\n1 1 1\n"));
+        assert!(e.contains("count line says 3 entries, found 2"), "{e}");
+        let e = err(&SMALL.replace("2 0 1\n", "5 0 1\n"));
+        assert!(e.contains("node id 5 out of range 1..=4"), "{e}");
+        let e = err(&SMALL.replace("2 4\n", "3 4\n"));
+        assert!(e.contains("expected 3 elements"), "{e}");
+        let e = err(&SMALL.replace("triangular_3-noded", "quadrilateral_4-noded"));
+        assert!(e.contains("unsupported"), "{e}");
+        let e = err("hello\n");
+        assert!(e.contains("version line"), "{e}");
+    }
+
+    #[test]
+    fn unknown_sections_are_kept_and_flagged() {
+        let src = SMALL.replace("$$FINISH", "$$SOMETHING_NEW\n3 4 5\n$$FINISH");
+        let m = read(src.as_bytes(), "x").unwrap();
+        assert_eq!(m.first_unremappable(), Some("SOMETHING_NEW"));
+        let w = String::from_utf8(write(&m)).unwrap();
+        assert!(w.contains("$$SOMETHING_NEW\n3 4 5\n$$FINISH"));
+    }
+}

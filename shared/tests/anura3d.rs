@@ -1,0 +1,102 @@
+//! Compatibility with Anura3D's own benchmark inputs. The folder comes from the environment
+//! variable `ANURA3D_BENCHMARKS` (e.g. `../shared/anura3d`); without it these tests pass
+//! without checking anything and say so.
+
+use std::path::{Path, PathBuf};
+
+use mpm_shared::cps::Cps;
+use mpm_shared::gom;
+
+fn benchmarks() -> Option<PathBuf> {
+    match std::env::var_os("ANURA3D_BENCHMARKS") {
+        Some(p) if Path::new(&p).is_dir() => Some(PathBuf::from(p)),
+        _ => {
+            eprintln!("ANURA3D_BENCHMARKS not set: skipping the Anura3D compatibility checks");
+            None
+        }
+    }
+}
+
+fn files(root: &Path, pred: &dyn Fn(&str) -> bool) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![root.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if pred(&p.file_name().unwrap().to_string_lossy()) {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+pub fn is_gom(name: &str) -> bool {
+    name.ends_with(".GOM") || name.contains(".GOM_stage")
+}
+
+#[test]
+fn every_gom_round_trips() {
+    let Some(root) = benchmarks() else { return };
+    let goms = files(&root, &is_gom);
+    assert!(goms.len() >= 80, "expected the 87 GOM files, found {}", goms.len());
+    for p in &goms {
+        let data = std::fs::read(p).unwrap();
+        let name = p.display().to_string();
+        let m = gom::read(&data, &name).unwrap_or_else(|e| panic!("{e}"));
+        assert!(m.element_count() > 0 && m.node_count() > 0, "{name}");
+        let w = gom::write(&m);
+        let m2 = gom::read(&w, "written").unwrap_or_else(|e| panic!("{name}: rewritten: {e}"));
+        assert_eq!(m, m2, "{name}: model changed in the round trip");
+        assert_eq!(w, gom::write(&m2), "{name}: write is not deterministic");
+        let text = String::from_utf8(w).unwrap();
+        assert!(text.starts_with("### Anura3D_20"), "{name}");
+        assert!(text.trim_end().ends_with("$$FINISH"), "{name}");
+        // Coordinates and ids are kept exactly, whatever their spelling in the input.
+        let original: Vec<f64> = m.coords.clone();
+        assert_eq!(original, m2.coords);
+    }
+}
+
+#[test]
+fn tet10_mid_edge_nodes_sit_at_edge_midpoints_and_orientation_is_positive() {
+    let Some(root) = benchmarks() else { return };
+    let mut checked = 0;
+    for p in files(&root, &is_gom) {
+        let m = gom::read(&std::fs::read(&p).unwrap(), "x").unwrap();
+        if m.element_type != mpm_shared::ElementType::Tet10 {
+            continue;
+        }
+        for e in 0..m.element_count() {
+            let el = m.element(e);
+            let x = |k: usize| m.node(el[k] as usize);
+            for (mid, (a, b)) in [(4, (0, 1)), (5, (1, 2)), (6, (0, 2)), (7, (0, 3)), (8, (1, 3)), (9, (2, 3))] {
+                for d in 0..3 {
+                    let want = 0.5 * (x(a)[d] + x(b)[d]);
+                    assert!((x(mid)[d] - want).abs() < 1e-6, "{}: element {} node {}", p.display(), e + 1, mid + 1);
+                }
+            }
+            let det = mpm_shared::msh::tet_det(x(0), x(2), x(3), x(1));
+            assert!(det > 0.0, "{}: element {} has det J = {det}", p.display(), e + 1);
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000, "checked {checked} tetrahedra");
+}
+
+#[test]
+fn every_cps_reads_and_types() {
+    let Some(root) = benchmarks() else { return };
+    let cpss = files(&root, &|n: &str| n.contains(".CPS"));
+    assert!(cpss.len() >= 80);
+    for p in cpss {
+        let name = p.display().to_string();
+        let (cps, _warnings) = Cps::read(&std::fs::read(&p).unwrap(), &name).unwrap_or_else(|e| panic!("{e}"));
+        let s = cps.settings().unwrap_or_else(|e| panic!("{e}"));
+        assert!(s.load_steps >= 1 && s.courant > 0.0, "{name}");
+        assert_eq!(Cps::read(&cps.write(), "w").unwrap().0.entries, cps.entries, "{name}");
+    }
+}
