@@ -117,38 +117,118 @@ pub struct Settings {
 
 /// Keys Anura3D's CPS files are known to carry (the 2024 template and the benchmark suite).
 const KNOWN: &[&str] = &[
-    "NUMBER_OF_LOADSTEPS", "TIME_PER_LOADSTEP", "TOTAL_TIME", "COURANT_NUMBER",
-    "COMPUTATION_METHOD", "GRAVITY_ACCELERATION", "GRAVITY_VECTOR", "GRAVITY_LOAD",
-    "SOLID_TRACTION", "SOLID_TRACTION_B", "LIQUID_PRESSURE", "LIQUID_PRESSURE_B", "GAS_PRESSURE",
-    "GAS_PRESSURE_B", "HYDRAULIC_HEAD", "APPLY_SEEPAGE_FACE", "APPLY_INFILTRATION",
-    "PRESCRIBED_VELOCITY", "QUASISTATIC_CONVERGENCE", "TOLERATED_ERROR_SOLID",
-    "TOLERATED_ERROR_LIQUID", "MAXIMUM_TIME_STEPS", "APPLY_IMPLICIT_QUASISTATIC", "QS_MIN_ITER",
-    "QS_MAX_ITER", "QS_UPSCALE_FACTOR", "QS_DOWNSCALE_FACTOR", "QS_MAX_ITERATIONS", "APPLY_ZLS",
-    "APPLY_ARC_LENGTH_CONTROL", "APPLY_ENHANCED_STIFFNESS", "QS_STIFFNESS_INCREASE_FACTOR",
-    "QS_DANGLING_ELEMENT_FACTOR", "APPLY_STEP_EXTRAPOLATION", "APPLY_JACOBIAN_CHECK",
-    "LIMIT_JACOBIAN_CHANGE", "APPLY_AUTOMATIC_LOADSTEPPING", "INCR_MULTIPLIER_SOILA",
-    "INCR_MULTIPLIER_GRAVITY", "INCR_MULTIPLIER_WATERA", "INCR_MULTIPLIER_GASA", "MASS_SCALING",
-    "HOMOGENEOUS_LOCAL_DAMPING", "BULK_VISCOSITY_DAMPING", "APPLY_DIVERGENCE_CHECK",
-    "SKIP_CONVECTION_TIME_STEPS", "AUTOMATIC_SKIP_CONVECTION", "MINIMUM_DETERMINANT_RATIO",
-    "NUMBER_OF_THREADS", "APPLY_NODE_DATA_AB", "CONTACT_FORMULATION",
-    "APPLY_CONTACT_MESH_BOUNDARY", "APPLY_TRACTION_CONTACT", "MONOPILE_SLICE_CONTACT",
-    "APPLY_CONTACT_VELOCITY_SCALING", "VELOCITY_SCALING_FACTOR",
-    "APPLY_CONTACT_NORMAL_CORRECTION", "NUMBER_OF_CORRECTED_NORMALS", "NODE_NORMAL_DATA",
-    "EXCAVATION", "CONSTRUCTION", "FILL_EMPTY_ELEMENTS", "FIX_SOLID_SKELETON", "STRAIN_SMOOTHING",
-    "APPLY_STRAIN_SMOOTHING_LIQUID_TWOLAYERFORM", "LIQUID_CAVITATION", "PERMEABILITY_UPDATE",
-    "INTRINSIC_PERMEABILITY", "GRAIN_SIZE_DIAMETER", "ERGUN_CONSTANTS",
-    "NO_TENSILE_STRESS_LIQUID_MP_WITH_LIQUID_STATUS", "MAXIMUM_POROSITY", "DETECT_FREE_SURFACE",
-    "RESET_DISPLACEMENTS", "REMOVE_FIXITIES", "K0_PROCEDURE", "MP_STRESS_INITIALIZATION_FROMFILE",
-    "SUBMERGED_CALCULATION", "APPLY_OBJECTIVE_STRESS", "DEGREE_OF_FILLING",
-    "NUMBER_OF_ACTIVE_ELEMENTS", "VISUALIZATION_OPTION", "OUTPUT_NUMBER_OF_MATERIAL_POINTS",
-    "OUTPUT_MATERIAL_POINTS", "INITIAL_WATER_PRESSURE", "APPLY_POROSITY_UPDATE",
-    "INITIAL_VELOCITY", "APPLY_SMOOTHENING_LIQUID_PRESSURE_INCREMENT", "SURFACE_ELEVATION",
-    "INITIAL_VERTICAL_LOAD_K0", "OUTPUT_NUMBER_OF_NODES", "OUTPUT_NODES", "APPLY_MATERIAL_UPDATE",
-    "K0_MAX_SUCTION", "THICKNESS_SOIL_LAYERS", "QUICK_CHECK_OUTPUT", "PARTICLE_FILE_COUNTER",
-    "OUTPUT_EACH_LOAD_STEP", "OUTPUT_DEBUG_DATA", "OUTPUT_CURVES_INTERVAL", "OUTPUT_BASIC_DATA",
-    "NUMBER_SOIL_LAYERS", "MASS_FACTOR_VIRTUAL_PARTICLES", "LIQUID_SURFACE", "GROUP_THRESHOLD",
-    "FILE_COUNTER", "FEEDBACK_LEVEL", "CONSIDERED_LOAD_K0", "APPLY_EMPTY_ELEMENTS",
-    "UPDATE_PERMEABILITY_DARCY_ERGUN", "STAGE", "APPLY_BULK_VISCOSITY_DAMPING",
+    "NUMBER_OF_LOADSTEPS",
+    "TIME_PER_LOADSTEP",
+    "TOTAL_TIME",
+    "COURANT_NUMBER",
+    "COMPUTATION_METHOD",
+    "GRAVITY_ACCELERATION",
+    "GRAVITY_VECTOR",
+    "GRAVITY_LOAD",
+    "SOLID_TRACTION",
+    "SOLID_TRACTION_B",
+    "LIQUID_PRESSURE",
+    "LIQUID_PRESSURE_B",
+    "GAS_PRESSURE",
+    "GAS_PRESSURE_B",
+    "HYDRAULIC_HEAD",
+    "APPLY_SEEPAGE_FACE",
+    "APPLY_INFILTRATION",
+    "PRESCRIBED_VELOCITY",
+    "QUASISTATIC_CONVERGENCE",
+    "TOLERATED_ERROR_SOLID",
+    "TOLERATED_ERROR_LIQUID",
+    "MAXIMUM_TIME_STEPS",
+    "APPLY_IMPLICIT_QUASISTATIC",
+    "QS_MIN_ITER",
+    "QS_MAX_ITER",
+    "QS_UPSCALE_FACTOR",
+    "QS_DOWNSCALE_FACTOR",
+    "QS_MAX_ITERATIONS",
+    "APPLY_ZLS",
+    "APPLY_ARC_LENGTH_CONTROL",
+    "APPLY_ENHANCED_STIFFNESS",
+    "QS_STIFFNESS_INCREASE_FACTOR",
+    "QS_DANGLING_ELEMENT_FACTOR",
+    "APPLY_STEP_EXTRAPOLATION",
+    "APPLY_JACOBIAN_CHECK",
+    "LIMIT_JACOBIAN_CHANGE",
+    "APPLY_AUTOMATIC_LOADSTEPPING",
+    "INCR_MULTIPLIER_SOILA",
+    "INCR_MULTIPLIER_GRAVITY",
+    "INCR_MULTIPLIER_WATERA",
+    "INCR_MULTIPLIER_GASA",
+    "MASS_SCALING",
+    "HOMOGENEOUS_LOCAL_DAMPING",
+    "BULK_VISCOSITY_DAMPING",
+    "APPLY_DIVERGENCE_CHECK",
+    "SKIP_CONVECTION_TIME_STEPS",
+    "AUTOMATIC_SKIP_CONVECTION",
+    "MINIMUM_DETERMINANT_RATIO",
+    "NUMBER_OF_THREADS",
+    "APPLY_NODE_DATA_AB",
+    "CONTACT_FORMULATION",
+    "APPLY_CONTACT_MESH_BOUNDARY",
+    "APPLY_TRACTION_CONTACT",
+    "MONOPILE_SLICE_CONTACT",
+    "APPLY_CONTACT_VELOCITY_SCALING",
+    "VELOCITY_SCALING_FACTOR",
+    "APPLY_CONTACT_NORMAL_CORRECTION",
+    "NUMBER_OF_CORRECTED_NORMALS",
+    "NODE_NORMAL_DATA",
+    "EXCAVATION",
+    "CONSTRUCTION",
+    "FILL_EMPTY_ELEMENTS",
+    "FIX_SOLID_SKELETON",
+    "STRAIN_SMOOTHING",
+    "APPLY_STRAIN_SMOOTHING_LIQUID_TWOLAYERFORM",
+    "LIQUID_CAVITATION",
+    "PERMEABILITY_UPDATE",
+    "INTRINSIC_PERMEABILITY",
+    "GRAIN_SIZE_DIAMETER",
+    "ERGUN_CONSTANTS",
+    "NO_TENSILE_STRESS_LIQUID_MP_WITH_LIQUID_STATUS",
+    "MAXIMUM_POROSITY",
+    "DETECT_FREE_SURFACE",
+    "RESET_DISPLACEMENTS",
+    "REMOVE_FIXITIES",
+    "K0_PROCEDURE",
+    "MP_STRESS_INITIALIZATION_FROMFILE",
+    "SUBMERGED_CALCULATION",
+    "APPLY_OBJECTIVE_STRESS",
+    "DEGREE_OF_FILLING",
+    "NUMBER_OF_ACTIVE_ELEMENTS",
+    "VISUALIZATION_OPTION",
+    "OUTPUT_NUMBER_OF_MATERIAL_POINTS",
+    "OUTPUT_MATERIAL_POINTS",
+    "INITIAL_WATER_PRESSURE",
+    "APPLY_POROSITY_UPDATE",
+    "INITIAL_VELOCITY",
+    "APPLY_SMOOTHENING_LIQUID_PRESSURE_INCREMENT",
+    "SURFACE_ELEVATION",
+    "INITIAL_VERTICAL_LOAD_K0",
+    "OUTPUT_NUMBER_OF_NODES",
+    "OUTPUT_NODES",
+    "APPLY_MATERIAL_UPDATE",
+    "K0_MAX_SUCTION",
+    "THICKNESS_SOIL_LAYERS",
+    "QUICK_CHECK_OUTPUT",
+    "PARTICLE_FILE_COUNTER",
+    "OUTPUT_EACH_LOAD_STEP",
+    "OUTPUT_DEBUG_DATA",
+    "OUTPUT_CURVES_INTERVAL",
+    "OUTPUT_BASIC_DATA",
+    "NUMBER_SOIL_LAYERS",
+    "MASS_FACTOR_VIRTUAL_PARTICLES",
+    "LIQUID_SURFACE",
+    "GROUP_THRESHOLD",
+    "FILE_COUNTER",
+    "FEEDBACK_LEVEL",
+    "CONSIDERED_LOAD_K0",
+    "APPLY_EMPTY_ELEMENTS",
+    "UPDATE_PERMEABILITY_DARCY_ERGUN",
+    "STAGE",
+    "APPLY_BULK_VISCOSITY_DAMPING",
 ];
 
 impl Cps {
@@ -158,7 +238,10 @@ impl Cps {
         let at = |n: usize, s: Option<&str>| Location::new(file, n, s);
         let (version, line_ending) = loop {
             let Some((n, l)) = lines.next() else {
-                return Err(Error::format(at(0, None), "empty file: expected a version line such as '### Anura3D_2021 ###'"));
+                return Err(Error::format(
+                    at(0, None),
+                    "empty file: expected a version line such as '### Anura3D_2021 ###'",
+                ));
             };
             if text::is_blank(l) {
                 continue;
@@ -167,13 +250,20 @@ impl Cps {
             if !t.starts_with(b"###") {
                 return Err(Error::format(
                     at(n, None),
-                    format!("expected a CPS version line such as '### Anura3D_2021 ###', found {}", text::show(l)),
+                    format!(
+                        "expected a CPS version line such as '### Anura3D_2021 ###', found {}",
+                        text::show(l)
+                    ),
                 ));
             }
             let crlf = data.get(lines.offset().wrapping_sub(2)) == Some(&b'\r');
             break (
                 String::from_utf8_lossy(t).into_owned(),
-                if crlf { LineEnding::CrLf } else { LineEnding::Lf },
+                if crlf {
+                    LineEnding::CrLf
+                } else {
+                    LineEnding::Lf
+                },
             );
         };
         let mut entries: Vec<Entry> = Vec::new();
@@ -198,7 +288,8 @@ impl Cps {
                             .iter()
                             .rposition(|&b| !text::is_separator(b))
                             .map_or(0, |e| e + 1);
-                        e.lines.push(String::from_utf8_lossy(&l[..end]).into_owned());
+                        e.lines
+                            .push(String::from_utf8_lossy(&l[..end]).into_owned());
                     }
                     None => {
                         return Err(Error::format(
@@ -210,7 +301,10 @@ impl Cps {
             }
         }
         if !ended {
-            return Err(Error::format(at(0, None), "file ends without '$$END' (truncated?)"));
+            return Err(Error::format(
+                at(0, None),
+                "file ends without '$$END' (truncated?)",
+            ));
         }
         let mut warnings = Vec::new();
         let mut warned: Vec<&str> = Vec::new();
@@ -240,7 +334,11 @@ impl Cps {
     }
 
     fn at(&self, e: &Entry, offset: usize) -> Location {
-        Location::new(&self.file, e.line + offset, Some(&format!("$${}", e.keyword)))
+        Location::new(
+            &self.file,
+            e.line + offset,
+            Some(&format!("$${}", e.keyword)),
+        )
     }
 
     fn tokens<'a>(&self, e: &'a Entry) -> Result<Vec<&'a [u8]>> {
@@ -258,7 +356,10 @@ impl Cps {
         let toks = self.tokens(e)?;
         let t = toks.first().copied().unwrap_or_default();
         text::parse_real(t).ok_or_else(|| {
-            Error::format(self.at(e, 1), format!("expected a number, found {}", text::show(t)))
+            Error::format(
+                self.at(e, 1),
+                format!("expected a number, found {}", text::show(t)),
+            )
         })
     }
 
@@ -267,15 +368,19 @@ impl Cps {
             return Ok(None);
         };
         let toks = self.tokens(e)?;
-        let flag = toks.first().and_then(|t| text::parse_int(t)).ok_or_else(|| {
-            Error::format(self.at(e, 1), "expected '0|1 value'")
-        })?;
+        let flag = toks
+            .first()
+            .and_then(|t| text::parse_int(t))
+            .ok_or_else(|| Error::format(self.at(e, 1), "expected '0|1 value'"))?;
         if flag == 0 {
             return Ok(None);
         }
-        let v = toks.get(1).and_then(|t| text::parse_real(t)).ok_or_else(|| {
-            Error::format(self.at(e, 1), "expected '1 value' with a numeric value")
-        })?;
+        let v = toks
+            .get(1)
+            .and_then(|t| text::parse_real(t))
+            .ok_or_else(|| {
+                Error::format(self.at(e, 1), "expected '1 value' with a numeric value")
+            })?;
         Ok(Some(v))
     }
 
@@ -295,14 +400,22 @@ impl Cps {
             return Ok(Multiplier::Off);
         };
         let toks = self.tokens(e)?;
-        let word = toks.first().map(|t| t.to_ascii_lowercase()).unwrap_or_default();
+        let word = toks
+            .first()
+            .map(|t| t.to_ascii_lowercase())
+            .unwrap_or_default();
         let num = |i: usize| -> Result<f64> {
-            toks.get(i).and_then(|t| text::parse_real(t)).ok_or_else(|| {
-                Error::format(
-                    self.at(e, 1),
-                    format!("expected '{} start final' with two numbers", String::from_utf8_lossy(&word)),
-                )
-            })
+            toks.get(i)
+                .and_then(|t| text::parse_real(t))
+                .ok_or_else(|| {
+                    Error::format(
+                        self.at(e, 1),
+                        format!(
+                            "expected '{} start final' with two numbers",
+                            String::from_utf8_lossy(&word)
+                        ),
+                    )
+                })
         };
         match word.as_slice() {
             b"off" => Ok(Multiplier::Off),
@@ -331,8 +444,13 @@ impl Cps {
     pub fn settings(&self) -> Result<Settings> {
         let load_steps = self.real("NUMBER_OF_LOADSTEPS", 1.0)?;
         if load_steps < 1.0 || load_steps.fract() != 0.0 {
-            let e = self.get("NUMBER_OF_LOADSTEPS").expect("present when not default");
-            return Err(Error::invalid(self.at(e, 1), "expected a positive whole number of load steps"));
+            let e = self
+                .get("NUMBER_OF_LOADSTEPS")
+                .expect("present when not default");
+            return Err(Error::invalid(
+                self.at(e, 1),
+                "expected a positive whole number of load steps",
+            ));
         }
         let method = match self.get("COMPUTATION_METHOD") {
             None => Method::MpmMixed,
@@ -355,7 +473,10 @@ impl Cps {
                 }
                 for (i, tok) in t.iter().take(3).enumerate() {
                     v[i] = text::parse_real(tok).ok_or_else(|| {
-                        Error::format(self.at(e, 1), format!("expected a number, found {}", text::show(tok)))
+                        Error::format(
+                            self.at(e, 1),
+                            format!("expected a number, found {}", text::show(tok)),
+                        )
                     })?;
                 }
                 v
@@ -398,7 +519,10 @@ impl Cps {
             Some(e) => {
                 let t = self.tokens(e)?;
                 let v = t.first().and_then(|t| text::parse_int(t)).ok_or_else(|| {
-                    Error::format(self.at(e, 1), "expected the number of output material points")
+                    Error::format(
+                        self.at(e, 1),
+                        "expected the number of output material points",
+                    )
                 })?;
                 Some(v.max(0) as usize)
             }
@@ -424,7 +548,10 @@ impl Cps {
                 let id = text::parse_u32(tok).filter(|&v| v > 0).ok_or_else(|| {
                     Error::format(
                         self.at(e, i + 1),
-                        format!("expected a material point id (positive integer), found {}", text::show(tok)),
+                        format!(
+                            "expected a material point id (positive integer), found {}",
+                            text::show(tok)
+                        ),
                     )
                 })?;
                 ids.push(id);
@@ -434,7 +561,10 @@ impl Cps {
             if ids.len() < n {
                 return Err(Error::format(
                     self.at(e, 0),
-                    format!("$$OUTPUT_NUMBER_OF_MATERIAL_POINTS says {n}, found {} ids", ids.len()),
+                    format!(
+                        "$$OUTPUT_NUMBER_OF_MATERIAL_POINTS says {n}, found {} ids",
+                        ids.len()
+                    ),
                 ));
             }
         }
@@ -492,7 +622,13 @@ mod tests {
         assert_eq!(s.method, Method::MpmMp);
         assert_eq!(s.gravity_load, Multiplier::Off);
         assert_eq!(s.solid_traction, Multiplier::Step { value: 1.0 });
-        assert_eq!(s.prescribed_velocity, Multiplier::Linear { start: 0.0, end: 2.0 });
+        assert_eq!(
+            s.prescribed_velocity,
+            Multiplier::Linear {
+                start: 0.0,
+                end: 2.0
+            }
+        );
         assert_eq!(s.local_damping, Some(0.05));
         assert_eq!(s.mass_scaling, None);
         assert_eq!(s.output_material_points, vec![3, 5]);
@@ -505,8 +641,14 @@ mod tests {
         assert_eq!(String::from_utf8(cps.write()).unwrap(), SRC);
         cps.set_output_material_points(&[7, 1, 9]);
         let (again, _) = Cps::read(&cps.write(), "b").unwrap();
-        assert_eq!(again.settings().unwrap().output_material_points, vec![7, 1, 9]);
-        assert_eq!(again.get("OUTPUT_NUMBER_OF_MATERIAL_POINTS").unwrap().lines, vec!["3"]);
+        assert_eq!(
+            again.settings().unwrap().output_material_points,
+            vec![7, 1, 9]
+        );
+        assert_eq!(
+            again.get("OUTPUT_NUMBER_OF_MATERIAL_POINTS").unwrap().lines,
+            vec!["3"]
+        );
     }
 
     #[test]
@@ -514,8 +656,13 @@ mod tests {
         let bad = SRC.replace("0.5\n", "fast\n");
         let (cps, _) = Cps::read(bad.as_bytes(), "a").unwrap();
         let e = cps.settings().unwrap_err().to_string();
-        assert!(e.contains("a:7 (in $$COURANT_NUMBER): expected a number, found 'fast'"), "{e}");
-        let e = Cps::read(b"### x ###\n$$COURANT_NUMBER\n1\n", "t").unwrap_err().to_string();
+        assert!(
+            e.contains("a:7 (in $$COURANT_NUMBER): expected a number, found 'fast'"),
+            "{e}"
+        );
+        let e = Cps::read(b"### x ###\n$$COURANT_NUMBER\n1\n", "t")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("without '$$END'"), "{e}");
     }
 }

@@ -38,7 +38,10 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
     // Version line.
     let (version, line_ending) = loop {
         let Some((n, l)) = lines.next() else {
-            return Err(Error::format(at(0, None), "empty file: expected a GOM version line such as '### Anura3D_2021 ###'"));
+            return Err(Error::format(
+                at(0, None),
+                "empty file: expected a GOM version line such as '### Anura3D_2021 ###'",
+            ));
         };
         if text::is_blank(l) {
             continue;
@@ -54,7 +57,11 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
             ));
         }
         let crlf = data.get(lines.offset().wrapping_sub(2)) == Some(&b'\r');
-        let ending = if crlf { LineEnding::CrLf } else { LineEnding::Lf };
+        let ending = if crlf {
+            LineEnding::CrLf
+        } else {
+            LineEnding::Lf
+        };
         break (String::from_utf8_lossy(t).into_owned(), ending);
     };
 
@@ -64,9 +71,8 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
     while let Some((n, l)) = lines.next() {
         let t = text::trim(l);
         if let Some(kw) = t.strip_prefix(b"$$") {
-            let keyword = std::str::from_utf8(kw).map_err(|_| {
-                Error::format(at(n, None), "keyword is not valid UTF-8 text")
-            })?;
+            let keyword = std::str::from_utf8(kw)
+                .map_err(|_| Error::format(at(n, None), "keyword is not valid UTF-8 text"))?;
             if let Some(prev) = raw.last_mut() {
                 let start = prev.body.as_ptr() as usize - data.as_ptr() as usize;
                 let end = lines.offset() - l.len() - line_terminator_len(data, lines.offset());
@@ -206,7 +212,11 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
         });
     }
     if !seen_geometry[3] || !seen_geometry[4] {
-        let k = if seen_geometry[3] { "STARTELEMCON" } else { "STARTNODES" };
+        let k = if seen_geometry[3] {
+            "STARTELEMCON"
+        } else {
+            "STARTNODES"
+        };
         return Err(Error::format(
             at(0, None),
             format!("required section '$${k}' is missing"),
@@ -271,7 +281,10 @@ fn read_counters(s: &RawSection, file: &str) -> Result<(usize, usize)> {
         text::parse_u32(tok).map(|v| v as usize).ok_or_else(|| {
             Error::format(
                 at(n),
-                format!("expected {what} as a non-negative integer, found {}", text::show(tok)),
+                format!(
+                    "expected {what} as a non-negative integer, found {}",
+                    text::show(tok)
+                ),
             )
         })
     };
@@ -308,7 +321,10 @@ fn text_lines(body: &[u8]) -> Vec<String> {
     Lines::new(body, 1)
         .filter(|(_, l)| !text::is_blank(l))
         .map(|(_, l)| {
-            let end = l.iter().rposition(|&b| !text::is_separator(b)).map_or(0, |e| e + 1);
+            let end = l
+                .iter()
+                .rposition(|&b| !text::is_separator(b))
+                .map_or(0, |e| e + 1);
             String::from_utf8_lossy(&l[..end]).into_owned()
         })
         .collect()
@@ -347,7 +363,10 @@ fn read_reals(s: &RawSection, width: usize, count: usize, file: &str) -> Result<
                 let v = text::parse_real(tok).ok_or_else(|| {
                     Error::format(
                         Location::new(file, n, Some(&sec)),
-                        format!("expected a coordinate (real number), found {}", text::show(tok)),
+                        format!(
+                            "expected a coordinate (real number), found {}",
+                            text::show(tok)
+                        ),
                     )
                 })?;
                 out.push(v);
@@ -400,7 +419,10 @@ fn read_ids(
                 let id = text::parse_u32(tok).ok_or_else(|| {
                     Error::format(
                         Location::new(file, n, Some(&sec)),
-                        format!("expected a node id (positive integer), found {}", text::show(tok)),
+                        format!(
+                            "expected a node id (positive integer), found {}",
+                            text::show(tok)
+                        ),
                     )
                 })?;
                 if id == 0 || id as usize > n_nodes {
@@ -709,7 +731,10 @@ mod tests {
     #[test]
     fn errors_name_file_line_and_section() {
         let e = err(&SMALL.replace("1 3 4\n", "1 3 9\n"));
-        assert!(e.contains("bad.gom:17 (in $$STARTELEMCON): node id 9 out of range"), "{e}");
+        assert!(
+            e.contains("bad.gom:17 (in $$STARTELEMCON): node id 9 out of range"),
+            "{e}"
+        );
         let e = err(&SMALL.replace("1.0 0\n", "1.0 x\n"));
         assert!(e.contains("bad.gom:12 (in $$STARTNODES)"), "{e}");
         let e = err(&SMALL.replace("$$FINISH\n", ""));

@@ -9,6 +9,7 @@
 
 pub mod cps;
 pub mod error;
+pub mod generate;
 pub mod gom;
 pub mod io;
 pub mod model;
@@ -79,7 +80,10 @@ pub fn read_model(path: &std::path::Path) -> Result<Model> {
         }
         Some(f) => f,
         None => {
-            let start = data.iter().position(|&b| !b.is_ascii_whitespace()).unwrap_or(0);
+            let start = data
+                .iter()
+                .position(|&b| !b.is_ascii_whitespace())
+                .unwrap_or(0);
             if data[start..].starts_with(b"$MeshFormat") {
                 Format::Msh
             } else if data[start..].starts_with(b"###") {

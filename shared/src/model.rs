@@ -222,13 +222,21 @@ impl Table {
 
     /// Row `i`.
     pub fn row(&self, i: usize) -> &[Token] {
-        let start = if i == 0 { 0 } else { self.row_ends[i - 1] as usize };
+        let start = if i == 0 {
+            0
+        } else {
+            self.row_ends[i - 1] as usize
+        };
         &self.tokens[start..self.row_ends[i] as usize]
     }
 
     /// Mutable row `i`.
     pub fn row_mut(&mut self, i: usize) -> &mut [Token] {
-        let start = if i == 0 { 0 } else { self.row_ends[i - 1] as usize };
+        let start = if i == 0 {
+            0
+        } else {
+            self.row_ends[i - 1] as usize
+        };
         let end = self.row_ends[i] as usize;
         &mut self.tokens[start..end]
     }
@@ -550,7 +558,10 @@ impl Model {
                     continue;
                 }
             };
-            let value = lines.first().map(|l| l.trim().to_string()).unwrap_or_default();
+            let value = lines
+                .first()
+                .map(|l| l.trim().to_string())
+                .unwrap_or_default();
             if s.keyword == "MATERIAL_INDEX" {
                 out.push(Material {
                     index: value.parse().unwrap_or(0),

@@ -96,7 +96,9 @@ impl ElementSet {
 impl MshMesh {
     /// The element set of Gmsh type `t`, if the file has such elements.
     pub fn set(&self, t: i32) -> Option<&ElementSet> {
-        self.sets.iter().find(|s| s.gmsh_type == t && !s.physical.is_empty())
+        self.sets
+            .iter()
+            .find(|s| s.gmsh_type == t && !s.physical.is_empty())
     }
 
     /// Name of physical group `tag` of dimension `dim`, if named.
@@ -138,10 +140,16 @@ impl<'a> Reader<'a> {
         let mut t = Tokens::new(l);
         for v in out.iter_mut() {
             let tok = t.next().ok_or_else(|| {
-                Error::format(self.at(n), format!("expected {what}, found {}", text::show(l)))
+                Error::format(
+                    self.at(n),
+                    format!("expected {what}, found {}", text::show(l)),
+                )
             })?;
             *v = text::parse_int(tok).ok_or_else(|| {
-                Error::format(self.at(n), format!("expected {what}, found {}", text::show(l)))
+                Error::format(
+                    self.at(n),
+                    format!("expected {what}, found {}", text::show(l)),
+                )
             })?;
         }
         Ok((n, out))
@@ -179,7 +187,10 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
     if text::trim(l) != b"$MeshFormat" {
         return Err(Error::format(
             Location::new(file, n, None),
-            format!("expected '$MeshFormat' (a Gmsh .msh file), found {}", text::show(l)),
+            format!(
+                "expected '$MeshFormat' (a Gmsh .msh file), found {}",
+                text::show(l)
+            ),
         ));
     }
     let (n, l) = r.line("the format line")?;
@@ -193,7 +204,10 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                 message: "binary .msh; save it as ASCII (gmsh -save_all -format msh41 with Mesh.Binary=0)".into(),
             });
         }
-        return Err(Error::format(r.at(n), format!("expected 'version 0 8', found {}", text::show(l))));
+        return Err(Error::format(
+            r.at(n),
+            format!("expected 'version 0 8', found {}", text::show(l)),
+        ));
     }
     let v4 = match version.as_str() {
         "2.2" | "2" | "2.0" | "2.1" => false,
@@ -213,7 +227,7 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
     };
     let mut tag_index: BTreeMap<u64, u32> = BTreeMap::new();
     let mut dense_tags: Option<u64> = None; // tags 1..=N in order: index = tag - 1
-    // Physical tags per (dim, entity) in 4.1 files.
+                                            // Physical tags per (dim, entity) in 4.1 files.
     let mut entity_physical: BTreeMap<(usize, i32), i32> = BTreeMap::new();
     let mut raw_elements: Vec<(i32, i32, Vec<u64>, usize)> = Vec::new(); // (type, physical, node tags, line)
     let mut have_nodes = false;
@@ -236,7 +250,9 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                     let tag = toks.get(1).and_then(|t| text::parse_int(t));
                     match (ok, dim, tag) {
                         (true, Some(d), Some(tag)) => {
-                            let name = String::from_utf8_lossy(toks[2]).trim_matches('"').to_string();
+                            let name = String::from_utf8_lossy(toks[2])
+                                .trim_matches('"')
+                                .to_string();
                             mesh.physical_names.push(PhysicalName {
                                 dim: d as usize,
                                 tag: tag as i32,
@@ -255,18 +271,33 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
             }
             b"$Entities" if v4 => {
                 r.section = "$Entities";
-                let (_, [np, nc, ns, nv]) = r.numbers::<4>("'numPoints numCurves numSurfaces numVolumes'")?;
+                let (_, [np, nc, ns, nv]) =
+                    r.numbers::<4>("'numPoints numCurves numSurfaces numVolumes'")?;
                 for (dim, count) in [(0usize, np), (1, nc), (2, ns), (3, nv)] {
                     for _ in 0..count {
                         let (n, l) = r.line("an entity")?;
                         let toks: Vec<&[u8]> = Tokens::new(l).collect();
                         // point: tag x y z nphys phys...; others: tag 6 box values nphys phys...
                         let k = if dim == 0 { 4 } else { 7 };
-                        let bad = || Error::format(r.at(n), format!("malformed entity line {}", text::show(l)));
-                        let tag = toks.first().and_then(|t| text::parse_int(t)).ok_or_else(bad)?;
-                        let nphys = toks.get(k).and_then(|t| text::parse_int(t)).ok_or_else(bad)?;
+                        let bad = || {
+                            Error::format(
+                                r.at(n),
+                                format!("malformed entity line {}", text::show(l)),
+                            )
+                        };
+                        let tag = toks
+                            .first()
+                            .and_then(|t| text::parse_int(t))
+                            .ok_or_else(bad)?;
+                        let nphys = toks
+                            .get(k)
+                            .and_then(|t| text::parse_int(t))
+                            .ok_or_else(bad)?;
                         if nphys > 0 {
-                            let p = toks.get(k + 1).and_then(|t| text::parse_int(t)).ok_or_else(bad)?;
+                            let p = toks
+                                .get(k + 1)
+                                .and_then(|t| text::parse_int(t))
+                                .ok_or_else(bad)?;
                             entity_physical.insert((dim, tag as i32), p as i32);
                         }
                     }
@@ -279,7 +310,8 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                 if v4 {
                     let (n0, [blocks, total, _min, _max]) =
                         r.numbers::<4>("'numEntityBlocks numNodes minNodeTag maxNodeTag'")?;
-                    let total = usize::try_from(total).map_err(|_| Error::format(r.at(n0), "negative node count"))?;
+                    let total = usize::try_from(total)
+                        .map_err(|_| Error::format(r.at(n0), "negative node count"))?;
                     mesh.coords.reserve(total * 3);
                     mesh.node_tags.reserve(total);
                     for _ in 0..blocks {
@@ -295,7 +327,10 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                         for _ in 0..count {
                             let (n, [tag]) = r.numbers::<1>("a node tag")?;
                             if tag <= 0 {
-                                return Err(Error::format(r.at(n), format!("node tag {tag} must be positive")));
+                                return Err(Error::format(
+                                    r.at(n),
+                                    format!("node tag {tag} must be positive"),
+                                ));
                             }
                             mesh.node_tags.push(tag as u64);
                         }
@@ -310,9 +345,16 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                     for _ in 0..count {
                         let (n, l) = r.line("a node line 'tag x y z'")?;
                         let mut t = Tokens::new(l);
-                        let tag = t.next().and_then(text::parse_u32).filter(|&v| v > 0).ok_or_else(|| {
-                            Error::format(r.at(n), format!("expected 'tag x y z', found {}", text::show(l)))
-                        })?;
+                        let tag = t
+                            .next()
+                            .and_then(text::parse_u32)
+                            .filter(|&v| v > 0)
+                            .ok_or_else(|| {
+                                Error::format(
+                                    r.at(n),
+                                    format!("expected 'tag x y z', found {}", text::show(l)),
+                                )
+                            })?;
                         mesh.node_tags.push(tag as u64);
                         let xyz: Vec<&[u8]> = t.collect();
                         push_xyz_tokens(&mut mesh.coords, &xyz, l, &r.at(n))?;
@@ -320,12 +362,20 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                 }
                 r.expect_end("$EndNodes")?;
                 let n = mesh.node_tags.len();
-                if mesh.node_tags.iter().enumerate().all(|(i, &t)| t == i as u64 + 1) {
+                if mesh
+                    .node_tags
+                    .iter()
+                    .enumerate()
+                    .all(|(i, &t)| t == i as u64 + 1)
+                {
                     dense_tags = Some(n as u64);
                 } else {
                     for (i, &t) in mesh.node_tags.iter().enumerate() {
                         if tag_index.insert(t, i as u32).is_some() {
-                            return Err(Error::invalid(r.at(0), format!("node tag {t} appears twice")));
+                            return Err(Error::invalid(
+                                r.at(0),
+                                format!("node tag {t} appears twice"),
+                            ));
                         }
                     }
                 }
@@ -334,16 +384,21 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                 r.section = "$Elements";
                 have_elements = true;
                 if v4 {
-                    let (_, [blocks, _total, _min, _max]) =
-                        r.numbers::<4>("'numEntityBlocks numElements minElementTag maxElementTag'")?;
+                    let (_, [blocks, _total, _min, _max]) = r.numbers::<4>(
+                        "'numEntityBlocks numElements minElementTag maxElementTag'",
+                    )?;
                     for _ in 0..blocks {
                         let (n, [edim, etag, etype, count]) =
                             r.numbers::<4>("'entityDim entityTag elementType numElementsInBlock'")?;
-                        let per = nodes_of_type(etype as i32).ok_or_else(|| Error::Unsupported {
-                            at: r.at(n),
-                            message: format!("Gmsh element type {etype}"),
-                        })?;
-                        let phys = entity_physical.get(&(edim as usize, etag as i32)).copied().unwrap_or(0);
+                        let per =
+                            nodes_of_type(etype as i32).ok_or_else(|| Error::Unsupported {
+                                at: r.at(n),
+                                message: format!("Gmsh element type {etype}"),
+                            })?;
+                        let phys = entity_physical
+                            .get(&(edim as usize, etag as i32))
+                            .copied()
+                            .unwrap_or(0);
                         for _ in 0..count {
                             let (n, l) = r.line("an element line")?;
                             let toks: Vec<&[u8]> = Tokens::new(l).collect();
@@ -364,10 +419,23 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                         let toks: Vec<&[u8]> = Tokens::new(l).collect();
                         let bad = |m: String| Error::format(r.at(n), m);
                         if toks.len() < 3 {
-                            return Err(bad(format!("expected 'id type ntags tags... nodes...', found {}", text::show(l))));
+                            return Err(bad(format!(
+                                "expected 'id type ntags tags... nodes...', found {}",
+                                text::show(l)
+                            )));
                         }
-                        let etype = text::parse_int(toks[1]).ok_or_else(|| bad(format!("expected an element type, found {}", text::show(toks[1]))))? as i32;
-                        let ntags = text::parse_u32(toks[2]).ok_or_else(|| bad(format!("expected a tag count, found {}", text::show(toks[2]))))? as usize;
+                        let etype = text::parse_int(toks[1]).ok_or_else(|| {
+                            bad(format!(
+                                "expected an element type, found {}",
+                                text::show(toks[1])
+                            ))
+                        })? as i32;
+                        let ntags = text::parse_u32(toks[2]).ok_or_else(|| {
+                            bad(format!(
+                                "expected a tag count, found {}",
+                                text::show(toks[2])
+                            ))
+                        })? as usize;
                         let per = nodes_of_type(etype).ok_or_else(|| Error::Unsupported {
                             at: r.at(n),
                             message: format!("Gmsh element type {etype}"),
@@ -379,7 +447,11 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                                 toks.len()
                             )));
                         }
-                        let phys = if ntags > 0 { text::parse_int(toks[3]).unwrap_or(0) as i32 } else { 0 };
+                        let phys = if ntags > 0 {
+                            text::parse_int(toks[3]).unwrap_or(0) as i32
+                        } else {
+                            0
+                        };
                         let nodes = parse_tags(&toks[3 + ntags..], l, &r.at(n))?;
                         raw_elements.push((etype, phys, nodes, n));
                     }
@@ -395,7 +467,10 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
             _ => {
                 return Err(Error::format(
                     Location::new(file, n, None),
-                    format!("expected a section such as '$Nodes', found {}", text::show(l)),
+                    format!(
+                        "expected a section such as '$Nodes', found {}",
+                        text::show(l)
+                    ),
                 ))
             }
         }
@@ -403,7 +478,11 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
     if !have_nodes || !have_elements {
         return Err(Error::format(
             Location::new(file, 0, None),
-            if have_nodes { "no $Elements section" } else { "no $Nodes section" },
+            if have_nodes {
+                "no $Elements section"
+            } else {
+                "no $Nodes section"
+            },
         ));
     }
     // Group by type, resolving node tags.
@@ -437,9 +516,15 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
 fn parse_tags(toks: &[&[u8]], l: &[u8], at: &Location) -> Result<Vec<u64>> {
     toks.iter()
         .map(|t| {
-            text::parse_u32(t).filter(|&v| v > 0).map(u64::from).ok_or_else(|| {
-                Error::format(at.clone(), format!("expected node tags, found {}", text::show(l)))
-            })
+            text::parse_u32(t)
+                .filter(|&v| v > 0)
+                .map(u64::from)
+                .ok_or_else(|| {
+                    Error::format(
+                        at.clone(),
+                        format!("expected node tags, found {}", text::show(l)),
+                    )
+                })
         })
         .collect()
 }
@@ -451,11 +536,17 @@ fn push_xyz(coords: &mut Vec<f64>, l: &[u8], at: &Location) -> Result<()> {
 
 fn push_xyz_tokens(coords: &mut Vec<f64>, toks: &[&[u8]], l: &[u8], at: &Location) -> Result<()> {
     if toks.len() != 3 {
-        return Err(Error::format(at.clone(), format!("expected 3 coordinates, found {}", text::show(l))));
+        return Err(Error::format(
+            at.clone(),
+            format!("expected 3 coordinates, found {}", text::show(l)),
+        ));
     }
     for t in toks {
         coords.push(text::parse_real(t).ok_or_else(|| {
-            Error::format(at.clone(), format!("expected a coordinate, found {}", text::show(t)))
+            Error::format(
+                at.clone(),
+                format!("expected a coordinate, found {}", text::show(t)),
+            )
         })?);
     }
     Ok(())
@@ -550,11 +641,11 @@ pub fn to_model(mesh: &MshMesh, file: &str) -> Result<Model> {
     let mut coords = Vec::new();
     let mut next = 0u32;
     let mut z0: Option<f64> = None;
-    for i in 0..n_nodes {
-        if new_id[i] == u32::MAX {
+    for (i, slot) in new_id.iter_mut().enumerate() {
+        if *slot == u32::MAX {
             continue;
         }
-        new_id[i] = next;
+        *slot = next;
         next += 1;
         let p = &mesh.coords[i * 3..i * 3 + 3];
         coords.extend_from_slice(&p[..dim]);
@@ -591,18 +682,37 @@ pub fn to_model(mesh: &MshMesh, file: &str) -> Result<Model> {
         body: Body::Text(vec![v.to_string()]),
     };
     let mut sections = vec![
-        Section { keyword: "DIMENSION".into(), body: Body::Dimension },
-        Section { keyword: "ELEMENTTYPE".into(), body: Body::ElementType },
+        Section {
+            keyword: "DIMENSION".into(),
+            body: Body::Dimension,
+        },
+        Section {
+            keyword: "ELEMENTTYPE".into(),
+            body: Body::ElementType,
+        },
         text("FORMULATION", "single-point"),
-        Section { keyword: "STARTCOUNTERS".into(), body: Body::Counters },
-        Section { keyword: "STARTNODES".into(), body: Body::Nodes },
-        Section { keyword: "STARTELEMCON".into(), body: Body::Connectivity },
+        Section {
+            keyword: "STARTCOUNTERS".into(),
+            body: Body::Counters,
+        },
+        Section {
+            keyword: "STARTNODES".into(),
+            body: Body::Nodes,
+        },
+        Section {
+            keyword: "STARTELEMCON".into(),
+            body: Body::Connectivity,
+        },
     ];
     for kind in ["SURFACE", "LINE", "POINT"] {
         for phase in ["SOLID", "LIQUID", "GAS"] {
             sections.push(Section {
                 keyword: format!("START_FIXITY_{kind}_{phase}"),
-                body: Body::Table { counted: true, refs: Refs::Nodes(1), rows: Table::new() },
+                body: Body::Table {
+                    counted: true,
+                    refs: Refs::Nodes(1),
+                    rows: Table::new(),
+                },
             });
         }
     }
@@ -623,11 +733,18 @@ pub fn to_model(mesh: &MshMesh, file: &str) -> Result<Model> {
         sections.push(text("MATERIAL_INDEX", &(i + 1).to_string()));
         sections.push(text("MATERIAL_NAME", name));
     }
-    sections.push(Section { keyword: "STARTELMMAT".into(), body: Body::PerElement(elmmat) });
+    sections.push(Section {
+        keyword: "STARTELMMAT".into(),
+        body: Body::PerElement(elmmat),
+    });
     Ok(Model {
         version: "### Anura3D_2021 ###".into(),
         line_ending: LineEnding::Lf,
-        dimension: if dim == 3 { Dimension::Cartesian3D } else { Dimension::PlaneStrain },
+        dimension: if dim == 3 {
+            Dimension::Cartesian3D
+        } else {
+            Dimension::PlaneStrain
+        },
         element_type,
         coords,
         connectivity: conn,
@@ -662,13 +779,24 @@ mod tests {
 
     #[test]
     fn errors_are_located() {
-        let e = read(V22.replace("5 1 1 1\n", "5 1 x 1\n").as_bytes(), "a.msh").unwrap_err().to_string();
+        let e = read(V22.replace("5 1 1 1\n", "5 1 x 1\n").as_bytes(), "a.msh")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("a.msh:14 (in $Nodes)"), "{e}");
-        let e = read(V22.replace("1 2 3 4 5\n", "1 2 3 4 9\n").as_bytes(), "a.msh").unwrap_err().to_string();
+        let e = read(
+            V22.replace("1 2 3 4 5\n", "1 2 3 4 9\n").as_bytes(),
+            "a.msh",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("node tag 9 is not in $Nodes"), "{e}");
-        let e = read(&V22.as_bytes()[..100], "a.msh").unwrap_err().to_string();
+        let e = read(&V22.as_bytes()[..100], "a.msh")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("truncated") || e.contains("expected"), "{e}");
-        let e = read(b"$MeshFormat\n4.1 1 8\n", "b.msh").unwrap_err().to_string();
+        let e = read(b"$MeshFormat\n4.1 1 8\n", "b.msh")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("binary"), "{e}");
     }
 }

@@ -123,8 +123,14 @@ pub fn is_blank(line: &[u8]) -> bool {
 
 /// Trims separators at both ends.
 pub fn trim(line: &[u8]) -> &[u8] {
-    let start = line.iter().position(|&b| !is_separator(b)).unwrap_or(line.len());
-    let end = line.iter().rposition(|&b| !is_separator(b)).map_or(start, |e| e + 1);
+    let start = line
+        .iter()
+        .position(|&b| !is_separator(b))
+        .unwrap_or(line.len());
+    let end = line
+        .iter()
+        .rposition(|&b| !is_separator(b))
+        .map_or(start, |e| e + 1);
     &line[start..end]
 }
 
@@ -195,7 +201,13 @@ fn parse_fortran_d(tok: &[u8]) -> Option<f64> {
     }
     let s: String = tok
         .iter()
-        .map(|&b| if b == b'd' || b == b'D' { 'e' } else { b as char })
+        .map(|&b| {
+            if b == b'd' || b == b'D' {
+                'e'
+            } else {
+                b as char
+            }
+        })
         .collect();
     s.parse().ok()
 }
@@ -252,7 +264,12 @@ mod tests {
         let v: Vec<_> = Lines::new(data, 1).collect();
         assert_eq!(
             v,
-            vec![(1, &b"a"[..]), (2, &b"b"[..]), (3, &b""[..]), (4, &b"c"[..])]
+            vec![
+                (1, &b"a"[..]),
+                (2, &b"b"[..]),
+                (3, &b""[..]),
+                (4, &b"c"[..])
+            ]
         );
     }
 

@@ -101,7 +101,11 @@ impl Values<'_> {
         let n = self.len();
         for i in 0..n {
             if i > 0 {
-                out.push(if components > 0 && i % components == 0 { b'\n' } else { b' ' });
+                out.push(if components > 0 && i % components == 0 {
+                    b'\n'
+                } else {
+                    b' '
+                });
             }
             match *self {
                 Values::F64(v) => text::push_real(out, v[i]),
@@ -261,14 +265,26 @@ pub fn write_vtu(w: &mut dyn Write, piece: &Piece, encoding: Encoding) -> io::Re
     for a in &piece.cell_data {
         check(a, n_cells, "cell")?;
     }
-    let points = DataArray { name: "Points", components: 3, values: Values::F64(piece.points) };
+    let points = DataArray {
+        name: "Points",
+        components: 3,
+        values: Values::F64(piece.points),
+    };
     let conn = DataArray {
         name: "connectivity",
         components: 1,
         values: Values::I64(&piece.cells.connectivity),
     };
-    let offs = DataArray { name: "offsets", components: 1, values: Values::I64(&piece.cells.offsets) };
-    let types = DataArray { name: "types", components: 1, values: Values::U8(&piece.cells.types) };
+    let offs = DataArray {
+        name: "offsets",
+        components: 1,
+        values: Values::I64(&piece.cells.offsets),
+    };
+    let types = DataArray {
+        name: "types",
+        components: 1,
+        values: Values::U8(&piece.cells.types),
+    };
 
     let mut appended: Vec<&DataArray> = Vec::new();
     let mut offset: u64 = 0;
@@ -292,7 +308,11 @@ pub fn write_vtu(w: &mut dyn Write, piece: &Piece, encoding: Encoding) -> io::Re
                 let mut raw = Vec::with_capacity(8 + a.values.byte_len());
                 raw.extend_from_slice(&(a.values.byte_len() as u64).to_le_bytes());
                 a.values.write_le(&mut raw)?;
-                head.extend_from_slice(base64::engine::general_purpose::STANDARD.encode(&raw).as_bytes());
+                head.extend_from_slice(
+                    base64::engine::general_purpose::STANDARD
+                        .encode(&raw)
+                        .as_bytes(),
+                );
                 head.extend_from_slice(b"\n        </DataArray>\n");
             }
             Encoding::Appended => {
@@ -305,8 +325,14 @@ pub fn write_vtu(w: &mut dyn Write, piece: &Piece, encoding: Encoding) -> io::Re
     head.extend_from_slice(
         b"<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n",
     );
-    writeln!(head, "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">")?;
-    let sections: [(&str, &Vec<DataArray>); 2] = [("PointData", &piece.point_data), ("CellData", &piece.cell_data)];
+    writeln!(
+        head,
+        "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">"
+    )?;
+    let sections: [(&str, &Vec<DataArray>); 2] = [
+        ("PointData", &piece.point_data),
+        ("CellData", &piece.cell_data),
+    ];
     for (tag, arrays) in sections {
         if arrays.is_empty() {
             writeln!(head, "      <{tag}/>")?;
@@ -371,11 +397,24 @@ pub fn write_model(
         .element_materials()
         .map(|m| m.into_iter().map(|v| v as i32).collect())
         .unwrap_or_else(|| vec![0; model.element_count()]);
-    let mut cell_data = vec![DataArray { name: "material", components: 1, values: Values::I32(&material) }];
+    let mut cell_data = vec![DataArray {
+        name: "material",
+        components: 1,
+        values: Values::I32(&material),
+    }];
     if let Some(p) = partition {
-        cell_data.push(DataArray { name: "partition", components: 1, values: Values::I32(p) });
+        cell_data.push(DataArray {
+            name: "partition",
+            components: 1,
+            values: Values::I32(p),
+        });
     }
-    let piece = Piece { points: &points, cells: &cells, point_data: Vec::new(), cell_data };
+    let piece = Piece {
+        points: &points,
+        cells: &cells,
+        point_data: Vec::new(),
+        cell_data,
+    };
     write_vtu(w, &piece, encoding)
 }
 
@@ -386,12 +425,20 @@ mod tests {
     #[test]
     fn ascii_vtu_is_exact() {
         let pts = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-        let cells = Cells { connectivity: vec![0, 1, 2], offsets: vec![3], types: vec![cell_type::TRIANGLE] };
+        let cells = Cells {
+            connectivity: vec![0, 1, 2],
+            offsets: vec![3],
+            types: vec![cell_type::TRIANGLE],
+        };
         let id = [1i32, 2, 3];
         let piece = Piece {
             points: &pts,
             cells: &cells,
-            point_data: vec![DataArray { name: "id", components: 1, values: Values::I32(&id) }],
+            point_data: vec![DataArray {
+                name: "id",
+                components: 1,
+                values: Values::I32(&id),
+            }],
             cell_data: vec![],
         };
         let mut out = Vec::new();
@@ -410,14 +457,20 @@ mod tests {
         let piece = Piece {
             points: &pts,
             cells: &cells,
-            point_data: vec![DataArray { name: "v", components: 1, values: Values::F64(&v) }],
+            point_data: vec![DataArray {
+                name: "v",
+                components: 1,
+                values: Values::F64(&v),
+            }],
             cell_data: vec![],
         };
         let mut out = Vec::new();
         write_vtu(&mut out, &piece, Encoding::Appended).unwrap();
         let s = String::from_utf8_lossy(&out);
         assert!(s.contains("Name=\"v\" NumberOfComponents=\"1\" format=\"appended\" offset=\"0\""));
-        assert!(s.contains("Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"24\""));
+        assert!(s.contains(
+            "Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"24\""
+        ));
         // 4 arrays + points: headers 8 bytes each; data 16 + 48 + 16 + 16 + 2.
         let marker = b"<AppendedData encoding=\"raw\">\n   _";
         let start = out.windows(marker.len()).position(|w| w == marker).unwrap() + marker.len();
@@ -435,7 +488,11 @@ mod tests {
         let piece = Piece {
             points: &pts,
             cells: &cells,
-            point_data: vec![DataArray { name: "v", components: 1, values: Values::F64(&v) }],
+            point_data: vec![DataArray {
+                name: "v",
+                components: 1,
+                values: Values::F64(&v),
+            }],
             cell_data: vec![],
         };
         assert!(write_vtu(&mut Vec::new(), &piece, Encoding::Ascii).is_err());
@@ -444,7 +501,11 @@ mod tests {
     #[test]
     fn pvd_lists_times() {
         let mut out = Vec::new();
-        write_pvd(&mut out, &[(0.0, "p_0.vtu".into()), (0.5, "p_1.vtu".into())]).unwrap();
+        write_pvd(
+            &mut out,
+            &[(0.0, "p_0.vtu".into()), (0.5, "p_1.vtu".into())],
+        )
+        .unwrap();
         let s = String::from_utf8(out).unwrap();
         assert!(s.contains("<DataSet timestep=\"0.5\" group=\"\" part=\"0\" file=\"p_1.vtu\"/>"));
     }

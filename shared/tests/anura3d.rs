@@ -42,7 +42,11 @@ pub fn is_gom(name: &str) -> bool {
 fn every_gom_round_trips() {
     let Some(root) = benchmarks() else { return };
     let goms = files(&root, &is_gom);
-    assert!(goms.len() >= 80, "expected the 87 GOM files, found {}", goms.len());
+    assert!(
+        goms.len() >= 80,
+        "expected the 87 GOM files, found {}",
+        goms.len()
+    );
     for p in &goms {
         let data = std::fs::read(p).unwrap();
         let name = p.display().to_string();
@@ -73,14 +77,32 @@ fn tet10_mid_edge_nodes_sit_at_edge_midpoints_and_orientation_is_positive() {
         for e in 0..m.element_count() {
             let el = m.element(e);
             let x = |k: usize| m.node(el[k] as usize);
-            for (mid, (a, b)) in [(4, (0, 1)), (5, (1, 2)), (6, (0, 2)), (7, (0, 3)), (8, (1, 3)), (9, (2, 3))] {
+            for (mid, (a, b)) in [
+                (4, (0, 1)),
+                (5, (1, 2)),
+                (6, (0, 2)),
+                (7, (0, 3)),
+                (8, (1, 3)),
+                (9, (2, 3)),
+            ] {
                 for d in 0..3 {
                     let want = 0.5 * (x(a)[d] + x(b)[d]);
-                    assert!((x(mid)[d] - want).abs() < 1e-6, "{}: element {} node {}", p.display(), e + 1, mid + 1);
+                    assert!(
+                        (x(mid)[d] - want).abs() < 1e-6,
+                        "{}: element {} node {}",
+                        p.display(),
+                        e + 1,
+                        mid + 1
+                    );
                 }
             }
             let det = mpm_shared::msh::tet_det(x(0), x(2), x(3), x(1));
-            assert!(det > 0.0, "{}: element {} has det J = {det}", p.display(), e + 1);
+            assert!(
+                det > 0.0,
+                "{}: element {} has det J = {det}",
+                p.display(),
+                e + 1
+            );
             checked += 1;
         }
     }
@@ -94,9 +116,14 @@ fn every_cps_reads_and_types() {
     assert!(cpss.len() >= 80);
     for p in cpss {
         let name = p.display().to_string();
-        let (cps, _warnings) = Cps::read(&std::fs::read(&p).unwrap(), &name).unwrap_or_else(|e| panic!("{e}"));
+        let (cps, _warnings) =
+            Cps::read(&std::fs::read(&p).unwrap(), &name).unwrap_or_else(|e| panic!("{e}"));
         let s = cps.settings().unwrap_or_else(|e| panic!("{e}"));
         assert!(s.load_steps >= 1 && s.courant > 0.0, "{name}");
-        assert_eq!(Cps::read(&cps.write(), "w").unwrap().0.entries, cps.entries, "{name}");
+        assert_eq!(
+            Cps::read(&cps.write(), "w").unwrap().0.entries,
+            cps.entries,
+            "{name}"
+        );
     }
 }

@@ -1,0 +1,181 @@
+//! Structured tetrahedral meshes of a box, for benchmarks and analytical tests where a Gmsh mesh
+//! of a given size is not at hand. Each hexahedral cell is cut into the 6 tetrahedra of its Kuhn
+//! subdivision (every tetrahedron spans the cell's main diagonal), which is conforming across
+//! cells. Mid-edge nodes of 10-node meshes are shared between neighbours.
+
+use crate::model::{Body, Dimension, ElementType, LineEnding, Model, Refs, Section, Table, Token};
+use crate::msh::tet_det;
+
+/// Builds a box `[0, size[0]] × [0, size[1]] × [0, size[2]]` with `n[0] × n[1] × n[2]` cells
+/// (6 tetrahedra each), 4- or 10-node, one material, empty fixity sections, and 4 material points
+/// per element in `$$START_NUMBER_OF_MATERIAL_POINTS`.
+pub fn box_mesh(n: [usize; 3], size: [f64; 3], element_type: ElementType) -> Model {
+    assert!(
+        element_type != ElementType::Tri3,
+        "box_mesh makes tetrahedra"
+    );
+    let quadratic = element_type == ElementType::Tet10;
+    // Lattice of node positions: step h/2 for 10-node meshes, h for 4-node ones.
+    let r = if quadratic { 2 } else { 1 };
+    let dims = [n[0] * r + 1, n[1] * r + 1, n[2] * r + 1];
+    let id = |i: usize, j: usize, k: usize| (i + dims[0] * (j + dims[1] * k)) as u32;
+    let mut coords = Vec::with_capacity(dims[0] * dims[1] * dims[2] * 3);
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                coords.push(size[0] * i as f64 / (dims[0] - 1) as f64);
+                coords.push(size[1] * j as f64 / (dims[1] - 1) as f64);
+                coords.push(size[2] * k as f64 / (dims[2] - 1) as f64);
+            }
+        }
+    }
+    const PATHS: [[usize; 3]; 6] = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    let per = element_type.nodes();
+    let cells = n[0] * n[1] * n[2];
+    let mut conn = Vec::with_capacity(cells * 6 * per);
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                for path in PATHS {
+                    // Corners on the lattice (in units of the lattice step).
+                    let mut c = [[i * r, j * r, k * r]; 4];
+                    for s in 0..3 {
+                        c[s + 1] = c[s];
+                        c[s + 1][path[s]] += r;
+                    }
+                    let p = |q: [usize; 3]| {
+                        let x = id(q[0], q[1], q[2]) as usize * 3;
+                        [coords[x], coords[x + 1], coords[x + 2]]
+                    };
+                    if tet_det(&p(c[0]), &p(c[1]), &p(c[2]), &p(c[3])) < 0.0 {
+                        c.swap(1, 2);
+                    }
+                    // Anura3D order: A1 = c0, A2 = c3, A3 = c1, A4 = c2.
+                    let a = [c[0], c[3], c[1], c[2]];
+                    for q in a {
+                        conn.push(id(q[0], q[1], q[2]));
+                    }
+                    if quadratic {
+                        for (u, v) in [(0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3)] {
+                            let m = [
+                                (a[u][0] + a[v][0]) / 2,
+                                (a[u][1] + a[v][1]) / 2,
+                                (a[u][2] + a[v][2]) / 2,
+                            ];
+                            conn.push(id(m[0], m[1], m[2]));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let n_el = cells * 6;
+    let text = |k: &str, v: &str| Section {
+        keyword: k.into(),
+        body: Body::Text(vec![v.into()]),
+    };
+    let geometry = |k: &str, b: Body| Section {
+        keyword: k.into(),
+        body: b,
+    };
+    let mut sections = vec![
+        geometry("DIMENSION", Body::Dimension),
+        geometry("ELEMENTTYPE", Body::ElementType),
+        text("FORMULATION", "single-point"),
+        geometry("STARTCOUNTERS", Body::Counters),
+        geometry("STARTNODES", Body::Nodes),
+        geometry("STARTELEMCON", Body::Connectivity),
+    ];
+    for kind in ["SURFACE", "LINE", "POINT"] {
+        for phase in ["SOLID", "LIQUID", "GAS"] {
+            sections.push(geometry(
+                &format!("START_FIXITY_{kind}_{phase}"),
+                Body::Table {
+                    counted: true,
+                    refs: Refs::Nodes(1),
+                    rows: Table::new(),
+                },
+            ));
+        }
+    }
+    sections.push(text("NUMBER_OF_MATERIALS", "1"));
+    sections.push(text("MATERIAL_INDEX", "1"));
+    sections.push(text("MATERIAL_NAME", "soil"));
+    let mut mat = Table::with_capacity(n_el, 1);
+    let mut mps = Table::with_capacity(n_el, 2);
+    for _ in 0..n_el {
+        mat.push_row([Token::Int(1)]);
+        mps.push_row([Token::Int(4), Token::Int(0)]);
+    }
+    sections.push(geometry("STARTELMMAT", Body::PerElement(mat)));
+    sections.push(geometry(
+        "START_NUMBER_OF_MATERIAL_POINTS",
+        Body::PerElement(mps),
+    ));
+    Model {
+        version: "### Anura3D_2021 ###".into(),
+        line_ending: LineEnding::Lf,
+        dimension: Dimension::Cartesian3D,
+        element_type,
+        coords,
+        connectivity: conn,
+        sections,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_is_conforming_positive_and_fills_the_volume() {
+        for et in [ElementType::Tet4, ElementType::Tet10] {
+            let m = box_mesh([3, 2, 2], [1.0, 2.0, 0.5], et);
+            assert_eq!(m.element_count(), 72);
+            let mut vol = 0.0;
+            for e in 0..m.element_count() {
+                let el = m.element(e);
+                let x = |k: usize| m.node(el[k] as usize);
+                let det = tet_det(x(0), x(2), x(3), x(1));
+                assert!(det > 0.0);
+                vol += det / 6.0;
+                if et == ElementType::Tet10 {
+                    for (mid, (a, b)) in [
+                        (4, (0, 1)),
+                        (5, (1, 2)),
+                        (6, (0, 2)),
+                        (7, (0, 3)),
+                        (8, (1, 3)),
+                        (9, (2, 3)),
+                    ] {
+                        for d in 0..3 {
+                            assert!((x(mid)[d] - 0.5 * (x(a)[d] + x(b)[d])).abs() < 1e-12);
+                        }
+                    }
+                }
+            }
+            assert!((vol - 1.0).abs() < 1e-12);
+            // Conforming: every interior face is shared by exactly two tetrahedra.
+            let mut faces = std::collections::HashMap::new();
+            for e in 0..m.element_count() {
+                let el = m.element(e);
+                for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+                    let mut key = [el[f[0]], el[f[1]], el[f[2]]];
+                    key.sort_unstable();
+                    *faces.entry(key).or_insert(0) += 1;
+                }
+            }
+            assert!(faces.values().all(|&c| c == 1 || c == 2));
+            let boundary = faces.values().filter(|&&c| c == 1).count();
+            // 2 triangles per boundary square: 2 * 2 * (3*2 + 3*2 + 2*2).
+            assert_eq!(boundary, 64);
+        }
+    }
+}
