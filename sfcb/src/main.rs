@@ -7,6 +7,8 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context};
 use clap::{Parser, ValueEnum};
+use mpm_shared::cps::Cps;
+use sfcb::order;
 
 /// Which curve orders the elements.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -110,17 +112,66 @@ fn run(args: Args) -> anyhow::Result<()> {
             );
         }
     }
-    if args.curve != Curve::None {
-        bail!(
-            "--curve {:?} is not available in this build; use --curve none",
-            args.curve
-        );
+    if args.curve == Curve::Hilbert {
+        bail!("--curve hilbert is not available in this build yet; use --curve morton or none");
     }
-    if args.partitions.is_some() || args.report.is_some() || args.cps.is_some() {
-        bail!(
-            "--partitions, --report and --cps need the curve ordering, not available in this build"
-        );
+    if args.report.is_some() {
+        bail!("--report is not available in this build yet");
     }
-    mpm_shared::write_model(&model, &args.output, None)?;
+    let cps_in = match &args.cps {
+        Some(p) => {
+            let data = mpm_shared::io::read_input(&p[0])?;
+            let (cps, warnings) = Cps::read(&data, &mpm_shared::display_name(&p[0]))?;
+            for w in warnings {
+                eprintln!("sfcb: warning: {w}");
+            }
+            Some(cps)
+        }
+        None => None,
+    };
+    let dim = model.dimension.coords();
+    let levels = args.levels.unwrap_or(if dim == 3 { 21 } else { 31 });
+    let (model, order) = match args.curve {
+        Curve::None => {
+            let order: Vec<u32> = (0..model.element_count() as u32).collect();
+            (model, order)
+        }
+        _ => {
+            let ord = order::morton(
+                &model,
+                order::Options {
+                    levels,
+                    cubic: !args.no_cubic,
+                },
+            );
+            let reordered = model.reordered(&ord.order, &ord.node_new)?;
+            (reordered, ord.order)
+        }
+    };
+    let partition: Option<Vec<i32>> = args.partitions.map(|p| {
+        order::partitions(&order::weights(&model), p)
+            .into_iter()
+            .map(|v| v as i32)
+            .collect()
+    });
+    let mut cps_out = None;
+    if let (Some(mut cps), Some(paths)) = (cps_in, &args.cps) {
+        let points = model.material_points_per_element().with_context(|| {
+            "--cps needs $$START_NUMBER_OF_MATERIAL_POINTS in the GOM to number material points"
+        })?;
+        // `points` is in the new order; rebuild the old-order counts to map old ids.
+        let mut old_points = vec![0u32; points.len()];
+        for (new, &old) in order.iter().enumerate() {
+            old_points[old as usize] = points[new];
+        }
+        let ids = cps.output_material_points()?;
+        let new_ids = order::remap_material_points(&old_points, &order, &ids)?;
+        cps.set_output_material_points(&new_ids);
+        cps_out = Some((paths[1].clone(), cps.write()));
+    }
+    mpm_shared::write_model(&model, &args.output, partition.as_deref())?;
+    if let Some((path, bytes)) = cps_out {
+        mpm_shared::io::write_output(&path, &bytes)?;
+    }
     Ok(())
 }

@@ -608,3 +608,118 @@ pub fn opaque_is_empty(lines: &[String]) -> bool {
         .collect();
     data.is_empty() || (data.len() == 1 && data[0] == "0")
 }
+
+impl Model {
+    /// The model with elements in the order `order` (new position → old element, 0-based) and
+    /// nodes renumbered by `node_new` (old node → new node, 0-based). Coordinates move with their
+    /// nodes, element-ordered sections are permuted, node ids and element ids in every table are
+    /// remapped. Refuses to run when a section that may hold ids is not understood.
+    ///
+    /// Both maps must be permutations (checked).
+    pub fn reordered(&self, order: &[u32], node_new: &[u32]) -> crate::Result<Model> {
+        if let Some(k) = self.first_unremappable() {
+            return Err(crate::Error::Unremappable {
+                section: format!("$${k}"),
+                reason: "is not understood by this tool, so its ids could not follow the new numbering; remove it or reorder with --curve none".into(),
+            });
+        }
+        let n_el = self.element_count();
+        let n_nodes = self.node_count();
+        let elem_new = inverse(order, n_el).ok_or_else(|| crate::Error::Unremappable {
+            section: "$$STARTELEMCON".into(),
+            reason: "element order is not a permutation".into(),
+        })?;
+        inverse(node_new, n_nodes).ok_or_else(|| crate::Error::Unremappable {
+            section: "$$STARTNODES".into(),
+            reason: "node numbering is not a permutation".into(),
+        })?;
+        let d = self.dimension.coords();
+        let mut coords = vec![0.0; self.coords.len()];
+        for (old, &new) in node_new.iter().enumerate() {
+            coords[new as usize * d..(new as usize + 1) * d].copy_from_slice(self.node(old));
+        }
+        let mut connectivity = Vec::with_capacity(self.connectivity.len());
+        for &old in order {
+            connectivity.extend(
+                self.element(old as usize)
+                    .iter()
+                    .map(|&n| node_new[n as usize]),
+            );
+        }
+        let map_id = |t: &Token, map: &[u32]| -> Token {
+            match t {
+                Token::Int(i) if *i >= 1 && (*i as usize) <= map.len() => {
+                    Token::Int(map[*i as usize - 1] as i64 + 1)
+                }
+                other => other.clone(),
+            }
+        };
+        let mut sections = Vec::with_capacity(self.sections.len());
+        for s in &self.sections {
+            let body = match &s.body {
+                Body::PerElement(t) => {
+                    let mut out = Table::with_capacity(t.len(), 2);
+                    for &old in order {
+                        out.push_row(t.row(old as usize).iter().cloned());
+                    }
+                    Body::PerElement(out)
+                }
+                Body::Table {
+                    counted,
+                    refs,
+                    rows,
+                } => {
+                    let mut out = Table::with_capacity(rows.len(), 4);
+                    for r in rows.rows() {
+                        let (k, map) = match refs {
+                            Refs::Nodes(k) => (*k, node_new),
+                            Refs::Element => (1, &elem_new[..]),
+                        };
+                        out.push_row(r.iter().enumerate().map(|(j, t)| {
+                            if j < k {
+                                map_id(t, map)
+                            } else {
+                                t.clone()
+                            }
+                        }));
+                    }
+                    Body::Table {
+                        counted: *counted,
+                        refs: *refs,
+                        rows: out,
+                    }
+                }
+                other => other.clone(),
+            };
+            sections.push(Section {
+                keyword: s.keyword.clone(),
+                body,
+            });
+        }
+        Ok(Model {
+            version: self.version.clone(),
+            line_ending: self.line_ending,
+            dimension: self.dimension,
+            element_type: self.element_type,
+            coords,
+            connectivity,
+            sections,
+        })
+    }
+}
+
+/// The inverse of a permutation of `0..n`, or `None` if `p` is not one.
+pub fn inverse(p: &[u32], n: usize) -> Option<Vec<u32>> {
+    if p.len() != n {
+        return None;
+    }
+    let mut inv = vec![u32::MAX; n];
+    for (i, &v) in p.iter().enumerate() {
+        let slot = inv.get_mut(v as usize)?;
+        if *slot != u32::MAX {
+            return None;
+        }
+        *slot = i as u32;
+    }
+    Some(inv)
+}

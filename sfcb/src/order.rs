@@ -1,0 +1,201 @@
+//! Element ordering along the curve, vertex renumbering by first use, and partitions
+//! (DESIGN §3, steps 1-7).
+
+use mpm_shared::{Error, Model};
+use rayon::prelude::*;
+
+use crate::morton::Grid;
+
+/// Options of one ordering.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// Curve levels N.
+    pub levels: u32,
+    /// One cube for all axes (the default) rather than per-axis extents.
+    pub cubic: bool,
+}
+
+/// The result of ordering a model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ordering {
+    /// New position → old element (0-based).
+    pub order: Vec<u32>,
+    /// Old node → new node (0-based).
+    pub node_new: Vec<u32>,
+    /// Curve key of each element in the new order.
+    pub keys: Vec<u64>,
+    /// Elements whose key equals the previous element's key.
+    pub shared_keys: usize,
+}
+
+/// Element centroids: corner coordinates summed in stored order, left to right, then divided
+/// by the corner count.
+pub fn centroid(model: &Model, e: usize, out: &mut [f64; 3]) {
+    let d = model.dimension.coords();
+    let corners = model.element_type.corners();
+    let el = model.element(e);
+    *out = [0.0; 3];
+    for &n in &el[..corners] {
+        let p = model.node(n as usize);
+        for a in 0..d {
+            out[a] += p[a];
+        }
+    }
+    for v in out.iter_mut().take(d) {
+        *v /= corners as f64;
+    }
+}
+
+/// Orders the elements of `model` along the Morton curve of their centroids and renumbers the
+/// vertices in order of first use. The result does not depend on the number of threads.
+pub fn morton(model: &Model, opts: Options) -> Ordering {
+    let d = model.dimension.coords();
+    let grid = Grid::bounding(&model.coords, d, opts.levels, opts.cubic);
+    let n = model.element_count();
+    let mut pairs: Vec<(u64, u32)> = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|e| {
+            let mut c = [0.0; 3];
+            centroid(model, e, &mut c);
+            (grid.key(&c), e as u32)
+        })
+        .collect();
+    // (key, original index) pairs are all distinct, so the unstable sort is deterministic and
+    // equals a stable sort by key.
+    pairs.par_sort_unstable();
+    let order: Vec<u32> = pairs.iter().map(|p| p.1).collect();
+    let keys: Vec<u64> = pairs.iter().map(|p| p.0).collect();
+    let shared_keys = keys.windows(2).filter(|w| w[0] == w[1]).count();
+    let node_new = first_use_numbering(model, &order);
+    Ordering {
+        order,
+        node_new,
+        keys,
+        shared_keys,
+    }
+}
+
+/// Vertex numbers in order of first appearance when walking the elements in `order` and each
+/// element's full node list in stored order; unused vertices follow in their original order.
+pub fn first_use_numbering(model: &Model, order: &[u32]) -> Vec<u32> {
+    let nn = model.node_count();
+    let mut node_new = vec![u32::MAX; nn];
+    let mut next = 0u32;
+    for &e in order {
+        for &v in model.element(e as usize) {
+            let slot = &mut node_new[v as usize];
+            if *slot == u32::MAX {
+                *slot = next;
+                next += 1;
+            }
+        }
+    }
+    for slot in node_new.iter_mut() {
+        if *slot == u32::MAX {
+            *slot = next;
+            next += 1;
+        }
+    }
+    node_new
+}
+
+/// Integer weight of each element: its material points (solid + liquid) when the model has
+/// `$$START_NUMBER_OF_MATERIAL_POINTS`, else 1.
+pub fn weights(model: &Model) -> Vec<u64> {
+    match model.per_element("START_NUMBER_OF_MATERIAL_POINTS") {
+        Some(t) => t
+            .rows()
+            .map(|r| {
+                r.iter()
+                    .take(2)
+                    .filter_map(|t| t.as_int())
+                    .map(|v| v.max(0) as u64)
+                    .sum()
+            })
+            .collect(),
+        None => vec![1; model.element_count()],
+    }
+}
+
+/// Contiguous parts along the element order: part(e) = min(P - 1, floor(P S_e / W)) with S_e the
+/// weight before element e and W the total (all weights 1 when W = 0).
+pub fn partitions(weights: &[u64], parts: u32) -> Vec<u32> {
+    let total: u64 = weights.iter().sum();
+    let unit = total == 0;
+    let w_total = if unit {
+        weights.len() as u128
+    } else {
+        total as u128
+    };
+    let p = parts as u128;
+    let mut before: u128 = 0;
+    let mut out = Vec::with_capacity(weights.len());
+    for &w in weights {
+        let part = (p * before).checked_div(w_total).unwrap_or(0).min(p - 1);
+        out.push(part as u32);
+        before += if unit { 1 } else { w as u128 };
+    }
+    out
+}
+
+/// Maps material-point ids (1-based, numbered in element order with `points[e]` per element) of
+/// the old order to the new one.
+pub fn remap_material_points(
+    points: &[u32],
+    order: &[u32],
+    ids: &[u32],
+) -> Result<Vec<u32>, Error> {
+    let n = points.len();
+    let mut first_old = Vec::with_capacity(n + 1);
+    let mut acc = 0u64;
+    for &p in points {
+        first_old.push(acc);
+        acc += p as u64;
+    }
+    first_old.push(acc);
+    let mut first_new = vec![0u64; n];
+    let mut acc = 0u64;
+    for &e in order {
+        first_new[e as usize] = acc;
+        acc += points[e as usize] as u64;
+    }
+    ids.iter()
+        .map(|&id| {
+            let k = id as u64 - 1;
+            if id == 0 || k >= acc {
+                return Err(Error::Unremappable {
+                    section: "$$OUTPUT_MATERIAL_POINTS".into(),
+                    reason: format!("names material point {id}, but the mesh has {acc}"),
+                });
+            }
+            let e = first_old.partition_point(|&f| f <= k) - 1;
+            Ok((first_new[e] + (k - first_old[e]) + 1) as u32)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn partitions_follow_the_formula() {
+        assert_eq!(partitions(&[1, 1, 1, 1], 2), vec![0, 0, 1, 1]);
+        assert_eq!(partitions(&[4, 0, 0, 4], 2), vec![0, 1, 1, 1]);
+        assert_eq!(partitions(&[1, 1, 1], 5), vec![0, 1, 3]);
+        assert_eq!(partitions(&[0, 0], 3), vec![0, 1]);
+    }
+
+    #[test]
+    fn material_points_follow_their_elements() {
+        // Elements with 2, 1, 3 points; new order 2, 0, 1.
+        let points = [2, 1, 3];
+        // Old ids: e0 -> 1,2; e1 -> 3; e2 -> 4,5,6. New: e2 -> 1,2,3; e0 -> 4,5; e1 -> 6.
+        assert_eq!(
+            remap_material_points(&points, &[2, 0, 1], &[1, 2, 3, 4, 6]).unwrap(),
+            vec![4, 5, 6, 1, 3]
+        );
+        assert!(remap_material_points(&points, &[2, 0, 1], &[7]).is_err());
+    }
+}

@@ -1,0 +1,180 @@
+//! Morton ordering: invariants on every bundled (and, when available, every Anura3D) mesh,
+//! golden files, idempotence and thread independence.
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use mpm_shared::model::{Body, Refs, Token};
+use mpm_shared::{gom, Model};
+use sfcb::order;
+
+fn testdata(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../testdata")
+        .join(name)
+}
+
+fn models() -> Vec<(String, Model)> {
+    let mut v: Vec<(String, Model)> = [
+        "cube_tet4.GOM",
+        "cube_tet10.GOM",
+        "column_tet10.GOM",
+        "square_tri3.GOM",
+    ]
+    .iter()
+    .map(|n| {
+        (
+            n.to_string(),
+            gom::read(&std::fs::read(testdata(n)).unwrap(), n).unwrap(),
+        )
+    })
+    .collect();
+    if let Some(root) = std::env::var_os("ANURA3D_BENCHMARKS") {
+        let mut stack = vec![PathBuf::from(root)];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap().flatten() {
+                let p = e.path();
+                let n = p.file_name().unwrap().to_string_lossy().to_string();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if n.ends_with(".GOM") || n.contains(".GOM_stage") {
+                    let m = gom::read(&std::fs::read(&p).unwrap(), &n).unwrap();
+                    v.push((p.display().to_string(), m));
+                }
+            }
+        }
+    }
+    v
+}
+
+fn opts(m: &Model) -> order::Options {
+    order::Options {
+        levels: if m.dimension.coords() == 3 { 21 } else { 31 },
+        cubic: true,
+    }
+}
+
+#[test]
+fn ordering_is_a_bijection_and_everything_follows_its_element_and_nodes() {
+    let mut refused = 0;
+    for (name, m) in models() {
+        let ord = order::morton(&m, opts(&m));
+        assert!(
+            mpm_shared::model::inverse(&ord.order, m.element_count()).is_some(),
+            "{name}"
+        );
+        assert!(
+            mpm_shared::model::inverse(&ord.node_new, m.node_count()).is_some(),
+            "{name}"
+        );
+        assert!(
+            ord.keys.windows(2).all(|w| w[0] <= w[1]),
+            "{name}: keys not sorted"
+        );
+        let r = match m.reordered(&ord.order, &ord.node_new) {
+            Ok(r) => r,
+            Err(e) => {
+                assert!(m.first_unremappable().is_some(), "{name}: {e}");
+                refused += 1;
+                continue;
+            }
+        };
+        // Each element keeps its vertex coordinates in the same local order.
+        for (new, &old) in ord.order.iter().enumerate() {
+            for (a, b) in r.element(new).iter().zip(m.element(old as usize)) {
+                assert_eq!(r.node(*a as usize), m.node(*b as usize), "{name}");
+            }
+        }
+        // Element-ordered sections follow; node and element ids in tables follow.
+        for (s_old, s_new) in m.sections.iter().zip(&r.sections) {
+            match (&s_old.body, &s_new.body) {
+                (Body::PerElement(a), Body::PerElement(b)) => {
+                    for (new, &old) in ord.order.iter().enumerate() {
+                        assert_eq!(b.row(new), a.row(old as usize), "{name} {}", s_old.keyword);
+                    }
+                }
+                (Body::Table { rows: a, refs, .. }, Body::Table { rows: b, .. }) => {
+                    for (ra, rb) in a.rows().zip(b.rows()) {
+                        let k = match refs {
+                            Refs::Nodes(k) => *k,
+                            Refs::Element => 1,
+                        };
+                        for j in 0..ra.len() {
+                            match (refs, &ra[j], &rb[j]) {
+                                (Refs::Nodes(_), Token::Int(x), Token::Int(y)) if j < k => {
+                                    assert_eq!(
+                                        m.node(*x as usize - 1),
+                                        r.node(*y as usize - 1),
+                                        "{name} {}",
+                                        s_old.keyword
+                                    )
+                                }
+                                (Refs::Element, Token::Int(x), Token::Int(y)) if j == 0 => {
+                                    assert_eq!(
+                                        ord.order[*y as usize - 1] as i64,
+                                        x - 1,
+                                        "{name} {}",
+                                        s_old.keyword
+                                    )
+                                }
+                                _ => assert_eq!(ra[j], rb[j], "{name} {}", s_old.keyword),
+                            }
+                        }
+                    }
+                }
+                (a, b) => assert_eq!(a, b, "{name} {}", s_old.keyword),
+            }
+        }
+        // Ordering the ordered model changes nothing.
+        let again = order::morton(&r, opts(&r));
+        let rr = r.reordered(&again.order, &again.node_new).unwrap();
+        assert!(gom::write(&rr) == gom::write(&r), "{name}: not idempotent");
+    }
+    // Only files with sections whose ids are not understood are refused.
+    assert!(refused <= 4, "{refused} refused");
+}
+
+#[test]
+fn golden_files_and_thread_independence() {
+    let dir = tempfile::tempdir().unwrap();
+    for m in ["cube_tet10", "square_tri3"] {
+        let golden = std::fs::read(testdata(&format!("{m}.morton.GOM"))).unwrap();
+        for threads in ["1", "2", "3"] {
+            let out = dir.path().join(format!("{m}_{threads}.GOM"));
+            Command::cargo_bin("sfcb")
+                .unwrap()
+                .arg(testdata(&format!("{m}.GOM")))
+                .arg(&out)
+                .args(["--threads", threads])
+                .assert()
+                .success();
+            assert!(
+                std::fs::read(&out).unwrap() == golden,
+                "{m} with {threads} threads differs from the golden file"
+            );
+        }
+        // From the Gmsh mesh directly, and through a pipe, the same bytes.
+        let out = Command::cargo_bin("sfcb")
+            .unwrap()
+            .arg(testdata(&format!("{m}.msh")))
+            .arg("-")
+            .output()
+            .unwrap();
+        assert!(out.stdout == golden, "{m}: msh input differs");
+    }
+}
+
+#[test]
+fn partitions_are_contiguous_and_balanced() {
+    let m = gom::read(&std::fs::read(testdata("column_tet10.GOM")).unwrap(), "c").unwrap();
+    let w = order::weights(&m);
+    for p in [1u32, 2, 3, 7, 16] {
+        let parts = order::partitions(&w, p);
+        assert!(parts.windows(2).all(|x| x[0] <= x[1]));
+        assert_eq!(*parts.last().unwrap(), p - 1);
+        let mut count = vec![0usize; p as usize];
+        parts.iter().for_each(|&q| count[q as usize] += 1);
+        let (lo, hi) = (count.iter().min().unwrap(), count.iter().max().unwrap());
+        assert!(hi - lo <= 1, "{p} parts: {count:?}");
+    }
+}
