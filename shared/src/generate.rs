@@ -3,7 +3,7 @@
 //! subdivision (every tetrahedron spans the cell's main diagonal), which is conforming across
 //! cells. Mid-edge nodes of 10-node meshes are shared between neighbours.
 
-use crate::model::{Body, Dimension, ElementType, LineEnding, Model, Refs, Section, Table, Token};
+use crate::model::{Body, Dimension, ElementType, Model, Section, Table, Token};
 use crate::msh::tet_det;
 
 /// Builds a box `[0, size[0]] × [0, size[1]] × [0, size[2]]` with `n[0] × n[1] × n[2]` cells
@@ -77,57 +77,23 @@ pub fn box_mesh(n: [usize; 3], size: [f64; 3], element_type: ElementType) -> Mod
         }
     }
     let n_el = cells * 6;
-    let text = |k: &str, v: &str| Section {
-        keyword: k.into(),
-        body: Body::Text(vec![v.into()]),
-    };
-    let geometry = |k: &str, b: Body| Section {
-        keyword: k.into(),
-        body: b,
-    };
-    let mut sections = vec![
-        geometry("DIMENSION", Body::Dimension),
-        geometry("ELEMENTTYPE", Body::ElementType),
-        text("FORMULATION", "single-point"),
-        geometry("STARTCOUNTERS", Body::Counters),
-        geometry("STARTNODES", Body::Nodes),
-        geometry("STARTELEMCON", Body::Connectivity),
-    ];
-    for kind in ["SURFACE", "LINE", "POINT"] {
-        for phase in ["SOLID", "LIQUID", "GAS"] {
-            sections.push(geometry(
-                &format!("START_FIXITY_{kind}_{phase}"),
-                Body::Table {
-                    counted: true,
-                    refs: Refs::Nodes(1),
-                    rows: Table::new(),
-                },
-            ));
-        }
-    }
-    sections.push(text("NUMBER_OF_MATERIALS", "1"));
-    sections.push(text("MATERIAL_INDEX", "1"));
-    sections.push(text("MATERIAL_NAME", "soil"));
-    let mut mat = Table::with_capacity(n_el, 1);
-    let mut mps = Table::with_capacity(n_el, 2);
-    for _ in 0..n_el {
-        mat.push_row([Token::Int(1)]);
-        mps.push_row([Token::Int(4), Token::Int(0)]);
-    }
-    sections.push(geometry("STARTELMMAT", Body::PerElement(mat)));
-    sections.push(geometry(
-        "START_NUMBER_OF_MATERIAL_POINTS",
-        Body::PerElement(mps),
-    ));
-    Model {
-        version: "### Anura3D_2021 ###".into(),
-        line_ending: LineEnding::Lf,
-        dimension: Dimension::Cartesian3D,
+    let mut model = Model::from_mesh(
+        Dimension::Cartesian3D,
         element_type,
         coords,
-        connectivity: conn,
-        sections,
+        conn,
+        &["soil".to_string()],
+        &vec![1; n_el],
+    );
+    let mut mps = Table::with_capacity(n_el, 2);
+    for _ in 0..n_el {
+        mps.push_row([Token::Int(4), Token::Int(0)]);
     }
+    model.sections.push(Section {
+        keyword: "START_NUMBER_OF_MATERIAL_POINTS".into(),
+        body: Body::PerElement(mps),
+    });
+    model
 }
 
 #[cfg(test)]
@@ -139,27 +105,12 @@ mod tests {
         for et in [ElementType::Tet4, ElementType::Tet10] {
             let m = box_mesh([3, 2, 2], [1.0, 2.0, 0.5], et);
             assert_eq!(m.element_count(), 72);
+            m.check_shapes(1e-12).unwrap();
             let mut vol = 0.0;
             for e in 0..m.element_count() {
                 let el = m.element(e);
                 let x = |k: usize| m.node(el[k] as usize);
-                let det = tet_det(x(0), x(2), x(3), x(1));
-                assert!(det > 0.0);
-                vol += det / 6.0;
-                if et == ElementType::Tet10 {
-                    for (mid, (a, b)) in [
-                        (4, (0, 1)),
-                        (5, (1, 2)),
-                        (6, (0, 2)),
-                        (7, (0, 3)),
-                        (8, (1, 3)),
-                        (9, (2, 3)),
-                    ] {
-                        for d in 0..3 {
-                            assert!((x(mid)[d] - 0.5 * (x(a)[d] + x(b)[d])).abs() < 1e-12);
-                        }
-                    }
-                }
+                vol += tet_det(x(0), x(2), x(3), x(1)) / 6.0;
             }
             assert!((vol - 1.0).abs() < 1e-12);
             // Conforming: every interior face is shared by exactly two tetrahedra.

@@ -723,3 +723,115 @@ pub fn inverse(p: &[u32], n: usize) -> Option<Vec<u32>> {
     }
     Some(inv)
 }
+
+impl Model {
+    /// A mesh-only model in Anura3D's layout: header and geometry sections, empty fixity lists
+    /// for the three phases, one material block (index and name) per entry of `materials`, and
+    /// `$$STARTELMMAT` from `element_material` (1-based indices, 0 for an empty element).
+    pub fn from_mesh(
+        dimension: Dimension,
+        element_type: ElementType,
+        coords: Vec<f64>,
+        connectivity: Vec<u32>,
+        materials: &[String],
+        element_material: &[i64],
+    ) -> Model {
+        let text = |k: &str, v: &str| Section {
+            keyword: k.into(),
+            body: Body::Text(vec![v.into()]),
+        };
+        let placeholder = |k: &str, body: Body| Section {
+            keyword: k.into(),
+            body,
+        };
+        let mut sections = vec![
+            placeholder("DIMENSION", Body::Dimension),
+            placeholder("ELEMENTTYPE", Body::ElementType),
+            text("FORMULATION", "single-point"),
+            placeholder("STARTCOUNTERS", Body::Counters),
+            placeholder("STARTNODES", Body::Nodes),
+            placeholder("STARTELEMCON", Body::Connectivity),
+        ];
+        for kind in ["SURFACE", "LINE", "POINT"] {
+            for phase in ["SOLID", "LIQUID", "GAS"] {
+                sections.push(placeholder(
+                    &format!("START_FIXITY_{kind}_{phase}"),
+                    Body::Table {
+                        counted: true,
+                        refs: Refs::Nodes(1),
+                        rows: Table::new(),
+                    },
+                ));
+            }
+        }
+        sections.push(text("NUMBER_OF_MATERIALS", &materials.len().to_string()));
+        for (i, name) in materials.iter().enumerate() {
+            sections.push(text("MATERIAL_INDEX", &(i + 1).to_string()));
+            sections.push(text("MATERIAL_NAME", name));
+        }
+        let mut elmmat = Table::with_capacity(element_material.len(), 1);
+        for &m in element_material {
+            elmmat.push_row([Token::Int(m)]);
+        }
+        sections.push(placeholder("STARTELMMAT", Body::PerElement(elmmat)));
+        Model {
+            version: "### Anura3D_2021 ###".into(),
+            line_ending: LineEnding::Lf,
+            dimension,
+            element_type,
+            coords,
+            connectivity,
+            sections,
+        }
+    }
+
+    /// Checks element shapes: every tetrahedron has det J > 0 with Anura3D's
+    /// J = [x3-x1, x4-x1, x2-x1], every triangle is counter-clockwise, and every mid-edge node of
+    /// a 10-node tetrahedron lies at its edge's midpoint (relative tolerance `tol`). Returns the
+    /// first problem found.
+    pub fn check_shapes(&self, tol: f64) -> Result<(), String> {
+        const EDGES: [(usize, (usize, usize)); 6] = [
+            (4, (0, 1)),
+            (5, (1, 2)),
+            (6, (0, 2)),
+            (7, (0, 3)),
+            (8, (1, 3)),
+            (9, (2, 3)),
+        ];
+        for e in 0..self.element_count() {
+            let el = self.element(e);
+            let x = |k: usize| self.node(el[k] as usize);
+            let signed = match self.element_type {
+                ElementType::Tri3 => {
+                    let (a, b, c) = (x(0), x(1), x(2));
+                    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+                }
+                _ => crate::msh::tet_det(x(0), x(2), x(3), x(1)),
+            };
+            if signed <= 0.0 {
+                return Err(format!(
+                    "element {} is inverted or flat (det J = {signed})",
+                    e + 1
+                ));
+            }
+            if self.element_type == ElementType::Tet10 {
+                let scale = signed.abs().cbrt();
+                for (mid, (a, b)) in EDGES {
+                    for d in 0..3 {
+                        let want = 0.5 * (x(a)[d] + x(b)[d]);
+                        if (x(mid)[d] - want).abs() > tol * scale {
+                            return Err(format!(
+                                "element {}: node {} is not the midpoint of corners {} and {}",
+                                e + 1,
+                                mid + 1,
+                                a + 1,
+                                b + 1
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -9,7 +9,7 @@
 use std::collections::BTreeMap;
 
 use crate::error::{Error, Location, Result};
-use crate::model::{Body, Dimension, ElementType, LineEnding, Model, Refs, Section, Table, Token};
+use crate::model::{Dimension, ElementType, Model};
 use crate::text::{self, Lines, Tokens};
 
 /// Gmsh element type codes used here.
@@ -673,49 +673,7 @@ pub fn to_model(mesh: &MshMesh, file: &str) -> Result<Model> {
             groups.binary_search(&p).map_or(0, |i| i as i64 + 1)
         }
     };
-    let mut elmmat = Table::with_capacity(n_el, 1);
-    for &p in &set.physical {
-        elmmat.push_row([Token::Int(mat_of(p))]);
-    }
-    let text = |k: &str, v: &str| Section {
-        keyword: k.to_string(),
-        body: Body::Text(vec![v.to_string()]),
-    };
-    let mut sections = vec![
-        Section {
-            keyword: "DIMENSION".into(),
-            body: Body::Dimension,
-        },
-        Section {
-            keyword: "ELEMENTTYPE".into(),
-            body: Body::ElementType,
-        },
-        text("FORMULATION", "single-point"),
-        Section {
-            keyword: "STARTCOUNTERS".into(),
-            body: Body::Counters,
-        },
-        Section {
-            keyword: "STARTNODES".into(),
-            body: Body::Nodes,
-        },
-        Section {
-            keyword: "STARTELEMCON".into(),
-            body: Body::Connectivity,
-        },
-    ];
-    for kind in ["SURFACE", "LINE", "POINT"] {
-        for phase in ["SOLID", "LIQUID", "GAS"] {
-            sections.push(Section {
-                keyword: format!("START_FIXITY_{kind}_{phase}"),
-                body: Body::Table {
-                    counted: true,
-                    refs: Refs::Nodes(1),
-                    rows: Table::new(),
-                },
-            });
-        }
-    }
+    let element_material: Vec<i64> = set.physical.iter().map(|&p| mat_of(p)).collect();
     let names: Vec<String> = if groups.is_empty() {
         vec!["material_1".to_string()]
     } else {
@@ -728,28 +686,19 @@ pub fn to_model(mesh: &MshMesh, file: &str) -> Result<Model> {
             })
             .collect()
     };
-    sections.push(text("NUMBER_OF_MATERIALS", &names.len().to_string()));
-    for (i, name) in names.iter().enumerate() {
-        sections.push(text("MATERIAL_INDEX", &(i + 1).to_string()));
-        sections.push(text("MATERIAL_NAME", name));
-    }
-    sections.push(Section {
-        keyword: "STARTELMMAT".into(),
-        body: Body::PerElement(elmmat),
-    });
-    Ok(Model {
-        version: "### Anura3D_2021 ###".into(),
-        line_ending: LineEnding::Lf,
-        dimension: if dim == 3 {
-            Dimension::Cartesian3D
-        } else {
-            Dimension::PlaneStrain
-        },
+    let dimension = if dim == 3 {
+        Dimension::Cartesian3D
+    } else {
+        Dimension::PlaneStrain
+    };
+    Ok(Model::from_mesh(
+        dimension,
         element_type,
         coords,
-        connectivity: conn,
-        sections,
-    })
+        conn,
+        &names,
+        &element_material,
+    ))
 }
 
 #[cfg(test)]

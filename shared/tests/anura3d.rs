@@ -74,37 +74,9 @@ fn tet10_mid_edge_nodes_sit_at_edge_midpoints_and_orientation_is_positive() {
         if m.element_type != mpm_shared::ElementType::Tet10 {
             continue;
         }
-        for e in 0..m.element_count() {
-            let el = m.element(e);
-            let x = |k: usize| m.node(el[k] as usize);
-            for (mid, (a, b)) in [
-                (4, (0, 1)),
-                (5, (1, 2)),
-                (6, (0, 2)),
-                (7, (0, 3)),
-                (8, (1, 3)),
-                (9, (2, 3)),
-            ] {
-                for d in 0..3 {
-                    let want = 0.5 * (x(a)[d] + x(b)[d]);
-                    assert!(
-                        (x(mid)[d] - want).abs() < 1e-6,
-                        "{}: element {} node {}",
-                        p.display(),
-                        e + 1,
-                        mid + 1
-                    );
-                }
-            }
-            let det = mpm_shared::msh::tet_det(x(0), x(2), x(3), x(1));
-            assert!(
-                det > 0.0,
-                "{}: element {} has det J = {det}",
-                p.display(),
-                e + 1
-            );
-            checked += 1;
-        }
+        m.check_shapes(1e-6)
+            .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        checked += m.element_count();
     }
     assert!(checked > 1000, "checked {checked} tetrahedra");
 }

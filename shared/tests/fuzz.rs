@@ -40,6 +40,19 @@ fn corpus() -> Vec<Vec<u8>> {
     v
 }
 
+/// Byte range of the line that holds byte `i`, terminator included.
+fn line_around(d: &[u8], i: usize) -> (usize, usize) {
+    let s = d[..i]
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |p| p + 1);
+    let e = d[i..]
+        .iter()
+        .position(|&b| b == b'\n')
+        .map_or(d.len(), |p| i + p + 1);
+    (s, e)
+}
+
 /// Applies a corruption: truncate, overwrite a byte, delete a line, or duplicate a line.
 fn corrupt(data: &[u8], op: u8, pos: f64, byte: u8) -> Vec<u8> {
     let i = ((data.len() as f64) * pos) as usize % data.len().max(1);
@@ -48,25 +61,11 @@ fn corrupt(data: &[u8], op: u8, pos: f64, byte: u8) -> Vec<u8> {
         0 => d.truncate(i),
         1 => d[i] = byte,
         2 => {
-            let s = d[..i]
-                .iter()
-                .rposition(|&b| b == b'\n')
-                .map_or(0, |p| p + 1);
-            let e = d[i..]
-                .iter()
-                .position(|&b| b == b'\n')
-                .map_or(d.len(), |p| i + p + 1);
+            let (s, e) = line_around(&d, i);
             d.drain(s..e);
         }
         3 => {
-            let s = d[..i]
-                .iter()
-                .rposition(|&b| b == b'\n')
-                .map_or(0, |p| p + 1);
-            let e = d[i..]
-                .iter()
-                .position(|&b| b == b'\n')
-                .map_or(d.len(), |p| i + p + 1);
+            let (s, e) = line_around(&d, i);
             let line = d[s..e].to_vec();
             d.splice(s..s, line);
         }
