@@ -2,5 +2,6 @@
 //! renumbering and partitions (DESIGN §3). The `sfcb` binary is a thin front end.
 #![warn(missing_docs)]
 
+pub mod metrics;
 pub mod morton;
 pub mod order;

@@ -8,7 +8,9 @@ use std::process::ExitCode;
 use anyhow::{bail, Context};
 use clap::{Parser, ValueEnum};
 use mpm_shared::cps::Cps;
-use sfcb::order;
+use sfcb::{metrics, order};
+use std::collections::BTreeMap;
+use std::time::Instant;
 
 /// Which curve orders the elements.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -98,7 +100,9 @@ fn run(args: Args) -> anyhow::Result<()> {
     {
         bail!("the mesh and the report cannot both go to standard output");
     }
+    let t_start = Instant::now();
     let model = mpm_shared::read_model(&args.input)?;
+    let t_read = t_start.elapsed().as_secs_f64();
     if let Some(l) = args.levels {
         let max = if model.dimension.coords() == 3 {
             21
@@ -115,9 +119,6 @@ fn run(args: Args) -> anyhow::Result<()> {
     if args.curve == Curve::Hilbert {
         bail!("--curve hilbert is not available in this build yet; use --curve morton or none");
     }
-    if args.report.is_some() {
-        bail!("--report is not available in this build yet");
-    }
     let cps_in = match &args.cps {
         Some(p) => {
             let data = mpm_shared::io::read_input(&p[0])?;
@@ -131,6 +132,12 @@ fn run(args: Args) -> anyhow::Result<()> {
     };
     let dim = model.dimension.coords();
     let levels = args.levels.unwrap_or(if dim == 3 { 21 } else { 31 });
+    let want_report = args.report.is_some();
+    let before = want_report.then(|| metrics::locality(&model));
+    let (n_el, n_nodes) = (model.element_count(), model.node_count());
+    let mut seconds = BTreeMap::new();
+    seconds.insert("read", t_read);
+    let mut shared_keys = 0;
     let (model, order) = match args.curve {
         Curve::None => {
             let order: Vec<u32> = (0..model.element_count() as u32).collect();
@@ -144,7 +151,13 @@ fn run(args: Args) -> anyhow::Result<()> {
                     cubic: !args.no_cubic,
                 },
             );
+            seconds.insert("keys", ord.seconds[0]);
+            seconds.insert("sort", ord.seconds[1]);
+            seconds.insert("renumber", ord.seconds[2]);
+            shared_keys = ord.shared_keys;
+            let t = Instant::now();
             let reordered = model.reordered(&ord.order, &ord.node_new)?;
+            seconds.insert("remap", t.elapsed().as_secs_f64());
             (reordered, ord.order)
         }
     };
@@ -169,9 +182,43 @@ fn run(args: Args) -> anyhow::Result<()> {
         cps.set_output_material_points(&new_ids);
         cps_out = Some((paths[1].clone(), cps.write()));
     }
+    let t = Instant::now();
     mpm_shared::write_model(&model, &args.output, partition.as_deref())?;
+    seconds.insert("write", t.elapsed().as_secs_f64());
     if let Some((path, bytes)) = cps_out {
         mpm_shared::io::write_output(&path, &bytes)?;
+    }
+    seconds.insert("total", t_start.elapsed().as_secs_f64());
+    if let Some(report_path) = &args.report {
+        let partitions = args.partitions.map(|p| {
+            let part: Vec<u32> = partition
+                .as_ref()
+                .expect("computed with --partitions")
+                .iter()
+                .map(|&v| v as u32)
+                .collect();
+            let nb = metrics::face_neighbours(&model);
+            metrics::partition_quality(&model, &nb, &part, &order::weights(&model), p)
+        });
+        let report = serde_json::json!({
+            "input": mpm_shared::display_name(&args.input),
+            "output": mpm_shared::display_name(&args.output),
+            "dimension": model.dimension.coords(),
+            "element_type": model.element_type.keyword(),
+            "elements": n_el,
+            "nodes": n_nodes,
+            "curve": format!("{:?}", args.curve).to_lowercase(),
+            "levels": levels,
+            "cubic": !args.no_cubic,
+            "threads": rayon::current_num_threads(),
+            "elements_sharing_a_key": shared_keys,
+            "seconds": seconds,
+            "locality": { "before": before, "after": metrics::locality(&model) },
+            "partitions": partitions,
+        });
+        let mut text = serde_json::to_string_pretty(&report)?;
+        text.push('\n');
+        mpm_shared::io::write_output(report_path, text.as_bytes())?;
     }
     Ok(())
 }

@@ -26,6 +26,8 @@ pub struct Ordering {
     pub keys: Vec<u64>,
     /// Elements whose key equals the previous element's key.
     pub shared_keys: usize,
+    /// Seconds spent on centroids and keys, the sort, and the vertex renumbering.
+    pub seconds: [f64; 3],
 }
 
 /// Element centroids: corner coordinates summed in stored order, left to right, then divided
@@ -52,6 +54,7 @@ pub fn morton(model: &Model, opts: Options) -> Ordering {
     let d = model.dimension.coords();
     let grid = Grid::bounding(&model.coords, d, opts.levels, opts.cubic);
     let n = model.element_count();
+    let t0 = std::time::Instant::now();
     let mut pairs: Vec<(u64, u32)> = (0..n)
         .into_par_iter()
         .with_min_len(4096)
@@ -63,16 +66,24 @@ pub fn morton(model: &Model, opts: Options) -> Ordering {
         .collect();
     // (key, original index) pairs are all distinct, so the unstable sort is deterministic and
     // equals a stable sort by key.
+    let t1 = std::time::Instant::now();
     pairs.par_sort_unstable();
+    let t2 = std::time::Instant::now();
     let order: Vec<u32> = pairs.iter().map(|p| p.1).collect();
     let keys: Vec<u64> = pairs.iter().map(|p| p.0).collect();
     let shared_keys = keys.windows(2).filter(|w| w[0] == w[1]).count();
     let node_new = first_use_numbering(model, &order);
+    let t3 = std::time::Instant::now();
     Ordering {
         order,
         node_new,
         keys,
         shared_keys,
+        seconds: [
+            (t1 - t0).as_secs_f64(),
+            (t2 - t1).as_secs_f64(),
+            (t3 - t2).as_secs_f64(),
+        ],
     }
 }
 

@@ -178,3 +178,43 @@ fn partitions_are_contiguous_and_balanced() {
         assert!(hi - lo <= 1, "{p} parts: {count:?}");
     }
 }
+
+#[test]
+fn report_has_timings_locality_and_partition_quality() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::cargo_bin("sfcb")
+        .unwrap()
+        .arg(testdata("column_tet10.msh"))
+        .arg(dir.path().join("c.vtu"))
+        .args(["--partitions", "4", "--report", "-"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for phase in [
+        "read", "keys", "sort", "renumber", "remap", "write", "total",
+    ] {
+        assert!(r["seconds"][phase].as_f64().unwrap() >= 0.0, "{phase}");
+    }
+    let (before, after) = (&r["locality"]["before"], &r["locality"]["after"]);
+    // Gmsh numbers nodes by geometric entity, so the curve order must tighten elements.
+    assert!(
+        after["mean_id_spread"].as_f64().unwrap()
+            < 0.5 * before["mean_id_spread"].as_f64().unwrap()
+    );
+    assert!(
+        after["mean_cache_lines"].as_f64().unwrap() < before["mean_cache_lines"].as_f64().unwrap()
+    );
+    let p = &r["partitions"];
+    assert_eq!(p["parts"], 4);
+    assert_eq!(p["pieces"].as_array().unwrap().len(), 4);
+    assert!(p["edge_cut"].as_u64().unwrap() > 0);
+    assert!(p["imbalance"].as_f64().unwrap() < 1.05);
+    // The VTU carries the partition field.
+    let vtu = std::fs::read(dir.path().join("c.vtu")).unwrap();
+    assert!(String::from_utf8_lossy(&vtu[..3000]).contains("Name=\"partition\""));
+}
