@@ -2,6 +2,7 @@
 //! renumbering and partitions (DESIGN §3). The `sfcb` binary is a thin front end.
 #![warn(missing_docs)]
 
+pub mod hilbert;
 pub mod metrics;
 pub mod morton;
 pub mod order;

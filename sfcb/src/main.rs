@@ -116,9 +116,6 @@ fn run(args: Args) -> anyhow::Result<()> {
             );
         }
     }
-    if args.curve == Curve::Hilbert {
-        bail!("--curve hilbert is not available in this build yet; use --curve morton or none");
-    }
     let cps_in = match &args.cps {
         Some(p) => {
             let data = mpm_shared::io::read_input(&p[0])?;
@@ -144,9 +141,15 @@ fn run(args: Args) -> anyhow::Result<()> {
             (model, order)
         }
         _ => {
-            let ord = order::morton(
+            let curve = if args.curve == Curve::Hilbert {
+                order::Curve::Hilbert
+            } else {
+                order::Curve::Morton
+            };
+            let ord = order::order(
                 &model,
                 order::Options {
+                    curve,
                     levels,
                     cubic: !args.no_cubic,
                 },

@@ -6,9 +6,20 @@ use rayon::prelude::*;
 
 use crate::morton::Grid;
 
+/// The space-filling curve that orders the elements.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Curve {
+    /// Z-order (bit interleaving).
+    Morton,
+    /// Hilbert curve on the same grid.
+    Hilbert,
+}
+
 /// Options of one ordering.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Options {
+    /// The curve.
+    pub curve: Curve,
     /// Curve levels N.
     pub levels: u32,
     /// One cube for all axes (the default) rather than per-axis extents.
@@ -48,9 +59,9 @@ pub fn centroid(model: &Model, e: usize, out: &mut [f64; 3]) {
     }
 }
 
-/// Orders the elements of `model` along the Morton curve of their centroids and renumbers the
-/// vertices in order of first use. The result does not depend on the number of threads.
-pub fn morton(model: &Model, opts: Options) -> Ordering {
+/// Orders the elements of `model` along the curve of their centroids and renumbers the vertices
+/// in order of first use. The result does not depend on the number of threads.
+pub fn order(model: &Model, opts: Options) -> Ordering {
     let d = model.dimension.coords();
     let grid = Grid::bounding(&model.coords, d, opts.levels, opts.cubic);
     let n = model.element_count();
@@ -61,7 +72,14 @@ pub fn morton(model: &Model, opts: Options) -> Ordering {
         .map(|e| {
             let mut c = [0.0; 3];
             centroid(model, e, &mut c);
-            (grid.key(&c), e as u32)
+            let key = match opts.curve {
+                Curve::Morton => grid.key(&c),
+                Curve::Hilbert => {
+                    let q = [grid.cell(c[0], 0), grid.cell(c[1], 1), grid.cell(c[2], 2)];
+                    crate::hilbert::key(&q[..d], opts.levels)
+                }
+            };
+            (key, e as u32)
         })
         .collect();
     // (key, original index) pairs are all distinct, so the unstable sort is deterministic and

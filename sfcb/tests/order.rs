@@ -47,8 +47,9 @@ fn models() -> Vec<(String, Model)> {
     v
 }
 
-fn opts(m: &Model) -> order::Options {
+fn opts(m: &Model, curve: order::Curve) -> order::Options {
     order::Options {
+        curve,
         levels: if m.dimension.coords() == 3 { 21 } else { 31 },
         cubic: true,
     }
@@ -57,8 +58,13 @@ fn opts(m: &Model) -> order::Options {
 #[test]
 fn ordering_is_a_bijection_and_everything_follows_its_element_and_nodes() {
     let mut refused = 0;
-    for (name, m) in models() {
-        let ord = order::morton(&m, opts(&m));
+    for ((name, m), curve) in models().into_iter().flat_map(|x| {
+        [
+            (x.clone(), order::Curve::Morton),
+            (x, order::Curve::Hilbert),
+        ]
+    }) {
+        let ord = order::order(&m, opts(&m, curve));
         assert!(
             mpm_shared::model::inverse(&ord.order, m.element_count()).is_some(),
             "{name}"
@@ -126,26 +132,31 @@ fn ordering_is_a_bijection_and_everything_follows_its_element_and_nodes() {
             }
         }
         // Ordering the ordered model changes nothing.
-        let again = order::morton(&r, opts(&r));
+        let again = order::order(&r, opts(&r, curve));
         let rr = r.reordered(&again.order, &again.node_new).unwrap();
         assert!(gom::write(&rr) == gom::write(&r), "{name}: not idempotent");
     }
     // Only files with sections whose ids are not understood are refused.
-    assert!(refused <= 4, "{refused} refused");
+    assert!(refused <= 8, "{refused} refused");
 }
 
 #[test]
 fn golden_files_and_thread_independence() {
     let dir = tempfile::tempdir().unwrap();
-    for m in ["cube_tet10", "square_tri3"] {
-        let golden = std::fs::read(testdata(&format!("{m}.morton.GOM"))).unwrap();
+    for (m, curve) in [
+        ("cube_tet10", "morton"),
+        ("square_tri3", "morton"),
+        ("cube_tet10", "hilbert"),
+        ("square_tri3", "hilbert"),
+    ] {
+        let golden = std::fs::read(testdata(&format!("{m}.{curve}.GOM"))).unwrap();
         for threads in ["1", "2", "3"] {
             let out = dir.path().join(format!("{m}_{threads}.GOM"));
             Command::cargo_bin("sfcb")
                 .unwrap()
                 .arg(testdata(&format!("{m}.GOM")))
                 .arg(&out)
-                .args(["--threads", threads])
+                .args(["--threads", threads, "--curve", curve])
                 .assert()
                 .success();
             assert!(
@@ -158,6 +169,7 @@ fn golden_files_and_thread_independence() {
             .unwrap()
             .arg(testdata(&format!("{m}.msh")))
             .arg("-")
+            .args(["--curve", curve])
             .output()
             .unwrap();
         assert!(out.stdout == golden, "{m}: msh input differs");
