@@ -8,6 +8,8 @@
 //! first problem. The writer keeps the section order of the model, writes one blank between
 //! values, integers as integers and reals in shortest round-trip form, so `read(write(m)) == m`.
 
+use std::io::{self, Write};
+
 use rayon::prelude::*;
 
 use crate::error::{Error, Location, Result};
@@ -68,7 +70,11 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
     // First pass: split into sections.
     let mut raw: Vec<RawSection> = Vec::new();
     let mut finished = false;
-    while let Some((n, l)) = lines.next() {
+    loop {
+        if !raw.is_empty() {
+            lines.skip_to_keyword();
+        }
+        let Some((n, l)) = lines.next() else { break };
         let t = text::trim(l);
         if let Some(kw) = t.strip_prefix(b"$$") {
             let keyword = std::str::from_utf8(kw)
@@ -352,54 +358,97 @@ fn chunks(body: &[u8], first_line: usize) -> Vec<(&[u8], usize)> {
     out
 }
 
-/// Reads `count` lines of exactly `width` reals (node coordinates).
-fn read_reals(s: &RawSection, width: usize, count: usize, file: &str) -> Result<Vec<f64>> {
+/// Reads `count` lines of exactly `width` values each into one array, in parallel chunks that
+/// parse straight into their part of the result. `parse` reads one token (or says what it
+/// expected); `what` names a row in messages ("coordinates per node").
+fn read_fixed<T, P>(
+    s: &RawSection,
+    width: usize,
+    count: usize,
+    file: &str,
+    what: (&str, &str),
+    parse: P,
+) -> Result<Vec<T>>
+where
+    T: Copy + Default + Send + Sync,
+    P: Fn(&[u8]) -> Result<T, String> + Sync,
+{
     let sec = format!("$${}", s.keyword);
-    let parse_piece = |(piece, first): (&[u8], usize)| -> Result<Vec<f64>> {
-        let mut out = Vec::with_capacity(piece.len() / 8);
-        for (n, l) in Lines::new(piece, first) {
-            let before = out.len();
-            for tok in Tokens::new(l) {
-                let v = text::parse_real(tok).ok_or_else(|| {
-                    Error::format(
-                        Location::new(file, n, Some(&sec)),
-                        format!(
-                            "expected a coordinate (real number), found {}",
-                            text::show(tok)
-                        ),
-                    )
-                })?;
-                out.push(v);
-            }
-            let got = out.len() - before;
-            if got != 0 && got != width {
-                return Err(Error::format(
-                    Location::new(file, n, Some(&sec)),
-                    format!("expected {width} coordinates per node, found {got}"),
-                ));
-            }
-        }
-        Ok(out)
-    };
-    let parts: Vec<Vec<f64>> = if s.body.len() > PARALLEL_BYTES {
+    let pieces = if s.body.len() > PARALLEL_BYTES {
         chunks(s.body, s.body_line)
-            .into_par_iter()
-            .map(parse_piece)
-            .collect::<Result<_>>()?
     } else {
-        vec![parse_piece((s.body, s.body_line))?]
+        vec![(s.body, s.body_line)]
     };
-    let out = concat(parts);
-    if out.len() != count * width {
+    // Rows per piece first, so each piece knows where its rows go.
+    let rows: Vec<usize> = pieces
+        .par_iter()
+        .map(|(p, _)| Lines::new(p, 1).filter(|(_, l)| !text::is_blank(l)).count())
+        .collect();
+    let total: usize = rows.iter().sum();
+    if total != count {
         return Err(Error::invalid(
             Location::new(file, s.line, Some(&sec)),
             format!(
-                "expected {count} nodes (from $$STARTCOUNTERS), found {}",
-                out.len() / width
+                "expected {count} {} (from $$STARTCOUNTERS), found {total}",
+                what.1
             ),
         ));
     }
+    let mut out = vec![T::default(); count * width];
+    let mut slices = Vec::with_capacity(pieces.len());
+    let mut rest = &mut out[..];
+    for &r in &rows {
+        let (head, tail) = rest.split_at_mut(r * width);
+        slices.push(head);
+        rest = tail;
+    }
+    pieces
+        .into_par_iter()
+        .zip(slices)
+        .try_for_each(|((piece, first), dst)| -> Result<()> {
+            let mut k = 0;
+            for (n, l) in Lines::new(piece, first) {
+                let mut got = 0;
+                for tok in Tokens::new(l) {
+                    if got == width {
+                        got += 1;
+                        break;
+                    }
+                    dst[k + got] = parse(tok)
+                        .map_err(|m| Error::format(Location::new(file, n, Some(&sec)), m))?;
+                    got += 1;
+                }
+                if got != 0 && got != width {
+                    let found = Tokens::new(l).count();
+                    return Err(Error::format(
+                        Location::new(file, n, Some(&sec)),
+                        format!("expected {width} {}, found {found}", what.0),
+                    ));
+                }
+                k += got;
+            }
+            Ok(())
+        })?;
     Ok(out)
+}
+
+/// Reads `count` lines of exactly `width` reals (node coordinates).
+fn read_reals(s: &RawSection, width: usize, count: usize, file: &str) -> Result<Vec<f64>> {
+    read_fixed(
+        s,
+        width,
+        count,
+        file,
+        ("coordinates per node", "nodes"),
+        |tok| {
+            text::parse_real(tok).ok_or_else(|| {
+                format!(
+                    "expected a coordinate (real number), found {}",
+                    text::show(tok)
+                )
+            })
+        },
+    )
 }
 
 /// Reads `count` lines of exactly `width` 1-based node ids, returned 0-based.
@@ -410,69 +459,25 @@ fn read_ids(
     n_nodes: usize,
     file: &str,
 ) -> Result<Vec<u32>> {
-    let sec = format!("$${}", s.keyword);
-    let parse_piece = |(piece, first): (&[u8], usize)| -> Result<Vec<u32>> {
-        let mut out = Vec::with_capacity(piece.len() / 5);
-        for (n, l) in Lines::new(piece, first) {
-            let before = out.len();
-            for tok in Tokens::new(l) {
-                let id = text::parse_u32(tok).ok_or_else(|| {
-                    Error::format(
-                        Location::new(file, n, Some(&sec)),
-                        format!(
-                            "expected a node id (positive integer), found {}",
-                            text::show(tok)
-                        ),
-                    )
-                })?;
-                if id == 0 || id as usize > n_nodes {
-                    return Err(Error::invalid(
-                        Location::new(file, n, Some(&sec)),
-                        format!("node id {id} out of range 1..={n_nodes}"),
-                    ));
-                }
-                out.push(id - 1);
+    read_fixed(
+        s,
+        width,
+        count,
+        file,
+        ("node ids per element", "elements"),
+        |tok| {
+            let id = text::parse_u32(tok).ok_or_else(|| {
+                format!(
+                    "expected a node id (positive integer), found {}",
+                    text::show(tok)
+                )
+            })?;
+            if id == 0 || id as usize > n_nodes {
+                return Err(format!("node id {id} out of range 1..={n_nodes}"));
             }
-            let got = out.len() - before;
-            if got != 0 && got != width {
-                return Err(Error::format(
-                    Location::new(file, n, Some(&sec)),
-                    format!("expected {width} node ids per element, found {got}"),
-                ));
-            }
-        }
-        Ok(out)
-    };
-    let parts: Vec<Vec<u32>> = if s.body.len() > PARALLEL_BYTES {
-        chunks(s.body, s.body_line)
-            .into_par_iter()
-            .map(parse_piece)
-            .collect::<Result<_>>()?
-    } else {
-        vec![parse_piece((s.body, s.body_line))?]
-    };
-    let out = concat(parts);
-    if out.len() != count * width {
-        return Err(Error::invalid(
-            Location::new(file, s.line, Some(&sec)),
-            format!(
-                "expected {count} elements (from $$STARTCOUNTERS), found {}",
-                out.len() / width
-            ),
-        ));
-    }
-    Ok(out)
-}
-
-fn concat<T: Copy>(parts: Vec<Vec<T>>) -> Vec<T> {
-    if parts.len() == 1 {
-        return parts.into_iter().next().expect("one part");
-    }
-    let mut out = Vec::with_capacity(parts.iter().map(Vec::len).sum());
-    for p in parts {
-        out.extend_from_slice(&p);
-    }
-    out
+            Ok(id - 1)
+        },
+    )
 }
 
 /// Reads every non-blank line as a row of tokens; when `refs` is given, checks that the id
@@ -507,9 +512,7 @@ fn read_rows(
             .collect::<Result<_>>()?;
         let mut t = Table::with_capacity(parts.iter().map(Table::len).sum(), 2);
         for p in parts {
-            for r in p.rows() {
-                t.push_row(r.iter().cloned());
-            }
+            t.append(p);
         }
         Ok(t)
     } else {
@@ -549,130 +552,162 @@ fn token_text(t: &Token) -> String {
     format!("'{}'", String::from_utf8_lossy(&v))
 }
 
-/// Writes a model in GOM layout.
+/// Writes a model in GOM layout to memory.
 pub fn write(model: &Model) -> Vec<u8> {
-    let eol = model.line_ending.bytes();
-    let estimate = model.coords.len() * 20 + model.connectivity.len() * 8 + 4096;
-    let mut out = Vec::with_capacity(estimate);
-    out.extend_from_slice(model.version.as_bytes());
-    out.extend_from_slice(eol);
-    for s in &model.sections {
-        out.extend_from_slice(b"$$");
-        out.extend_from_slice(s.keyword.as_bytes());
-        out.extend_from_slice(eol);
-        match &s.body {
-            Body::Dimension => line(&mut out, model.dimension.keyword().as_bytes(), eol),
-            Body::ElementType => line(&mut out, model.element_type.keyword().as_bytes(), eol),
-            Body::Counters => {
-                text::push_int(&mut out, model.element_count());
-                out.push(b' ');
-                text::push_int(&mut out, model.node_count());
-                out.extend_from_slice(eol);
-            }
-            Body::Nodes => write_nodes(&mut out, model, eol),
-            Body::Connectivity => write_connectivity(&mut out, model, eol),
-            Body::Table { counted, rows, .. } => {
-                if *counted {
-                    text::push_int(&mut out, rows.len());
-                    out.extend_from_slice(eol);
-                }
-                write_rows(&mut out, rows, eol);
-            }
-            Body::PerElement(rows) => write_rows(&mut out, rows, eol),
-            Body::Text(lines) | Body::Opaque(lines) => {
-                for l in lines {
-                    line(&mut out, l.as_bytes(), eol);
-                }
-            }
-        }
-    }
-    out.extend_from_slice(b"$$FINISH");
-    out.extend_from_slice(eol);
+    let mut out = Vec::with_capacity(model.coords.len() * 20 + model.connectivity.len() * 8 + 4096);
+    write_to(model, &mut out).expect("writing to memory cannot fail");
     out
 }
 
-fn line(out: &mut Vec<u8>, l: &[u8], eol: &[u8]) {
-    out.extend_from_slice(l);
-    out.extend_from_slice(eol);
-}
+/// Bytes collected before they are handed to the writer.
+const FLUSH_BYTES: usize = 1 << 20;
 
 /// Rows per parallel formatting task.
-const WRITE_CHUNK: usize = 1 << 15;
+const WRITE_CHUNK: usize = 1 << 14;
 
-fn write_nodes(out: &mut Vec<u8>, model: &Model, eol: &[u8]) {
-    let d = model.dimension.coords();
-    let fmt = |nodes: &[f64]| {
-        let mut buf = Vec::with_capacity(nodes.len() * 20);
-        for node in nodes.chunks_exact(d) {
-            for (j, &c) in node.iter().enumerate() {
-                if j > 0 {
-                    buf.push(b' ');
-                }
-                text::push_real(&mut buf, c);
-            }
-            buf.extend_from_slice(eol);
+/// Buffers small pieces and streams large sections to the writer in order.
+struct Sink<'w> {
+    w: &'w mut dyn Write,
+    buf: Vec<u8>,
+}
+
+impl Sink<'_> {
+    fn put(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.buf.extend_from_slice(bytes);
+        if self.buf.len() >= FLUSH_BYTES {
+            self.flush()?;
         }
-        buf
-    };
-    if model.coords.len() > WRITE_CHUNK * d {
-        let parts: Vec<Vec<u8>> = model.coords.par_chunks(WRITE_CHUNK * d).map(fmt).collect();
-        parts.iter().for_each(|p| out.extend_from_slice(p));
-    } else {
-        out.extend_from_slice(&fmt(&model.coords));
+        Ok(())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.w.write_all(&self.buf)?;
+        self.buf.clear();
+        Ok(())
+    }
+
+    /// Formats rows `0..n` in parallel chunks of `WRITE_CHUNK` with `fmt` and writes them in
+    /// order; a batch of chunks at a time keeps memory bounded.
+    fn rows<F>(&mut self, n: usize, fmt: F) -> io::Result<()>
+    where
+        F: Fn(std::ops::Range<usize>, &mut Vec<u8>) + Sync,
+    {
+        if n <= WRITE_CHUNK {
+            let mut b = std::mem::take(&mut self.buf);
+            fmt(0..n, &mut b);
+            self.buf = b;
+            return if self.buf.len() >= FLUSH_BYTES {
+                self.flush()
+            } else {
+                Ok(())
+            };
+        }
+        self.flush()?;
+        let chunks = n.div_ceil(WRITE_CHUNK);
+        let batch = 4 * rayon::current_num_threads().max(1);
+        for first in (0..chunks).step_by(batch) {
+            let parts: Vec<Vec<u8>> = (first..(first + batch).min(chunks))
+                .into_par_iter()
+                .map(|c| {
+                    let mut b = Vec::with_capacity(WRITE_CHUNK * 64);
+                    fmt(c * WRITE_CHUNK..((c + 1) * WRITE_CHUNK).min(n), &mut b);
+                    b
+                })
+                .collect();
+            for p in parts {
+                self.w.write_all(&p)?;
+            }
+        }
+        Ok(())
     }
 }
 
-fn write_connectivity(out: &mut Vec<u8>, model: &Model, eol: &[u8]) {
-    let w = model.element_type.nodes();
-    let fmt = |ids: &[u32]| {
-        let mut buf = Vec::with_capacity(ids.len() * 8);
-        for el in ids.chunks_exact(w) {
-            for (j, &id) in el.iter().enumerate() {
-                if j > 0 {
-                    buf.push(b' ');
-                }
-                text::push_int(&mut buf, id + 1);
-            }
-            buf.extend_from_slice(eol);
-        }
-        buf
+/// Writes a model in GOM layout, streaming: large sections are formatted in parallel batches
+/// and written in order, so the bytes do not depend on the number of threads.
+pub fn write_to(model: &Model, w: &mut dyn Write) -> io::Result<()> {
+    let eol = model.line_ending.bytes();
+    let mut out = Sink {
+        w,
+        buf: Vec::with_capacity(FLUSH_BYTES + 4096),
     };
-    if model.connectivity.len() > WRITE_CHUNK * w {
-        let parts: Vec<Vec<u8>> = model
-            .connectivity
-            .par_chunks(WRITE_CHUNK * w)
-            .map(fmt)
-            .collect();
-        parts.iter().for_each(|p| out.extend_from_slice(p));
-    } else {
-        out.extend_from_slice(&fmt(&model.connectivity));
+    let line = |out: &mut Sink, l: &[u8]| -> io::Result<()> {
+        out.put(l)?;
+        out.put(eol)
+    };
+    line(&mut out, model.version.as_bytes())?;
+    for s in &model.sections {
+        out.put(b"$$")?;
+        line(&mut out, s.keyword.as_bytes())?;
+        match &s.body {
+            Body::Dimension => line(&mut out, model.dimension.keyword().as_bytes())?,
+            Body::ElementType => line(&mut out, model.element_type.keyword().as_bytes())?,
+            Body::Counters => {
+                let mut b = Vec::new();
+                text::push_int(&mut b, model.element_count());
+                b.push(b' ');
+                text::push_int(&mut b, model.node_count());
+                line(&mut out, &b)?;
+            }
+            Body::Nodes => {
+                let d = model.dimension.coords();
+                out.rows(model.node_count(), |r, b| {
+                    for node in model.coords[r.start * d..r.end * d].chunks_exact(d) {
+                        for (j, &c) in node.iter().enumerate() {
+                            if j > 0 {
+                                b.push(b' ');
+                            }
+                            text::push_real(b, c);
+                        }
+                        b.extend_from_slice(eol);
+                    }
+                })?
+            }
+            Body::Connectivity => {
+                let per = model.element_type.nodes();
+                out.rows(model.element_count(), |r, b| {
+                    for el in model.connectivity[r.start * per..r.end * per].chunks_exact(per) {
+                        for (j, &id) in el.iter().enumerate() {
+                            if j > 0 {
+                                b.push(b' ');
+                            }
+                            text::push_int(b, id + 1);
+                        }
+                        b.extend_from_slice(eol);
+                    }
+                })?
+            }
+            Body::Table { counted, rows, .. } => {
+                if *counted {
+                    let mut b = Vec::new();
+                    text::push_int(&mut b, rows.len());
+                    line(&mut out, &b)?;
+                }
+                write_rows(&mut out, rows, eol)?;
+            }
+            Body::PerElement(rows) => write_rows(&mut out, rows, eol)?,
+            Body::Text(lines) | Body::Opaque(lines) => {
+                for l in lines {
+                    line(&mut out, l.as_bytes())?;
+                }
+            }
+        }
     }
+    line(&mut out, b"$$FINISH")?;
+    out.flush()
 }
 
-fn write_rows(out: &mut Vec<u8>, rows: &Table, eol: &[u8]) {
-    let fmt = |range: std::ops::Range<usize>| {
-        let mut buf = Vec::with_capacity(range.len() * 8);
-        for i in range {
+fn write_rows(out: &mut Sink, rows: &Table, eol: &[u8]) -> io::Result<()> {
+    out.rows(rows.len(), |r, b| {
+        for i in r {
             for (j, t) in rows.row(i).iter().enumerate() {
                 if j > 0 {
-                    buf.push(b' ');
+                    b.push(b' ');
                 }
-                t.push_to(&mut buf);
+                t.push_to(b);
             }
-            buf.extend_from_slice(eol);
+            b.extend_from_slice(eol);
         }
-        buf
-    };
-    let n = rows.len();
-    if n > WRITE_CHUNK {
-        let parts: Vec<Vec<u8>> = (0..n.div_ceil(WRITE_CHUNK))
-            .into_par_iter()
-            .map(|c| fmt(c * WRITE_CHUNK..((c + 1) * WRITE_CHUNK).min(n)))
-            .collect();
-        parts.iter().for_each(|p| out.extend_from_slice(p));
-    } else {
-        out.extend_from_slice(&fmt(0..n));
-    }
+    })
 }
 
 #[cfg(test)]

@@ -12,6 +12,42 @@ pub fn is_stdio(path: &Path) -> bool {
     path.as_os_str() == "-"
 }
 
+/// The bytes of an input: a memory map of a regular file, or a buffer (standard input, pipes).
+pub enum Input {
+    /// A mapped file.
+    Mapped(memmap2::Mmap),
+    /// Bytes read into memory.
+    Buffer(Vec<u8>),
+}
+
+impl std::ops::Deref for Input {
+    type Target = [u8];
+    fn deref(&self) -> &[u8] {
+        match self {
+            Input::Mapped(m) => m,
+            Input::Buffer(b) => b,
+        }
+    }
+}
+
+/// Opens an input for reading without copying it: regular files are memory-mapped (the big
+/// meshes parse straight from the page cache), standard input (`-`) and other files are read.
+pub fn map_input(path: &Path) -> Result<Input> {
+    if is_stdio(path) {
+        return read_input(path).map(Input::Buffer);
+    }
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let meta = file.metadata().map_err(|e| Error::io(path, e))?;
+    if meta.is_file() && meta.len() > 0 {
+        // SAFETY: the map is read-only and private to this process; like any reader, we assume
+        // the input is not truncated by another program while we parse it.
+        if let Ok(m) = unsafe { memmap2::Mmap::map(&file) } {
+            return Ok(Input::Mapped(m));
+        }
+    }
+    read_input(path).map(Input::Buffer)
+}
+
 /// Reads a whole file, or standard input for `-`.
 pub fn read_input(path: &Path) -> Result<Vec<u8>> {
     if is_stdio(path) {

@@ -22,13 +22,13 @@ pub use model::{Dimension, ElementType, Model};
 
 /// Reads a GOM file (`-` for standard input).
 pub fn read_gom_file(path: &std::path::Path) -> Result<Model> {
-    let data = io::read_input(path)?;
+    let data = io::map_input(path)?;
     gom::read(&data, &display_name(path))
 }
 
 /// Writes a GOM file atomically (`-` for standard output).
 pub fn write_gom_file(model: &Model, path: &std::path::Path) -> Result<()> {
-    io::write_output(path, &gom::write(model))
+    io::write_output_with(path, |w| gom::write_to(model, w))
 }
 
 /// The name of `path` as shown in messages.
@@ -69,7 +69,7 @@ pub fn format_of(path: &std::path::Path) -> Option<Format> {
 /// Reads a mesh as a model: GOM or Gmsh MSH, chosen by extension, or by content for `-` and
 /// unknown extensions (`$MeshFormat` starts an MSH file, `###` a GOM).
 pub fn read_model(path: &std::path::Path) -> Result<Model> {
-    let data = io::read_input(path)?;
+    let data = io::map_input(path)?;
     let name = display_name(path);
     let format = match format_of(path) {
         Some(Format::Vtu) => {

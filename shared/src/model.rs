@@ -5,6 +5,8 @@
 //! node ids can be remapped and element-ordered sections permuted. Sections this crate does not
 //! understand are kept verbatim as [`Body::Opaque`] and make renumbering refuse to run.
 
+use rayon::prelude::*;
+
 use crate::text;
 
 /// Spatial setting of the model (`$$DIMENSION`).
@@ -244,6 +246,33 @@ impl Table {
     /// All rows in order.
     pub fn rows(&self) -> impl ExactSizeIterator<Item = &[Token]> + '_ {
         (0..self.len()).map(move |i| self.row(i))
+    }
+
+    /// The rows in the order `order` (new position → old row), built in parallel pieces.
+    pub fn permuted(&self, order: &[u32]) -> Table {
+        let parts: Vec<Table> = order
+            .par_chunks(1 << 16)
+            .map(|olds| {
+                let mut t = Table::with_capacity(olds.len(), 2);
+                for &o in olds {
+                    t.push_row(self.row(o as usize).iter().cloned());
+                }
+                t
+            })
+            .collect();
+        let mut out = Table::with_capacity(self.len(), 2);
+        for p in parts {
+            out.append(p);
+        }
+        out
+    }
+
+    /// Moves all rows of `other` to the end of this table.
+    pub fn append(&mut self, other: Table) {
+        let base = self.tokens.len() as u32;
+        self.tokens.extend(other.tokens);
+        self.row_ends
+            .extend(other.row_ends.into_iter().map(|e| e + base));
     }
 
     /// Appends a row.
@@ -638,14 +667,18 @@ impl Model {
         for (old, &new) in node_new.iter().enumerate() {
             coords[new as usize * d..(new as usize + 1) * d].copy_from_slice(self.node(old));
         }
-        let mut connectivity = Vec::with_capacity(self.connectivity.len());
-        for &old in order {
-            connectivity.extend(
-                self.element(old as usize)
-                    .iter()
-                    .map(|&n| node_new[n as usize]),
-            );
-        }
+        let per = self.element_type.nodes();
+        let mut connectivity = vec![0u32; self.connectivity.len()];
+        connectivity
+            .par_chunks_mut(per * 4096)
+            .zip(order.par_chunks(4096))
+            .for_each(|(dst, olds)| {
+                for (el, &old) in dst.chunks_exact_mut(per).zip(olds) {
+                    for (x, &n) in el.iter_mut().zip(self.element(old as usize)) {
+                        *x = node_new[n as usize];
+                    }
+                }
+            });
         let map_id = |t: &Token, map: &[u32]| -> Token {
             match t {
                 Token::Int(i) if *i >= 1 && (*i as usize) <= map.len() => {
@@ -657,13 +690,7 @@ impl Model {
         let mut sections = Vec::with_capacity(self.sections.len());
         for s in &self.sections {
             let body = match &s.body {
-                Body::PerElement(t) => {
-                    let mut out = Table::with_capacity(t.len(), 2);
-                    for &old in order {
-                        out.push_row(t.row(old as usize).iter().cloned());
-                    }
-                    Body::PerElement(out)
-                }
+                Body::PerElement(t) => Body::PerElement(t.permuted(order)),
                 Body::Table {
                     counted,
                     refs,

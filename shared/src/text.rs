@@ -34,6 +34,32 @@ impl<'a> Lines<'a> {
         self.line
     }
 
+    /// Moves to the start of the next line that begins (after blanks) with `$$`, counting the
+    /// lines skipped. Data lines never hold `$`, so this scans at memchr speed instead of line by
+    /// line.
+    pub fn skip_to_keyword(&mut self) {
+        let rest = &self.data[self.pos..];
+        for p in memchr::memchr_iter(b'$', rest) {
+            if rest.get(p + 1) != Some(&b'$') {
+                continue;
+            }
+            let ls = rest[..p]
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |i| i + 1);
+            if rest[ls..p].iter().all(|&b| is_separator(b)) {
+                self.line += memchr::memchr_iter(b'\n', &rest[..ls]).count();
+                self.pos += ls;
+                return;
+            }
+        }
+        self.line += memchr::memchr_iter(b'\n', rest).count();
+        if !rest.is_empty() && rest[rest.len() - 1] != b'\n' {
+            self.line += 1;
+        }
+        self.pos = self.data.len();
+    }
+
     /// The next line without consuming it.
     pub fn peek(&self) -> Option<(usize, &'a [u8])> {
         self.clone().next()
