@@ -63,29 +63,43 @@ pub fn centroid(model: &Model, e: usize, out: &mut [f64; 3]) {
 /// in order of first use. The result does not depend on the number of threads.
 pub fn order(model: &Model, opts: Options) -> Ordering {
     let d = model.dimension.coords();
+    let t0 = std::time::Instant::now();
     let grid = Grid::bounding(&model.coords, d, opts.levels, opts.cubic);
     let n = model.element_count();
-    let t0 = std::time::Instant::now();
-    let mut pairs: Vec<(u64, u32)> = (0..n)
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|e| {
-            let mut c = [0.0; 3];
-            centroid(model, e, &mut c);
-            let key = match opts.curve {
-                Curve::Morton => grid.key(&c),
-                Curve::Hilbert => {
-                    let q = [grid.cell(c[0], 0), grid.cell(c[1], 1), grid.cell(c[2], 2)];
-                    crate::hilbert::key(&q[..d], opts.levels)
+    let per = model.element_type.nodes();
+    let corners = model.element_type.corners();
+    let conn = &model.connectivity;
+    let mut pairs = vec![(0u64, 0u32); n];
+    const BLOCK: usize = 8192;
+    pairs
+        .par_chunks_mut(BLOCK)
+        .enumerate()
+        .for_each(|(b, out)| {
+            let first = b * BLOCK;
+            for (i, slot) in out.iter_mut().enumerate() {
+                let e = first + i;
+                // The corners of a later element are fetched while this one is computed:
+                // the coordinate reads are the random accesses that dominate.
+                if e + PREFETCH < n {
+                    for &v in &conn[(e + PREFETCH) * per..(e + PREFETCH) * per + corners] {
+                        prefetch(&model.coords[v as usize * d]);
+                    }
                 }
-            };
-            (key, e as u32)
-        })
-        .collect();
-    // (key, original index) pairs are all distinct, so the unstable sort is deterministic and
-    // equals a stable sort by key.
+                let mut c = [0.0; 3];
+                centroid(model, e, &mut c);
+                let key = match opts.curve {
+                    Curve::Morton => grid.key(&c),
+                    Curve::Hilbert => {
+                        let q = [grid.cell(c[0], 0), grid.cell(c[1], 1), grid.cell(c[2], 2)];
+                        crate::hilbert::key(&q[..d], opts.levels)
+                    }
+                };
+                *slot = (key, e as u32);
+            }
+        });
+    // Pairs are made in index order, so a stable sort by key gives (key, index) order.
     let t1 = std::time::Instant::now();
-    pairs.par_sort_unstable();
+    sort_pairs(&mut pairs);
     let t2 = std::time::Instant::now();
     let order: Vec<u32> = pairs.iter().map(|p| p.1).collect();
     let keys: Vec<u64> = pairs.iter().map(|p| p.0).collect();
@@ -105,14 +119,142 @@ pub fn order(model: &Model, opts: Options) -> Ordering {
     }
 }
 
+/// How many elements ahead the random reads are prefetched.
+const PREFETCH: usize = 8;
+
+/// Hints the processor to load the cache line holding `x`.
+#[inline(always)]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: prefetching is a hint; it never faults, whatever the address.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch(x as *const T as *const i8, std::arch::x86_64::_MM_HINT_T0)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
+/// Raw pointer that may be shared by the scatter tasks of one radix pass (they write disjoint
+/// positions).
+#[derive(Clone, Copy)]
+struct Dst(*mut (u64, u32));
+unsafe impl Send for Dst {}
+unsafe impl Sync for Dst {}
+
+impl Dst {
+    /// Pointer to slot `i` (taking `&self` makes closures capture the whole wrapper).
+    fn at(&self, i: usize) -> *mut (u64, u32) {
+        // SAFETY: callers stay inside the allocation.
+        unsafe { self.0.add(i) }
+    }
+}
+
+/// Bits of the most-significant digit that splits the pairs into cache-sized buckets.
+const RADIX_BITS: u32 = 11;
+const BUCKETS: usize = 1 << RADIX_BITS;
+
+/// Sorts `(key, index)` pairs by key, then index: one parallel scatter by the top 11 bits in use
+/// (memory-bound, done once), then each bucket, small enough for the cache, sorted on its own in
+/// parallel. The order is the unique (key, index) order whatever the number of threads.
+pub fn sort_pairs(pairs: &mut Vec<(u64, u32)>) {
+    let n = pairs.len();
+    if n < 1 << 12 {
+        pairs.sort_unstable();
+        return;
+    }
+    let max = pairs.par_iter().map(|p| p.0).max().unwrap_or(0);
+    let used = 64 - max.leading_zeros();
+    let shift = used.saturating_sub(RADIX_BITS);
+    let digit = |p: &(u64, u32)| ((p.0 >> shift) as usize) & (BUCKETS - 1);
+    let threads = rayon::current_num_threads().max(1);
+    let chunk = n.div_ceil(threads).max(4096);
+    let hists: Vec<Box<[usize; BUCKETS]>> = pairs
+        .par_chunks(chunk)
+        .map(|c| {
+            let mut h = Box::new([0usize; BUCKETS]);
+            for p in c {
+                h[digit(p)] += 1;
+            }
+            h
+        })
+        .collect();
+    let mut starts = vec![0usize; BUCKETS + 1];
+    let mut offsets = vec![Box::new([0usize; BUCKETS]); hists.len()];
+    let mut base = 0;
+    for b in 0..BUCKETS {
+        starts[b] = base;
+        for (t, h) in hists.iter().enumerate() {
+            offsets[t][b] = base;
+            base += h[b];
+        }
+    }
+    starts[BUCKETS] = n;
+    let mut out = vec![(0u64, 0u32); n];
+    let dst = Dst(out.as_mut_ptr());
+    pairs
+        .par_chunks(chunk)
+        .zip(offsets.into_par_iter())
+        .for_each(|(c, mut off)| {
+            for p in c {
+                let b = digit(p);
+                // SAFETY: the offsets partition 0..n among chunks and buckets, so each position
+                // is written exactly once.
+                unsafe { *dst.at(off[b]) = *p };
+                off[b] += 1;
+            }
+        });
+    // Cut `out` into its buckets and sort each.
+    let mut buckets: Vec<&mut [(u64, u32)]> = Vec::with_capacity(BUCKETS);
+    let mut rest = &mut out[..];
+    for b in 0..BUCKETS {
+        let (head, tail) = rest.split_at_mut(starts[b + 1] - starts[b]);
+        buckets.push(head);
+        rest = tail;
+    }
+    buckets
+        .into_par_iter()
+        .with_min_len(16)
+        .for_each(|b| b.sort_unstable());
+    *pairs = out;
+}
+
 /// Vertex numbers in order of first appearance when walking the elements in `order` and each
 /// element's full node list in stored order; unused vertices follow in their original order.
 pub fn first_use_numbering(model: &Model, order: &[u32]) -> Vec<u32> {
     let nn = model.node_count();
+    let per = model.element_type.nodes();
+    // Each contiguous chunk of the sorted elements lists its nodes in local first-use order,
+    // using a bitmap small enough to stay in cache; merging the lists in chunk order and
+    // keeping each node's first appearance gives the global first-use order. The result is
+    // the same for any chunking, and the serial merge touches each node about once instead of
+    // every element's every node.
+    let threads = rayon::current_num_threads().max(1);
+    let chunk = order.len().div_ceil(threads).max(1 << 14);
+    let lists: Vec<Vec<u32>> = order
+        .par_chunks(chunk)
+        .map(|part| {
+            let mut seen = vec![0u64; nn.div_ceil(64)];
+            let mut list = Vec::with_capacity((part.len() * 2).min(nn));
+            for (i, &e) in part.iter().enumerate() {
+                // Elements arrive in curve order, scattered in memory: fetch ahead.
+                if let Some(&ahead) = part.get(i + PREFETCH) {
+                    prefetch(&model.connectivity[ahead as usize * per]);
+                }
+                for &v in model.element(e as usize) {
+                    let (w, bit) = (v as usize / 64, 1u64 << (v % 64));
+                    if seen[w] & bit == 0 {
+                        seen[w] |= bit;
+                        list.push(v);
+                    }
+                }
+            }
+            list
+        })
+        .collect();
     let mut node_new = vec![u32::MAX; nn];
     let mut next = 0u32;
-    for &e in order {
-        for &v in model.element(e as usize) {
+    for list in &lists {
+        for &v in list {
             let slot = &mut node_new[v as usize];
             if *slot == u32::MAX {
                 *slot = next;
@@ -207,6 +349,25 @@ pub fn remap_material_points(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pair_sort_orders_by_key_then_index() {
+        let mut seed = 1u64;
+        let mut v: Vec<(u64, u32)> = (0..100_000u32)
+            .map(|i| {
+                seed = seed
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((seed >> 1) % if i % 3 == 0 { 50 } else { u64::MAX >> 1 }, i)
+            })
+            .collect();
+        let mut want = v.clone();
+        want.sort_by_key(|p| p.0);
+        // Shuffle the indices' order of arrival: the result must still be by (key, index).
+        v.reverse();
+        sort_pairs(&mut v);
+        assert_eq!(v, want);
+    }
 
     #[test]
     fn partitions_follow_the_formula() {
