@@ -279,18 +279,27 @@ fn main() {
                     ));
                     q.edge_cut
                 };
-                let morton = order::partitions(&w, p);
+                let mut morton = order::partitions(&w, p);
                 let cut_m = row("morton", &morton, &ordered, None);
+                let t = Instant::now();
+                metrics::merge_pieces(n, &nb, &mut morton, &w, 20);
+                let secs = t.elapsed().as_secs_f64();
+                let cut_mm = row("morton + merge pieces", &morton, &ordered, Some(secs));
                 let oh = order::order(&shuffled, opts(order::Curve::Hilbert));
                 let hil = shuffled.reordered(&oh.order, &oh.node_new).unwrap();
-                let hp = order::partitions(&order::weights(&hil), p);
+                let wh = order::weights(&hil);
+                let mut hp = order::partitions(&wh, p);
                 row("hilbert", &hp, &hil, None);
+                let nbh = metrics::face_neighbours(&hil);
+                metrics::merge_pieces(n, &nbh, &mut hp, &wh, 20);
+                row("hilbert + merge pieces", &hp, &hil, None);
                 if let Some(bin) = &mpmetis {
                     if let Some((mp, secs)) = metis(&ordered, bin, p, &work, &name) {
                         let cut = row("metis", &mp, &ordered, Some(secs));
                         part_rows.push(format!(
-                            "| {name} | {p} | morton / metis cut | {:.2} | | | | |",
-                            cut_m as f64 / cut as f64
+                            "| {name} | {p} | cut / metis cut: morton {:.2}, merged {:.2} | | | | | |",
+                            cut_m as f64 / cut as f64,
+                            cut_mm as f64 / cut as f64
                         ));
                     }
                 }

@@ -56,6 +56,11 @@ struct Args {
     /// `partition` cell field of a .vtu output and summarised in the report).
     #[arg(long, value_name = "P")]
     partitions: Option<u32>,
+    /// With --partitions: move every face-detached piece of a part to the neighbouring part it
+    /// touches most, so each part is one connected piece (parts are then no longer contiguous
+    /// ranges of the curve; meant for process partitions).
+    #[arg(long, requires = "partitions")]
+    merge_pieces: bool,
     /// Write a JSON report (timings, locality before and after) to FILE, `-` for standard output.
     #[arg(long, value_name = "FILE")]
     report: Option<PathBuf>,
@@ -164,11 +169,16 @@ fn run(args: Args) -> anyhow::Result<()> {
             (reordered, ord.order)
         }
     };
+    let mut neighbours = None;
     let partition: Option<Vec<i32>> = args.partitions.map(|p| {
-        order::partitions(&order::weights(&model), p)
-            .into_iter()
-            .map(|v| v as i32)
-            .collect()
+        let w = order::weights(&model);
+        let mut part = order::partitions(&w, p);
+        if args.merge_pieces {
+            let nb = metrics::face_neighbours(&model);
+            metrics::merge_pieces(model.element_count(), &nb, &mut part, &w, 20);
+            neighbours = Some(nb);
+        }
+        part.into_iter().map(|v| v as i32).collect()
     });
     let mut cps_out = None;
     if let (Some(mut cps), Some(paths)) = (cps_in, &args.cps) {
@@ -200,7 +210,9 @@ fn run(args: Args) -> anyhow::Result<()> {
                 .iter()
                 .map(|&v| v as u32)
                 .collect();
-            let nb = metrics::face_neighbours(&model);
+            let nb = neighbours
+                .take()
+                .unwrap_or_else(|| metrics::face_neighbours(&model));
             metrics::partition_quality(&model, &nb, &part, &order::weights(&model), p)
         });
         let report = serde_json::json!({

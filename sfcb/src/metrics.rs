@@ -204,3 +204,110 @@ mod tests {
         assert_eq!(l.max_id_spread, 7);
     }
 }
+
+/// Moves every face-connected piece of a part other than its heaviest one to the neighbouring
+/// part it shares most faces with (ties: the lower part), repeating until no piece moves (at most
+/// `rounds` times). Parts stop being contiguous ranges of the curve, which suits process
+/// partitions more than thread ranges. Pieces that touch no other part (separate bodies of the
+/// mesh) stay. Deterministic.
+pub fn merge_pieces(
+    n: usize,
+    neighbours: &[(u32, u32)],
+    part: &mut [u32],
+    weights: &[u64],
+    rounds: usize,
+) -> usize {
+    let mut moved_total = 0;
+    for _ in 0..rounds {
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        for &(a, b) in neighbours {
+            if part[a as usize] == part[b as usize] {
+                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                }
+            }
+        }
+        let roots: Vec<u32> = (0..n as u32).map(|e| find(&mut parent, e)).collect();
+        let mut piece_weight = vec![0u64; n];
+        for e in 0..n {
+            piece_weight[roots[e] as usize] += weights[e].max(1);
+        }
+        // Heaviest piece of each part (ties: the piece whose first element comes first).
+        let mut main: std::collections::BTreeMap<u32, (u64, u32)> = Default::default();
+        for e in 0..n {
+            if roots[e] as usize == e {
+                let w = piece_weight[e];
+                let entry = main.entry(part[e]).or_insert((w, e as u32));
+                if w > entry.0 {
+                    *entry = (w, e as u32);
+                }
+            }
+        }
+        let is_main = |r: u32| main.get(&part[r as usize]).is_some_and(|m| m.1 == r);
+        let mut contacts: Vec<(u32, u32)> = Vec::new();
+        for &(a, b) in neighbours {
+            let (pa, pb) = (part[a as usize], part[b as usize]);
+            if pa != pb {
+                let (ra, rb) = (roots[a as usize], roots[b as usize]);
+                if !is_main(ra) {
+                    contacts.push((ra, pb));
+                }
+                if !is_main(rb) {
+                    contacts.push((rb, pa));
+                }
+            }
+        }
+        contacts.sort_unstable();
+        let mut target: std::collections::BTreeMap<u32, u32> = Default::default();
+        let mut i = 0;
+        while i < contacts.len() {
+            let root = contacts[i].0;
+            let (mut best, mut best_count) = (0u32, 0usize);
+            while i < contacts.len() && contacts[i].0 == root {
+                let p = contacts[i].1;
+                let mut c = 0;
+                while i < contacts.len() && contacts[i] == (root, p) {
+                    c += 1;
+                    i += 1;
+                }
+                if c > best_count {
+                    (best, best_count) = (p, c);
+                }
+            }
+            target.insert(root, best);
+        }
+        if target.is_empty() {
+            break;
+        }
+        for e in 0..n {
+            if let Some(&p) = target.get(&roots[e]) {
+                part[e] = p;
+            }
+        }
+        moved_total += target.len();
+    }
+    moved_total
+}
+
+#[cfg(test)]
+mod merge_tests {
+    use super::*;
+    use mpm_shared::{generate, ElementType};
+
+    #[test]
+    fn detached_pieces_join_a_neighbour() {
+        let m = generate::box_mesh([4, 1, 1], [4.0, 1.0, 1.0], ElementType::Tet4);
+        let nb = face_neighbours(&m);
+        // Cells 0..4 along x, 6 tets each: part 0 = cells 0 and 2 (two pieces), part 1 = 1 and 3.
+        let mut part: Vec<u32> = (0..24).map(|e| ((e / 6) % 2) as u32).collect();
+        let w = vec![1u64; 24];
+        let before = partition_quality(&m, &nb, &part, &w, 2);
+        assert_eq!(before.extra_pieces, 2);
+        let moved = merge_pieces(24, &nb, &mut part, &w, 10);
+        assert!(moved >= 1);
+        let after = partition_quality(&m, &nb, &part, &w, 2);
+        assert_eq!(after.extra_pieces, 0, "{:?}", after.pieces);
+        assert!(after.edge_cut < before.edge_cut);
+    }
+}

@@ -230,3 +230,37 @@ fn report_has_timings_locality_and_partition_quality() {
     let vtu = std::fs::read(dir.path().join("c.vtu")).unwrap();
     assert!(String::from_utf8_lossy(&vtu[..3000]).contains("Name=\"partition\""));
 }
+
+#[test]
+fn merge_pieces_leaves_one_piece_per_part() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let out = Command::cargo_bin("sfcb")
+            .unwrap()
+            .arg(testdata("column_tet10.msh"))
+            .arg(dir.path().join("c.vtu"))
+            .args(["--partitions", "8", "--report", "-"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let plain = run(&[]);
+    let merged = run(&["--merge-pieces"]);
+    assert!(plain["partitions"]["extra_pieces"].as_u64().unwrap() > 0);
+    assert_eq!(merged["partitions"]["extra_pieces"], 0);
+    assert!(merged["partitions"]["edge_cut"].as_u64() <= plain["partitions"]["edge_cut"].as_u64());
+    // --merge-pieces needs --partitions.
+    Command::cargo_bin("sfcb")
+        .unwrap()
+        .arg(testdata("column_tet10.msh"))
+        .arg(dir.path().join("d.GOM"))
+        .arg("--merge-pieces")
+        .assert()
+        .failure();
+}
