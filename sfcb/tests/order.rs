@@ -264,3 +264,111 @@ fn merge_pieces_leaves_one_piece_per_part() {
         .assert()
         .failure();
 }
+
+mod properties {
+    use super::*;
+    use mpm_shared::{generate, ElementType};
+    use proptest::prelude::*;
+
+    fn shuffle(n: usize, mut seed: u64) -> Vec<u32> {
+        let mut p: Vec<u32> = (0..n as u32).collect();
+        for i in (1..n).rev() {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            p.swap(i, ((seed >> 33) % (i as u64 + 1)) as usize);
+        }
+        p
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 24, .. ProptestConfig::default() })]
+
+        /// Whatever the input numbering, ordering gives a bijection that keeps every element's
+        /// vertices, is idempotent, and (without key ties) gives the same file.
+        #[test]
+        fn ordering_forgets_the_input_numbering(
+            nx in 1usize..5, ny in 1usize..5, nz in 1usize..4,
+            sx in 0.1f64..10.0, sy in 0.1f64..10.0,
+            quadratic in any::<bool>(), hilbert in any::<bool>(),
+            s1 in any::<u64>(), s2 in any::<u64>(),
+        ) {
+            let et = if quadratic { ElementType::Tet10 } else { ElementType::Tet4 };
+            let base = generate::box_mesh([nx, ny, nz], [sx, sy, 1.0], et);
+            let curve = if hilbert { order::Curve::Hilbert } else { order::Curve::Morton };
+            let mut outputs = Vec::new();
+            for seed in [s1, s2] {
+                let m = base.reordered(&shuffle(base.element_count(), seed), &shuffle(base.node_count(), !seed)).unwrap();
+                let o = order::order(&m, opts(&m, curve));
+                prop_assert!(mpm_shared::model::inverse(&o.order, m.element_count()).is_some());
+                prop_assert!(mpm_shared::model::inverse(&o.node_new, m.node_count()).is_some());
+                let r = m.reordered(&o.order, &o.node_new).unwrap();
+                for (new, &old) in o.order.iter().enumerate() {
+                    for (a, b) in r.element(new).iter().zip(m.element(old as usize)) {
+                        prop_assert_eq!(r.node(*a as usize), m.node(*b as usize));
+                    }
+                }
+                let again = order::order(&r, opts(&r, curve));
+                let rr = r.reordered(&again.order, &again.node_new).unwrap();
+                let bytes = gom::write(&r);
+                prop_assert!(gom::write(&rr) == bytes, "not idempotent");
+                outputs.push((o.shared_keys, bytes));
+            }
+            if outputs[0].0 == 0 && outputs[1].0 == 0 {
+                prop_assert!(outputs[0].1 == outputs[1].1, "output depends on the input numbering");
+            }
+        }
+    }
+}
+
+#[test]
+fn cps_material_points_follow_their_elements() {
+    use mpm_shared::{generate, ElementType};
+    let dir = tempfile::tempdir().unwrap();
+    // A box with 4 material points per element, numbered shuffled so that ordering moves them.
+    let base = generate::box_mesh([3, 2, 2], [1.0, 1.0, 1.0], ElementType::Tet10);
+    let n = base.element_count();
+    let perm: Vec<u32> = (0..n as u32).rev().collect();
+    let m = base
+        .reordered(&perm, &(0..base.node_count() as u32).collect::<Vec<_>>())
+        .unwrap();
+    let gom_in = dir.path().join("in.GOM");
+    mpm_shared::write_gom_file(&m, &gom_in).unwrap();
+    let ids: Vec<u32> = vec![1, 2, 5, 40, 4 * n as u32];
+    let mut cps = String::from("### Anura3D_2021 ###\n$$NUMBER_OF_LOADSTEPS\n1\n");
+    cps.push_str(&format!(
+        "$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n{}\n$$OUTPUT_MATERIAL_POINTS\n",
+        ids.len()
+    ));
+    for i in &ids {
+        cps.push_str(&format!("{i}\n"));
+    }
+    cps.push_str("$$END\n");
+    let cps_in = dir.path().join("in.CPS_001");
+    std::fs::write(&cps_in, cps).unwrap();
+    let (gom_out, cps_out) = (dir.path().join("out.GOM"), dir.path().join("out.CPS_001"));
+    Command::cargo_bin("sfcb")
+        .unwrap()
+        .arg(&gom_in)
+        .arg(&gom_out)
+        .arg("--cps")
+        .arg(&cps_in)
+        .arg(&cps_out)
+        .assert()
+        .success();
+    let out = gom::read(&std::fs::read(&gom_out).unwrap(), "out").unwrap();
+    let (c, _) = mpm_shared::cps::Cps::read(&std::fs::read(&cps_out).unwrap(), "out.CPS").unwrap();
+    let new_ids = c.output_material_points().unwrap();
+    assert_eq!(new_ids.len(), ids.len());
+    let centroid = |model: &Model, e: usize| {
+        let mut c = [0.0; 3];
+        order::centroid(model, e, &mut c);
+        c
+    };
+    for (old, new) in ids.iter().zip(&new_ids) {
+        // 4 points per element: point k lies in element (k - 1) / 4, at the same slot.
+        let (eo, en) = ((*old as usize - 1) / 4, (*new as usize - 1) / 4);
+        assert_eq!(centroid(&m, eo), centroid(&out, en), "point {old} -> {new}");
+        assert_eq!((*old - 1) % 4, (*new - 1) % 4);
+    }
+}
