@@ -14,7 +14,8 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Location, Result};
 use crate::model::{
-    classify, Body, Dimension, ElementType, Kind, LineEnding, Model, Refs, Section, Table, Token,
+    classify, Body, Dimension, ElementType, IdKind, Kind, LineEnding, Model, Refs, Section, Table,
+    Token,
 };
 use crate::text::{self, Lines, Tokens};
 
@@ -521,23 +522,27 @@ fn read_rows(
 }
 
 fn check_ids(row: &[Token], refs: Refs, n_el: usize, n_nodes: usize) -> Result<(), String> {
-    let (cols, max, what) = match refs {
-        Refs::Nodes(k) => (k, n_nodes, "node"),
-        Refs::Element => (1, n_el, "element"),
-    };
-    if row.len() < cols {
+    let cols = refs.columns();
+    let need = cols.iter().map(|c| c.0 + 1).max().unwrap_or(0);
+    if row.len() < need {
         return Err(format!(
-            "expected at least {cols} {what} id(s) at the start of the line, found {} value(s)",
+            "expected at least {need} values with ids in columns {:?}, found {} value(s)",
+            cols.iter().map(|c| c.0 + 1).collect::<Vec<_>>(),
             row.len()
         ));
     }
-    for t in &row[..cols] {
-        match t {
+    for (c, kind) in cols {
+        let (max, what) = match kind {
+            IdKind::Node => (n_nodes, "node"),
+            IdKind::Element => (n_el, "element"),
+        };
+        match &row[c] {
             Token::Int(i) if *i >= 1 && (*i as usize) <= max => {}
             Token::Int(i) => return Err(format!("{what} id {i} out of range 1..={max}")),
             other => {
                 return Err(format!(
-                    "expected a {what} id (integer), found {}",
+                    "expected a {what} id (integer) in column {}, found {}",
+                    c + 1,
                     token_text(other)
                 ))
             }

@@ -282,13 +282,41 @@ impl Table {
     }
 }
 
-/// What the leading columns of a table's rows refer to.
+/// Which columns of a table's rows are ids, and of what.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Refs {
     /// The first `n` columns are 1-based node ids.
     Nodes(usize),
     /// The first column is a 1-based element id.
     Element,
+    /// Column `c` (0-based) is a 1-based element id (`$$START_EXCAVATION_SOLID`: stage, element).
+    ElementAt(usize),
+    /// A quoted label, a 1-based element id, then `n` node ids of one of its faces
+    /// (`$$START_OUTPUT_REACTION_FORCES`).
+    LabelElementNodes(usize),
+}
+
+/// What an id column refers to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IdKind {
+    /// A node.
+    Node,
+    /// An element.
+    Element,
+}
+
+impl Refs {
+    /// The id columns of a row: `(column, kind)`.
+    pub fn columns(self) -> Vec<(usize, IdKind)> {
+        match self {
+            Refs::Nodes(n) => (0..n).map(|c| (c, IdKind::Node)).collect(),
+            Refs::Element => vec![(0, IdKind::Element)],
+            Refs::ElementAt(c) => vec![(c, IdKind::Element)],
+            Refs::LabelElementNodes(n) => std::iter::once((1, IdKind::Element))
+                .chain((2..2 + n).map(|c| (c, IdKind::Node)))
+                .collect(),
+        }
+    }
 }
 
 /// The content of one section.
@@ -377,6 +405,8 @@ pub fn classify(keyword: &str, et: ElementType) -> Kind {
             Kind::Counted(face)
         }
         "START_SOIL_SURFACE_NODES" | "START_PHREATIC_SURFACE_NODES" => Kind::Counted(face),
+        "START_OUTPUT_REACTION_FORCES" => Kind::Counted(Refs::LabelElementNodes(et.face_nodes())),
+        "START_EXCAVATION_SOLID" => Kind::Uncounted(Refs::ElementAt(1)),
         k if k.starts_with("PRESCRIBED_NODAL_VELOCITY_") => Kind::Counted(one),
         k if k.starts_with("ABSORBING_BOUNDARY_SURFACE_")
             || k.starts_with("ABSORBING_BOUNDARY_LINE_")
@@ -697,16 +727,13 @@ impl Model {
                     rows,
                 } => {
                     let mut out = Table::with_capacity(rows.len(), 4);
+                    let cols = refs.columns();
                     for r in rows.rows() {
-                        let (k, map) = match refs {
-                            Refs::Nodes(k) => (*k, node_new),
-                            Refs::Element => (1, &elem_new[..]),
-                        };
                         out.push_row(r.iter().enumerate().map(|(j, t)| {
-                            if j < k {
-                                map_id(t, map)
-                            } else {
-                                t.clone()
+                            match cols.iter().find(|c| c.0 == j) {
+                                Some((_, IdKind::Node)) => map_id(t, node_new),
+                                Some((_, IdKind::Element)) => map_id(t, &elem_new),
+                                None => t.clone(),
                             }
                         }));
                     }
