@@ -587,6 +587,12 @@ pub fn gmsh_tet_to_anura(g: &[u32], coords: &[f64]) -> Vec<u32> {
 /// group of the volume dimension becomes a material (index by ascending tag, named after the
 /// group), written in `$$STARTELMMAT`.
 pub fn to_model(mesh: &MshMesh, file: &str) -> Result<Model> {
+    to_model_with_map(mesh, file).map(|(m, _)| m)
+}
+
+/// Like [`to_model`], also returning for each `.msh` node (file order) its 0-based node in the
+/// model, or `u32::MAX` for nodes no volume element uses (so boundary groups can be mapped).
+pub fn to_model_with_map(mesh: &MshMesh, file: &str) -> Result<(Model, Vec<u32>)> {
     let at = Location::new(file, 0, None);
     let tet4 = mesh.set(kind::TET4);
     let tet10 = mesh.set(kind::TET10);
@@ -691,14 +697,15 @@ pub fn to_model(mesh: &MshMesh, file: &str) -> Result<Model> {
     } else {
         Dimension::PlaneStrain
     };
-    Ok(Model::from_mesh(
+    let model = Model::from_mesh(
         dimension,
         element_type,
         coords,
         conn,
         &names,
         &element_material,
-    ))
+    );
+    Ok((model, new_id))
 }
 
 #[cfg(test)]

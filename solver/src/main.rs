@@ -1,8 +1,10 @@
 //! `mpm-solve`: explicit material point method on tetrahedral meshes.
 //!
-//! This release reads and checks a case (GOM + CPS, or a GOM from standard input with `--cps`)
-//! and prints what it holds; the time integration arrives with the solver issue.
+//! `mpm-solve SCENE.toml --out DIR` runs a TOML scene on a Gmsh mesh. Anura3D cases
+//! (`CASE.GOM` + `CASE.CPS_001`) are read and checked with `--check`; running them is the next
+//! step of the solver work.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -10,15 +12,29 @@ use anyhow::{bail, Context};
 use clap::Parser;
 use mpm_shared::cps::Cps;
 
-/// Check an Anura3D case (GOM + CPS) and summarise it.
+/// Run an explicit MPM simulation.
+///
+/// Examples:
+///   mpm-solve testdata/column_gravity.toml --out out/column
+///   mpm-solve case.GOM --check
 #[derive(Debug, Parser)]
-#[command(version)]
+#[command(version, verbatim_doc_comment)]
 struct Args {
-    /// The case geometry: CASE.GOM, or `-` for standard input (then --cps is required).
-    case: PathBuf,
-    /// Calculation parameters [default: CASE.CPS_001 beside the GOM].
+    /// A TOML scene (`.toml`), or an Anura3D geometry CASE.GOM (`-` for standard input, then
+    /// --cps is required).
+    input: PathBuf,
+    /// Calculation parameters for a GOM [default: CASE.CPS_001 beside it].
     #[arg(long)]
     cps: Option<PathBuf>,
+    /// Output folder (created if missing).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Material-point ids (1-based) written to history.csv, e.g. --probe 3,17.
+    #[arg(long, value_delimiter = ',')]
+    probe: Vec<u32>,
+    /// Deactivate material points that leave the mesh (counted in run.json) instead of stopping.
+    #[arg(long)]
+    drop_lost: bool,
     /// Only read and check the input, print a summary and exit.
     #[arg(long)]
     check: bool,
@@ -35,12 +51,46 @@ fn main() -> ExitCode {
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
-    let cps_path = match (&args.cps, mpm_shared::io::is_stdio(&args.case)) {
+    let is_scene = args
+        .input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if is_scene {
+        let mut case = mpm_solve::scene::load(&args.input)?;
+        case.probes.extend(&args.probe);
+        case.probes.sort_unstable();
+        case.probes.dedup();
+        println!(
+            "{}: {} elements, {} nodes, {} s in outputs of {} s",
+            args.input.display(),
+            case.model.element_count(),
+            case.model.node_count(),
+            case.end_time,
+            case.output_times.first().copied().unwrap_or(0.0)
+        );
+        if args.check {
+            return Ok(());
+        }
+        let Some(out) = &args.out else {
+            bail!("--out DIR is required to run a case")
+        };
+        let progress = std::io::stderr().is_terminal();
+        let engine = mpm_solve::run::run::<f64>(&case, out, args.drop_lost, progress)?;
+        println!(
+            "done: {} steps of {:.3e} s, {} material points, outputs in {}",
+            engine.steps,
+            engine.dt,
+            engine.particles.len(),
+            out.display()
+        );
+        return Ok(());
+    }
+    let cps_path = match (&args.cps, mpm_shared::io::is_stdio(&args.input)) {
         (Some(p), _) => p.clone(),
         (None, true) => bail!("reading the GOM from standard input needs --cps FILE"),
-        (None, false) => args.case.with_extension("CPS_001"),
+        (None, false) => args.input.with_extension("CPS_001"),
     };
-    let model = mpm_shared::read_model(&args.case)?;
+    let model = mpm_shared::read_model(&args.input)?;
     let data =
         std::fs::read(&cps_path).with_context(|| format!("reading {}", cps_path.display()))?;
     let (cps, warnings) = Cps::read(&data, &cps_path.display().to_string())?;
@@ -50,7 +100,7 @@ fn run(args: Args) -> anyhow::Result<()> {
     let settings = cps.settings()?;
     println!(
         "{}: {} {} elements, {} nodes, {} materials; {} load step(s) of {} s, Courant {}",
-        mpm_shared::display_name(&args.case),
+        mpm_shared::display_name(&args.input),
         model.element_count(),
         model.element_type.keyword(),
         model.node_count(),
@@ -60,7 +110,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         settings.courant
     );
     if !args.check {
-        bail!("time integration is not available in this release; run with --check to validate a case");
+        bail!("running Anura3D GOM/CPS cases is not available in this release (use --check to validate one, or a TOML scene to run)");
     }
     Ok(())
 }

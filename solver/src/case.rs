@@ -1,0 +1,117 @@
+//! A case ready to run: mesh, materials, boundary conditions, loads and time controls, whether
+//! it came from a TOML scene or (later) an Anura3D GOM + CPS.
+
+use mpm_shared::Model;
+
+/// How a load grows with time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LoadCurve {
+    /// Full value from the first step.
+    Step,
+    /// Linear from 0 at t = 0 to 1 at t = `over`, then 1.
+    Ramp {
+        /// Seconds to full load.
+        over: f64,
+    },
+}
+
+impl LoadCurve {
+    /// A ramp over `over` seconds, or a step when `over` is 0.
+    pub fn ramp(over: f64) -> Self {
+        if over > 0.0 {
+            LoadCurve::Ramp { over }
+        } else {
+            LoadCurve::Step
+        }
+    }
+
+    /// Multiplier at time `t`.
+    pub fn at(&self, t: f64) -> f64 {
+        match *self {
+            LoadCurve::Step => 1.0,
+            LoadCurve::Ramp { over } => (t / over).min(1.0),
+        }
+    }
+}
+
+/// A linear elastic solid material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialSpec {
+    /// Name.
+    pub name: String,
+    /// Mass density in t/m³ (kg/m³ ÷ 1000).
+    pub density: f64,
+    /// Young's modulus (kPa).
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+}
+
+impl MaterialSpec {
+    /// Checks and converts: `density_kg_m3` in kg/m³, `young` in kPa.
+    pub fn new(name: &str, density_kg_m3: f64, young: f64, poisson: f64) -> Result<Self, String> {
+        if !(density_kg_m3 > 0.0) {
+            return Err(format!("density must be positive, got {density_kg_m3}"));
+        }
+        if !(young > 0.0) {
+            return Err(format!("Young's modulus must be positive, got {young}"));
+        }
+        if !(poisson > -1.0 && poisson < 0.5) {
+            return Err(format!(
+                "Poisson's ratio must be in (-1, 0.5), got {poisson}"
+            ));
+        }
+        Ok(MaterialSpec {
+            name: name.to_string(),
+            density: density_kg_m3 / 1000.0,
+            young,
+            poisson,
+        })
+    }
+
+    /// P-wave speed sqrt(E_oed / ρ) (m/s).
+    pub fn wave_speed(&self) -> f64 {
+        (crate::linear_elastic::LinearElastic::<f64>::oedometric(self.young, self.poisson)
+            / self.density)
+            .sqrt()
+    }
+}
+
+/// Everything a run needs.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// Case name (file stem).
+    pub name: String,
+    /// Input files, for `run.json`.
+    pub inputs: Vec<String>,
+    /// The mesh model.
+    pub model: Model,
+    /// Materials by 1-based index (entry 0 unused; `None` for materials no element uses).
+    pub materials: Vec<Option<MaterialSpec>>,
+    /// Material of each element (0 = empty).
+    pub element_material: Vec<u32>,
+    /// Material points per element.
+    pub points_per_element: Vec<u32>,
+    /// Fixed velocity components per model node.
+    pub fixed: Vec<[bool; 3]>,
+    /// Nodal face-load forces per model node (kN) at multiplier 1.
+    pub traction: Vec<[f64; 3]>,
+    /// Traction multiplier.
+    pub traction_curve: LoadCurve,
+    /// Gravity acceleration vector (m/s²) at multiplier 1.
+    pub gravity: [f64; 3],
+    /// Gravity multiplier.
+    pub gravity_curve: LoadCurve,
+    /// Courant number.
+    pub courant: f64,
+    /// Local damping factor α.
+    pub damping: f64,
+    /// End time (s).
+    pub end_time: f64,
+    /// Output times (s), increasing, the last equal to `end_time`.
+    pub output_times: Vec<f64>,
+    /// Optional cap on time steps.
+    pub max_steps: Option<u64>,
+    /// Material-point ids written to `history.csv`.
+    pub probes: Vec<u32>,
+}

@@ -1,0 +1,244 @@
+//! The explicit MPM engine: state, critical time step and one MUSL step through the phases.
+
+use std::time::Instant;
+
+use crate::case::Case;
+use crate::grid::Grid;
+use crate::linear_elastic::LinearElastic;
+use crate::locate::{walk, Found};
+use crate::mesh::TetMesh;
+use crate::particles::{self, Particles};
+use crate::real::{Real, V3};
+use crate::{grid_to_particle, grid_update, particle_to_grid, stress};
+
+/// Phases timed in `run.json`.
+pub const PHASES: [&str; 6] = [
+    "particle_to_grid",
+    "grid_update",
+    "grid_to_particle",
+    "stress",
+    "locate",
+    "output",
+];
+
+/// A material point that left the mesh.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("material point {id} left the mesh at step {step} (t = {time} s) at ({x}, {y}, {z}) from element {element}; use --drop-lost to deactivate such points instead")]
+pub struct Lost {
+    /// Point id (1-based, input numbering).
+    pub id: u32,
+    /// Time step number (1-based).
+    pub step: u64,
+    /// Simulated time.
+    pub time: f64,
+    /// Position.
+    pub x: f64,
+    /// Position.
+    pub y: f64,
+    /// Position.
+    pub z: f64,
+    /// Last element (1-based).
+    pub element: u32,
+}
+
+/// Solver state and preallocated buffers.
+pub struct Engine<R: Real> {
+    /// Computational mesh.
+    pub mesh: TetMesh<R>,
+    /// Material points.
+    pub particles: Particles<R>,
+    /// Nodal arrays.
+    pub grid: Grid<R>,
+    /// Fixed components per computational node.
+    pub fixed: Vec<[bool; 3]>,
+    /// Face-load forces per computational node at multiplier 1.
+    pub traction: Vec<V3<R>>,
+    /// Constitutive law per material index.
+    pub laws: Vec<LinearElastic<R>>,
+    /// Critical time step × Courant number.
+    pub dt: f64,
+    /// Simulated time.
+    pub time: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// External work done so far (kJ).
+    pub external_work: f64,
+    /// Seconds spent per phase (see [`PHASES`]).
+    pub phase_seconds: [f64; 6],
+    /// Points deactivated under `--drop-lost`.
+    pub lost: u64,
+    /// Deactivate points that leave the mesh instead of stopping.
+    pub drop_lost: bool,
+}
+
+impl<R: Real> Engine<R> {
+    /// Sets up the mesh, places the material points and computes the time step.
+    pub fn new(case: &Case, drop_lost: bool) -> Result<Self, String> {
+        let mesh = TetMesh::<R>::new(&case.model).map_err(|e| e.to_string())?;
+        let density = |m: u32| {
+            case.materials[m as usize]
+                .as_ref()
+                .map_or(0.0, |s| s.density)
+        };
+        let particles = particles::place(
+            &mesh,
+            &case.points_per_element,
+            &case.element_material,
+            density,
+        )?;
+        if particles.is_empty() {
+            return Err("the case has no material points (every element is empty)".into());
+        }
+        let mut fixed = vec![[false; 3]; mesh.nodes()];
+        let mut traction = vec![[R::ZERO; 3]; mesh.nodes()];
+        for (c, &m) in mesh.model_node.iter().enumerate() {
+            fixed[c] = case.fixed[m as usize];
+            traction[c] = case.traction[m as usize].map(R::of);
+        }
+        let laws = case
+            .materials
+            .iter()
+            .map(|m| {
+                m.as_ref().map_or(
+                    LinearElastic {
+                        lambda: R::ZERO,
+                        shear: R::ZERO,
+                    },
+                    |s| LinearElastic::new(s.young, s.poisson),
+                )
+            })
+            .collect();
+        let c_max = case
+            .materials
+            .iter()
+            .flatten()
+            .map(|m| m.wave_speed())
+            .fold(0.0, f64::max);
+        let mut dt = f64::INFINITY;
+        for e in 0..mesh.elements() {
+            let m = case.element_material[e] as usize;
+            let c = case
+                .materials
+                .get(m)
+                .and_then(|s| s.as_ref())
+                .map_or(c_max, |s| s.wave_speed());
+            dt = dt.min(mesh.min_altitude[e].f64() / c);
+        }
+        let dt = case.courant * dt;
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(format!("critical time step is not positive ({dt})"));
+        }
+        let grid = Grid::new(mesh.nodes());
+        Ok(Engine {
+            mesh,
+            particles,
+            grid,
+            fixed,
+            traction,
+            laws,
+            dt,
+            time: 0.0,
+            steps: 0,
+            external_work: 0.0,
+            phase_seconds: [0.0; 6],
+            lost: 0,
+            drop_lost,
+        })
+    }
+
+    /// One explicit MUSL step of length `dt`; `snap_to` sets the clock exactly when the step
+    /// ends on an output time (so times print as given, not as sums of steps).
+    pub fn step(&mut self, case: &Case, dt: f64, snap_to: Option<f64>) -> Result<(), Lost> {
+        let t0 = Instant::now();
+        let gm = case.gravity_curve.at(self.time + dt);
+        let gravity = case.gravity.map(|g| R::of(g * gm));
+        particle_to_grid::particle_to_grid(&self.mesh, &self.particles, gravity, &mut self.grid);
+        let t1 = Instant::now();
+        let tm = R::of(case.traction_curve.at(self.time + dt));
+        grid_update::grid_update(
+            &mut self.grid,
+            &self.traction,
+            tm,
+            &self.fixed,
+            R::of(case.damping),
+        );
+        let t2 = Instant::now();
+        grid_to_particle::grid_to_particle(
+            &self.mesh,
+            &mut self.particles,
+            &mut self.grid,
+            &self.fixed,
+            R::of(dt),
+        );
+        let t3 = Instant::now();
+        stress::update_stress_and_move(
+            &self.mesh,
+            &mut self.particles,
+            &self.grid,
+            &self.laws,
+            R::of(dt),
+        );
+        // External work of gravity and face loads over the step, with the new nodal velocities.
+        let mut w = 0.0;
+        for n in 0..self.grid.mass.len() {
+            for a in 0..3 {
+                let f = self.grid.f_ext[n][a] + tm * self.traction[n][a];
+                w += (f * self.grid.vel[n][a]).f64();
+            }
+        }
+        self.external_work += w * dt;
+        self.steps += 1;
+        self.time += dt;
+        if let Some(t) = snap_to {
+            self.time = t;
+        }
+        let t4 = Instant::now();
+        self.locate()?;
+        let t5 = Instant::now();
+        for (k, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5)]
+            .into_iter()
+            .enumerate()
+        {
+            self.phase_seconds[k] += (b - a).as_secs_f64();
+        }
+        Ok(())
+    }
+
+    fn locate(&mut self) -> Result<(), Lost> {
+        let p = &mut self.particles;
+        for i in 0..p.len() {
+            if !p.active[i] {
+                continue;
+            }
+            match walk(&self.mesh, p.element[i], &p.x[i]) {
+                Found::In(e) => p.element[i] = e,
+                Found::Outside(e) => {
+                    if self.drop_lost {
+                        p.active[i] = false;
+                        self.lost += 1;
+                    } else {
+                        return Err(Lost {
+                            id: p.id[i],
+                            step: self.steps,
+                            time: self.time,
+                            x: p.x[i][0].f64(),
+                            y: p.x[i][1].f64(),
+                            z: p.x[i][2].f64(),
+                            element: e + 1,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Kinetic energy of the active points (kJ), summed in point order.
+    pub fn kinetic_energy(&self) -> f64 {
+        let p = &self.particles;
+        (0..p.len())
+            .filter(|&i| p.active[i])
+            .map(|i| 0.5 * p.mass[i].f64() * p.v[i].iter().map(|v| v.f64() * v.f64()).sum::<f64>())
+            .sum()
+    }
+}

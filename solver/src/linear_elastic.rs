@@ -1,0 +1,60 @@
+//! Incremental small-strain linear elasticity.
+
+use crate::real::Real;
+
+/// Isotropic linear elastic law.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearElastic<R: Real> {
+    /// Lamé's first parameter (kPa).
+    pub lambda: R,
+    /// Shear modulus (kPa).
+    pub shear: R,
+}
+
+impl<R: Real> LinearElastic<R> {
+    /// From Young's modulus (kPa) and Poisson's ratio.
+    pub fn new(young: f64, poisson: f64) -> Self {
+        let g = young / (2.0 * (1.0 + poisson));
+        let l = young * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson));
+        LinearElastic {
+            lambda: R::of(l),
+            shear: R::of(g),
+        }
+    }
+
+    /// Oedometric (constrained) modulus 2G(1-ν)/(1-2ν) = λ + 2G.
+    pub fn oedometric(young: f64, poisson: f64) -> f64 {
+        2.0 * young / (2.0 * (1.0 + poisson)) * (1.0 - poisson) / (1.0 - 2.0 * poisson)
+    }
+
+    /// Adds the stress increment of strain increment `de` (xx yy zz xy yz zx, tensor shear
+    /// components) to `s`.
+    #[inline]
+    pub fn update(&self, s: &mut [R; 6], de: &[R; 6]) {
+        let tr = self.lambda * (de[0] + de[1] + de[2]);
+        let g2 = self.shear + self.shear;
+        s[0] += tr + g2 * de[0];
+        s[1] += tr + g2 * de[1];
+        s[2] += tr + g2 * de[2];
+        s[3] += g2 * de[3];
+        s[4] += g2 * de[4];
+        s[5] += g2 * de[5];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniaxial_strain_gives_oedometric_modulus() {
+        let law = LinearElastic::<f64>::new(1000.0, 0.3);
+        let mut s = [0.0; 6];
+        law.update(&mut s, &[0.0, -1e-3, 0.0, 0.0, 0.0, 0.0]);
+        let eoed = LinearElastic::<f64>::oedometric(1000.0, 0.3);
+        assert!((s[1] + eoed * 1e-3).abs() < 1e-9);
+        assert!((eoed - 1346.153846153846).abs() < 1e-9);
+        // Lateral stress: K0 = ν / (1 - ν).
+        assert!((s[0] / s[1] - 0.3 / 0.7).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,115 @@
+//! Material points, stored as structure of arrays, and their initial placement by Anura3D's rule.
+
+use crate::mesh::TetMesh;
+use crate::real::{Real, V3};
+
+/// Material-point state (one entry per point in every array).
+#[derive(Debug, Clone, Default)]
+pub struct Particles<R: Real> {
+    /// Position.
+    pub x: Vec<V3<R>>,
+    /// Displacement since the start.
+    pub u: Vec<V3<R>>,
+    /// Velocity.
+    pub v: Vec<V3<R>>,
+    /// Mass (t).
+    pub mass: Vec<R>,
+    /// Volume (m³).
+    pub volume: Vec<R>,
+    /// Stress (kPa, tension positive): xx yy zz xy yz zx.
+    pub stress: Vec<[R; 6]>,
+    /// Element holding the point.
+    pub element: Vec<u32>,
+    /// Material index (1-based, as in the GOM).
+    pub material: Vec<u32>,
+    /// Id in the input numbering (1-based, in element order as Anura3D counts).
+    pub id: Vec<u32>,
+    /// False once a point has left the mesh under `--drop-lost`.
+    pub active: Vec<bool>,
+}
+
+impl<R: Real> Particles<R> {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// True when there are none.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Bytes of state per point.
+    pub fn bytes_per_point() -> usize {
+        let r = std::mem::size_of::<R>();
+        (3 + 3 + 3 + 1 + 1 + 6) * r + 4 + 4 + 4 + 1
+    }
+}
+
+/// Barycentric positions of Anura3D's material points in a tetrahedron for the supported counts:
+/// 1 (centroid) and 4 (the 4-point Gauss rule, a = 0.1381966, b = 0.5854102).
+pub fn tet_points(n: u32) -> Option<Vec<[f64; 4]>> {
+    const A: f64 = 0.1381966;
+    const B: f64 = 0.5854102;
+    match n {
+        0 => Some(Vec::new()),
+        1 => Some(vec![[0.25; 4]]),
+        4 => Some(
+            (0..4)
+                .map(|k| {
+                    let mut l = [A; 4];
+                    l[k] = B;
+                    l
+                })
+                .collect(),
+        ),
+        _ => None,
+    }
+}
+
+/// Places `points[e]` material points in every element `e` of material `material[e]` (0 = empty),
+/// each with an equal share of the element's volume and mass `density[material] · V / n`.
+/// Ids follow element order, `points[e]` per element, as Anura3D numbers them.
+pub fn place<R: Real>(
+    mesh: &TetMesh<R>,
+    points: &[u32],
+    material: &[u32],
+    density: impl Fn(u32) -> f64,
+) -> Result<Particles<R>, String> {
+    let mut p = Particles::default();
+    let mut id = 0u32;
+    for e in 0..mesh.elements() {
+        let n = points[e];
+        let Some(local) = tet_points(n) else {
+            return Err(format!(
+                "element {}: {n} material points per element is not supported (use 1 or 4)",
+                e + 1
+            ));
+        };
+        for l in local {
+            id += 1;
+            if material[e] == 0 {
+                continue;
+            }
+            let c = mesh.corners[e].map(|i| mesh.x[i as usize]);
+            let mut x = [R::ZERO; 3];
+            for k in 0..4 {
+                for a in 0..3 {
+                    x[a] += R::of(l[k]) * c[k][a];
+                }
+            }
+            let vol = mesh.volume[e].f64() / n as f64;
+            p.x.push(x);
+            p.u.push([R::ZERO; 3]);
+            p.v.push([R::ZERO; 3]);
+            p.volume.push(R::of(vol));
+            p.mass.push(R::of(density(material[e]) * vol));
+            p.stress.push([R::ZERO; 6]);
+            p.element.push(e as u32);
+            p.material.push(material[e]);
+            p.id.push(id);
+            p.active.push(true);
+        }
+    }
+    Ok(p)
+}

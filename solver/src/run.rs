@@ -1,0 +1,77 @@
+//! The driver: time steps between output times, writing outputs, progress and the summary.
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::case::Case;
+use crate::engine::Engine;
+use crate::output::{self, Output};
+use crate::real::Real;
+
+/// Why a run stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// Set-up failed (mesh, material points, time step).
+    #[error("{0}")]
+    Setup(String),
+    /// A material point left the mesh.
+    #[error(transparent)]
+    Lost(#[from] crate::engine::Lost),
+    /// Writing an output failed.
+    #[error(transparent)]
+    Output(#[from] mpm_shared::Error),
+    /// The step limit was reached before the end time.
+    #[error("stopped after the maximum of {0} time steps at t = {1} s")]
+    MaxSteps(u64, f64),
+}
+
+/// Runs `case` to its end time, writing into `dir`. Returns the engine's final state.
+pub fn run<R: Real>(
+    case: &Case,
+    dir: &Path,
+    drop_lost: bool,
+    progress: bool,
+) -> Result<Engine<R>, RunError> {
+    let wall = Instant::now();
+    let mut engine = Engine::<R>::new(case, drop_lost).map_err(RunError::Setup)?;
+    let mut out = Output::new(dir, case, &engine)?;
+    let total_steps = (case.end_time / engine.dt).ceil() as u64;
+    let bar = progress.then(|| {
+        let b = indicatif::ProgressBar::new(total_steps);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} steps, {per_sec}, ETA {eta}",
+            )
+            .expect("valid template"),
+        );
+        b
+    });
+    let mut stepping = 0.0;
+    for &t_out in &case.output_times {
+        let t0 = Instant::now();
+        while engine.time < t_out * (1.0 - 1e-12) {
+            if case.max_steps.is_some_and(|m| engine.steps >= m) {
+                return Err(RunError::MaxSteps(engine.steps, engine.time));
+            }
+            let left = t_out - engine.time;
+            let (dt, snap) = if engine.dt >= left {
+                (left, Some(t_out))
+            } else {
+                (engine.dt, None)
+            };
+            engine.step(case, dt, snap)?;
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
+        }
+        stepping += t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        out.write(&engine)?;
+        engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    output::write_summary(dir, case, &engine, wall.elapsed().as_secs_f64(), stepping)?;
+    Ok(engine)
+}

@@ -1,0 +1,412 @@
+//! TOML scenes for Gmsh meshes: materials per physical volume, fixities per physical surface or
+//! plane selector, tractions, gravity, time, Courant number, damping and output interval.
+//!
+//! Units are Anura3D's: kN, m, s, t; densities are given in kg/m³ (divided by 1000 here), moduli
+//! and tractions in kPa. Example (`testdata/column_gravity.toml`):
+//!
+//! ```toml
+//! mesh = "column_tet4.msh"        # relative to the scene file
+//! [time]
+//! end = 0.5                       # s
+//! courant = 0.5
+//! output_interval = 0.05
+//! [gravity]
+//! vector = [0.0, -9.81, 0.0]      # m/s²
+//! [damping]
+//! local = 0.75
+//! [[material]]
+//! physical = "soil"
+//! density = 2000.0                # kg/m³
+//! young = 10000.0                 # kPa
+//! poisson = 0.3
+//! points_per_element = 4
+//! [[fixity]]
+//! physical = "bottom"
+//! fixed = [true, true, true]      # x y z
+//! [[fixity]]
+//! plane = "x = 0"
+//! fixed = [true, false, false]
+//! [[traction]]
+//! physical = "top"
+//! traction = [0.0, -10.0, 0.0]    # kPa
+//! ramp = 0.0                      # s to reach full load (0: sudden)
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use mpm_shared::msh::{self, MshMesh};
+use mpm_shared::Model;
+
+use crate::case::{Case, LoadCurve, MaterialSpec};
+
+/// The scene file's content.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Scene {
+    mesh: PathBuf,
+    time: Time,
+    #[serde(default)]
+    gravity: Option<Gravity>,
+    #[serde(default)]
+    damping: Option<Damping>,
+    material: Vec<Material>,
+    #[serde(default)]
+    fixity: Vec<Fixity>,
+    #[serde(default)]
+    traction: Vec<Traction>,
+    #[serde(default)]
+    probes: Vec<u32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Time {
+    end: f64,
+    #[serde(default = "default_courant")]
+    courant: f64,
+    output_interval: f64,
+    #[serde(default)]
+    max_steps: Option<u64>,
+}
+
+fn default_courant() -> f64 {
+    0.9
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Gravity {
+    vector: [f64; 3],
+    #[serde(default)]
+    ramp: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Damping {
+    local: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Material {
+    physical: String,
+    density: f64,
+    young: f64,
+    poisson: f64,
+    #[serde(default = "default_points")]
+    points_per_element: u32,
+}
+
+fn default_points() -> u32 {
+    4
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Fixity {
+    #[serde(default)]
+    physical: Option<String>,
+    #[serde(default)]
+    plane: Option<String>,
+    fixed: [bool; 3],
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Traction {
+    physical: String,
+    traction: [f64; 3],
+    #[serde(default)]
+    ramp: f64,
+}
+
+/// Errors in a scene, naming the file and the item.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// TOML syntax or an unknown/missing key (the message carries line and column).
+    #[error("{file}: {message}")]
+    Parse {
+        /// Scene file.
+        file: String,
+        /// What the TOML reader said.
+        message: String,
+    },
+    /// A value or reference that cannot be used.
+    #[error("{file}: {item}: {message}")]
+    Invalid {
+        /// Scene file.
+        file: String,
+        /// The offending item, e.g. `material "soil"`.
+        item: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The mesh could not be read.
+    #[error(transparent)]
+    Mesh(#[from] mpm_shared::Error),
+}
+
+/// Nodes (0-based, model numbering) of the boundary triangles in physical group `name`, and the
+/// triangles themselves (model node triples of their corners).
+fn physical_faces(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<[u32; 3]>> {
+    let tag = mesh
+        .physical_names
+        .iter()
+        .find(|p| p.dim == 2 && p.name == name)?
+        .tag;
+    let mut faces = Vec::new();
+    for set in mesh.sets.iter().filter(|s| s.dim() == 2) {
+        for (e, &phys) in set.physical.iter().enumerate() {
+            if phys == tag {
+                let nodes = &set.nodes[e * set.nodes_per..e * set.nodes_per + 3];
+                faces.push([
+                    node_map[nodes[0] as usize],
+                    node_map[nodes[1] as usize],
+                    node_map[nodes[2] as usize],
+                ]);
+            }
+        }
+    }
+    Some(faces)
+}
+
+/// All nodes of the physical surface group `name` (corner and mid-edge).
+fn physical_nodes(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<u32>> {
+    let tag = mesh
+        .physical_names
+        .iter()
+        .find(|p| p.dim == 2 && p.name == name)?
+        .tag;
+    let mut out = Vec::new();
+    for set in mesh.sets.iter().filter(|s| s.dim() == 2) {
+        for (e, &phys) in set.physical.iter().enumerate() {
+            if phys == tag {
+                out.extend(
+                    set.nodes[e * set.nodes_per..(e + 1) * set.nodes_per]
+                        .iter()
+                        .map(|&n| node_map[n as usize]),
+                );
+            }
+        }
+    }
+    out.retain(|&n| n != u32::MAX);
+    out.sort_unstable();
+    out.dedup();
+    Some(out)
+}
+
+/// Parses `x = 0.5` style selectors: (axis, value).
+fn parse_plane(s: &str) -> Option<(usize, f64)> {
+    let (a, v) = s.split_once('=')?;
+    let axis = match a.trim() {
+        "x" => 0,
+        "y" => 1,
+        "z" => 2,
+        _ => return None,
+    };
+    Some((axis, v.trim().parse().ok()?))
+}
+
+/// Reads a scene file and builds the case it describes.
+pub fn load(path: &Path) -> Result<Case, SceneError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Parse {
+        file: file.clone(),
+        message: e.to_string(),
+    })?;
+    let scene: Scene = toml::from_str(&text).map_err(|e| SceneError::Parse {
+        file: file.clone(),
+        message: e.to_string(),
+    })?;
+    let invalid = |item: String, message: String| SceneError::Invalid {
+        file: file.clone(),
+        item,
+        message,
+    };
+    let mesh_path = path.parent().unwrap_or(Path::new(".")).join(&scene.mesh);
+    let data = mpm_shared::io::read_input(&mesh_path)?;
+    let mesh_name = mesh_path.display().to_string();
+    let msh_mesh = msh::read(&data, &mesh_name)?;
+    let (model, node_map) = msh::to_model_with_map(&msh_mesh, &mesh_name)?;
+    if model.dimension.coords() != 3 {
+        return Err(invalid(
+            "mesh".into(),
+            "scenes need a 3D tetrahedral mesh".into(),
+        ));
+    }
+    let t = &scene.time;
+    if !(t.end > 0.0) {
+        return Err(invalid(
+            "time.end".into(),
+            format!("must be positive, got {}", t.end),
+        ));
+    }
+    if !(t.courant > 0.0 && t.courant <= 1.0) {
+        return Err(invalid(
+            "time.courant".into(),
+            format!("must be in (0, 1], got {}", t.courant),
+        ));
+    }
+    if !(t.output_interval > 0.0) {
+        return Err(invalid(
+            "time.output_interval".into(),
+            format!("must be positive, got {}", t.output_interval),
+        ));
+    }
+    // Materials: model material k is the k-th physical volume group by tag (see msh::to_model).
+    let names: Vec<String> = model.materials().iter().map(|m| m.name.clone()).collect();
+    let mut materials = vec![None; names.len() + 1];
+    let mut points = vec![0u32; names.len() + 1];
+    for m in &scene.material {
+        let item = format!("material \"{}\"", m.physical);
+        let k = names.iter().position(|n| *n == m.physical).ok_or_else(|| {
+            invalid(
+                item.clone(),
+                format!("no physical volume of that name in {mesh_name} (it has {names:?})"),
+            )
+        })? + 1;
+        let spec = MaterialSpec::new(&m.physical, m.density, m.young, m.poisson)
+            .map_err(|e| invalid(item.clone(), e))?;
+        materials[k] = Some(spec);
+        points[k] = m.points_per_element;
+    }
+    let element_material: Vec<u32> = model
+        .element_materials()
+        .unwrap_or_default()
+        .iter()
+        .map(|&m| m as u32)
+        .collect();
+    for (k, m) in materials.iter().enumerate().skip(1) {
+        if m.is_none() && element_material.contains(&(k as u32)) {
+            return Err(invalid(
+                format!("physical volume \"{}\"", names[k - 1]),
+                "has elements but no [[material]] entry".into(),
+            ));
+        }
+    }
+    let points_per_element: Vec<u32> = element_material
+        .iter()
+        .map(|&m| points[m as usize])
+        .collect();
+    let mut fixed = vec![[false; 3]; model.node_count()];
+    let size = (0..3)
+        .map(|a| {
+            let (lo, hi) = model
+                .coords
+                .chunks_exact(3)
+                .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p[a]), h.max(p[a])));
+            hi - lo
+        })
+        .fold(0.0, f64::max);
+    for f in &scene.fixity {
+        let nodes: Vec<u32> = match (&f.physical, &f.plane) {
+            (Some(name), None) => physical_nodes(&msh_mesh, &node_map, name).ok_or_else(|| {
+                invalid(
+                    format!("fixity \"{name}\""),
+                    format!("no physical surface of that name in {mesh_name}"),
+                )
+            })?,
+            (None, Some(plane)) => {
+                let (axis, value) = parse_plane(plane).ok_or_else(|| {
+                    invalid(
+                        format!("fixity plane \"{plane}\""),
+                        "expected 'x = value', 'y = value' or 'z = value'".into(),
+                    )
+                })?;
+                let tol = 1e-9 * size.max(1e-300);
+                let found: Vec<u32> = (0..model.node_count() as u32)
+                    .filter(|&n| (model.node(n as usize)[axis] - value).abs() <= tol)
+                    .collect();
+                if found.is_empty() {
+                    return Err(invalid(
+                        format!("fixity plane \"{plane}\""),
+                        "selects no node".into(),
+                    ));
+                }
+                found
+            }
+            _ => {
+                return Err(invalid(
+                    "fixity".into(),
+                    "give exactly one of physical = \"name\" or plane = \"x = value\"".into(),
+                ))
+            }
+        };
+        for n in nodes {
+            for a in 0..3 {
+                fixed[n as usize][a] |= f.fixed[a];
+            }
+        }
+    }
+    let mut traction = vec![[0.0; 3]; model.node_count()];
+    let mut traction_ramp = 0.0f64;
+    for tr in &scene.traction {
+        let faces = physical_faces(&msh_mesh, &node_map, &tr.physical).ok_or_else(|| {
+            invalid(
+                format!("traction \"{}\"", tr.physical),
+                format!("no physical surface of that name in {mesh_name}"),
+            )
+        })?;
+        add_face_loads(&model, &faces, tr.traction, &mut traction);
+        traction_ramp = traction_ramp.max(tr.ramp);
+    }
+    let gravity = scene.gravity.as_ref().map_or([0.0; 3], |g| g.vector);
+    let gravity_ramp = scene.gravity.as_ref().map_or(0.0, |g| g.ramp);
+    let damping = scene.damping.as_ref().map_or(0.0, |d| d.local);
+    if !(0.0..1.0).contains(&damping) {
+        return Err(invalid(
+            "damping.local".into(),
+            format!("must be in [0, 1), got {damping}"),
+        ));
+    }
+    let n_out = (t.end / t.output_interval).round().max(1.0) as usize;
+    let output_times = (1..=n_out)
+        .map(|k| (k as f64 * t.output_interval).min(t.end))
+        .collect();
+    Ok(Case {
+        name: path
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or_default(),
+        inputs: vec![file.clone(), mesh_name],
+        model,
+        materials,
+        element_material,
+        points_per_element,
+        fixed,
+        traction,
+        traction_curve: LoadCurve::ramp(traction_ramp),
+        gravity,
+        gravity_curve: LoadCurve::ramp(gravity_ramp),
+        courant: t.courant,
+        damping,
+        end_time: t.end,
+        output_times,
+        max_steps: t.max_steps,
+        probes: scene.probes.clone(),
+    })
+}
+
+/// Adds the nodal forces of a uniform traction `t` (kPa) on triangles `faces` (model node ids of
+/// their corners): each corner takes a third of the face's area times `t`.
+pub fn add_face_loads(model: &Model, faces: &[[u32; 3]], t: [f64; 3], out: &mut [[f64; 3]]) {
+    for f in faces {
+        let p = f.map(|n| model.node(n as usize));
+        let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+        let b = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let area = 0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+        for &n in f {
+            for d in 0..3 {
+                out[n as usize][d] += area / 3.0 * t[d];
+            }
+        }
+    }
+}

@@ -1,0 +1,166 @@
+//! `mpm-solve` from the command line: outputs, determinism, bad input.
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+
+fn testdata(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../testdata")
+        .join(name)
+}
+
+fn scene(dir: &Path, edit: &dyn Fn(String) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(testdata("column_gravity.toml")).unwrap();
+    let text = text
+        .replace(
+            "column_fine_tet4.msh",
+            &testdata("column_tet4.msh").display().to_string(),
+        )
+        .replace("end = 0.6", "end = 0.02")
+        .replace("output_interval = 0.1", "output_interval = 0.01");
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, edit(text)).unwrap();
+    p
+}
+
+#[test]
+fn writes_every_output_and_repeats_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene(dir.path(), &|t| t);
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    for out in [&a, &b] {
+        Command::cargo_bin("mpm-solve")
+            .unwrap()
+            .arg(&s)
+            .arg("--out")
+            .arg(out)
+            .args(["--probe", "1,5"])
+            .assert()
+            .success();
+    }
+    let mut names: Vec<String> = std::fs::read_dir(&a)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "energy.csv",
+            "history.csv",
+            "mesh.vtu",
+            "particles_00000.vtu",
+            "particles_00001.vtu",
+            "run.json",
+            "run.pvd"
+        ]
+    );
+    for n in &names {
+        if n != "run.json" {
+            assert!(
+                std::fs::read(a.join(n)).unwrap() == std::fs::read(b.join(n)).unwrap(),
+                "{n} differs between runs"
+            );
+        }
+    }
+    let history = std::fs::read_to_string(a.join("history.csv")).unwrap();
+    assert_eq!(history.lines().count(), 1 + 2 * 2);
+    assert!(history.starts_with("time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx\n0.01,1,"));
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(a.join("run.json")).unwrap()).unwrap();
+    for key in [
+        "particles",
+        "elements",
+        "steps",
+        "threads",
+        "precision",
+        "wall_seconds",
+        "particle_steps_per_second",
+        "phase_seconds",
+        "bytes_per_particle",
+        "peak_rss_bytes",
+    ] {
+        assert!(run.get(key).is_some(), "run.json lacks {key}");
+    }
+    assert_eq!(run["precision"], "f64");
+}
+
+#[test]
+fn bad_scenes_fail_with_a_clear_message_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&dyn Fn(String) -> String, &str); 6] = [
+        (
+            &|t| t.replace("courant = 0.5", "courant = 0.0"),
+            "time.courant",
+        ),
+        (
+            &|t| t.replace("courant = 0.5", "courant = 1.5"),
+            "time.courant",
+        ),
+        (
+            &|t| t.replace("density = 2000.0", "density = -1.0"),
+            "density must be positive",
+        ),
+        (
+            &|t| t.replace("young = 10000.0", "young = 0.0"),
+            "Young's modulus must be positive",
+        ),
+        (
+            &|t| t.replace("physical = \"soil\"", "physical = \"rock\""),
+            "material \"rock\"",
+        ),
+        (
+            &|t| {
+                t.replace(
+                    "[[fixity]]\nphysical = \"bottom\"",
+                    "[[fixity]]\nphysical = \"floor\"",
+                )
+            },
+            "fixity \"floor\"",
+        ),
+    ];
+    for (i, (edit, message)) in cases.iter().enumerate() {
+        let sub = dir.path().join(format!("case{i}"));
+        std::fs::create_dir(&sub).unwrap();
+        let s = scene(&sub, edit);
+        let out = sub.join("out");
+        Command::cargo_bin("mpm-solve")
+            .unwrap()
+            .arg(&s)
+            .arg("--out")
+            .arg(&out)
+            .assert()
+            .failure()
+            .stderr(predicate::str::contains(*message).and(predicate::str::contains("scene.toml")));
+        assert!(!out.exists(), "case {i} wrote outputs");
+    }
+    // Unknown keys are refused with their line.
+    let s = scene(dir.path(), &|t| t.replace("[time]", "[time]\nspeed = 3"));
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(&s)
+        .arg("--out")
+        .arg(dir.path().join("o"))
+        .assert()
+        .failure()
+        .stderr(
+            predicate::str::contains("unknown field `speed`").and(predicate::str::contains("line")),
+        );
+}
+
+#[test]
+fn anura3d_cases_are_checked() {
+    let Some(root) = std::env::var_os("ANURA3D_BENCHMARKS") else {
+        return;
+    };
+    let gom = Path::new(&root).join("Benchmarks/Pre-Commit_Tests/1005_Oedometer_QS_MPMMP_1Phase_NormalStress_3D/test-1005_3D.A3D/test-1005_3D.GOM");
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(&gom)
+        .arg("--check")
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("66 tetrahedral_old elements"));
+}
