@@ -9,6 +9,7 @@
 // better as index loops; and `!(x > 0.0)` is deliberate where NaN must be rejected too.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod anura3d;
 pub mod case;
 pub mod engine;
 pub mod grid;

@@ -1,8 +1,7 @@
 //! `mpm-solve`: explicit material point method on tetrahedral meshes.
 //!
-//! `mpm-solve SCENE.toml --out DIR` runs a TOML scene on a Gmsh mesh. Anura3D cases
-//! (`CASE.GOM` + `CASE.CPS_001`) are read and checked with `--check`; running them is the next
-//! step of the solver work.
+//! `mpm-solve SCENE.toml --out DIR` runs a TOML scene on a Gmsh mesh; `mpm-solve CASE.GOM --out
+//! DIR` runs an Anura3D case (dry, linear elastic, MPM-MP; other features are refused by name).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -90,27 +89,43 @@ fn run(args: Args) -> anyhow::Result<()> {
         (None, true) => bail!("reading the GOM from standard input needs --cps FILE"),
         (None, false) => args.input.with_extension("CPS_001"),
     };
-    let model = mpm_shared::read_model(&args.input)?;
-    let data =
-        std::fs::read(&cps_path).with_context(|| format!("reading {}", cps_path.display()))?;
-    let (cps, warnings) = Cps::read(&data, &cps_path.display().to_string())?;
-    for w in warnings {
-        eprintln!("mpm-solve: warning: {w}");
+    if args.check {
+        let model = mpm_shared::read_model(&args.input)?;
+        let data =
+            std::fs::read(&cps_path).with_context(|| format!("reading {}", cps_path.display()))?;
+        let (cps, warnings) = Cps::read(&data, &cps_path.display().to_string())?;
+        for w in warnings {
+            eprintln!("mpm-solve: warning: {w}");
+        }
+        let settings = cps.settings()?;
+        println!(
+            "{}: {} {} elements, {} nodes, {} materials; {} load step(s) of {} s, Courant {}",
+            mpm_shared::display_name(&args.input),
+            model.element_count(),
+            model.element_type.keyword(),
+            model.node_count(),
+            model.materials().len(),
+            settings.load_steps,
+            settings.time_per_load_step,
+            settings.courant
+        );
+        return Ok(());
     }
-    let settings = cps.settings()?;
+    let Some(out) = &args.out else {
+        bail!("--out DIR is required to run a case")
+    };
+    let (mut case, _settings) = mpm_solve::anura3d::load(&args.input, &cps_path)?;
+    case.probes.extend(&args.probe);
+    case.probes.sort_unstable();
+    case.probes.dedup();
+    let progress = std::io::stderr().is_terminal();
+    let engine = mpm_solve::run::run::<f64>(&case, out, args.drop_lost, progress)?;
     println!(
-        "{}: {} {} elements, {} nodes, {} materials; {} load step(s) of {} s, Courant {}",
-        mpm_shared::display_name(&args.input),
-        model.element_count(),
-        model.element_type.keyword(),
-        model.node_count(),
-        model.materials().len(),
-        settings.load_steps,
-        settings.time_per_load_step,
-        settings.courant
+        "done: {} steps of {:.3e} s, {} material points, outputs in {}",
+        engine.steps,
+        engine.dt,
+        engine.particles.len(),
+        out.display()
     );
-    if !args.check {
-        bail!("running Anura3D GOM/CPS cases is not available in this release (use --check to validate one, or a TOML scene to run)");
-    }
     Ok(())
 }

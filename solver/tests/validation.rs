@@ -128,3 +128,148 @@ fn compression_wave_arrives_at_mid_height_on_time() {
     );
     assert!(err.abs() < 0.03, "arrival error {:.2}%", 100.0 * err);
 }
+
+/// Writes a GOM + CPS oedometer (structured column, lateral rollers, fixed base, a nodal face
+/// load q on the top) and returns the GOM path.
+fn write_oedometer_case(dir: &Path, q: f64, method: &str) -> PathBuf {
+    use mpm_shared::model::{Body, Refs, Section, Table, Token};
+    use mpm_shared::{generate, ElementType};
+    let mut model = generate::box_mesh([2, 20, 2], [0.1, 1.0, 0.1], ElementType::Tet4);
+    let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
+    let mut fix = Table::new();
+    for i in 0..model.node_count() {
+        let p = model.node(i);
+        let f = [
+            near(p[0], 0.0) || near(p[0], 0.1) || near(p[1], 0.0),
+            near(p[1], 0.0),
+            near(p[2], 0.0) || near(p[2], 0.1) || near(p[1], 0.0),
+        ];
+        if f.iter().any(|&b| b) {
+            fix.push_row(
+                [Token::Int(i as i64 + 1)]
+                    .into_iter()
+                    .chain(f.map(|b| Token::Int(b as i64))),
+            );
+        }
+    }
+    let mut load = Table::new();
+    for e in 0..model.element_count() {
+        let el = model.element(e).to_vec();
+        for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+            if f.iter().all(|&k| near(model.node(el[k] as usize)[1], 1.0)) {
+                let ids = f.map(|k| Token::Int(el[k] as i64 + 1));
+                let t = (0..3).flat_map(|_| [Token::Real(0.0), Token::Real(-q), Token::Real(0.0)]);
+                load.push_row(ids.into_iter().chain(t));
+            }
+        }
+    }
+    for s in model.sections.iter_mut() {
+        if s.keyword == "START_FIXITY_SURFACE_SOLID" {
+            s.body = Body::Table {
+                counted: true,
+                refs: Refs::Nodes(1),
+                rows: fix.clone(),
+            };
+        }
+    }
+    let at = model
+        .sections
+        .iter()
+        .position(|s| s.keyword == "NUMBER_OF_MATERIALS")
+        .unwrap();
+    model.sections.insert(
+        at,
+        Section {
+            keyword: "START_LOAD_ON_NODES_SOLID".into(),
+            body: Body::Table {
+                counted: true,
+                refs: Refs::Nodes(3),
+                rows: load,
+            },
+        },
+    );
+    let at = model
+        .sections
+        .iter()
+        .position(|s| s.keyword == "MATERIAL_NAME")
+        .unwrap()
+        + 1;
+    for (k, v) in [
+        ("MATERIAL_TYPE", "dry_material"),
+        ("POROSITY_SOLID", "0.0"),
+        ("DENSITY_SOLID", "2000"),
+        ("K0_VALUE_SOLID", "0.5"),
+        ("MATERIAL_MODEL_SOLID", "linear_elasticity"),
+        ("YOUNG_MODULUS", "1000"),
+        ("POISSON_RATIO", "0.3"),
+    ]
+    .iter()
+    .rev()
+    {
+        model.sections.insert(
+            at,
+            Section {
+                keyword: k.to_string(),
+                body: Body::Text(vec![v.to_string()]),
+            },
+        );
+    }
+    let gom = dir.join("oedo.GOM");
+    mpm_shared::write_gom_file(&model, &gom).unwrap();
+    let cps = format!(
+        "### Anura3D_2021 ###\n$$NUMBER_OF_LOADSTEPS\n4\n$$TIME_PER_LOADSTEP\n0.5\n$$COURANT_NUMBER\n0.9\n$$COMPUTATION_METHOD\n{method}\n$$GRAVITY_LOAD\noff 0.0 1.0\n$$SOLID_TRACTION\nstep 0.0 1.0\n$$HOMOGENEOUS_LOCAL_DAMPING\n1 0.75\n$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n1\n$$OUTPUT_MATERIAL_POINTS\n1\n$$END\n"
+    );
+    std::fs::write(dir.join("oedo.CPS_001"), cps).unwrap();
+    gom
+}
+
+#[test]
+fn anura3d_oedometer_settles_by_q_h_over_e_oed() {
+    let dir = tempfile::tempdir().unwrap();
+    // A load small enough that no material point crosses into another element: crossings make
+    // MPM-MP stresses uneven near the top (that is what MPM-MIXED integration is for).
+    let q = 5.0;
+    let gom = write_oedometer_case(dir.path(), q, "MPM-MP");
+    let (case, _) = mpm_solve::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
+    let engine = mpm_solve::run::run::<f64>(&case, &dir.path().join("out"), false, false).unwrap();
+    let eoed = mpm_solve::linear_elastic::LinearElastic::<f64>::oedometric(1000.0, 0.3);
+    let p = &engine.particles;
+    // Uniform strain -q/E_oed: every point's vertical displacement is -q y0 / E_oed.
+    let mut worst: f64 = 0.0;
+    let (mut worst_s, mut mean_s) = (0.0f64, 0.0);
+    for i in 0..p.len() {
+        let y0 = p.x[i][1] - p.u[i][1];
+        let want = -q * y0 / eoed;
+        worst = worst.max((p.u[i][1] - want).abs() / (q / eoed));
+        worst_s = worst_s.max((p.stress[i][1] + q).abs() / q);
+        mean_s += p.stress[i][1] / p.len() as f64;
+    }
+    eprintln!(
+        "oedometer: mean sigma_yy {mean_s:.5}, worst {:.3}% off q; kinetic {:e}",
+        100.0 * worst_s,
+        engine.kinetic_energy()
+    );
+    eprintln!(
+        "oedometer: worst displacement error {:.3}% of q H / E_oed",
+        100.0 * worst
+    );
+    assert!(worst < 0.01, "displacement error {worst}");
+    // The particle volume shrinks by the strain while the grid stays, so the stress that
+    // balances the load grows by about the strain (0.37 %).
+    assert!(worst_s < 0.01, "stress error {worst_s}");
+    // Four load steps, four particle files.
+    assert!(dir.path().join("out/particles_00003.vtu").exists());
+}
+
+#[test]
+fn unsupported_anura3d_features_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let gom = write_oedometer_case(dir.path(), 10.0, "MPM-MIXED");
+    let err = mpm_solve::anura3d::load(&gom, &dir.path().join("oedo.CPS_001"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("$$COMPUTATION_METHOD") && err.contains("MPM-MIXED"),
+        "{err}"
+    );
+}

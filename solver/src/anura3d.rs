@@ -1,0 +1,275 @@
+//! Anura3D cases (GOM + CPS) turned into a [`Case`]: dry linear elastic materials, solid
+//! fixities, nodal face loads, gravity, local damping and load steps, integrated at material
+//! points (`MPM-MP`). Features this solver does not model yet are refused with the item named,
+//! never silently ignored.
+
+use std::path::Path;
+
+use mpm_shared::cps::{Cps, Method, Multiplier, Settings};
+use mpm_shared::model::{Body, Token};
+use mpm_shared::{ElementType, Model};
+
+use crate::case::{Case, LoadCurve, MaterialSpec};
+
+/// Why a case cannot run here.
+#[derive(Debug, thiserror::Error)]
+pub enum CaseError {
+    /// Reading the files failed.
+    #[error(transparent)]
+    Read(#[from] mpm_shared::Error),
+    /// The case asks for something this solver does not model (yet).
+    #[error("{file}: {item}: {message}")]
+    Unsupported {
+        /// The file holding the item.
+        file: String,
+        /// The section or key.
+        item: String,
+        /// What is not supported and what is.
+        message: String,
+    },
+}
+
+fn unsupported(file: &str, item: &str, message: impl Into<String>) -> CaseError {
+    CaseError::Unsupported {
+        file: file.into(),
+        item: item.into(),
+        message: message.into(),
+    }
+}
+
+/// A multiplier as a load curve over the calculation's total time `total`.
+fn curve(m: Multiplier, total: f64, file: &str, key: &str) -> Result<(f64, LoadCurve), CaseError> {
+    Ok(match m {
+        Multiplier::Off => (0.0, LoadCurve::Step),
+        Multiplier::Step { value } => (value, LoadCurve::Step),
+        Multiplier::Linear { start, end } => {
+            if start != 0.0 {
+                return Err(unsupported(
+                    file,
+                    key,
+                    format!("linear multipliers must start at 0 here (got {start})"),
+                ));
+            }
+            (end, LoadCurve::ramp(total))
+        }
+        Multiplier::File { .. } => {
+            return Err(unsupported(
+                file,
+                key,
+                "load multipliers from files are not supported",
+            ))
+        }
+    })
+}
+
+/// Reads `gom` and `cps` into a case. Returns the case and the CPS settings.
+pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> {
+    let gfile = mpm_shared::display_name(gom);
+    let cfile = cps_path.display().to_string();
+    let model = mpm_shared::read_model(gom)?;
+    let data = mpm_shared::io::read_input(cps_path)?;
+    let (cps, warnings) = Cps::read(&data, &cfile)?;
+    for w in warnings {
+        eprintln!("mpm-solve: warning: {w}");
+    }
+    let s = cps.settings()?;
+    if model.element_type == ElementType::Tri3 {
+        return Err(unsupported(
+            &gfile,
+            "$$ELEMENTTYPE",
+            "2D cases are not supported; the solver computes 3D tetrahedra",
+        ));
+    }
+    match &s.method {
+        Method::MpmMp => {}
+        Method::MpmMixed => {
+            return Err(unsupported(
+                &cfile,
+                "$$COMPUTATION_METHOD",
+                "MPM-MIXED is not supported yet (use MPM-MP)",
+            ))
+        }
+        Method::Other(m) => {
+            return Err(unsupported(
+                &cfile,
+                "$$COMPUTATION_METHOD",
+                format!("{m} is not an MPM method"),
+            ))
+        }
+    }
+    if !(s.courant > 0.0 && s.courant <= 1.0) {
+        return Err(unsupported(
+            &cfile,
+            "$$COURANT_NUMBER",
+            format!("must be in (0, 1], got {}", s.courant),
+        ));
+    }
+    if !(s.time_per_load_step > 0.0) {
+        return Err(unsupported(
+            &cfile,
+            "$$TIME_PER_LOADSTEP",
+            format!("must be positive, got {}", s.time_per_load_step),
+        ));
+    }
+    // Materials.
+    let mats = model.materials();
+    let max_index = mats.iter().map(|m| m.index).max().unwrap_or(0).max(0) as usize;
+    let mut materials: Vec<Option<MaterialSpec>> = vec![None; max_index + 1];
+    for m in &mats {
+        let item = format!("material {} \"{}\"", m.index, m.name);
+        if m.kind != "dry_material" {
+            return Err(unsupported(
+                &gfile,
+                &item,
+                format!(
+                    "MATERIAL_TYPE {} is not supported yet (dry_material is)",
+                    m.kind
+                ),
+            ));
+        }
+        let model_name = m.get("MATERIAL_MODEL_SOLID").unwrap_or("");
+        if model_name != "linear_elasticity" {
+            return Err(unsupported(
+                &gfile,
+                &item,
+                format!(
+                    "MATERIAL_MODEL_SOLID {model_name} is not supported yet (linear_elasticity is)"
+                ),
+            ));
+        }
+        let get = |k: &str| {
+            m.get_f64(k)
+                .ok_or_else(|| unsupported(&gfile, &item, format!("missing or non-numeric ${k}")))
+        };
+        let n = get("POROSITY_SOLID").unwrap_or(0.0);
+        // A dry material's mass is that of its solid grains: (1 - n) ρs.
+        let density = (1.0 - n) * get("DENSITY_SOLID")?;
+        let spec = MaterialSpec::new(
+            &m.name,
+            density,
+            get("YOUNG_MODULUS")?,
+            get("POISSON_RATIO")?,
+        )
+        .map_err(|e| unsupported(&gfile, &item, e))?;
+        materials[m.index.max(0) as usize] = Some(spec);
+    }
+    let element_material: Vec<u32> = model
+        .element_materials()
+        .ok_or_else(|| unsupported(&gfile, "$$STARTELMMAT", "missing"))?
+        .iter()
+        .map(|&m| m.max(0) as u32)
+        .collect();
+    for (e, &m) in element_material.iter().enumerate() {
+        if m as usize >= materials.len() || (m != 0 && materials[m as usize].is_none()) {
+            return Err(unsupported(
+                &gfile,
+                "$$STARTELMMAT",
+                format!(
+                    "element {} refers to material {m}, which is not defined",
+                    e + 1
+                ),
+            ));
+        }
+    }
+    let points_per_element = model
+        .material_points_per_element()
+        .ok_or_else(|| unsupported(&gfile, "$$START_NUMBER_OF_MATERIAL_POINTS", "missing"))?;
+    // Fixities and loads.
+    let n = model.node_count();
+    let mut fixed = vec![[false; 3]; n];
+    let mut traction = vec![[0.0; 3]; n];
+    for sec in &model.sections {
+        let k = sec.keyword.as_str();
+        let Body::Table { rows, .. } = &sec.body else {
+            continue;
+        };
+        if rows.is_empty() {
+            continue;
+        }
+        if k.starts_with("START_FIXITY_") && k.ends_with("_SOLID") {
+            for r in rows.rows() {
+                let node = r[0].as_int().unwrap_or(0) as usize - 1;
+                for a in 0..3 {
+                    fixed[node][a] |= r.get(1 + a).and_then(Token::as_int) == Some(1);
+                }
+            }
+        } else if k == "START_LOAD_ON_NODES_SOLID" {
+            add_nodal_face_loads(&model, rows, &mut traction);
+        } else if k.starts_with("START_REMOVE_FIXITY_")
+            || k.starts_with("START_LOAD_ON_")
+            || k.starts_with("PRESCRIBED_")
+            || k.starts_with("ABSORBING_")
+            || k.starts_with("START_FIXITY_")
+            || k == "START_CONTACT_VOLUME"
+            || k == "START_EXCAVATION_SOLID"
+        {
+            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (a dry case may use solid fixities and $$START_LOAD_ON_NODES_SOLID)"));
+        }
+    }
+    let total = s.load_steps as f64 * s.time_per_load_step;
+    let (tm, traction_curve) = curve(s.solid_traction, total, &cfile, "$$SOLID_TRACTION")?;
+    for t in traction.iter_mut() {
+        for v in t.iter_mut() {
+            *v *= tm;
+        }
+    }
+    let (gm, gravity_curve) = curve(s.gravity_load, total, &cfile, "$$GRAVITY_LOAD")?;
+    let g = s.gravity_vector.map(|v| v * s.gravity_acceleration * gm);
+    let output_times = (1..=s.load_steps)
+        .map(|k| k as f64 * s.time_per_load_step)
+        .collect();
+    let case = Case {
+        name: gom
+            .file_stem()
+            .map(|x| x.to_string_lossy().to_string())
+            .unwrap_or_default(),
+        inputs: vec![gfile, cfile],
+        model,
+        materials,
+        element_material,
+        points_per_element,
+        fixed,
+        traction,
+        traction_curve,
+        gravity: g,
+        gravity_curve,
+        courant: s.courant,
+        damping: s.local_damping.unwrap_or(0.0),
+        end_time: total,
+        output_times,
+        max_steps: None,
+        probes: s.output_material_points.clone(),
+    };
+    Ok((case, s))
+}
+
+/// Adds the nodal forces of `$$START_LOAD_ON_NODES_SOLID` rows: per loaded face the node ids
+/// (3 corners first) and a traction vector per node; the corner tractions are interpolated
+/// linearly over the face and integrated exactly: F_a = A/12 (2 t_a + t_b + t_c).
+fn add_nodal_face_loads(model: &Model, rows: &mpm_shared::model::Table, out: &mut [[f64; 3]]) {
+    let k = model.element_type.face_nodes();
+    for r in rows.rows() {
+        let ids: Vec<usize> = r[..3]
+            .iter()
+            .map(|t| t.as_int().unwrap_or(1) as usize - 1)
+            .collect();
+        let t: Vec<[f64; 3]> = (0..3)
+            .map(|c| [0, 1, 2].map(|d| r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0)))
+            .collect();
+        let p: Vec<&[f64]> = ids.iter().map(|&i| model.node(i)).collect();
+        let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+        let b = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let area = 0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+        for i in 0..3 {
+            let (j, l) = ((i + 1) % 3, (i + 2) % 3);
+            for d in 0..3 {
+                out[ids[i]][d] += area / 12.0 * (2.0 * t[i][d] + t[j][d] + t[l][d]);
+            }
+        }
+    }
+}
