@@ -24,19 +24,7 @@ fn main() {
         ElementType::Tet10,
     );
     let n = model.node_count();
-    let size = 0.1 * nxz as f64 / 10.0;
-    let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
-    let fixed = (0..n)
-        .map(|i| {
-            let p = model.node(i);
-            let bottom = near(p[1], 0.0);
-            [
-                bottom || near(p[0], 0.0) || near(p[0], size),
-                bottom,
-                bottom || near(p[2], 0.0) || near(p[2], size),
-            ]
-        })
-        .collect();
+    let fixed = mpm_solve::case::confined_box(&model);
     let n_el = model.element_count();
     let case = Case {
         name: "throughput".into(),

@@ -256,15 +256,7 @@ fn add_nodal_face_loads(model: &Model, rows: &mpm_shared::model::Table, out: &mu
         let t: Vec<[f64; 3]> = (0..3)
             .map(|c| [0, 1, 2].map(|d| r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0)))
             .collect();
-        let p: Vec<&[f64]> = ids.iter().map(|&i| model.node(i)).collect();
-        let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
-        let b = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
-        let c = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let area = 0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+        let area = crate::scene::triangle_area(model, [ids[0], ids[1], ids[2]]);
         for i in 0..3 {
             let (j, l) = ((i + 1) % 3, (i + 2) % 3);
             for d in 0..3 {

@@ -115,3 +115,30 @@ pub struct Case {
     /// Material-point ids written to `history.csv`.
     pub probes: Vec<u32>,
 }
+
+/// Fixities of a laterally confined box (an oedometer): nodes on the x and z faces of the
+/// bounding box may not move normal to them, nodes on the bottom (lowest y) not at all.
+pub fn confined_box(model: &Model) -> Vec<[bool; 3]> {
+    let d = model.dimension.coords();
+    let mut lo = [f64::MAX; 3];
+    let mut hi = [f64::MIN; 3];
+    for p in model.coords.chunks_exact(d) {
+        for a in 0..d {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let tol = 1e-9 * (0..d).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+    let on = |v: f64, w: f64| (v - w).abs() <= tol;
+    (0..model.node_count())
+        .map(|i| {
+            let p = model.node(i);
+            let bottom = on(p[1], lo[1]);
+            [
+                bottom || on(p[0], lo[0]) || on(p[0], hi[0]),
+                bottom,
+                bottom || on(p[2], lo[2]) || on(p[2], hi[2]),
+            ]
+        })
+        .collect()
+}

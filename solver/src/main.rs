@@ -55,10 +55,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
     if is_scene {
-        let mut case = mpm_solve::scene::load(&args.input)?;
-        case.probes.extend(&args.probe);
-        case.probes.sort_unstable();
-        case.probes.dedup();
+        let case = mpm_solve::scene::load(&args.input)?;
         println!(
             "{}: {} elements, {} nodes, {} s in outputs of {} s",
             args.input.display(),
@@ -70,19 +67,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         if args.check {
             return Ok(());
         }
-        let Some(out) = &args.out else {
-            bail!("--out DIR is required to run a case")
-        };
-        let progress = std::io::stderr().is_terminal();
-        let engine = mpm_solve::run::run::<f64>(&case, out, args.drop_lost, progress)?;
-        println!(
-            "done: {} steps of {:.3e} s, {} material points, outputs in {}",
-            engine.steps,
-            engine.dt,
-            engine.particles.len(),
-            out.display()
-        );
-        return Ok(());
+        return solve(case, &args);
     }
     let cps_path = match (&args.cps, mpm_shared::io::is_stdio(&args.input)) {
         (Some(p), _) => p.clone(),
@@ -111,10 +96,15 @@ fn run(args: Args) -> anyhow::Result<()> {
         );
         return Ok(());
     }
+    let (case, _settings) = mpm_solve::anura3d::load(&args.input, &cps_path)?;
+    solve(case, &args)
+}
+
+/// Runs `case` with the command line's probes, output folder and options.
+fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
     let Some(out) = &args.out else {
         bail!("--out DIR is required to run a case")
     };
-    let (mut case, _settings) = mpm_solve::anura3d::load(&args.input, &cps_path)?;
     case.probes.extend(&args.probe);
     case.probes.sort_unstable();
     case.probes.dedup();

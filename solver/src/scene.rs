@@ -394,19 +394,24 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
 /// their corners): each corner takes a third of the face's area times `t`.
 pub fn add_face_loads(model: &Model, faces: &[[u32; 3]], t: [f64; 3], out: &mut [[f64; 3]]) {
     for f in faces {
-        let p = f.map(|n| model.node(n as usize));
-        let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
-        let b = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
-        let c = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let area = 0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+        let area = triangle_area(model, [f[0] as usize, f[1] as usize, f[2] as usize]);
         for &n in f {
             for d in 0..3 {
                 out[n as usize][d] += area / 3.0 * t[d];
             }
         }
     }
+}
+
+/// Area of the triangle with corners at model nodes `n` (0-based).
+pub fn triangle_area(model: &Model, n: [usize; 3]) -> f64 {
+    let p = n.map(|i| model.node(i));
+    let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+    let b = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+    let c = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
 }

@@ -44,15 +44,7 @@ fn loaded_column(ny: usize) -> mpm_solve::case::Case {
     let model = generate::box_mesh([ny / 10, ny, ny / 10], [0.1, 1.0, 0.1], ElementType::Tet4);
     let n = model.node_count();
     let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
-    let mut fixed = vec![[false; 3]; n];
-    for (i, f) in fixed.iter_mut().enumerate() {
-        let p = model.node(i);
-        if near(p[1], 0.0) {
-            *f = [true; 3];
-        }
-        f[0] |= near(p[0], 0.0) || near(p[0], 0.1);
-        f[2] |= near(p[2], 0.0) || near(p[2], 0.1);
-    }
+    let fixed = mpm_solve::case::confined_box(&model);
     let mut top = Vec::new();
     for e in 0..model.element_count() {
         let el = model.element(e);
@@ -137,13 +129,10 @@ fn write_oedometer_case(dir: &Path, q: f64, method: &str) -> PathBuf {
     let mut model = generate::box_mesh([2, 20, 2], [0.1, 1.0, 0.1], ElementType::Tet4);
     let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
     let mut fix = Table::new();
-    for i in 0..model.node_count() {
-        let p = model.node(i);
-        let f = [
-            near(p[0], 0.0) || near(p[0], 0.1) || near(p[1], 0.0),
-            near(p[1], 0.0),
-            near(p[2], 0.0) || near(p[2], 0.1) || near(p[1], 0.0),
-        ];
+    for (i, f) in mpm_solve::case::confined_box(&model)
+        .into_iter()
+        .enumerate()
+    {
         if f.iter().any(|&b| b) {
             fix.push_row(
                 [Token::Int(i as i64 + 1)]
