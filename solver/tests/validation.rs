@@ -262,3 +262,23 @@ fn unsupported_anura3d_features_are_named() {
         "{err}"
     );
 }
+
+#[test]
+fn single_precision_runs_the_same_code_and_agrees() {
+    let case = loaded_column(20);
+    let mut a = Engine::<f64>::new(&case, false).unwrap();
+    let mut b = Engine::<f32>::new(&case, false).unwrap();
+    for _ in 0..200 {
+        a.step(&case, a.dt, None).unwrap();
+        b.step(&case, a.dt, None).unwrap();
+    }
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    for i in 0..a.particles.len() {
+        for c in 0..6 {
+            num = num.max((a.particles.stress[i][c] - b.particles.stress[i][c] as f64).abs());
+            den = den.max(a.particles.stress[i][c].abs());
+        }
+    }
+    eprintln!("f32 vs f64: largest stress difference {num:e} of {den:e}");
+    assert!(num < 1e-3 * den);
+}
