@@ -497,12 +497,11 @@ fn read_rows(
             if text::is_blank(l) {
                 continue;
             }
-            let row: Vec<Token> = Tokens::new(l).map(Token::parse).collect();
+            t.push_row(Tokens::new(l).map(Token::parse));
             if let Some(refs) = refs {
-                check_ids(&row, refs, n_el, n_nodes)
+                check_ids(t.row(t.len() - 1), refs, n_el, n_nodes)
                     .map_err(|m| Error::invalid(Location::new(file, n, Some(&sec)), m))?;
             }
-            t.push_row(row);
         }
         Ok(t)
     };
@@ -574,6 +573,9 @@ const WRITE_CHUNK: usize = 1 << 14;
 struct Sink<'w> {
     w: &'w mut dyn Write,
     buf: Vec<u8>,
+    /// Chunk buffers reused from batch to batch: fresh megabyte allocations would be returned
+    /// to the system and page-faulted in again every time.
+    pool: Vec<Vec<u8>>,
 }
 
 impl Sink<'_> {
@@ -610,17 +612,22 @@ impl Sink<'_> {
         self.flush()?;
         let chunks = n.div_ceil(WRITE_CHUNK);
         let batch = 4 * rayon::current_num_threads().max(1);
+        if self.pool.len() < batch {
+            self.pool
+                .resize_with(batch, || Vec::with_capacity(WRITE_CHUNK * 64));
+        }
         for first in (0..chunks).step_by(batch) {
-            let parts: Vec<Vec<u8>> = (first..(first + batch).min(chunks))
-                .into_par_iter()
-                .map(|c| {
-                    let mut b = Vec::with_capacity(WRITE_CHUNK * 64);
-                    fmt(c * WRITE_CHUNK..((c + 1) * WRITE_CHUNK).min(n), &mut b);
-                    b
-                })
-                .collect();
-            for p in parts {
-                self.w.write_all(&p)?;
+            let count = batch.min(chunks - first);
+            self.pool[..count]
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(j, b)| {
+                    let c = first + j;
+                    b.clear();
+                    fmt(c * WRITE_CHUNK..((c + 1) * WRITE_CHUNK).min(n), b);
+                });
+            for b in &self.pool[..count] {
+                self.w.write_all(b)?;
             }
         }
         Ok(())
@@ -634,6 +641,7 @@ pub fn write_to(model: &Model, w: &mut dyn Write) -> io::Result<()> {
     let mut out = Sink {
         w,
         buf: Vec::with_capacity(FLUSH_BYTES + 4096),
+        pool: Vec::new(),
     };
     let line = |out: &mut Sink, l: &[u8]| -> io::Result<()> {
         out.put(l)?;

@@ -250,6 +250,17 @@ impl Table {
 
     /// The rows in the order `order` (new position → old row), built in parallel pieces.
     pub fn permuted(&self, order: &[u32]) -> Table {
+        // Rows of one width (the usual case) are gathered straight into place.
+        let w = self.row_ends.first().copied().unwrap_or(0) as usize;
+        if w > 0 && self.tokens.len() == w * self.len() && order.len() == self.len() {
+            let tokens: Vec<Token> = (0..order.len() * w)
+                .into_par_iter()
+                .with_min_len(1 << 14)
+                .map(|k| self.tokens[order[k / w] as usize * w + k % w].clone())
+                .collect();
+            let row_ends = (1..=order.len() as u32).map(|i| i * w as u32).collect();
+            return Table { tokens, row_ends };
+        }
         let parts: Vec<Table> = order
             .par_chunks(1 << 16)
             .map(|olds| {
@@ -688,15 +699,20 @@ impl Model {
             section: "$$STARTELEMCON".into(),
             reason: "element order is not a permutation".into(),
         })?;
-        inverse(node_new, n_nodes).ok_or_else(|| crate::Error::Unremappable {
+        let node_old = inverse(node_new, n_nodes).ok_or_else(|| crate::Error::Unremappable {
             section: "$$STARTNODES".into(),
             reason: "node numbering is not a permutation".into(),
         })?;
         let d = self.dimension.coords();
         let mut coords = vec![0.0; self.coords.len()];
-        for (old, &new) in node_new.iter().enumerate() {
-            coords[new as usize * d..(new as usize + 1) * d].copy_from_slice(self.node(old));
-        }
+        coords
+            .par_chunks_mut(d * 8192)
+            .zip(node_old.par_chunks(8192))
+            .for_each(|(dst, olds)| {
+                for (x, &old) in dst.chunks_exact_mut(d).zip(olds) {
+                    x.copy_from_slice(self.node(old as usize));
+                }
+            });
         let per = self.element_type.nodes();
         let mut connectivity = vec![0u32; self.connectivity.len()];
         connectivity
