@@ -164,3 +164,59 @@ fn anura3d_cases_are_checked() {
         .success()
         .stdout(predicate::str::contains("66 tetrahedral_old elements"));
 }
+
+#[test]
+fn bad_anura3d_cases_name_the_item() {
+    use mpm_shared::{generate, ElementType};
+    let dir = tempfile::tempdir().unwrap();
+    let model = generate::box_mesh([1, 2, 1], [1.0; 3], ElementType::Tet10);
+    let gom = dir.path().join("box.GOM");
+    mpm_shared::write_gom_file(&model, &gom).unwrap();
+    // No CPS beside the GOM.
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(&gom)
+        .arg("--out")
+        .arg(dir.path().join("o"))
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("box.CPS_001"));
+    // A CPS, but the material has no type this solver knows.
+    std::fs::write(
+        dir.path().join("box.CPS_001"),
+        "### Anura3D_2021 ###\n$$COMPUTATION_METHOD\nMPM-MP\n$$TIME_PER_LOADSTEP\n0.1\n$$END\n",
+    )
+    .unwrap();
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(&gom)
+        .arg("--out")
+        .arg(dir.path().join("o"))
+        .assert()
+        .failure()
+        .stderr(
+            predicate::str::contains("material 1 \"soil\"")
+                .and(predicate::str::contains("MATERIAL_TYPE")),
+        );
+    // Courant number out of range.
+    std::fs::write(dir.path().join("box.CPS_001"), "### Anura3D_2021 ###\n$$COMPUTATION_METHOD\nMPM-MP\n$$TIME_PER_LOADSTEP\n0.1\n$$COURANT_NUMBER\n1.5\n$$END\n").unwrap();
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(&gom)
+        .arg("--out")
+        .arg(dir.path().join("o"))
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("$$COURANT_NUMBER"));
+    assert!(!dir.path().join("o").exists());
+    // A GOM on standard input needs --cps.
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg("-")
+        .arg("--out")
+        .arg(dir.path().join("o"))
+        .write_stdin(std::fs::read(&gom).unwrap())
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("--cps"));
+}
