@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use mpm_shared::{generate, ElementType};
-use mpm_solve::case::{Case, LoadCurve, MaterialSpec};
+use mpm_solve::case::{Case, MaterialSpec};
 use mpm_solve::engine::Engine;
 
 fn main() {
@@ -23,31 +23,13 @@ fn main() {
         [0.1 * nxz as f64 / 10.0, 1.0, 0.1 * nxz as f64 / 10.0],
         ElementType::Tet10,
     );
-    let n = model.node_count();
     let fixed = mpm_solve::case::confined_box(&model);
     let n_el = model.element_count();
-    let case = Case {
-        name: "throughput".into(),
-        inputs: vec![],
-        model,
-        materials: vec![
-            None,
-            Some(MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap()),
-        ],
-        element_material: vec![1; n_el],
-        points_per_element: vec![4; n_el],
-        fixed,
-        traction: vec![[0.0; 3]; n],
-        traction_curve: LoadCurve::Step,
-        gravity: [0.0, -9.81, 0.0],
-        gravity_curve: LoadCurve::Step,
-        courant: 0.5,
-        damping: 0.75,
-        end_time: 1.0,
-        output_times: vec![1.0],
-        max_steps: None,
-        probes: vec![],
-    };
+    let soil = MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap();
+    let mut case = Case::single_material("throughput", model, soil, 4, fixed);
+    case.gravity = [0.0, -9.81, 0.0];
+    case.courant = 0.5;
+    case.damping = 0.75;
     let mut engine = Engine::<f64>::new(&case, false).unwrap();
     let np = engine.particles.len();
     let t = Instant::now();

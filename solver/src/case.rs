@@ -142,3 +142,37 @@ pub fn confined_box(model: &Model) -> Vec<[bool; 3]> {
         })
         .collect()
 }
+
+impl Case {
+    /// A case of one material filling every element with `points` material points each, the
+    /// given fixities, no loads, Courant number 0.9, no damping, one output at t = 1 s; callers
+    /// set what differs (used by benchmarks and tests that build meshes in memory).
+    pub fn single_material(
+        name: &str,
+        model: Model,
+        material: MaterialSpec,
+        points: u32,
+        fixed: Vec<[bool; 3]>,
+    ) -> Case {
+        let (n, n_el) = (model.node_count(), model.element_count());
+        Case {
+            name: name.to_string(),
+            inputs: Vec::new(),
+            model,
+            materials: vec![None, Some(material)],
+            element_material: vec![1; n_el],
+            points_per_element: vec![points; n_el],
+            fixed,
+            traction: vec![[0.0; 3]; n],
+            traction_curve: LoadCurve::Step,
+            gravity: [0.0; 3],
+            gravity_curve: LoadCurve::Step,
+            courant: 0.9,
+            damping: 0.0,
+            end_time: 1.0,
+            output_times: vec![1.0],
+            max_steps: None,
+            probes: Vec::new(),
+        }
+    }
+}

@@ -40,7 +40,7 @@ fn column_under_self_weight_matches_rho_g_depth() {
 /// the height, bottom fixed, and a sudden 10 kPa load on the top.
 fn loaded_column(ny: usize) -> mpm_solve::case::Case {
     use mpm_shared::{generate, ElementType};
-    use mpm_solve::case::{Case, LoadCurve, MaterialSpec};
+    use mpm_solve::case::{Case, MaterialSpec};
     let model = generate::box_mesh([ny / 10, ny, ny / 10], [0.1, 1.0, 0.1], ElementType::Tet4);
     let n = model.node_count();
     let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
@@ -59,29 +59,12 @@ fn loaded_column(ny: usize) -> mpm_solve::case::Case {
     scene::add_face_loads(&model, &top, [0.0, -10.0, 0.0], &mut traction);
     let total: f64 = traction.iter().map(|t| t[1]).sum();
     assert!((total + 10.0 * 0.01).abs() < 1e-9, "top load {total}");
-    let n_el = model.element_count();
-    Case {
-        name: "wave".into(),
-        inputs: vec![],
-        model,
-        materials: vec![
-            None,
-            Some(MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap()),
-        ],
-        element_material: vec![1; n_el],
-        points_per_element: vec![4; n_el],
-        fixed,
-        traction,
-        traction_curve: LoadCurve::Step,
-        gravity: [0.0; 3],
-        gravity_curve: LoadCurve::Step,
-        courant: 0.9,
-        damping: 0.0,
-        end_time: 0.02,
-        output_times: vec![0.02],
-        max_steps: None,
-        probes: vec![],
-    }
+    let soil = MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap();
+    let mut case = Case::single_material("wave", model, soil, 4, fixed);
+    case.traction = traction;
+    case.end_time = 0.02;
+    case.output_times = vec![0.02];
+    case
 }
 
 #[test]
