@@ -19,7 +19,8 @@ pub struct TetMesh<R: Real> {
     pub node_of_model: Vec<u32>,
     /// Corner nodes of each element.
     pub corners: Vec<[u32; 4]>,
-    /// Rows 2-4 of the barycentric map: λ_{k+1} = m[k] · (x - x1), λ1 = 1 - Σ.
+    /// Rows 2-4 of the barycentric map: `λ(k+2) = inv[k] · (x - x1)` for k = 0..3, and
+    /// `λ1 = 1 - λ2 - λ3 - λ4`.
     pub inv: Vec<[V3<R>; 3]>,
     /// Shape-function gradients of the four corners.
     pub grad: Vec<[V3<R>; 4]>,
