@@ -232,17 +232,6 @@ impl Table {
         &self.tokens[start..self.row_ends[i] as usize]
     }
 
-    /// Mutable row `i`.
-    pub fn row_mut(&mut self, i: usize) -> &mut [Token] {
-        let start = if i == 0 {
-            0
-        } else {
-            self.row_ends[i - 1] as usize
-        };
-        let end = self.row_ends[i] as usize;
-        &mut self.tokens[start..end]
-    }
-
     /// All rows in order.
     pub fn rows(&self) -> impl ExactSizeIterator<Item = &[Token]> + '_ {
         (0..self.len()).map(move |i| self.row(i))

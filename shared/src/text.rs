@@ -59,11 +59,6 @@ impl<'a> Lines<'a> {
         }
         self.pos = self.data.len();
     }
-
-    /// The next line without consuming it.
-    pub fn peek(&self) -> Option<(usize, &'a [u8])> {
-        self.clone().next()
-    }
 }
 
 impl<'a> Iterator for Lines<'a> {

@@ -17,6 +17,8 @@ pub struct Grid<R: Real> {
     pub acc: Vec<V3<R>>,
     /// Velocity after the MUSL re-mapping.
     pub vel: Vec<V3<R>>,
+    /// Nodes at or below this mass are empty this step (set by the grid update).
+    pub empty_below: R,
 }
 
 impl<R: Real> Grid<R> {
@@ -30,6 +32,7 @@ impl<R: Real> Grid<R> {
             f_ext: vec![z; n],
             acc: vec![z; n],
             vel: vec![z; n],
+            empty_below: R::ZERO,
         }
     }
 

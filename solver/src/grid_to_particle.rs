@@ -42,8 +42,7 @@ pub fn grid_to_particle<R: Real>(
             }
         }
     }
-    let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
-    let eps = heaviest * R::of(crate::grid_update::MASS_EPS);
+    let eps = g.empty_below;
     for n in 0..g.mass.len() {
         for c in 0..3 {
             g.vel[n][c] = if g.mass[n] <= eps || fixed[n][c] {

@@ -18,6 +18,7 @@ pub fn grid_update<R: Real>(
 ) {
     let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
     let eps = heaviest * R::of(MASS_EPS);
+    g.empty_below = eps;
     for n in 0..g.mass.len() {
         let m = g.mass[n];
         if m <= eps {

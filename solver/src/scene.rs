@@ -149,32 +149,9 @@ pub enum SceneError {
     Mesh(#[from] mpm_shared::Error),
 }
 
-/// Nodes (0-based, model numbering) of the boundary triangles in physical group `name`, and the
-/// triangles themselves (model node triples of their corners).
-fn physical_faces(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<[u32; 3]>> {
-    let tag = mesh
-        .physical_names
-        .iter()
-        .find(|p| p.dim == 2 && p.name == name)?
-        .tag;
-    let mut faces = Vec::new();
-    for set in mesh.sets.iter().filter(|s| s.dim() == 2) {
-        for (e, &phys) in set.physical.iter().enumerate() {
-            if phys == tag {
-                let nodes = &set.nodes[e * set.nodes_per..e * set.nodes_per + 3];
-                faces.push([
-                    node_map[nodes[0] as usize],
-                    node_map[nodes[1] as usize],
-                    node_map[nodes[2] as usize],
-                ]);
-            }
-        }
-    }
-    Some(faces)
-}
-
-/// All nodes of the physical surface group `name` (corner and mid-edge).
-fn physical_nodes(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<u32>> {
+/// The node lists (`.msh` node indices, corners first) of the surface elements in the physical
+/// surface group `name`, or `None` if the mesh has no such group.
+fn physical_surface<'m>(mesh: &'m MshMesh, name: &str) -> Option<Vec<&'m [u32]>> {
     let tag = mesh
         .physical_names
         .iter()
@@ -184,15 +161,31 @@ fn physical_nodes(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<u3
     for set in mesh.sets.iter().filter(|s| s.dim() == 2) {
         for (e, &phys) in set.physical.iter().enumerate() {
             if phys == tag {
-                out.extend(
-                    set.nodes[e * set.nodes_per..(e + 1) * set.nodes_per]
-                        .iter()
-                        .map(|&n| node_map[n as usize]),
-                );
+                out.push(&set.nodes[e * set.nodes_per..(e + 1) * set.nodes_per]);
             }
         }
     }
-    out.retain(|&n| n != u32::MAX);
+    Some(out)
+}
+
+/// The triangles (model node ids of their corners) of the physical surface group `name`.
+fn physical_faces(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<[u32; 3]>> {
+    let faces = physical_surface(mesh, name)?;
+    Some(
+        faces
+            .iter()
+            .map(|f| [0, 1, 2].map(|k| node_map[f[k] as usize]))
+            .collect(),
+    )
+}
+
+/// All nodes (model numbering, corner and mid-edge) of the physical surface group `name`.
+fn physical_nodes(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<u32>> {
+    let mut out: Vec<u32> = physical_surface(mesh, name)?
+        .iter()
+        .flat_map(|f| f.iter().map(|&n| node_map[n as usize]))
+        .filter(|&n| n != u32::MAX)
+        .collect();
     out.sort_unstable();
     out.dedup();
     Some(out)

@@ -11,6 +11,17 @@ fn testdata(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// `mpm-solve INPUT --out OUT`, expected to fail.
+fn fails(input: &Path, out: &Path) -> assert_cmd::assert::Assert {
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(input)
+        .arg("--out")
+        .arg(out)
+        .assert()
+        .failure()
+}
+
 fn scene(dir: &Path, edit: &dyn Fn(String) -> String) -> PathBuf {
     let text = std::fs::read_to_string(testdata("column_gravity.toml")).unwrap();
     let text = text
@@ -126,28 +137,15 @@ fn bad_scenes_fail_with_a_clear_message_and_write_nothing() {
         std::fs::create_dir(&sub).unwrap();
         let s = scene(&sub, edit);
         let out = sub.join("out");
-        Command::cargo_bin("mpm-solve")
-            .unwrap()
-            .arg(&s)
-            .arg("--out")
-            .arg(&out)
-            .assert()
-            .failure()
+        fails(&s, &out)
             .stderr(predicate::str::contains(*message).and(predicate::str::contains("scene.toml")));
         assert!(!out.exists(), "case {i} wrote outputs");
     }
     // Unknown keys are refused with their line.
     let s = scene(dir.path(), &|t| t.replace("[time]", "[time]\nspeed = 3"));
-    Command::cargo_bin("mpm-solve")
-        .unwrap()
-        .arg(&s)
-        .arg("--out")
-        .arg(dir.path().join("o"))
-        .assert()
-        .failure()
-        .stderr(
-            predicate::str::contains("unknown field `speed`").and(predicate::str::contains("line")),
-        );
+    fails(&s, &dir.path().join("o")).stderr(
+        predicate::str::contains("unknown field `speed`").and(predicate::str::contains("line")),
+    );
 }
 
 #[test]
@@ -173,41 +171,20 @@ fn bad_anura3d_cases_name_the_item() {
     let gom = dir.path().join("box.GOM");
     mpm_shared::write_gom_file(&model, &gom).unwrap();
     // No CPS beside the GOM.
-    Command::cargo_bin("mpm-solve")
-        .unwrap()
-        .arg(&gom)
-        .arg("--out")
-        .arg(dir.path().join("o"))
-        .assert()
-        .failure()
-        .stderr(predicate::str::contains("box.CPS_001"));
+    fails(&gom, &dir.path().join("o")).stderr(predicate::str::contains("box.CPS_001"));
     // A CPS, but the material has no type this solver knows.
     std::fs::write(
         dir.path().join("box.CPS_001"),
         "### Anura3D_2021 ###\n$$COMPUTATION_METHOD\nMPM-MP\n$$TIME_PER_LOADSTEP\n0.1\n$$END\n",
     )
     .unwrap();
-    Command::cargo_bin("mpm-solve")
-        .unwrap()
-        .arg(&gom)
-        .arg("--out")
-        .arg(dir.path().join("o"))
-        .assert()
-        .failure()
-        .stderr(
-            predicate::str::contains("material 1 \"soil\"")
-                .and(predicate::str::contains("MATERIAL_TYPE")),
-        );
+    fails(&gom, &dir.path().join("o")).stderr(
+        predicate::str::contains("material 1 \"soil\"")
+            .and(predicate::str::contains("MATERIAL_TYPE")),
+    );
     // Courant number out of range.
     std::fs::write(dir.path().join("box.CPS_001"), "### Anura3D_2021 ###\n$$COMPUTATION_METHOD\nMPM-MP\n$$TIME_PER_LOADSTEP\n0.1\n$$COURANT_NUMBER\n1.5\n$$END\n").unwrap();
-    Command::cargo_bin("mpm-solve")
-        .unwrap()
-        .arg(&gom)
-        .arg("--out")
-        .arg(dir.path().join("o"))
-        .assert()
-        .failure()
-        .stderr(predicate::str::contains("$$COURANT_NUMBER"));
+    fails(&gom, &dir.path().join("o")).stderr(predicate::str::contains("$$COURANT_NUMBER"));
     assert!(!dir.path().join("o").exists());
     // A GOM on standard input needs --cps.
     Command::cargo_bin("mpm-solve")
