@@ -111,6 +111,9 @@ pub struct Settings {
     pub quasi_static: bool,
     /// `APPLY_OBJECTIVE_STRESS`.
     pub objective_stress: bool,
+    /// `TOLERATED_ERROR_SOLID`: tolerated out-of-balance force ratio and kinetic-energy ratio
+    /// of the quasi-static convergence check.
+    pub tolerated_error_solid: [f64; 2],
     /// `OUTPUT_MATERIAL_POINTS` (1-based ids).
     pub output_material_points: Vec<u32>,
 }
@@ -363,6 +366,22 @@ impl Cps {
         })
     }
 
+    /// Two numbers on the key's line (`force energy` tolerances).
+    fn pair(&self, key: &str, default: [f64; 2]) -> Result<[f64; 2]> {
+        let Some(e) = self.get(key) else {
+            return Ok(default);
+        };
+        let toks = self.tokens(e)?;
+        let mut v = [0.0; 2];
+        for (i, x) in v.iter_mut().enumerate() {
+            *x = toks
+                .get(i)
+                .and_then(|t| text::parse_real(t))
+                .ok_or_else(|| Error::format(self.at(e, 1), "expected two numbers"))?;
+        }
+        Ok(v)
+    }
+
     fn flag_value(&self, key: &str) -> Result<Option<f64>> {
         let Some(e) = self.get(key) else {
             return Ok(None);
@@ -487,6 +506,7 @@ impl Cps {
             Some(_) => Some(self.real("MAXIMUM_TIME_STEPS", 0.0)? as u64),
         };
         let output_material_points = self.output_material_points()?;
+        let tolerated_error_solid = self.pair("TOLERATED_ERROR_SOLID", [0.01, 0.01])?;
         Ok(Settings {
             load_steps: load_steps as u32,
             time_per_load_step: self.real("TIME_PER_LOADSTEP", 0.0)?,
@@ -507,6 +527,7 @@ impl Cps {
             max_time_steps,
             quasi_static: self.flag("QUASISTATIC_CONVERGENCE")?,
             objective_stress: self.flag("APPLY_OBJECTIVE_STRESS")?,
+            tolerated_error_solid,
             output_material_points,
         })
     }

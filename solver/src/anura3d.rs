@@ -9,7 +9,7 @@ use mpm_shared::cps::{Cps, Method, Multiplier, Settings};
 use mpm_shared::model::{Body, Token};
 use mpm_shared::{ElementType, Model};
 
-use crate::case::{Case, LoadCurve, MaterialSpec};
+use crate::case::{Case, FaceLoad, Integration, LoadCurve, MaterialSpec, QuasiStatic};
 
 /// Why a case cannot run here.
 #[derive(Debug, thiserror::Error)]
@@ -80,14 +80,19 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             "2D cases are not supported; the solver computes 3D tetrahedra",
         ));
     }
-    match &s.method {
-        Method::MpmMp => {}
+    let integration = match &s.method {
+        Method::MpmMp => Integration::MaterialPoints,
         Method::MpmMixed => {
-            return Err(unsupported(
-                &cfile,
-                "$$COMPUTATION_METHOD",
-                "MPM-MIXED is not supported yet (use MPM-MP)",
-            ))
+            if !(s.degree_of_filling > 0.0 && s.degree_of_filling <= 1.0) {
+                return Err(unsupported(
+                    &cfile,
+                    "$$DEGREE_OF_FILLING",
+                    format!("must be in (0, 1], got {}", s.degree_of_filling),
+                ));
+            }
+            Integration::Mixed {
+                filling: s.degree_of_filling,
+            }
         }
         Method::Other(m) => {
             return Err(unsupported(
@@ -96,7 +101,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                 format!("{m} is not an MPM method"),
             ))
         }
-    }
+    };
     if !(s.courant > 0.0 && s.courant <= 1.0) {
         return Err(unsupported(
             &cfile,
@@ -178,6 +183,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let n = model.node_count();
     let mut fixed = vec![[false; 3]; n];
     let mut traction = vec![[0.0; 3]; n];
+    let mut point_loads = Vec::new();
     for sec in &model.sections {
         let k = sec.keyword.as_str();
         let Body::Table { rows, .. } = &sec.body else {
@@ -195,6 +201,8 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             }
         } else if k == "START_LOAD_ON_NODES_SOLID" {
             add_nodal_face_loads(&model, rows, &mut traction);
+        } else if k == "START_LOAD_ON_MATERIAL_POINTS_SOLID" {
+            point_loads.extend(face_loads_on_points(&model, rows));
         } else if k.starts_with("START_REMOVE_FIXITY_")
             || k.starts_with("START_LOAD_ON_")
             || k.starts_with("PRESCRIBED_")
@@ -203,7 +211,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             || k == "START_CONTACT_VOLUME"
             || k == "START_EXCAVATION_SOLID"
         {
-            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (a dry case may use solid fixities and $$START_LOAD_ON_NODES_SOLID)"));
+            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (a dry case may use solid fixities, $$START_LOAD_ON_NODES_SOLID and $$START_LOAD_ON_MATERIAL_POINTS_SOLID)"));
         }
     }
     let total = s.load_steps as f64 * s.time_per_load_step;
@@ -230,6 +238,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         points_per_element,
         fixed,
         traction,
+        point_loads,
         traction_curve,
         gravity: g,
         gravity_curve,
@@ -238,9 +247,36 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         end_time: total,
         output_times,
         max_steps: None,
+        quasi_static: s.quasi_static.then_some(QuasiStatic {
+            max_steps: s.max_time_steps,
+            force_tolerance: s.tolerated_error_solid[0],
+            energy_tolerance: s.tolerated_error_solid[1],
+        }),
+        objective_stress: s.objective_stress,
+        integration,
         probes: s.output_material_points.clone(),
     };
     Ok((case, s))
+}
+
+/// The loads of `$$START_LOAD_ON_MATERIAL_POINTS_SOLID` rows (3 corners first, then a traction
+/// vector per node): Anura3D takes the traction at the face centroid, the mean of the corner
+/// values, times the face area as the face's total force.
+fn face_loads_on_points(model: &Model, rows: &mpm_shared::model::Table) -> Vec<FaceLoad> {
+    let k = model.element_type.face_nodes();
+    rows.rows()
+        .map(|r| {
+            let corners = [0, 1, 2].map(|i| r[i].as_int().unwrap_or(1) as usize - 1);
+            let area = crate::scene::triangle_area(model, corners);
+            let mut force = [0.0; 3];
+            for c in 0..3 {
+                for (d, f) in force.iter_mut().enumerate() {
+                    *f += area / 3.0 * r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0);
+                }
+            }
+            FaceLoad { corners, force }
+        })
+        .collect()
 }
 
 /// Adds the nodal forces of `$$START_LOAD_ON_NODES_SOLID` rows: per loaded face the node ids

@@ -77,6 +77,43 @@ impl MaterialSpec {
     }
 }
 
+/// A distributed load on a face, carried by the material points next to it (Anura3D's
+/// `$$START_LOAD_ON_MATERIAL_POINTS_SOLID`): the face's total force is shared equally by the
+/// points of the adjacent filled element(s) that lie nearest the face, and moves with them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FaceLoad {
+    /// Corner nodes of the face (0-based model node ids).
+    pub corners: [usize; 3],
+    /// Total force on the face (kN) at multiplier 1.
+    pub force: [f64; 3],
+}
+
+/// Quasi-static load steps (Anura3D's `QUASISTATIC_CONVERGENCE`): a load step ends when the
+/// out-of-balance force and the kinetic energy are small, or after a number of steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuasiStatic {
+    /// A load step ends once it has taken more than this many steps (Anura3D's
+    /// `MAXIMUM_TIME_STEPS`; `None`: at the load step's end time).
+    pub max_steps: Option<u64>,
+    /// Tolerated ratio |free out-of-balance force| / |free external force|.
+    pub force_tolerance: f64,
+    /// Tolerated ratio kinetic energy / external work.
+    pub energy_tolerance: f64,
+}
+
+/// How stresses are integrated (Anura3D's `COMPUTATION_METHOD`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Integration {
+    /// At the material points everywhere (`MPM-MP`).
+    MaterialPoints,
+    /// At the element's Gauss point in elements whose points fill at least this fraction of
+    /// the element volume, at material points elsewhere (`MPM-MIXED`).
+    Mixed {
+        /// Degree of filling from which an element counts as full.
+        filling: f64,
+    },
+}
+
 /// Everything a run needs.
 #[derive(Debug, Clone)]
 pub struct Case {
@@ -96,7 +133,9 @@ pub struct Case {
     pub fixed: Vec<[bool; 3]>,
     /// Nodal face-load forces per model node (kN) at multiplier 1.
     pub traction: Vec<[f64; 3]>,
-    /// Traction multiplier.
+    /// Loads carried by material points.
+    pub point_loads: Vec<FaceLoad>,
+    /// Traction multiplier (face loads on nodes and on material points).
     pub traction_curve: LoadCurve,
     /// Gravity acceleration vector (m/s²) at multiplier 1.
     pub gravity: [f64; 3],
@@ -112,6 +151,12 @@ pub struct Case {
     pub output_times: Vec<f64>,
     /// Optional cap on time steps.
     pub max_steps: Option<u64>,
+    /// Quasi-static load steps: each output time ends a load step, which may end earlier.
+    pub quasi_static: Option<QuasiStatic>,
+    /// Jaumann (objective) stress rate instead of the plain small-strain update.
+    pub objective_stress: bool,
+    /// Stress integration.
+    pub integration: Integration,
     /// Material-point ids written to `history.csv`.
     pub probes: Vec<u32>,
 }
@@ -164,6 +209,7 @@ impl Case {
             points_per_element: vec![points; n_el],
             fixed,
             traction: vec![[0.0; 3]; n],
+            point_loads: Vec::new(),
             traction_curve: LoadCurve::Step,
             gravity: [0.0; 3],
             gravity_curve: LoadCurve::Step,
@@ -172,6 +218,9 @@ impl Case {
             end_time: 1.0,
             output_times: vec![1.0],
             max_steps: None,
+            quasi_static: None,
+            objective_stress: false,
+            integration: Integration::MaterialPoints,
             probes: Vec::new(),
         }
     }

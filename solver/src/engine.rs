@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use crate::case::Case;
+use crate::case::{Case, Integration};
 use crate::grid::Grid;
 use crate::linear_elastic::LinearElastic;
 use crate::locate::{walk, Found};
@@ -69,6 +69,13 @@ pub struct Engine<R: Real> {
     pub lost: u64,
     /// Deactivate points that leave the mesh instead of stopping.
     pub drop_lost: bool,
+    /// Face loads carried by points: (point index, force at multiplier 1).
+    pub point_loads: Vec<(u32, V3<R>)>,
+    /// Per-element sums for mixed integration (empty under material-point integration).
+    pub mixed: Option<crate::mixed::Mixed<R>>,
+    /// |free out-of-balance force| / |free external force| of the last step (0 when there
+    /// is no external force).
+    pub force_error: f64,
 }
 
 impl<R: Real> Engine<R> {
@@ -129,6 +136,13 @@ impl<R: Real> Engine<R> {
             return Err(format!("critical time step is not positive ({dt})"));
         }
         let grid = Grid::new(mesh.nodes());
+        let point_loads = resolve_point_loads(&mesh, &particles, case)?;
+        let mixed = match case.integration {
+            Integration::MaterialPoints => None,
+            Integration::Mixed { filling } => {
+                Some(crate::mixed::Mixed::new(mesh.elements(), filling))
+            }
+        };
         Ok(Engine {
             mesh,
             particles,
@@ -143,6 +157,9 @@ impl<R: Real> Engine<R> {
             phase_seconds: [0.0; 6],
             lost: 0,
             drop_lost,
+            point_loads,
+            mixed,
+            force_error: 0.0,
         })
     }
 
@@ -152,10 +169,26 @@ impl<R: Real> Engine<R> {
         let t0 = Instant::now();
         let gm = case.gravity_curve.at(self.time + dt);
         let gravity = case.gravity.map(|g| R::of(g * gm));
-        particle_to_grid::particle_to_grid(&self.mesh, &self.particles, gravity, &mut self.grid);
-        let t1 = Instant::now();
         let tm = R::of(case.traction_curve.at(self.time + dt));
-        grid_update::grid_update(
+        if let Some(m) = &mut self.mixed {
+            m.gather(&self.mesh, &self.particles);
+        }
+        particle_to_grid::particle_to_grid(
+            &self.mesh,
+            &self.particles,
+            gravity,
+            self.mixed.as_ref(),
+            &mut self.grid,
+        );
+        particle_to_grid::add_point_loads(
+            &self.mesh,
+            &self.particles,
+            &self.point_loads,
+            tm,
+            &mut self.grid,
+        );
+        let t1 = Instant::now();
+        self.force_error = grid_update::grid_update(
             &mut self.grid,
             &self.traction,
             tm,
@@ -176,8 +209,12 @@ impl<R: Real> Engine<R> {
             &mut self.particles,
             &self.grid,
             &self.laws,
+            case.objective_stress,
             R::of(dt),
         );
+        if let Some(m) = &mut self.mixed {
+            m.smooth_stresses(&mut self.particles);
+        }
         // External work of gravity and face loads over the step, with the new nodal velocities.
         let mut w = 0.0;
         for n in 0..self.grid.mass.len() {
@@ -202,6 +239,17 @@ impl<R: Real> Engine<R> {
             self.phase_seconds[k] += (b - a).as_secs_f64();
         }
         Ok(())
+    }
+
+    /// Anura3D's quasi-static convergence test: out-of-balance force and kinetic energy (per
+    /// unit of external work) within the tolerances.
+    pub fn converged(&self, force_tolerance: f64, energy_tolerance: f64) -> bool {
+        let kinetic = if self.external_work != 0.0 {
+            (self.kinetic_energy() / self.external_work).abs()
+        } else {
+            0.0
+        };
+        self.force_error <= force_tolerance && kinetic <= energy_tolerance
     }
 
     fn locate(&mut self) -> Result<(), Lost> {
@@ -241,4 +289,57 @@ impl<R: Real> Engine<R> {
             .map(|i| 0.5 * p.mass[i].f64() * p.v[i].iter().map(|v| v.f64() * v.f64()).sum::<f64>())
             .sum()
     }
+}
+
+/// Finds the points that carry each face load: in every element with points that has the face,
+/// the points nearest its three corners (the one point of a 1-point element). The face's force
+/// is shared equally among all of them (Anura3D gives each adjacent element the full share, which
+/// doubles loads on faces between two filled elements; such faces are rare and we keep the total).
+fn resolve_point_loads<R: Real>(
+    mesh: &TetMesh<R>,
+    p: &Particles<R>,
+    case: &Case,
+) -> Result<Vec<(u32, V3<R>)>, String> {
+    if case.point_loads.is_empty() {
+        return Ok(Vec::new());
+    }
+    // Points are placed in element order: the first point of each element.
+    let mut first = vec![0u32; mesh.elements() + 1];
+    for &e in &p.element {
+        first[e as usize + 1] += 1;
+    }
+    for e in 0..mesh.elements() {
+        first[e + 1] += first[e];
+    }
+    let mut out = Vec::new();
+    for load in &case.point_loads {
+        let c = load.corners.map(|m| mesh.node_of_model[m]);
+        let mut carriers = Vec::new();
+        for e in 0..mesh.elements() {
+            let corners = mesh.corners[e];
+            if !c.iter().all(|n| corners.contains(n)) {
+                continue;
+            }
+            let (a, b) = (first[e] as usize, first[e + 1] as usize);
+            match b - a {
+                0 => {}
+                1 => carriers.push(a),
+                4 => {
+                    let opposite = (0..4).find(|&k| !c.contains(&corners[k])).unwrap_or(0);
+                    carriers.extend((0..4).filter(|&k| k != opposite).map(|k| a + k));
+                }
+                _ => carriers.extend(a..b),
+            }
+        }
+        if carriers.is_empty() {
+            let ids = load.corners.map(|m| m + 1);
+            return Err(format!(
+                "the load on material points of the face with corner nodes {} {} {} has no filled element next to it",
+                ids[0], ids[1], ids[2]
+            ));
+        }
+        let share = load.force.map(|f| R::of(f / carriers.len() as f64));
+        out.extend(carriers.into_iter().map(|i| (i as u32, share)));
+    }
+    Ok(out)
 }

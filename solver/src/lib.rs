@@ -18,6 +18,7 @@ pub mod grid_update;
 pub mod linear_elastic;
 pub mod locate;
 pub mod mesh;
+pub mod mixed;
 pub mod output;
 pub mod particle_to_grid;
 pub mod particles;

@@ -2,15 +2,18 @@
 
 use crate::grid::Grid;
 use crate::mesh::TetMesh;
+use crate::mixed::Mixed;
 use crate::particles::Particles;
 use crate::real::{Real, V3};
 
 /// Maps every active particle to the nodes of its element. `gravity` is the acceleration vector
-/// with the current load multiplier applied.
+/// with the current load multiplier applied. Under mixed integration the internal force of full
+/// elements comes from their Gauss point instead of their points.
 pub fn particle_to_grid<R: Real>(
     mesh: &TetMesh<R>,
     p: &Particles<R>,
     gravity: V3<R>,
+    mixed: Option<&Mixed<R>>,
     g: &mut Grid<R>,
 ) {
     let z = [R::ZERO; 3];
@@ -25,7 +28,12 @@ pub fn particle_to_grid<R: Real>(
         let e = p.element[i] as usize;
         let n = mesh.shape(e, &p.x[i]);
         let grad = &mesh.grad[e];
-        let (m, vol, v, s) = (p.mass[i], p.volume[i], p.v[i], p.stress[i]);
+        let (m, v, s) = (p.mass[i], p.v[i], p.stress[i]);
+        // A full element's points carry no internal force of their own (see below).
+        let vol = match mixed {
+            Some(mx) if mx.full[e] => R::ZERO,
+            _ => p.volume[i],
+        };
         for k in 0..4 {
             let node = mesh.corners[e][k] as usize;
             let w = m * n[k];
@@ -41,6 +49,33 @@ pub fn particle_to_grid<R: Real>(
                 g.momentum[node][a] += w * v[a];
                 g.f_int[node][a] -= vol * f[a];
                 g.f_ext[node][a] += w * gravity[a];
+            }
+        }
+    }
+    if let Some(mx) = mixed {
+        mx.internal_forces(mesh, g);
+    }
+}
+
+/// Adds the face loads carried by points, `scale` times their force, at the points' positions.
+pub fn add_point_loads<R: Real>(
+    mesh: &TetMesh<R>,
+    p: &Particles<R>,
+    loads: &[(u32, V3<R>)],
+    scale: R,
+    g: &mut Grid<R>,
+) {
+    for &(i, f) in loads {
+        let i = i as usize;
+        if !p.active[i] {
+            continue;
+        }
+        let e = p.element[i] as usize;
+        let n = mesh.shape(e, &p.x[i]);
+        for k in 0..4 {
+            let node = mesh.corners[e][k] as usize;
+            for a in 0..3 {
+                g.f_ext[node][a] += n[k] * scale * f[a];
             }
         }
     }

@@ -47,23 +47,47 @@ pub fn run<R: Real>(
         b
     });
     let mut stepping = 0.0;
+    let mut load_step_start = 0.0;
     for &t_out in &case.output_times {
         let t0 = Instant::now();
-        while engine.time < t_out * (1.0 - 1e-12) {
+        let mut taken = 0u64;
+        let begun = engine.time;
+        loop {
+            if let Some(qs) = &case.quasi_static {
+                // Anura3D ends a quasi-static load step once converged or when its step counter,
+                // which starts at 1, exceeds the limit: after `limit` steps (its report then says
+                // time step limit + 1). Without a limit, at the load step's duration.
+                let done = if taken == 0 {
+                    false
+                } else if engine.converged(qs.force_tolerance, qs.energy_tolerance) {
+                    true
+                } else if let Some(m) = qs.max_steps {
+                    taken >= m
+                } else {
+                    engine.time - begun >= (t_out - load_step_start) * (1.0 - 1e-12)
+                };
+                if done {
+                    break;
+                }
+            } else if engine.time >= t_out * (1.0 - 1e-12) {
+                break;
+            }
             if case.max_steps.is_some_and(|m| engine.steps >= m) {
                 return Err(RunError::MaxSteps(engine.steps, engine.time));
             }
             let left = t_out - engine.time;
-            let (dt, snap) = if engine.dt >= left {
-                (left, Some(t_out))
-            } else {
+            let (dt, snap) = if case.quasi_static.is_some() || engine.dt < left {
                 (engine.dt, None)
+            } else {
+                (left, Some(t_out))
             };
             engine.step(case, dt, snap)?;
+            taken += 1;
             if let Some(b) = &bar {
                 b.inc(1);
             }
         }
+        load_step_start = t_out;
         stepping += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         out.write(&engine)?;

@@ -39,7 +39,7 @@ use serde::Deserialize;
 use mpm_shared::msh::{self, MshMesh};
 use mpm_shared::Model;
 
-use crate::case::{Case, LoadCurve, MaterialSpec};
+use crate::case::{Case, Integration, LoadCurve, MaterialSpec};
 
 /// The scene file's content.
 #[derive(Debug, Deserialize)]
@@ -371,6 +371,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         points_per_element,
         fixed,
         traction,
+        point_loads: Vec::new(),
         traction_curve: LoadCurve::ramp(traction_ramp),
         gravity,
         gravity_curve: LoadCurve::ramp(gravity_ramp),
@@ -379,6 +380,9 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         end_time: t.end,
         output_times,
         max_steps: t.max_steps,
+        quasi_static: None,
+        objective_stress: false,
+        integration: Integration::MaterialPoints,
         probes: scene.probes.clone(),
     })
 }

@@ -7,12 +7,14 @@ use crate::mesh::TetMesh;
 use crate::particles::Particles;
 use crate::real::Real;
 
-/// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε; V *= 1 + tr Δε; x += Δt Σ N_n v_n.
+/// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus the Jaumann rotation Δω σ - σ Δω with
+/// Δω = skew(L) Δt when `objective`); V *= 1 + tr Δε; x += Δt Σ N_n v_n.
 pub fn update_stress_and_move<R: Real>(
     mesh: &TetMesh<R>,
     p: &mut Particles<R>,
     g: &Grid<R>,
     laws: &[LinearElastic<R>],
+    objective: bool,
     dt: R,
 ) {
     let half = R::of(0.5);
@@ -42,11 +44,69 @@ pub fn update_stress_and_move<R: Real>(
             half * (l[1][2] + l[2][1]) * dt,
             half * (l[2][0] + l[0][2]) * dt,
         ];
+        if objective {
+            let w = [
+                half * (l[0][1] - l[1][0]) * dt, // ω_xy
+                half * (l[1][2] - l[2][1]) * dt, // ω_yz
+                half * (l[2][0] - l[0][2]) * dt, // ω_zx
+            ];
+            rotate(&mut p.stress[i], &w);
+        }
         laws[p.material[i] as usize].update(&mut p.stress[i], &de);
         p.volume[i] *= R::ONE + de[0] + de[1] + de[2];
         for a in 0..3 {
             p.x[i][a] += dt * dx[a];
             p.u[i][a] += dt * dx[a];
         }
+    }
+}
+
+/// Adds Ω σ - σ Ω to `s` for the skew increment Ω with Ω_xy = w[0], Ω_yz = w[1], Ω_zx = w[2]
+/// (Ω_yx = -w[0] etc.): the Jaumann co-rotation of the stress over one step.
+#[inline]
+pub fn rotate<R: Real>(s: &mut [R; 6], w: &[R; 3]) {
+    let [xx, yy, zz, xy, yz, zx] = *s;
+    let (wxy, wyz, wzx) = (w[0], w[1], w[2]);
+    let two = R::of(2.0);
+    // (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj, written out for the symmetric result.
+    s[0] += two * (wxy * xy - wzx * zx);
+    s[1] += two * (wyz * yz - wxy * xy);
+    s[2] += two * (wzx * zx - wyz * yz);
+    s[3] += wxy * (yy - xx) + wyz * zx - wzx * yz;
+    s[4] += wyz * (zz - yy) + wzx * xy - wxy * zx;
+    s[5] += wzx * (xx - zz) + wxy * yz - wyz * xy;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ω σ - σ Ω by full 3×3 products.
+    fn reference(s: &[f64; 6], w: &[f64; 3]) -> [f64; 6] {
+        let m = [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]];
+        let o = [[0.0, w[0], -w[2]], [-w[0], 0.0, w[1]], [w[2], -w[1], 0.0]];
+        let mut r = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                for k in 0..3 {
+                    r[i][j] += o[i][k] * m[k][j] - m[i][k] * o[k][j];
+                }
+            }
+        }
+        [r[0][0], r[1][1], r[2][2], r[0][1], r[1][2], r[2][0]]
+    }
+
+    #[test]
+    fn jaumann_rotation_matches_matrix_products() {
+        let s0 = [1.0, -2.0, 3.5, 0.25, -0.75, 1.5];
+        let w = [0.01, -0.02, 0.03];
+        let mut s = s0;
+        rotate(&mut s, &w);
+        let r = reference(&s0, &w);
+        for c in 0..6 {
+            assert!((s[c] - s0[c] - r[c]).abs() < 1e-15, "component {c}");
+        }
+        // A rotation leaves the trace unchanged.
+        assert!(((s[0] + s[1] + s[2]) - (s0[0] + s0[1] + s0[2])).abs() < 1e-15);
     }
 }

@@ -236,12 +236,12 @@ fn anura3d_oedometer_settles_by_q_h_over_e_oed() {
 #[test]
 fn unsupported_anura3d_features_are_named() {
     let dir = tempfile::tempdir().unwrap();
-    let gom = write_oedometer_case(dir.path(), 10.0, "MPM-MIXED");
+    let gom = write_oedometer_case(dir.path(), 10.0, "UL-FEM");
     let err = mpm_solve::anura3d::load(&gom, &dir.path().join("oedo.CPS_001"))
         .unwrap_err()
         .to_string();
     assert!(
-        err.contains("$$COMPUTATION_METHOD") && err.contains("MPM-MIXED"),
+        err.contains("$$COMPUTATION_METHOD") && err.contains("UL-FEM"),
         "{err}"
     );
 }
@@ -264,4 +264,30 @@ fn single_precision_runs_the_same_code_and_agrees() {
     }
     eprintln!("f32 vs f64: largest stress difference {num:e} of {den:e}");
     assert!(num < 1e-3 * den);
+}
+
+#[test]
+fn mixed_integration_settles_like_material_points_with_one_stress_per_element() {
+    let dir = tempfile::tempdir().unwrap();
+    let q = 5.0;
+    let gom = write_oedometer_case(dir.path(), q, "MPM-MIXED");
+    let (case, _) = mpm_solve::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
+    let engine = mpm_solve::run::run::<f64>(&case, &dir.path().join("out"), false, false).unwrap();
+    let p = &engine.particles;
+    let mut by_element: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
+    for i in 0..p.len() {
+        by_element.entry(p.element[i]).or_default().push(i);
+        assert!((p.stress[i][1] + q).abs() / q < 0.01, "point {i}");
+    }
+    // Points that stayed in a full element carry its Gauss-point stress.
+    let mut shared = 0;
+    for pts in by_element.values().filter(|v| v.len() == 4) {
+        for &i in pts {
+            for c in 0..6 {
+                assert!((p.stress[i][c] - p.stress[pts[0]][c]).abs() <= 1e-12 * q);
+            }
+        }
+        shared += 1;
+    }
+    assert!(shared > 0);
 }
