@@ -16,6 +16,7 @@ pub mod grid;
 pub mod grid_to_particle;
 pub mod grid_update;
 pub mod linear_elastic;
+pub mod liquid;
 pub mod locate;
 pub mod mesh;
 pub mod mixed;
