@@ -10,6 +10,7 @@ use mpm_shared::model::{Body, Token};
 use mpm_shared::{ElementType, Model};
 
 use crate::case::{Case, FaceLoad, Integration, LoadCurve, MaterialSpec, QuasiStatic};
+use crate::liquid::LiquidSpec;
 
 /// Why a case cannot run here.
 #[derive(Debug, thiserror::Error)]
@@ -122,16 +123,19 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let mut materials: Vec<Option<MaterialSpec>> = vec![None; max_index + 1];
     for m in &mats {
         let item = format!("material {} \"{}\"", m.index, m.name);
-        if m.kind != "dry_material" {
-            return Err(unsupported(
-                &gfile,
-                &item,
-                format!(
-                    "MATERIAL_TYPE {} is not supported yet (dry_material is)",
-                    m.kind
-                ),
-            ));
-        }
+        let saturated = match m.kind.as_str() {
+            "dry_material" => false,
+            "saturated_material_coupled" => true,
+            other => {
+                return Err(unsupported(
+                    &gfile,
+                    &item,
+                    format!(
+                        "MATERIAL_TYPE {other} is not supported yet (dry_material and saturated_material_coupled are)"
+                    ),
+                ))
+            }
+        };
         let model_name = m.get("MATERIAL_MODEL_SOLID").unwrap_or("");
         if model_name != "linear_elasticity" {
             return Err(unsupported(
@@ -144,17 +148,34 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         }
         let get = |k: &str| {
             m.get_f64(k)
-                .ok_or_else(|| unsupported(&gfile, &item, format!("missing or non-numeric ${k}")))
+                .ok_or_else(|| unsupported(&gfile, &item, format!("missing or non-numeric $${k}")))
         };
         let n = get("POROSITY_SOLID").unwrap_or(0.0);
-        // A dry material's mass is that of its solid grains: (1 - n) ρs.
-        let density = (1.0 - n) * get("DENSITY_SOLID")?;
-        let spec = MaterialSpec::new(
-            &m.name,
-            density,
-            get("YOUNG_MODULUS")?,
-            get("POISSON_RATIO")?,
-        )
+        let spec = if saturated {
+            let liquid = LiquidSpec::new(
+                n,
+                get("DENSITY_LIQUID")?,
+                get("BULK_MODULUS_LIQUID")?,
+                get("INTRINSIC_PERMEABILITY_LIQUID")?,
+                get("DYNAMIC_VISCOSITY_LIQUID")?,
+            )
+            .map_err(|e| unsupported(&gfile, &item, e))?;
+            MaterialSpec::saturated(
+                &m.name,
+                get("DENSITY_SOLID")?,
+                get("YOUNG_MODULUS")?,
+                get("POISSON_RATIO")?,
+                liquid,
+            )
+        } else {
+            // A dry material's mass is that of its solid grains: (1 - n) ρs.
+            MaterialSpec::new(
+                &m.name,
+                (1.0 - n) * get("DENSITY_SOLID")?,
+                get("YOUNG_MODULUS")?,
+                get("POISSON_RATIO")?,
+            )
+        }
         .map_err(|e| unsupported(&gfile, &item, e))?;
         materials[m.index.max(0) as usize] = Some(spec);
     }
@@ -182,6 +203,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     // Fixities and loads.
     let n = model.node_count();
     let mut fixed = vec![[false; 3]; n];
+    let mut liquid_fixed = vec![[false; 3]; n];
     let mut traction = vec![[0.0; 3]; n];
     let mut point_loads = Vec::new();
     for sec in &model.sections {
@@ -192,11 +214,18 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         if rows.is_empty() {
             continue;
         }
-        if k.starts_with("START_FIXITY_") && k.ends_with("_SOLID") {
+        let phase = if k.ends_with("_SOLID") {
+            Some(&mut fixed)
+        } else if k.ends_with("_LIQUID") {
+            Some(&mut liquid_fixed)
+        } else {
+            None
+        };
+        if let (true, Some(target)) = (k.starts_with("START_FIXITY_"), phase) {
             for r in rows.rows() {
                 let node = r[0].as_int().unwrap_or(0) as usize - 1;
                 for a in 0..3 {
-                    fixed[node][a] |= r.get(1 + a).and_then(Token::as_int) == Some(1);
+                    target[node][a] |= r.get(1 + a).and_then(Token::as_int) == Some(1);
                 }
             }
         } else if k == "START_LOAD_ON_NODES_SOLID" {
@@ -237,6 +266,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         element_material,
         points_per_element,
         fixed,
+        liquid_fixed,
         traction,
         point_loads,
         traction_curve,
@@ -254,6 +284,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         }),
         objective_stress: s.objective_stress,
         integration,
+        consolidation: None,
         probes: s.output_material_points.clone(),
     };
     Ok((case, s))

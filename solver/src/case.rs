@@ -34,17 +34,21 @@ impl LoadCurve {
     }
 }
 
-/// A linear elastic solid material.
+/// A linear elastic solid material, dry or saturated with a pore liquid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MaterialSpec {
     /// Name.
     pub name: String,
-    /// Mass density in t/m³ (kg/m³ ÷ 1000).
+    /// Mass of solid per unit volume in t/m³ (kg/m³ ÷ 1000): (1 - n) ρs.
     pub density: f64,
     /// Young's modulus (kPa).
     pub young: f64,
     /// Poisson's ratio.
     pub poisson: f64,
+    /// The pore liquid of a saturated (two-phase) material; `None` for a dry one.
+    pub liquid: Option<crate::liquid::LiquidSpec>,
+    /// Pore pressure at t = 0 (kPa, compression negative), for saturated materials.
+    pub initial_pore_pressure: f64,
 }
 
 impl MaterialSpec {
@@ -66,14 +70,51 @@ impl MaterialSpec {
             density: density_kg_m3 / 1000.0,
             young,
             poisson,
+            liquid: None,
+            initial_pore_pressure: 0.0,
         })
     }
 
-    /// P-wave speed sqrt(E_oed / ρ) (m/s).
+    /// A saturated material: grains of density `grain_density_kg_m3` (kg/m³) filling 1 - n of
+    /// the volume, and the pore liquid `liquid`.
+    pub fn saturated(
+        name: &str,
+        grain_density_kg_m3: f64,
+        young: f64,
+        poisson: f64,
+        liquid: crate::liquid::LiquidSpec,
+    ) -> Result<Self, String> {
+        let mut m = MaterialSpec::new(
+            name,
+            (1.0 - liquid.porosity) * grain_density_kg_m3,
+            young,
+            poisson,
+        )?;
+        m.liquid = Some(liquid);
+        Ok(m)
+    }
+
+    /// Oedometric modulus (kPa).
+    pub fn oedometric(&self) -> f64 {
+        crate::linear_elastic::LinearElastic::<f64>::oedometric(self.young, self.poisson)
+    }
+
+    /// Fastest wave speed on an element of size `dx` (m/s): sqrt(E_oed / ρ) when dry; for a
+    /// saturated material the two-phase speed with the drag treated implicitly
+    /// ([`crate::liquid::LiquidSpec::wave_speed_implicit_drag`]).
+    pub fn wave_speed_at(&self, dx: f64) -> f64 {
+        match &self.liquid {
+            None => self.wave_speed(),
+            Some(l) => {
+                let grains = self.density / (1.0 - l.porosity);
+                l.wave_speed_implicit_drag(grains, self.oedometric(), dx)
+            }
+        }
+    }
+
+    /// P-wave speed of the dry skeleton, sqrt(E_oed / ρ) (m/s).
     pub fn wave_speed(&self) -> f64 {
-        (crate::linear_elastic::LinearElastic::<f64>::oedometric(self.young, self.poisson)
-            / self.density)
-            .sqrt()
+        (self.oedometric() / self.density).sqrt()
     }
 }
 
@@ -131,6 +172,9 @@ pub struct Case {
     pub points_per_element: Vec<u32>,
     /// Fixed velocity components per model node.
     pub fixed: Vec<[bool; 3]>,
+    /// Fixed liquid velocity components per model node (impermeable faces); used only where a
+    /// saturated material is.
+    pub liquid_fixed: Vec<[bool; 3]>,
     /// Nodal face-load forces per model node (kN) at multiplier 1.
     pub traction: Vec<[f64; 3]>,
     /// Loads carried by material points.
@@ -157,6 +201,8 @@ pub struct Case {
     pub objective_stress: bool,
     /// Stress integration.
     pub integration: Integration,
+    /// A consolidation run compared with Terzaghi (scenes with `[consolidation]`).
+    pub consolidation: Option<crate::consolidation::ConsolidationSpec>,
     /// Material-point ids written to `history.csv`.
     pub probes: Vec<u32>,
 }
@@ -189,6 +235,11 @@ pub fn confined_box(model: &Model) -> Vec<[bool; 3]> {
 }
 
 impl Case {
+    /// True when some material is saturated: the run then allocates and computes the liquid.
+    pub fn has_liquid(&self) -> bool {
+        self.materials.iter().flatten().any(|m| m.liquid.is_some())
+    }
+
     /// A case of one material filling every element with `points` material points each, the
     /// given fixities, no loads, Courant number 0.9, no damping, one output at t = 1 s; callers
     /// set what differs (used by benchmarks and tests that build meshes in memory).
@@ -207,6 +258,7 @@ impl Case {
             materials: vec![None, Some(material)],
             element_material: vec![1; n_el],
             points_per_element: vec![points; n_el],
+            liquid_fixed: fixed.clone(),
             fixed,
             traction: vec![[0.0; 3]; n],
             point_loads: Vec::new(),
@@ -221,6 +273,7 @@ impl Case {
             quasi_static: None,
             objective_stress: false,
             integration: Integration::MaterialPoints,
+            consolidation: None,
             probes: Vec::new(),
         }
     }

@@ -3,8 +3,9 @@
 use std::time::Instant;
 
 use crate::case::{Case, Integration};
-use crate::grid::Grid;
+use crate::grid::{Grid, LiquidNodes};
 use crate::linear_elastic::LinearElastic;
+use crate::liquid::Fluid;
 use crate::locate::{walk, Found};
 use crate::mesh::TetMesh;
 use crate::particles::{self, Particles};
@@ -76,6 +77,10 @@ pub struct Engine<R: Real> {
     /// |free out-of-balance force| / |free external force| of the last step (0 when there
     /// is no external force).
     pub force_error: f64,
+    /// Liquid constants per material index (`None` for dry materials; all `None` in a dry case).
+    pub fluids: Vec<Option<Fluid<R>>>,
+    /// Fixed liquid components per computational node.
+    pub liquid_fixed: Vec<[bool; 3]>,
 }
 
 impl<R: Real> Engine<R> {
@@ -87,7 +92,7 @@ impl<R: Real> Engine<R> {
                 .as_ref()
                 .map_or(0.0, |s| s.density)
         };
-        let particles = particles::place(
+        let mut particles = particles::place(
             &mesh,
             &case.points_per_element,
             &case.element_material,
@@ -96,10 +101,25 @@ impl<R: Real> Engine<R> {
         if particles.is_empty() {
             return Err("the case has no material points (every element is empty)".into());
         }
+        let two_phase = case.has_liquid();
+        if two_phase {
+            particles.add_liquid(|m| {
+                case.materials[m as usize]
+                    .as_ref()
+                    .map_or(0.0, |s| s.initial_pore_pressure)
+            });
+        }
+        let fluids: Vec<Option<Fluid<R>>> = case
+            .materials
+            .iter()
+            .map(|m| m.as_ref().and_then(|s| s.liquid.as_ref()).map(Fluid::new))
+            .collect();
         let mut fixed = vec![[false; 3]; mesh.nodes()];
+        let mut liquid_fixed = vec![[false; 3]; mesh.nodes()];
         let mut traction = vec![[R::ZERO; 3]; mesh.nodes()];
         for (c, &m) in mesh.model_node.iter().enumerate() {
             fixed[c] = case.fixed[m as usize];
+            liquid_fixed[c] = case.liquid_fixed[m as usize];
             traction[c] = case.traction[m as usize].map(R::of);
         }
         let laws = case
@@ -115,27 +135,30 @@ impl<R: Real> Engine<R> {
                 )
             })
             .collect();
-        let c_max = case
-            .materials
-            .iter()
-            .flatten()
-            .map(|m| m.wave_speed())
-            .fold(0.0, f64::max);
+        // Empty elements may fill: they take the fastest material's speed.
         let mut dt = f64::INFINITY;
         for e in 0..mesh.elements() {
+            let dx = mesh.min_altitude[e].f64();
             let m = case.element_material[e] as usize;
-            let c = case
-                .materials
-                .get(m)
-                .and_then(|s| s.as_ref())
-                .map_or(c_max, |s| s.wave_speed());
-            dt = dt.min(mesh.min_altitude[e].f64() / c);
+            let c = match case.materials.get(m).and_then(|s| s.as_ref()) {
+                Some(s) => s.wave_speed_at(dx),
+                None => case
+                    .materials
+                    .iter()
+                    .flatten()
+                    .map(|s| s.wave_speed_at(dx))
+                    .fold(0.0, f64::max),
+            };
+            dt = dt.min(dx / c);
         }
         let dt = case.courant * dt;
         if !(dt > 0.0 && dt.is_finite()) {
             return Err(format!("critical time step is not positive ({dt})"));
         }
-        let grid = Grid::new(mesh.nodes());
+        let mut grid = Grid::new(mesh.nodes());
+        if two_phase {
+            grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
+        }
         let point_loads = resolve_point_loads(&mesh, &particles, case)?;
         let mixed = match case.integration {
             Integration::MaterialPoints => None,
@@ -160,6 +183,8 @@ impl<R: Real> Engine<R> {
             point_loads,
             mixed,
             force_error: 0.0,
+            fluids,
+            liquid_fixed,
         })
     }
 
@@ -180,6 +205,13 @@ impl<R: Real> Engine<R> {
             self.mixed.as_ref(),
             &mut self.grid,
         );
+        particle_to_grid::liquid_to_grid(
+            &self.mesh,
+            &self.particles,
+            &self.fluids,
+            gravity,
+            &mut self.grid,
+        );
         particle_to_grid::add_point_loads(
             &self.mesh,
             &self.particles,
@@ -188,13 +220,25 @@ impl<R: Real> Engine<R> {
             &mut self.grid,
         );
         let t1 = Instant::now();
-        self.force_error = grid_update::grid_update(
-            &mut self.grid,
-            &self.traction,
-            tm,
-            &self.fixed,
-            R::of(case.damping),
-        );
+        self.force_error = if self.grid.liquid.is_some() {
+            grid_update::grid_update_two_phase(
+                &mut self.grid,
+                &self.traction,
+                tm,
+                &self.fixed,
+                &self.liquid_fixed,
+                R::of(case.damping),
+                R::of(dt),
+            )
+        } else {
+            grid_update::grid_update(
+                &mut self.grid,
+                &self.traction,
+                tm,
+                &self.fixed,
+                R::of(case.damping),
+            )
+        };
         let t2 = Instant::now();
         grid_to_particle::grid_to_particle(
             &self.mesh,
@@ -203,7 +247,22 @@ impl<R: Real> Engine<R> {
             &self.fixed,
             R::of(dt),
         );
+        grid_to_particle::liquid_to_particles(
+            &self.mesh,
+            &mut self.particles,
+            &mut self.grid,
+            &self.fluids,
+            &self.liquid_fixed,
+            R::of(dt),
+        );
         let t3 = Instant::now();
+        stress::update_pore_pressure(
+            &self.mesh,
+            &mut self.particles,
+            &mut self.grid,
+            &self.fluids,
+            R::of(dt),
+        );
         stress::update_stress_and_move(
             &self.mesh,
             &mut self.particles,

@@ -11,6 +11,7 @@
 
 pub mod anura3d;
 pub mod case;
+pub mod consolidation;
 pub mod engine;
 pub mod grid;
 pub mod grid_to_particle;
@@ -27,3 +28,4 @@ pub mod real;
 pub mod run;
 pub mod scene;
 pub mod stress;
+pub mod terzaghi;

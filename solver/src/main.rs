@@ -109,6 +109,31 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
     case.probes.sort_unstable();
     case.probes.dedup();
     let progress = std::io::stderr().is_terminal();
+    if case.consolidation.is_some() {
+        let (engine, t, w) =
+            mpm_solve::consolidation::run_job::<f64>(&case, out, args.drop_lost, progress)?;
+        println!(
+            "done: {} steps of {:.3e} s, {} material points, outputs in {}",
+            engine.steps,
+            engine.dt,
+            engine.particles.len(),
+            out.display()
+        );
+        for (name, tr) in
+            std::iter::once(("default", &t)).chain(w.as_ref().map(|w| ("workshop", w)))
+        {
+            let last = tr.records.last().expect("at least one output");
+            println!(
+                "{name}: T_v {:.3}, settlement {:.4e} m (Terzaghi {:.4e}), RMS pore-pressure error {:.4} of u0",
+                last.tv, last.settlement, last.terzaghi, last.rms
+            );
+        }
+        println!(
+            "consolidation report: {}",
+            out.join("consolidation.csv").display()
+        );
+        return Ok(());
+    }
     let engine = mpm_solve::run::run::<f64>(&case, out, args.drop_lost, progress)?;
     println!(
         "done: {} steps of {:.3e} s, {} material points, outputs in {}",

@@ -44,7 +44,11 @@ impl Output {
         Ok(Output {
             dir: dir.to_path_buf(),
             pvd: Vec::new(),
-            history: "time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx\n".into(),
+            history: if p.liquid.is_some() {
+                "time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx,pore_pressure\n".into()
+            } else {
+                "time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx\n".into()
+            },
             energy: "time,kinetic,external_work\n".into(),
             probes,
         })
@@ -102,6 +106,22 @@ impl Output {
             ],
             cell_data: Vec::new(),
         };
+        let (pore, liquid_vel);
+        let mut piece = piece;
+        if let Some(l) = &p.liquid {
+            pore = active.iter().map(|&i| l.p[i].f64()).collect::<Vec<f64>>();
+            liquid_vel = flat(&|i| l.w[i].iter().map(|v| v.f64()).collect());
+            piece.point_data.push(DataArray {
+                name: "pore_pressure",
+                components: 1,
+                values: Values::F64(&pore),
+            });
+            piece.point_data.push(DataArray {
+                name: "liquid_velocity",
+                components: 3,
+                values: Values::F64(&liquid_vel),
+            });
+        }
         let name = format!("particles_{:05}.vtu", self.pvd.len());
         write_output_with(&self.dir.join(&name), |w| {
             vtu::write_vtu(w, &piece, Encoding::Appended)
@@ -113,6 +133,9 @@ impl Output {
             let _ = write!(self.history, ",{}", p.id[i]);
             for v in p.x[i].iter().chain(&p.u[i]).chain(&p.stress[i]) {
                 csv_real(&mut self.history, v.f64());
+            }
+            if let Some(l) = &p.liquid {
+                csv_real(&mut self.history, l.p[i].f64());
             }
             self.history.push('\n');
         }
@@ -173,7 +196,7 @@ pub fn write_summary<R: Real>(
         "wall_seconds": wall,
         "particle_steps_per_second": ps,
         "phase_seconds": phases,
-        "bytes_per_particle": crate::particles::Particles::<R>::bytes_per_point() as f64 + grid_bytes,
+        "bytes_per_particle": engine.particles.bytes_per_point() as f64 + grid_bytes,
         "peak_rss_bytes": peak_rss_bytes(),
         "lost_particles": engine.lost,
     });

@@ -1,6 +1,7 @@
 //! Particle to grid: lumped masses, momentum, internal and gravity forces (DESIGN §4, step 1).
 
 use crate::grid::Grid;
+use crate::liquid::Fluid;
 use crate::mesh::TetMesh;
 use crate::mixed::Mixed;
 use crate::particles::Particles;
@@ -28,12 +29,20 @@ pub fn particle_to_grid<R: Real>(
         let e = p.element[i] as usize;
         let n = mesh.shape(e, &p.x[i]);
         let grad = &mesh.grad[e];
-        let (m, v, s) = (p.mass[i], p.v[i], p.stress[i]);
-        // A full element's points carry no internal force of their own (see below).
+        let (m, v) = (p.mass[i], p.v[i]);
+        // A full element's points carry no effective-stress force of their own (see below).
         let vol = match mixed {
             Some(mx) if mx.full[e] => R::ZERO,
             _ => p.volume[i],
         };
+        // Total stress V σ' + V p I (pore pressure p only where the liquid is modelled).
+        let mut s = p.stress[i].map(|c| vol * c);
+        if let Some(l) = &p.liquid {
+            let vp = p.volume[i] * l.p[i];
+            s[0] += vp;
+            s[1] += vp;
+            s[2] += vp;
+        }
         for k in 0..4 {
             let node = mesh.corners[e][k] as usize;
             let w = m * n[k];
@@ -47,7 +56,7 @@ pub fn particle_to_grid<R: Real>(
             ];
             for a in 0..3 {
                 g.momentum[node][a] += w * v[a];
-                g.f_int[node][a] -= vol * f[a];
+                g.f_int[node][a] -= f[a];
                 g.f_ext[node][a] += w * gravity[a];
             }
         }
@@ -76,6 +85,53 @@ pub fn add_point_loads<R: Real>(
             let node = mesh.corners[e][k] as usize;
             for a in 0..3 {
                 g.f_ext[node][a] += n[k] * scale * f[a];
+            }
+        }
+    }
+}
+
+/// The liquid's share of particle to grid (two-phase, DESIGN §4): liquid masses M_w and M̄_w,
+/// drag Q, liquid momentum, the liquid force -Σ V p ∇N + M_w g, and the liquid's weight added to
+/// the mixture's external force. Points of dry materials (`fluids[m]` is `None`) add nothing.
+pub fn liquid_to_grid<R: Real>(
+    mesh: &TetMesh<R>,
+    p: &Particles<R>,
+    fluids: &[Option<Fluid<R>>],
+    gravity: V3<R>,
+    g: &mut Grid<R>,
+) {
+    let (Some(lp), Some(gl)) = (&p.liquid, &mut g.liquid) else {
+        return;
+    };
+    let z = [R::ZERO; 3];
+    gl.mass.fill(R::ZERO);
+    gl.mass_n.fill(R::ZERO);
+    gl.drag.fill(R::ZERO);
+    gl.momentum.fill(z);
+    gl.force.fill(z);
+    for i in 0..p.len() {
+        let Some(f) = fluids[p.material[i] as usize] else {
+            continue;
+        };
+        if !p.active[i] {
+            continue;
+        }
+        let e = p.element[i] as usize;
+        let n = mesh.shape(e, &p.x[i]);
+        let grad = &mesh.grad[e];
+        let vol = p.volume[i];
+        let mw = f.rho_w * vol;
+        let (pw, w) = (lp.p[i] * vol, lp.w[i]);
+        for k in 0..4 {
+            let node = mesh.corners[e][k] as usize;
+            let nk = n[k];
+            gl.mass[node] += mw * nk;
+            gl.mass_n[node] += f.n * mw * nk;
+            gl.drag[node] += f.drag * vol * nk;
+            for a in 0..3 {
+                gl.momentum[node][a] += mw * nk * w[a];
+                gl.force[node][a] += mw * nk * gravity[a] - pw * grad[k][a];
+                g.f_ext[node][a] += f.n * mw * nk * gravity[a];
             }
         }
     }

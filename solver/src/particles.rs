@@ -26,6 +26,17 @@ pub struct Particles<R: Real> {
     pub id: Vec<u32>,
     /// False once a point has left the mesh under `--drop-lost`.
     pub active: Vec<bool>,
+    /// Liquid state, present only when the case has a saturated material.
+    pub liquid: Option<LiquidPoints<R>>,
+}
+
+/// Liquid state of the material points (one entry per point; zero at points of dry materials).
+#[derive(Debug, Clone, Default)]
+pub struct LiquidPoints<R: Real> {
+    /// Liquid velocity.
+    pub w: Vec<V3<R>>,
+    /// Pore pressure (kPa, compression negative, as Anura3D).
+    pub p: Vec<R>,
 }
 
 impl<R: Real> Particles<R> {
@@ -39,10 +50,19 @@ impl<R: Real> Particles<R> {
         self.x.is_empty()
     }
 
-    /// Bytes of state per point.
-    pub fn bytes_per_point() -> usize {
+    /// Bytes of state per point (more when the liquid is modelled).
+    pub fn bytes_per_point(&self) -> usize {
         let r = std::mem::size_of::<R>();
-        (3 + 3 + 3 + 1 + 1 + 6) * r + 4 + 4 + 4 + 1
+        let liquid = if self.liquid.is_some() { 4 * r } else { 0 };
+        (3 + 3 + 3 + 1 + 1 + 6) * r + 4 + 4 + 4 + 1 + liquid
+    }
+
+    /// Adds the liquid state, every point starting at rest with pore pressure `p0(material)`.
+    pub fn add_liquid(&mut self, p0: impl Fn(u32) -> f64) {
+        self.liquid = Some(LiquidPoints {
+            w: vec![[R::ZERO; 3]; self.len()],
+            p: self.material.iter().map(|&m| R::of(p0(m))).collect(),
+        });
     }
 }
 

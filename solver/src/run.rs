@@ -4,6 +4,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::case::Case;
+use crate::consolidation::{apply_undrained_start, Layer, Start, Tracker};
 use crate::engine::Engine;
 use crate::output::{self, Output};
 use crate::real::Real;
@@ -32,8 +33,29 @@ pub fn run<R: Real>(
     drop_lost: bool,
     progress: bool,
 ) -> Result<Engine<R>, RunError> {
+    run_tracked(case, dir, drop_lost, progress).map(|(e, _)| e)
+}
+
+/// [`run`], and for a consolidation case (`case.consolidation`) its start state and the
+/// record of every output time against Terzaghi.
+pub fn run_tracked<R: Real>(
+    case: &Case,
+    dir: &Path,
+    drop_lost: bool,
+    progress: bool,
+) -> Result<(Engine<R>, Option<Tracker>), RunError> {
     let wall = Instant::now();
     let mut engine = Engine::<R>::new(case, drop_lost).map_err(RunError::Setup)?;
+    let mut tracker = match &case.consolidation {
+        None => None,
+        Some(spec) => {
+            let layer = Layer::of(case, spec).map_err(RunError::Setup)?;
+            if spec.start == Start::Undrained {
+                apply_undrained_start(&mut engine, &layer);
+            }
+            Some(Tracker::new(&engine, layer, spec.start))
+        }
+    };
     let mut out = Output::new(dir, case, &engine)?;
     let total_steps = (case.end_time / engine.dt).ceil() as u64;
     let bar = progress.then(|| {
@@ -91,11 +113,14 @@ pub fn run<R: Real>(
         stepping += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         out.write(&engine)?;
+        if let Some(t) = &mut tracker {
+            t.record(&engine);
+        }
         engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
     }
     if let Some(b) = bar {
         b.finish_and_clear();
     }
     output::write_summary(dir, case, &engine, wall.elapsed().as_secs_f64(), stepping)?;
-    Ok(engine)
+    Ok((engine, tracker))
 }

@@ -40,6 +40,8 @@ use mpm_shared::msh::{self, MshMesh};
 use mpm_shared::Model;
 
 use crate::case::{Case, Integration, LoadCurve, MaterialSpec};
+use crate::consolidation::{ConsolidationSpec, Start};
+use crate::liquid::LiquidSpec;
 
 /// The scene file's content.
 #[derive(Debug, Deserialize)]
@@ -58,15 +60,43 @@ struct Scene {
     traction: Vec<Traction>,
     #[serde(default)]
     probes: Vec<u32>,
+    #[serde(default)]
+    consolidation: Option<Consolidation>,
+}
+
+/// `[consolidation]`: compare with Terzaghi (one saturated material, load on the drained top).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Consolidation {
+    /// Top load (kPa, compression positive), as applied by the scene's traction.
+    load: f64,
+    /// "undrained" (default) or "rest".
+    #[serde(default = "default_start")]
+    start: String,
+    /// Also run the workshop-style configuration (at rest, sudden load) and report both.
+    #[serde(default)]
+    compare_rest: bool,
+    /// Time factor between outputs (sets time.output_interval).
+    #[serde(default)]
+    output_tv: Option<f64>,
+    /// Final time factor (sets time.end).
+    #[serde(default)]
+    end_tv: Option<f64>,
+}
+
+fn default_start() -> String {
+    "undrained".into()
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Time {
-    end: f64,
+    #[serde(default)]
+    end: Option<f64>,
     #[serde(default = "default_courant")]
     courant: f64,
-    output_interval: f64,
+    #[serde(default)]
+    output_interval: Option<f64>,
     #[serde(default)]
     max_steps: Option<u64>,
 }
@@ -98,6 +128,22 @@ struct Material {
     poisson: f64,
     #[serde(default = "default_points")]
     points_per_element: u32,
+    #[serde(default)]
+    liquid: Option<Liquid>,
+}
+
+/// The pore liquid of a saturated material (`[material.liquid]`); `density` of the material is
+/// then the grains' density ρs.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Liquid {
+    porosity: f64,
+    density: f64,
+    bulk_modulus: f64,
+    intrinsic_permeability: f64,
+    viscosity: f64,
+    #[serde(default)]
+    initial_pore_pressure: f64,
 }
 
 fn default_points() -> u32 {
@@ -112,6 +158,9 @@ struct Fixity {
     #[serde(default)]
     plane: Option<String>,
     fixed: [bool; 3],
+    /// Liquid fixities (impermeable directions); default: those of the solid.
+    #[serde(default)]
+    liquid: Option<[bool; 3]>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -231,22 +280,10 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         ));
     }
     let t = &scene.time;
-    if !(t.end > 0.0) {
-        return Err(invalid(
-            "time.end".into(),
-            format!("must be positive, got {}", t.end),
-        ));
-    }
     if !(t.courant > 0.0 && t.courant <= 1.0) {
         return Err(invalid(
             "time.courant".into(),
             format!("must be in (0, 1], got {}", t.courant),
-        ));
-    }
-    if !(t.output_interval > 0.0) {
-        return Err(invalid(
-            "time.output_interval".into(),
-            format!("must be positive, got {}", t.output_interval),
         ));
     }
     // Materials: model material k is the k-th physical volume group by tag (see msh::to_model).
@@ -261,8 +298,23 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
                 format!("no physical volume of that name in {mesh_name} (it has {names:?})"),
             )
         })? + 1;
-        let spec = MaterialSpec::new(&m.physical, m.density, m.young, m.poisson)
-            .map_err(|e| invalid(item.clone(), e))?;
+        let spec = match &m.liquid {
+            None => MaterialSpec::new(&m.physical, m.density, m.young, m.poisson),
+            Some(l) => LiquidSpec::new(
+                l.porosity,
+                l.density,
+                l.bulk_modulus,
+                l.intrinsic_permeability,
+                l.viscosity,
+            )
+            .and_then(|liquid| {
+                let mut s =
+                    MaterialSpec::saturated(&m.physical, m.density, m.young, m.poisson, liquid)?;
+                s.initial_pore_pressure = l.initial_pore_pressure;
+                Ok(s)
+            }),
+        }
+        .map_err(|e| invalid(item.clone(), e))?;
         materials[k] = Some(spec);
         points[k] = m.points_per_element;
     }
@@ -285,6 +337,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         .map(|&m| points[m as usize])
         .collect();
     let mut fixed = vec![[false; 3]; model.node_count()];
+    let mut liquid_fixed = vec![[false; 3]; model.node_count()];
     let size = (0..3)
         .map(|a| {
             let (lo, hi) = model
@@ -328,9 +381,11 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
                 ))
             }
         };
+        let liquid = f.liquid.unwrap_or(f.fixed);
         for n in nodes {
             for a in 0..3 {
                 fixed[n as usize][a] |= f.fixed[a];
+                liquid_fixed[n as usize][a] |= liquid[a];
             }
         }
     }
@@ -355,9 +410,84 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
             format!("must be in [0, 1), got {damping}"),
         ));
     }
-    let n_out = (t.end / t.output_interval).round().max(1.0) as usize;
+    // Consolidation runs may set their times by time factor (c_v of the saturated material).
+    let consolidation = match &scene.consolidation {
+        None => None,
+        Some(c) => {
+            let start = match c.start.as_str() {
+                "undrained" => Start::Undrained,
+                "rest" => Start::Rest,
+                other => {
+                    return Err(invalid(
+                        "consolidation.start".into(),
+                        format!("expected \"undrained\" or \"rest\", got \"{other}\""),
+                    ))
+                }
+            };
+            if !(c.load > 0.0) {
+                return Err(invalid(
+                    "consolidation.load".into(),
+                    format!("must be positive, got {}", c.load),
+                ));
+            }
+            Some(ConsolidationSpec {
+                load: c.load,
+                start,
+                compare_rest: c.compare_rest,
+            })
+        }
+    };
+    let by_tv = |tv: Option<f64>| -> Result<Option<f64>, SceneError> {
+        let Some(tv) = tv else { return Ok(None) };
+        let sat: Vec<&MaterialSpec> = materials
+            .iter()
+            .flatten()
+            .filter(|m| m.liquid.is_some())
+            .collect();
+        let [m] = sat.as_slice() else {
+            return Err(invalid(
+                "consolidation".into(),
+                "times by time factor need exactly one saturated material".into(),
+            ));
+        };
+        let cv = m
+            .liquid
+            .as_ref()
+            .expect("saturated")
+            .consolidation_coefficient(m.oedometric());
+        let (lo, hi) = model
+            .coords
+            .chunks_exact(3)
+            .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p[1]), h.max(p[1])));
+        Ok(Some(tv * (hi - lo) * (hi - lo) / cv))
+    };
+    let (c_end, c_out) = match &scene.consolidation {
+        Some(c) => (by_tv(c.end_tv)?, by_tv(c.output_tv)?),
+        None => (None, None),
+    };
+    let end = c_end.or(t.end).unwrap_or(0.0);
+    let interval = c_out.or(t.output_interval).unwrap_or(0.0);
+    if !(end > 0.0) {
+        return Err(invalid(
+            "time.end".into(),
+            format!("must be given and positive, got {end}"),
+        ));
+    }
+    if !(interval > 0.0) {
+        return Err(invalid(
+            "time.output_interval".into(),
+            format!("must be given and positive, got {interval}"),
+        ));
+    }
+    let n_out = (end / interval).round().max(1.0) as usize;
     let output_times = (1..=n_out)
-        .map(|k| (k as f64 * t.output_interval).min(t.end))
+        .map(|k| {
+            if k == n_out {
+                end
+            } else {
+                (k as f64 * interval).min(end)
+            }
+        })
         .collect();
     Ok(Case {
         name: path
@@ -370,6 +500,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         element_material,
         points_per_element,
         fixed,
+        liquid_fixed,
         traction,
         point_loads: Vec::new(),
         traction_curve: LoadCurve::ramp(traction_ramp),
@@ -377,12 +508,13 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         gravity_curve: LoadCurve::ramp(gravity_ramp),
         courant: t.courant,
         damping,
-        end_time: t.end,
+        end_time: end,
         output_times,
         max_steps: t.max_steps,
         quasi_static: None,
         objective_stress: false,
         integration: Integration::MaterialPoints,
+        consolidation,
         probes: scene.probes.clone(),
     })
 }

@@ -3,6 +3,7 @@
 
 use crate::grid::Grid;
 use crate::linear_elastic::LinearElastic;
+use crate::liquid::Fluid;
 use crate::mesh::TetMesh;
 use crate::particles::Particles;
 use crate::real::Real;
@@ -58,6 +59,73 @@ pub fn update_stress_and_move<R: Real>(
             p.x[i][a] += dt * dx[a];
             p.u[i][a] += dt * dx[a];
         }
+    }
+}
+
+/// Pore-pressure update of saturated points (DESIGN §4): Δp = (K_w / n) (n Δε_vol,w +
+/// (1 - n) Δε_vol,s), the volumetric strain increments from the nodal liquid and solid velocities
+/// (compression negative, so compression lowers p). Call before the points move.
+///
+/// Linear tetrahedra give one volumetric strain per element, and with a stiff liquid
+/// (K_w / n ≫ E_oed) the pressure then shows spurious element-to-element (checkerboard) modes
+/// that grow near drained faces. The rate is therefore smoothed through the nodes: each point's
+/// rate is averaged to its element's nodes (weight V N) and interpolated back with N, as
+/// Anura3D's strain smoothing does for the volumetric strain.
+pub fn update_pore_pressure<R: Real>(
+    mesh: &TetMesh<R>,
+    p: &mut Particles<R>,
+    g: &mut Grid<R>,
+    fluids: &[Option<Fluid<R>>],
+    dt: R,
+) {
+    let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
+        return;
+    };
+    gl.rate.fill(R::ZERO);
+    gl.weight.fill(R::ZERO);
+    for i in 0..p.x.len() {
+        let Some(f) = fluids[p.material[i] as usize] else {
+            continue;
+        };
+        if !p.active[i] {
+            continue;
+        }
+        let e = p.element[i] as usize;
+        let grad = &mesh.grad[e];
+        let (mut div_v, mut div_w) = (R::ZERO, R::ZERO);
+        for k in 0..4 {
+            let node = mesh.corners[e][k] as usize;
+            let (v, w) = (g.vel[node], gl.vel[node]);
+            for a in 0..3 {
+                div_v += v[a] * grad[k][a];
+                div_w += w[a] * grad[k][a];
+            }
+        }
+        let rate = f.kw_over_n * (f.n * div_w + (R::ONE - f.n) * div_v);
+        let n = mesh.shape(e, &p.x[i]);
+        let vol = p.volume[i];
+        for k in 0..4 {
+            let node = mesh.corners[e][k] as usize;
+            gl.rate[node] += vol * n[k] * rate;
+            gl.weight[node] += vol * n[k];
+        }
+    }
+    for n in 0..gl.rate.len() {
+        if gl.weight[n] > R::ZERO {
+            gl.rate[n] = gl.rate[n] / gl.weight[n];
+        }
+    }
+    for i in 0..p.x.len() {
+        if fluids[p.material[i] as usize].is_none() || !p.active[i] {
+            continue;
+        }
+        let e = p.element[i] as usize;
+        let n = mesh.shape(e, &p.x[i]);
+        let mut rate = R::ZERO;
+        for k in 0..4 {
+            rate += n[k] * gl.rate[mesh.corners[e][k] as usize];
+        }
+        lp.p[i] += rate * dt;
     }
 }
 
