@@ -1,7 +1,9 @@
-//! Anura3D cases (GOM + CPS) turned into a [`Case`]: dry linear elastic materials, solid
-//! fixities, nodal face loads, gravity, local damping and load steps, integrated at material
-//! points (`MPM-MP`). Features this solver does not model yet are refused with the item named,
-//! never silently ignored.
+//! Anura3D cases (GOM + CPS) turned into a [`Case`]: dry and saturated
+//! (`saturated_material_coupled`) linear elastic materials, fixities of both phases, face loads
+//! on nodes and on material points, gravity, local damping, load steps, quasi-static
+//! convergence, objective stress, MPM-MP and MPM-MIXED integration, with Anura3D's two-phase
+//! time step, liquid damping and (per `STRAIN_SMOOTHING`) pressure smoothing. Features this
+//! solver does not model yet are refused with the item named, never silently ignored.
 
 use std::path::Path;
 
@@ -240,7 +242,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             || k == "START_CONTACT_VOLUME"
             || k == "START_EXCAVATION_SOLID"
         {
-            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (a dry case may use solid fixities, $$START_LOAD_ON_NODES_SOLID and $$START_LOAD_ON_MATERIAL_POINTS_SOLID)"));
+            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (supported: fixities of either phase, $$START_LOAD_ON_NODES_SOLID and $$START_LOAD_ON_MATERIAL_POINTS_SOLID)"));
         }
     }
     let total = s.load_steps as f64 * s.time_per_load_step;
@@ -284,6 +286,14 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         }),
         objective_stress: s.objective_stress,
         integration,
+        anura3d_time_step: true,
+        damp_liquid: true,
+        smooth_pressure: cps.get("STRAIN_SMOOTHING").is_some_and(|e| {
+            e.lines
+                .first()
+                .and_then(|l| l.split_whitespace().next())
+                .is_some_and(|w| w != "0")
+        }),
         consolidation: None,
         probes: s.output_material_points.clone(),
     };

@@ -100,14 +100,19 @@ impl MaterialSpec {
     }
 
     /// Fastest wave speed on an element of size `dx` (m/s): sqrt(E_oed / ρ) when dry; for a
-    /// saturated material the two-phase speed with the drag treated implicitly
-    /// ([`crate::liquid::LiquidSpec::wave_speed_implicit_drag`]).
-    pub fn wave_speed_at(&self, dx: f64) -> f64 {
+    /// saturated material the two-phase speed, with the drag treated implicitly
+    /// ([`crate::liquid::LiquidSpec::wave_speed_implicit_drag`]) or, for `anura3d_step`,
+    /// Anura3D's formula with its explicit-drag and consolidation terms (smaller, so as safe).
+    pub fn wave_speed_at(&self, dx: f64, anura3d_step: bool) -> f64 {
         match &self.liquid {
             None => self.wave_speed(),
             Some(l) => {
                 let grains = self.density / (1.0 - l.porosity);
-                l.wave_speed_implicit_drag(grains, self.oedometric(), dx)
+                if anura3d_step {
+                    l.wave_speed(grains, self.oedometric(), dx)
+                } else {
+                    l.wave_speed_implicit_drag(grains, self.oedometric(), dx)
+                }
             }
         }
     }
@@ -201,6 +206,14 @@ pub struct Case {
     pub objective_stress: bool,
     /// Stress integration.
     pub integration: Integration,
+    /// Take Anura3D's two-phase critical time step (explicit drag and consolidation terms)
+    /// rather than the implicit-drag one, so that Anura3D inputs step as Anura3D does.
+    pub anura3d_time_step: bool,
+    /// Damp the liquid's force too (Anura3D does; it slows seepage by 1 - α, so scenes don't).
+    pub damp_liquid: bool,
+    /// Smooth pore-pressure rates through the nodes (Anura3D's `STRAIN_SMOOTHING`; on for
+    /// scenes).
+    pub smooth_pressure: bool,
     /// A consolidation run compared with Terzaghi (scenes with `[consolidation]`).
     pub consolidation: Option<crate::consolidation::ConsolidationSpec>,
     /// Material-point ids written to `history.csv`.
@@ -273,6 +286,9 @@ impl Case {
             quasi_static: None,
             objective_stress: false,
             integration: Integration::MaterialPoints,
+            anura3d_time_step: false,
+            damp_liquid: false,
+            smooth_pressure: true,
             consolidation: None,
             probes: Vec::new(),
         }

@@ -141,12 +141,12 @@ impl<R: Real> Engine<R> {
             let dx = mesh.min_altitude[e].f64();
             let m = case.element_material[e] as usize;
             let c = match case.materials.get(m).and_then(|s| s.as_ref()) {
-                Some(s) => s.wave_speed_at(dx),
+                Some(s) => s.wave_speed_at(dx, case.anura3d_time_step),
                 None => case
                     .materials
                     .iter()
                     .flatten()
-                    .map(|s| s.wave_speed_at(dx))
+                    .map(|s| s.wave_speed_at(dx, case.anura3d_time_step))
                     .fold(0.0, f64::max),
             };
             dt = dt.min(dx / c);
@@ -228,6 +228,7 @@ impl<R: Real> Engine<R> {
                 &self.fixed,
                 &self.liquid_fixed,
                 R::of(case.damping),
+                case.damp_liquid,
                 R::of(dt),
             )
         } else {
@@ -261,6 +262,7 @@ impl<R: Real> Engine<R> {
             &mut self.particles,
             &mut self.grid,
             &self.fluids,
+            case.smooth_pressure,
             R::of(dt),
         );
         stress::update_stress_and_move(

@@ -73,6 +73,7 @@ pub fn grid_update_two_phase<R: Real>(
     fixed: &[[bool; 3]],
     liquid_fixed: &[[bool; 3]],
     alpha: R,
+    damp_liquid: bool,
     dt: R,
 ) -> f64 {
     let (mut unbalanced, mut external) = (0.0, 0.0);
@@ -110,9 +111,14 @@ pub fn grid_update_two_phase<R: Real>(
                 gl.acc[n][a] = R::ZERO;
                 continue;
             }
-            // The liquid's force is not damped: in seepage it is balanced by the drag, which is
-            // dissipative already, and damping it would slow the flow (c_v × (1 - α)).
-            let fw = gl.force[n][a];
+            // The liquid's force is not damped by default: in seepage it is balanced by the
+            // drag, which is dissipative already, and damping it would slow the flow
+            // (c_v × (1 - α)). Anura3D damps it; `damp_liquid` follows Anura3D.
+            let fw = if damp_liquid {
+                damp(gl.force[n][a], gl.momentum[n][a])
+            } else {
+                gl.force[n][a]
+            };
             // Relative velocity w - v at the start of the step.
             let dv = gl.momentum[n][a] / mw - g.momentum[n][a] / ms;
             let qdt = q * dt;

@@ -514,6 +514,9 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         quasi_static: None,
         objective_stress: false,
         integration: Integration::MaterialPoints,
+        anura3d_time_step: false,
+        damp_liquid: false,
+        smooth_pressure: true,
         consolidation,
         probes: scene.probes.clone(),
     })

@@ -70,12 +70,14 @@ pub fn update_stress_and_move<R: Real>(
 /// (K_w / n ≫ E_oed) the pressure then shows spurious element-to-element (checkerboard) modes
 /// that grow near drained faces. The rate is therefore smoothed through the nodes: each point's
 /// rate is averaged to its element's nodes (weight V N) and interpolated back with N, as
-/// Anura3D's strain smoothing does for the volumetric strain.
+/// Anura3D's strain smoothing does for the volumetric strain (`smooth`; without it each point
+/// takes its element's rate, as Anura3D without `STRAIN_SMOOTHING`).
 pub fn update_pore_pressure<R: Real>(
     mesh: &TetMesh<R>,
     p: &mut Particles<R>,
     g: &mut Grid<R>,
     fluids: &[Option<Fluid<R>>],
+    smooth: bool,
     dt: R,
 ) {
     let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
@@ -102,6 +104,10 @@ pub fn update_pore_pressure<R: Real>(
             }
         }
         let rate = f.kw_over_n * (f.n * div_w + (R::ONE - f.n) * div_v);
+        if !smooth {
+            lp.p[i] += rate * dt;
+            continue;
+        }
         let n = mesh.shape(e, &p.x[i]);
         let vol = p.volume[i];
         for k in 0..4 {
@@ -109,6 +115,9 @@ pub fn update_pore_pressure<R: Real>(
             gl.rate[node] += vol * n[k] * rate;
             gl.weight[node] += vol * n[k];
         }
+    }
+    if !smooth {
+        return;
     }
     for n in 0..gl.rate.len() {
         if gl.weight[n] > R::ZERO {

@@ -1,6 +1,7 @@
-//! Anura3D's 3D dry benchmarks (`../shared/anura3d`, found through `ANURA3D_BENCHMARKS`):
-//! the material-point positions, displacements and stresses its expected `.BMS` files report,
-//! reproduced at the reported time. Skipped when the variable is unset.
+//! Anura3D's 3D benchmarks with expected results, dry and saturated (`../shared/anura3d`,
+//! found through `ANURA3D_BENCHMARKS`): the material-point positions, displacements, stresses
+//! and pore pressures its expected `.BMS` files report, reproduced at the reported time.
+//! Skipped when the variable is unset.
 
 use std::path::{Path, PathBuf};
 
@@ -15,6 +16,9 @@ const CASES: &[&str] = &[
     "1010_Oedometer_QS_MPMMIXED_1Phase_NormalStress_HighToleratedError_3D",
     "1011_Oedometer_QS_MPMMIXED_1Phase_NormalStress_LowDampingFactor_3D",
     "1012_Oedometer_QS_MPMMIXED_1Phase_NormalStress_HighDampingFactor_3D",
+    // Saturated (two-phase) columns under gravity, undamped and damped.
+    "3065_Gravitation_DYN_MPMMIXED_2Phase_Gravity_Dynamic",
+    "3066_Gravitation_QS_MPMMIXED_2Phase_Gravity_Damping",
 ];
 
 fn benchmarks() -> Option<PathBuf> {
@@ -23,11 +27,12 @@ fn benchmarks() -> Option<PathBuf> {
     p.is_dir().then_some(p)
 }
 
-/// One reported material point: time, id, then X Y Z, Ux Uy Uz, σxx σyy σzz σxy σyz σzx.
+/// One reported material point: time, id, then X Y Z, Ux Uy Uz, σxx σyy σzz σxy σyz σzx and
+/// the pore pressure (WPressure).
 struct Row {
     time: f64,
     id: u32,
-    values: [f64; 12],
+    values: [f64; 13],
 }
 
 /// Reads the material-point table of a `.BMS` file.
@@ -50,8 +55,19 @@ fn read_bms(path: &Path) -> Vec<Row> {
             words[i].parse().unwrap()
         };
         let names = [
-            "X", "Y", "Z", "Ux", "Uy", "Uz", "SigmaXX", "SigmaYY", "SigmaZZ", "SigmaXY", "SigmaYZ",
+            "X",
+            "Y",
+            "Z",
+            "Ux",
+            "Uy",
+            "Uz",
+            "SigmaXX",
+            "SigmaYY",
+            "SigmaZZ",
+            "SigmaXY",
+            "SigmaYZ",
             "SigmaZX",
+            "WPressure",
         ];
         rows.push(Row {
             time: col("Time"),
@@ -76,7 +92,7 @@ fn find(dir: &Path, suffix: &str) -> PathBuf {
 }
 
 #[test]
-fn dry_3d_benchmarks_reproduce_the_expected_material_points() {
+fn benchmarks_reproduce_the_expected_material_points() {
     let Some(root) = benchmarks() else {
         eprintln!("ANURA3D_BENCHMARKS not set: skipped");
         return;
@@ -93,7 +109,7 @@ fn dry_3d_benchmarks_reproduce_the_expected_material_points() {
         let engine = mpm_solve::run::run::<f64>(&case, out.path(), false, false).unwrap();
         let p = &engine.particles;
         // Each column's scale: values far below it are round-off in Anura3D's report (1e-27).
-        let mut scale = [0.0f64; 12];
+        let mut scale = [0.0f64; 13];
         for r in &expected {
             for (s, v) in scale.iter_mut().zip(r.values) {
                 *s = s.max(v.abs());
@@ -104,6 +120,7 @@ fn dry_3d_benchmarks_reproduce_the_expected_material_points() {
             let rel_t = (engine.time - r.time).abs() / r.time;
             assert!(rel_t < 1e-3, "{name}: time {} vs {}", engine.time, r.time);
             let i = p.id.iter().position(|&id| id == r.id).unwrap();
+            let pore = p.liquid.as_ref().map_or(0.0, |l| l.p[i]);
             let ours = [
                 p.x[i][0],
                 p.x[i][1],
@@ -117,8 +134,9 @@ fn dry_3d_benchmarks_reproduce_the_expected_material_points() {
                 p.stress[i][3],
                 p.stress[i][4],
                 p.stress[i][5],
+                pore,
             ];
-            for c in 0..12 {
+            for c in 0..13 {
                 let want = r.values[c];
                 // 1% of the value, or of 1e-3 of the column's largest value for near-zeros;
                 // the report prints 4 significant digits (0.05% rounding).
