@@ -139,7 +139,7 @@ pub fn update_pore_pressure<R: Real>(
 }
 
 /// Adds Ω σ - σ Ω to `s` for the skew increment Ω with Ω_xy = `w[0]`, Ω_yz = `w[1]`, Ω_zx = `w[2]`
-/// (Ω_yx = -w[0] etc.): the Jaumann co-rotation of the stress over one step.
+/// (Ω_yx = `-w[0]` etc.): the Jaumann co-rotation of the stress over one step.
 #[inline]
 pub fn rotate<R: Real>(s: &mut [R; 6], w: &[R; 3]) {
     let [xx, yy, zz, xy, yz, zx] = *s;
