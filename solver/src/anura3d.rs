@@ -267,6 +267,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         materials,
         element_material,
         points_per_element,
+        first_point_id: None,
         fixed,
         liquid_fixed,
         traction,
@@ -296,6 +297,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         }),
         consolidation: None,
         probes: s.output_material_points.clone(),
+        engine: Default::default(),
     };
     Ok((case, s))
 }

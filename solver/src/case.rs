@@ -175,6 +175,9 @@ pub struct Case {
     pub element_material: Vec<u32>,
     /// Material points per element.
     pub points_per_element: Vec<u32>,
+    /// Points before each element in the input's element order, when the elements were
+    /// reordered (so point ids stay the input's); `None`: ids follow the element order.
+    pub first_point_id: Option<Vec<u32>>,
     /// Fixed velocity components per model node.
     pub fixed: Vec<[bool; 3]>,
     /// Fixed liquid velocity components per model node (impermeable faces); used only where a
@@ -218,6 +221,8 @@ pub struct Case {
     pub consolidation: Option<crate::consolidation::ConsolidationSpec>,
     /// Material-point ids written to `history.csv`.
     pub probes: Vec<u32>,
+    /// Threads, pinning and first touch of the run (not physics: results do not depend on it).
+    pub engine: crate::engine::Options,
 }
 
 /// Fixities of a laterally confined box (an oedometer): nodes on the x and z faces of the
@@ -247,7 +252,72 @@ pub fn confined_box(model: &Model) -> Vec<[bool; 3]> {
         .collect()
 }
 
+/// How the solver orders the mesh before computing (`--reorder`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reorder {
+    /// Keep the input's order (e.g. a mesh sfcb already ordered).
+    None,
+    /// Elements along the Morton curve of their centroids, nodes by first use.
+    Morton,
+    /// The same along the Hilbert curve.
+    Hilbert,
+}
+
 impl Case {
+    /// The case with its elements ordered along a space-filling curve and its nodes renumbered
+    /// by first use (sfcb's ordering), every per-element and per-node datum following, and the
+    /// material-point ids kept those of the input. `Reorder::None` returns it unchanged.
+    pub fn reordered(mut self, how: Reorder) -> Result<Case, String> {
+        let curve = match how {
+            Reorder::None => return Ok(self),
+            Reorder::Morton => sfcb::order::Curve::Morton,
+            Reorder::Hilbert => sfcb::order::Curve::Hilbert,
+        };
+        let o = sfcb::order::order(
+            &self.model,
+            sfcb::order::Options {
+                curve,
+                levels: 21,
+                cubic: true,
+            },
+        );
+        let model = self
+            .model
+            .reordered(&o.order, &o.node_new)
+            .map_err(|e| e.to_string())?;
+        let old_first: Vec<u32> = match &self.first_point_id {
+            Some(f) => f.clone(),
+            None => self
+                .points_per_element
+                .iter()
+                .scan(0u32, |acc, &n| {
+                    let first = *acc;
+                    *acc += n;
+                    Some(first)
+                })
+                .collect(),
+        };
+        let by_element = |v: &[u32]| o.order.iter().map(|&e| v[e as usize]).collect::<Vec<u32>>();
+        self.first_point_id = Some(by_element(&old_first));
+        self.element_material = by_element(&self.element_material);
+        self.points_per_element = by_element(&self.points_per_element);
+        fn by_node<T: Copy>(v: &[T], node_new: &[u32]) -> Vec<T> {
+            let mut out = v.to_vec();
+            for (old, &new) in node_new.iter().enumerate() {
+                out[new as usize] = v[old];
+            }
+            out
+        }
+        self.fixed = by_node(&self.fixed, &o.node_new);
+        self.liquid_fixed = by_node(&self.liquid_fixed, &o.node_new);
+        self.traction = by_node(&self.traction, &o.node_new);
+        for load in &mut self.point_loads {
+            load.corners = load.corners.map(|n| o.node_new[n] as usize);
+        }
+        self.model = model;
+        Ok(self)
+    }
+
     /// True when some material is saturated: the run then allocates and computes the liquid.
     pub fn has_liquid(&self) -> bool {
         self.materials.iter().flatten().any(|m| m.liquid.is_some())
@@ -271,6 +341,7 @@ impl Case {
             materials: vec![None, Some(material)],
             element_material: vec![1; n_el],
             points_per_element: vec![points; n_el],
+            first_point_id: None,
             liquid_fixed: fixed.clone(),
             fixed,
             traction: vec![[0.0; 3]; n],
@@ -291,6 +362,7 @@ impl Case {
             smooth_pressure: true,
             consolidation: None,
             probes: Vec::new(),
+            engine: Default::default(),
         }
     }
 }

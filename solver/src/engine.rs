@@ -3,6 +3,7 @@
 use std::time::Instant;
 
 use crate::case::{Case, Integration};
+use crate::gather::{element_starts, sort_by_element, Layout, Slots};
 use crate::grid::{Grid, LiquidNodes};
 use crate::linear_elastic::LinearElastic;
 use crate::liquid::Fluid;
@@ -10,6 +11,7 @@ use crate::locate::{walk, Found};
 use crate::mesh::TetMesh;
 use crate::particles::{self, Particles};
 use crate::real::{Real, V3};
+use crate::team::{Pin, Shared, Team};
 use crate::{grid_to_particle, grid_update, particle_to_grid, stress};
 
 /// Phases timed in `run.json`.
@@ -77,15 +79,51 @@ pub struct Engine<R: Real> {
     /// |free out-of-balance force| / |free external force| of the last step (0 when there
     /// is no external force).
     pub force_error: f64,
+    /// The thread team.
+    pub team: Team,
+    /// Per-thread ranges and the node-to-corner map of the parallel sums.
+    pub layout: Layout<R>,
+    /// Per-corner partial sums (scratch of the particle-to-grid passes).
+    pub slots: Slots<R>,
     /// Liquid constants per material index (`None` for dry materials; all `None` in a dry case).
     pub fluids: Vec<Option<Fluid<R>>>,
     /// Fixed liquid components per computational node.
     pub liquid_fixed: Vec<[bool; 3]>,
 }
 
+/// How the engine uses the machine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Options {
+    /// Worker threads (0: one per core available).
+    pub threads: usize,
+    /// Thread placement.
+    pub pin: Pin,
+    /// Let each thread initialise (first touch) the particle arrays of its range, so that their
+    /// pages are placed near it; off: the main thread's placement, for measurement.
+    pub first_touch: bool,
+}
+
+impl Default for Options {
+    /// One thread per core, placed by the OS, first touch on.
+    fn default() -> Self {
+        Options {
+            threads: 0,
+            pin: Pin::None,
+            first_touch: true,
+        }
+    }
+}
+
 impl<R: Real> Engine<R> {
-    /// Sets up the mesh, places the material points and computes the time step.
+    /// Sets up the mesh, places the material points and computes the time step, with the
+    /// case's engine options.
     pub fn new(case: &Case, drop_lost: bool) -> Result<Self, String> {
+        Self::with_options(case, drop_lost, case.engine)
+    }
+
+    /// [`Engine::new`] with the given thread options.
+    pub fn with_options(case: &Case, drop_lost: bool, options: Options) -> Result<Self, String> {
+        let team = Team::new(options.threads, options.pin)?;
         let mesh = TetMesh::<R>::new(&case.model).map_err(|e| e.to_string())?;
         let density = |m: u32| {
             case.materials[m as usize]
@@ -96,6 +134,7 @@ impl<R: Real> Engine<R> {
             &mesh,
             &case.points_per_element,
             &case.element_material,
+            case.first_point_id.as_deref(),
             density,
         )?;
         if particles.is_empty() {
@@ -160,6 +199,11 @@ impl<R: Real> Engine<R> {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
         }
         let point_loads = resolve_point_loads(&mesh, &particles, case)?;
+        let layout = Layout::new(&mesh, &particles, team.threads);
+        if options.first_touch {
+            particles = first_touch(&team, &layout, particles);
+        }
+        let slots = layout.new_slots();
         let mixed = match case.integration {
             Integration::MaterialPoints => None,
             Integration::Mixed { filling } => {
@@ -185,6 +229,9 @@ impl<R: Real> Engine<R> {
             force_error: 0.0,
             fluids,
             liquid_fixed,
+            team,
+            layout,
+            slots,
         })
     }
 
@@ -195,17 +242,20 @@ impl<R: Real> Engine<R> {
         let gm = case.gravity_curve.at(self.time + dt);
         let gravity = case.gravity.map(|g| R::of(g * gm));
         let tm = R::of(case.traction_curve.at(self.time + dt));
-        if let Some(m) = &mut self.mixed {
-            m.gather(&self.mesh, &self.particles);
-        }
         particle_to_grid::particle_to_grid(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
             &self.mesh,
             &self.particles,
             gravity,
-            self.mixed.as_ref(),
+            self.mixed.as_mut(),
             &mut self.grid,
         );
         particle_to_grid::liquid_to_grid(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
             &self.mesh,
             &self.particles,
             &self.fluids,
@@ -242,6 +292,9 @@ impl<R: Real> Engine<R> {
         };
         let t2 = Instant::now();
         grid_to_particle::grid_to_particle(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
             &self.mesh,
             &mut self.particles,
             &mut self.grid,
@@ -249,6 +302,9 @@ impl<R: Real> Engine<R> {
             R::of(dt),
         );
         grid_to_particle::liquid_to_particles(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
             &self.mesh,
             &mut self.particles,
             &mut self.grid,
@@ -258,6 +314,9 @@ impl<R: Real> Engine<R> {
         );
         let t3 = Instant::now();
         stress::update_pore_pressure(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
             &self.mesh,
             &mut self.particles,
             &mut self.grid,
@@ -266,6 +325,8 @@ impl<R: Real> Engine<R> {
             R::of(dt),
         );
         stress::update_stress_and_move(
+            &self.team,
+            &self.layout,
             &self.mesh,
             &mut self.particles,
             &self.grid,
@@ -273,8 +334,8 @@ impl<R: Real> Engine<R> {
             case.objective_stress,
             R::of(dt),
         );
-        if let Some(m) = &mut self.mixed {
-            m.smooth_stresses(&mut self.particles);
+        if let Some(m) = &self.mixed {
+            m.smooth_stresses(&self.team, &self.layout, &mut self.particles);
         }
         // External work of gravity and face loads over the step, with the new nodal velocities.
         let mut w = 0.0;
@@ -313,42 +374,92 @@ impl<R: Real> Engine<R> {
         self.force_error <= force_tolerance && kinetic <= energy_tolerance
     }
 
+    /// Finds every point's element (each thread walks its own points), stops at the first
+    /// point (by index) that left the mesh unless such points are dropped, and keeps the points
+    /// sorted by element.
     fn locate(&mut self) -> Result<(), Lost> {
+        let mesh = &self.mesh;
+        let layout = &self.layout;
         let p = &mut self.particles;
-        for i in 0..p.len() {
-            if !p.active[i] {
-                continue;
-            }
-            match walk(&self.mesh, p.element[i], &p.x[i]) {
-                Found::In(e) => p.element[i] = e,
-                Found::Outside(e) => {
-                    if self.drop_lost {
-                        p.active[i] = false;
-                        self.lost += 1;
-                    } else {
-                        return Err(Lost {
-                            id: p.id[i],
-                            step: self.steps,
-                            time: self.time,
-                            x: p.x[i][0].f64(),
-                            y: p.x[i][1].f64(),
-                            z: p.x[i][2].f64(),
-                            element: e + 1,
-                        });
+        let elements = Shared::new(&mut p.element);
+        let x = &p.x;
+        let active = &p.active;
+        let mut first_lost = vec![(usize::MAX, 0u32); self.team.threads];
+        let lost_out = Shared::new(&mut first_lost);
+        let mut outside = vec![0u64; self.team.threads];
+        let outside_out = Shared::new(&mut outside);
+        let drop_lost = self.drop_lost;
+        let dropped: Vec<std::sync::Mutex<Vec<usize>>> = (0..self.team.threads)
+            .map(|_| std::sync::Mutex::new(Vec::new()))
+            .collect();
+        self.team.run(|t| {
+            let r = layout.particle_range(t);
+            // SAFETY: the particle ranges of the threads are disjoint.
+            let el = unsafe { elements.range(r.clone()) };
+            let mut mine = Vec::new();
+            for (j, i) in r.enumerate() {
+                if !active[i] {
+                    continue;
+                }
+                match walk(mesh, el[j], &x[i]) {
+                    Found::In(e) => el[j] = e,
+                    Found::Outside(e) => {
+                        el[j] = e;
+                        mine.push(i);
+                        if !drop_lost {
+                            // SAFETY: slot t is this thread's only.
+                            unsafe { lost_out.write(t, (i, e)) };
+                            break;
+                        }
                     }
                 }
+            }
+            // SAFETY: slot t is this thread's only.
+            unsafe { outside_out.write(t, mine.len() as u64) };
+            *dropped[t].lock().expect("not poisoned") = mine;
+        });
+        if !drop_lost {
+            if let Some(&(i, e)) = first_lost.iter().filter(|x| x.0 != usize::MAX).min() {
+                return Err(Lost {
+                    id: p.id[i],
+                    step: self.steps,
+                    time: self.time,
+                    x: p.x[i][0].f64(),
+                    y: p.x[i][1].f64(),
+                    z: p.x[i][2].f64(),
+                    element: e + 1,
+                });
+            }
+        }
+        for list in dropped {
+            for i in list.into_inner().expect("not poisoned") {
+                p.active[i] = false;
+            }
+        }
+        self.lost += outside.iter().sum::<u64>();
+        if let Some(order) = sort_by_element(p, mesh.elements()) {
+            self.layout.elem_start = element_starts(&p.element, mesh.elements());
+            let mut new_index = vec![0u32; order.len()];
+            for (new, &old) in order.iter().enumerate() {
+                new_index[old as usize] = new as u32;
+            }
+            for load in &mut self.point_loads {
+                load.0 = new_index[load.0 as usize];
             }
         }
         Ok(())
     }
 
-    /// Kinetic energy of the active points (kJ), summed in point order.
+    /// Kinetic energy of the active points (kJ), summed in fixed blocks of points.
     pub fn kinetic_energy(&self) -> f64 {
         let p = &self.particles;
-        (0..p.len())
-            .filter(|&i| p.active[i])
-            .map(|i| 0.5 * p.mass[i].f64() * p.v[i].iter().map(|v| v.f64() * v.f64()).sum::<f64>())
-            .sum()
+        self.team.sum_blocks(p.len(), |r| {
+            r.filter(|&i| p.active[i])
+                .map(|i| {
+                    0.5 * p.mass[i].f64() * p.v[i].iter().map(|v| v.f64() * v.f64()).sum::<f64>()
+                })
+                .sum()
+        })
     }
 }
 
@@ -403,4 +514,46 @@ fn resolve_point_loads<R: Real>(
         out.extend(carriers.into_iter().map(|i| (i as u32, share)));
     }
     Ok(out)
+}
+
+/// The particle arrays copied range by range on the threads that own the ranges, so that each
+/// range's pages are first touched (and placed) by its thread.
+fn first_touch<R: Real>(team: &Team, layout: &Layout<R>, p: Particles<R>) -> Particles<R> {
+    fn copy<T: Copy + Default + Send + Sync, R: Real>(
+        team: &Team,
+        layout: &Layout<R>,
+        v: &[T],
+    ) -> Vec<T> {
+        let mut out: Vec<T> = Vec::with_capacity(v.len());
+        let spare = out.spare_capacity_mut();
+        let dst = Shared::new(spare);
+        team.run(|t| {
+            let r = layout.particle_range(t);
+            // SAFETY: the particle ranges are disjoint and cover 0..len.
+            let d = unsafe { dst.range(r.clone()) };
+            for (slot, &x) in d.iter_mut().zip(&v[r]) {
+                slot.write(x);
+            }
+        });
+        // SAFETY: every element was written above (the ranges cover all particles).
+        unsafe { out.set_len(v.len()) };
+        out
+    }
+    let liquid = p.liquid.as_ref().map(|l| crate::particles::LiquidPoints {
+        w: copy(team, layout, &l.w),
+        p: copy(team, layout, &l.p),
+    });
+    Particles {
+        x: copy(team, layout, &p.x),
+        u: copy(team, layout, &p.u),
+        v: copy(team, layout, &p.v),
+        mass: copy(team, layout, &p.mass),
+        volume: copy(team, layout, &p.volume),
+        stress: copy(team, layout, &p.stress),
+        element: copy(team, layout, &p.element),
+        material: copy(team, layout, &p.material),
+        id: copy(team, layout, &p.id),
+        active: copy(team, layout, &p.active),
+        liquid,
+    }
 }

@@ -40,10 +40,8 @@ pub struct LiquidNodes<R: Real> {
     pub acc: Vec<V3<R>>,
     /// Liquid velocity after the re-mapping.
     pub vel: Vec<V3<R>>,
-    /// Volume-weighted sums of the points' pore-pressure rates (for the nodal smoothing).
+    /// Smoothed pore-pressure rate per node.
     pub rate: Vec<R>,
-    /// Sums of the points' volumes times N (the weights of `rate`).
-    pub weight: Vec<R>,
 }
 
 impl<R: Real> LiquidNodes<R> {
@@ -59,7 +57,6 @@ impl<R: Real> LiquidNodes<R> {
             acc: vec![z; n],
             vel: vec![z; n],
             rate: vec![R::ZERO; n],
-            weight: vec![R::ZERO; n],
         }
     }
 }
@@ -82,7 +79,7 @@ impl<R: Real> Grid<R> {
 
     /// Bytes held.
     pub fn bytes(&self) -> usize {
-        let per_node = if self.liquid.is_some() { 16 + 17 } else { 16 };
+        let per_node = if self.liquid.is_some() { 16 + 16 } else { 16 };
         self.mass.len() * std::mem::size_of::<R>() * per_node
     }
 }

@@ -1,64 +1,102 @@
-//! Grid to particle, MUSL: FLIP velocity update, momentum re-mapping, strain and stress update,
-//! volume and position update (DESIGN §4, step 3).
+//! Grid to particle, MUSL: FLIP velocity update, then momentum re-mapped to the nodes for the
+//! velocities that drive strain, stress, volume and position (DESIGN §4, step 3), on the team.
 
+use crate::gather::{Layout, Slots};
 use crate::grid::Grid;
 use crate::liquid::Fluid;
 use crate::mesh::TetMesh;
 use crate::particles::Particles;
-use crate::real::Real;
+use crate::real::{Real, V3};
+use crate::team::{Shared, Team};
 
 /// Updates particle velocities from nodal accelerations (FLIP), then re-maps momentum to get
-/// the nodal velocities (fixed components zero) that drive strain, stress, volume and position
-/// (see [`crate::stress`]).
+/// the nodal velocities (fixed components and empty nodes zero) that drive strain, stress,
+/// volume and position (see [`crate::stress`]).
+#[allow(clippy::too_many_arguments)]
 pub fn grid_to_particle<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
     mesh: &TetMesh<R>,
     p: &mut Particles<R>,
     g: &mut Grid<R>,
     fixed: &[[bool; 3]],
     dt: R,
 ) {
-    // FLIP velocity update, and the momentum of the new velocities.
-    g.momentum.fill([R::ZERO; 3]);
-    for i in 0..p.len() {
-        if !p.active[i] {
-            continue;
-        }
-        let e = p.element[i] as usize;
-        let n = mesh.shape(e, &p.x[i]);
-        let mut dv = [R::ZERO; 3];
-        for k in 0..4 {
-            let a = g.acc[mesh.corners[e][k] as usize];
+    let vel = Shared::new(&mut p.v);
+    let (x, mass, active) = (&p.x, &p.mass, &p.active);
+    let acc = &g.acc;
+    layout.scatter::<3, _>(team, slots, |e, four| {
+        for i in layout.particles_of(e) {
+            if !active[i] {
+                continue;
+            }
+            let n = mesh.shape(e, &x[i]);
+            let mut dv = [R::ZERO; 3];
+            for k in 0..4 {
+                let a = acc[mesh.corners[e][k] as usize];
+                for c in 0..3 {
+                    dv[c] += n[k] * a[c];
+                }
+            }
+            // SAFETY: particle i (of element e) belongs to this thread only.
+            let v = unsafe { &mut vel.range(i..i + 1)[0] };
             for c in 0..3 {
-                dv[c] += n[k] * a[c];
+                v[c] += dt * dv[c];
+            }
+            for (k, slot) in four.iter_mut().enumerate() {
+                let w = mass[i] * n[k];
+                for c in 0..3 {
+                    slot[c] += w * v[c];
+                }
             }
         }
-        for c in 0..3 {
-            p.v[i][c] += dt * dv[c];
-        }
-        for k in 0..4 {
-            let node = mesh.corners[e][k] as usize;
-            let w = p.mass[i] * n[k];
+    });
+    nodal_velocity(
+        team,
+        layout,
+        slots,
+        &g.mass,
+        g.empty_below,
+        fixed,
+        &mut g.vel,
+    );
+}
+
+/// Nodal velocities from the re-mapped momentum in `slots`: zero at empty nodes and in fixed
+/// components.
+fn nodal_velocity<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &Slots<R>,
+    mass: &[R],
+    empty_below: R,
+    fixed: &[[bool; 3]],
+    vel: &mut [V3<R>],
+) {
+    let out = Shared::new(vel);
+    layout.gather::<3, _>(team, slots, |n, momentum| {
+        let mut v = [R::ZERO; 3];
+        if mass[n] > empty_below {
             for c in 0..3 {
-                g.momentum[node][c] += w * p.v[i][c];
+                if !fixed[n][c] {
+                    v[c] = momentum[c] / mass[n];
+                }
             }
         }
-    }
-    let eps = g.empty_below;
-    for n in 0..g.mass.len() {
-        for c in 0..3 {
-            g.vel[n][c] = if g.mass[n] <= eps || fixed[n][c] {
-                R::ZERO
-            } else {
-                g.momentum[n][c] / g.mass[n]
-            };
-        }
-    }
+        // SAFETY: node n is this thread's only.
+        unsafe { out.write(n, v) };
+    });
 }
 
 /// The liquid's share of grid to particle: liquid velocities of the points updated from the
 /// nodal liquid accelerations (FLIP), then the liquid momentum re-mapped to nodal liquid
 /// velocities (zero in fixed components and at nodes without liquid).
+#[allow(clippy::too_many_arguments)]
 pub fn liquid_to_particles<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
     mesh: &TetMesh<R>,
     p: &mut Particles<R>,
     g: &mut Grid<R>,
@@ -69,42 +107,45 @@ pub fn liquid_to_particles<R: Real>(
     let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
         return;
     };
-    gl.momentum.fill([R::ZERO; 3]);
-    for i in 0..p.x.len() {
-        let Some(f) = fluids[p.material[i] as usize] else {
-            continue;
-        };
-        if !p.active[i] {
-            continue;
-        }
-        let e = p.element[i] as usize;
-        let n = mesh.shape(e, &p.x[i]);
-        let mut dw = [R::ZERO; 3];
-        for k in 0..4 {
-            let a = gl.acc[mesh.corners[e][k] as usize];
-            for c in 0..3 {
-                dw[c] += n[k] * a[c];
-            }
-        }
-        for c in 0..3 {
-            lp.w[i][c] += dt * dw[c];
-        }
-        let mw = f.rho_w * p.volume[i];
-        for k in 0..4 {
-            let node = mesh.corners[e][k] as usize;
-            for c in 0..3 {
-                gl.momentum[node][c] += mw * n[k] * lp.w[i][c];
-            }
-        }
-    }
-    let eps = g.empty_below;
-    for n in 0..gl.mass.len() {
-        for c in 0..3 {
-            gl.vel[n][c] = if gl.mass[n] <= eps || liquid_fixed[n][c] {
-                R::ZERO
-            } else {
-                gl.momentum[n][c] / gl.mass[n]
+    let w_out = Shared::new(&mut lp.w);
+    let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
+    let acc = &gl.acc;
+    layout.scatter::<3, _>(team, slots, |e, four| {
+        for i in layout.particles_of(e) {
+            let Some(f) = fluids[material[i] as usize] else {
+                continue;
             };
+            if !active[i] {
+                continue;
+            }
+            let n = mesh.shape(e, &x[i]);
+            let mut dw = [R::ZERO; 3];
+            for k in 0..4 {
+                let a = acc[mesh.corners[e][k] as usize];
+                for c in 0..3 {
+                    dw[c] += n[k] * a[c];
+                }
+            }
+            // SAFETY: particle i (of element e) belongs to this thread only.
+            let w = unsafe { &mut w_out.range(i..i + 1)[0] };
+            for c in 0..3 {
+                w[c] += dt * dw[c];
+            }
+            let mw = f.rho_w * volume[i];
+            for (k, slot) in four.iter_mut().enumerate() {
+                for c in 0..3 {
+                    slot[c] += mw * n[k] * w[c];
+                }
+            }
         }
-    }
+    });
+    nodal_velocity(
+        team,
+        layout,
+        slots,
+        &gl.mass,
+        g.empty_below,
+        liquid_fixed,
+        &mut gl.vel,
+    );
 }

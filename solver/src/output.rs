@@ -19,7 +19,7 @@ pub struct Output {
     pvd: Vec<(f64, String)>,
     history: String,
     energy: String,
-    probes: Vec<usize>,
+    probes: Vec<u32>,
 }
 
 fn csv_real(s: &mut String, v: f64) {
@@ -31,15 +31,16 @@ impl Output {
     /// Prepares `dir` (created if missing) and writes `mesh.vtu`.
     pub fn new<R: Real>(dir: &Path, case: &Case, engine: &Engine<R>) -> mpm_shared::Result<Self> {
         std::fs::create_dir_all(dir).map_err(|e| mpm_shared::Error::io(dir, e))?;
-        let partition = vec![0i32; case.model.element_count()];
         write_output_with(&dir.join("mesh.vtu"), |w| {
-            vtu::write_model(w, &case.model, Some(&partition), Encoding::Appended)
+            vtu::write_model(w, &case.model, None, Encoding::Appended)
         })?;
         let p = &engine.particles;
+        // Points are re-sorted as they move: probes are kept by id and found at each output.
         let probes = case
             .probes
             .iter()
-            .filter_map(|&id| p.id.iter().position(|&x| x == id))
+            .copied()
+            .filter(|id| p.id.contains(id))
             .collect();
         Ok(Output {
             dir: dir.to_path_buf(),
@@ -128,7 +129,10 @@ impl Output {
         })?;
         self.pvd.push((engine.time, name));
         write_output_with(&self.dir.join("run.pvd"), |w| vtu::write_pvd(w, &self.pvd))?;
-        for &i in &self.probes {
+        for &id in &self.probes {
+            let Some(i) = p.id.iter().position(|&x| x == id) else {
+                continue;
+            };
             self.history.push_str(&real_to_string(engine.time));
             let _ = write!(self.history, ",{}", p.id[i]);
             for v in p.x[i].iter().chain(&p.u[i]).chain(&p.stress[i]) {
@@ -184,8 +188,13 @@ pub fn write_summary<R: Real>(
     let json = serde_json::json!({
         "case": case.name,
         "inputs": case.inputs,
-        "threads": 1,
-        "pinning": "none",
+        "threads": engine.team.threads,
+        "pinning": match case.engine.pin {
+            crate::team::Pin::None => "none",
+            crate::team::Pin::Cores => "cores",
+        },
+        "pinned_cores": engine.team.pinned,
+        "first_touch": case.engine.first_touch,
         "precision": R::NAME,
         "particles": n,
         "elements": engine.mesh.elements(),

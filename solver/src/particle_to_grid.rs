@@ -1,72 +1,127 @@
-//! Particle to grid: lumped masses, momentum, internal and gravity forces (DESIGN §4, step 1).
+//! Particle to grid: lumped masses, momentum, internal and gravity forces (DESIGN §4, step 1),
+//! summed element by element and then node by node on the team (see [`crate::gather`]).
 
+use crate::gather::{Layout, Slots};
 use crate::grid::Grid;
 use crate::liquid::Fluid;
 use crate::mesh::TetMesh;
 use crate::mixed::Mixed;
 use crate::particles::Particles;
 use crate::real::{Real, V3};
+use crate::team::{Shared, Team};
 
-/// Maps every active particle to the nodes of its element. `gravity` is the acceleration vector
-/// with the current load multiplier applied. Under mixed integration the internal force of full
-/// elements comes from their Gauss point instead of their points.
+/// f = σ ∇N for symmetric σ (xx yy zz xy yz zx).
+#[inline]
+fn traction<R: Real>(s: &[R; 6], dn: &V3<R>) -> V3<R> {
+    [
+        s[0] * dn[0] + s[3] * dn[1] + s[5] * dn[2],
+        s[3] * dn[0] + s[1] * dn[1] + s[4] * dn[2],
+        s[5] * dn[0] + s[4] * dn[1] + s[2] * dn[2],
+    ]
+}
+
+/// Maps every active particle to the nodes of its element: mass, momentum, internal force
+/// -Σ V (σ' + p I) ∇N and gravity. `gravity` is the acceleration with its multiplier applied.
+/// Under mixed integration the effective-stress force of full elements comes from their Gauss
+/// point instead of their points (the element sums are formed here too).
+#[allow(clippy::too_many_arguments)]
 pub fn particle_to_grid<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
     mesh: &TetMesh<R>,
     p: &Particles<R>,
     gravity: V3<R>,
-    mixed: Option<&Mixed<R>>,
+    mixed: Option<&mut Mixed<R>>,
     g: &mut Grid<R>,
 ) {
-    let z = [R::ZERO; 3];
-    g.mass.fill(R::ZERO);
-    g.momentum.fill(z);
-    g.f_int.fill(z);
-    g.f_ext.fill(z);
-    for i in 0..p.len() {
-        if !p.active[i] {
-            continue;
-        }
-        let e = p.element[i] as usize;
-        let n = mesh.shape(e, &p.x[i]);
+    let mixed_sums = mixed.map(|m| {
+        let filling = R::of(m.filling);
+        (
+            Shared::new(&mut m.stress),
+            Shared::new(&mut m.full),
+            filling,
+        )
+    });
+    layout.scatter::<10, _>(team, slots, |e, four| {
         let grad = &mesh.grad[e];
-        let (m, v) = (p.mass[i], p.v[i]);
-        // A full element's points carry no effective-stress force of their own (see below).
-        let vol = match mixed {
-            Some(mx) if mx.full[e] => R::ZERO,
-            _ => p.volume[i],
-        };
-        // Total stress V σ' + V p I (pore pressure p only where the liquid is modelled).
-        let mut s = p.stress[i].map(|c| vol * c);
-        if let Some(l) = &p.liquid {
-            let vp = p.volume[i] * l.p[i];
-            s[0] += vp;
-            s[1] += vp;
-            s[2] += vp;
-        }
-        for k in 0..4 {
-            let node = mesh.corners[e][k] as usize;
-            let w = m * n[k];
-            g.mass[node] += w;
-            let dn = grad[k];
-            // f_int = -V σ ∇N (σ symmetric: xx yy zz xy yz zx).
-            let f = [
-                s[0] * dn[0] + s[3] * dn[1] + s[5] * dn[2],
-                s[3] * dn[0] + s[1] * dn[1] + s[4] * dn[2],
-                s[5] * dn[0] + s[4] * dn[1] + s[2] * dn[2],
-            ];
-            for a in 0..3 {
-                g.momentum[node][a] += w * v[a];
-                g.f_int[node][a] -= f[a];
-                g.f_ext[node][a] += w * gravity[a];
+        let range = layout.particles_of(e);
+        // Mixed integration: is the element full, and its mean stress.
+        let mut full = false;
+        if let Some((stress, flags, filling)) = &mixed_sums {
+            let (mut v, mut s) = (R::ZERO, [R::ZERO; 6]);
+            for i in range.clone() {
+                if p.active[i] {
+                    v += p.volume[i];
+                    for c in 0..6 {
+                        s[c] += p.volume[i] * p.stress[i][c];
+                    }
+                }
+            }
+            full = v > R::ZERO && v >= *filling * mesh.volume[e];
+            if full {
+                for c in s.iter_mut() {
+                    *c /= v;
+                }
+            }
+            // SAFETY: element e is this thread's only.
+            unsafe {
+                stress.write(e, s);
+                flags.write(e, full);
+            }
+            if full {
+                let ve = mesh.volume[e];
+                for (k, slot) in four.iter_mut().enumerate() {
+                    let f = traction(&s, &grad[k]);
+                    for a in 0..3 {
+                        slot[4 + a] -= ve * f[a];
+                    }
+                }
             }
         }
-    }
-    if let Some(mx) = mixed {
-        mx.internal_forces(mesh, g);
-    }
+        for i in range {
+            if !p.active[i] {
+                continue;
+            }
+            let n = mesh.shape(e, &p.x[i]);
+            let (m, v) = (p.mass[i], p.v[i]);
+            let vol = if full { R::ZERO } else { p.volume[i] };
+            let mut s = p.stress[i].map(|c| vol * c);
+            if let Some(l) = &p.liquid {
+                let vp = p.volume[i] * l.p[i];
+                s[0] += vp;
+                s[1] += vp;
+                s[2] += vp;
+            }
+            for (k, slot) in four.iter_mut().enumerate() {
+                let w = m * n[k];
+                let f = traction(&s, &grad[k]);
+                slot[0] += w;
+                for a in 0..3 {
+                    slot[1 + a] += w * v[a];
+                    slot[4 + a] -= f[a];
+                    slot[7 + a] += w * gravity[a];
+                }
+            }
+        }
+    });
+    let mass = Shared::new(&mut g.mass);
+    let momentum = Shared::new(&mut g.momentum);
+    let f_int = Shared::new(&mut g.f_int);
+    let f_ext = Shared::new(&mut g.f_ext);
+    layout.gather::<10, _>(team, slots, |n, s| {
+        // SAFETY: node n is this thread's only.
+        unsafe {
+            mass.write(n, s[0]);
+            momentum.write(n, [s[1], s[2], s[3]]);
+            f_int.write(n, [s[4], s[5], s[6]]);
+            f_ext.write(n, [s[7], s[8], s[9]]);
+        }
+    });
 }
 
-/// Adds the face loads carried by points, `scale` times their force, at the points' positions.
+/// Adds the face loads carried by points, `scale` times their force, at the points' positions
+/// (a short list, in its fixed order).
 pub fn add_point_loads<R: Real>(
     mesh: &TetMesh<R>,
     p: &Particles<R>,
@@ -93,7 +148,11 @@ pub fn add_point_loads<R: Real>(
 /// The liquid's share of particle to grid (two-phase, DESIGN §4): liquid masses M_w and M̄_w,
 /// drag Q, liquid momentum, the liquid force -Σ V p ∇N + M_w g, and the liquid's weight added to
 /// the mixture's external force. Points of dry materials (`fluids[m]` is `None`) add nothing.
+#[allow(clippy::too_many_arguments)]
 pub fn liquid_to_grid<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
     mesh: &TetMesh<R>,
     p: &Particles<R>,
     fluids: &[Option<Fluid<R>>],
@@ -103,36 +162,51 @@ pub fn liquid_to_grid<R: Real>(
     let (Some(lp), Some(gl)) = (&p.liquid, &mut g.liquid) else {
         return;
     };
-    let z = [R::ZERO; 3];
-    gl.mass.fill(R::ZERO);
-    gl.mass_n.fill(R::ZERO);
-    gl.drag.fill(R::ZERO);
-    gl.momentum.fill(z);
-    gl.force.fill(z);
-    for i in 0..p.len() {
-        let Some(f) = fluids[p.material[i] as usize] else {
-            continue;
-        };
-        if !p.active[i] {
-            continue;
-        }
-        let e = p.element[i] as usize;
-        let n = mesh.shape(e, &p.x[i]);
+    layout.scatter::<12, _>(team, slots, |e, four| {
         let grad = &mesh.grad[e];
-        let vol = p.volume[i];
-        let mw = f.rho_w * vol;
-        let (pw, w) = (lp.p[i] * vol, lp.w[i]);
-        for k in 0..4 {
-            let node = mesh.corners[e][k] as usize;
-            let nk = n[k];
-            gl.mass[node] += mw * nk;
-            gl.mass_n[node] += f.n * mw * nk;
-            gl.drag[node] += f.drag * vol * nk;
-            for a in 0..3 {
-                gl.momentum[node][a] += mw * nk * w[a];
-                gl.force[node][a] += mw * nk * gravity[a] - pw * grad[k][a];
-                g.f_ext[node][a] += f.n * mw * nk * gravity[a];
+        for i in layout.particles_of(e) {
+            let Some(f) = fluids[p.material[i] as usize] else {
+                continue;
+            };
+            if !p.active[i] {
+                continue;
+            }
+            let n = mesh.shape(e, &p.x[i]);
+            let vol = p.volume[i];
+            let mw = f.rho_w * vol;
+            let (pw, w) = (lp.p[i] * vol, lp.w[i]);
+            for (k, slot) in four.iter_mut().enumerate() {
+                let nk = n[k];
+                slot[0] += mw * nk;
+                slot[1] += f.n * mw * nk;
+                slot[2] += f.drag * vol * nk;
+                for a in 0..3 {
+                    slot[3 + a] += mw * nk * w[a];
+                    slot[6 + a] += mw * nk * gravity[a] - pw * grad[k][a];
+                    slot[9 + a] += f.n * mw * nk * gravity[a];
+                }
             }
         }
-    }
+    });
+    let mass = Shared::new(&mut gl.mass);
+    let mass_n = Shared::new(&mut gl.mass_n);
+    let drag = Shared::new(&mut gl.drag);
+    let momentum = Shared::new(&mut gl.momentum);
+    let force = Shared::new(&mut gl.force);
+    let f_ext = Shared::new(&mut g.f_ext);
+    layout.gather::<12, _>(team, slots, |n, s| {
+        // SAFETY: node n is this thread's only; f_ext[n] was written by this thread's range in
+        // the solid pass (same node ranges).
+        unsafe {
+            mass.write(n, s[0]);
+            mass_n.write(n, s[1]);
+            drag.write(n, s[2]);
+            momentum.write(n, [s[3], s[4], s[5]]);
+            force.write(n, [s[6], s[7], s[8]]);
+            let fe = &mut f_ext.range(n..n + 1)[0];
+            for a in 0..3 {
+                fe[a] += s[9 + a];
+            }
+        }
+    });
 }

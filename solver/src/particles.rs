@@ -90,15 +90,22 @@ pub fn tet_points(n: u32) -> Option<Vec<[f64; 4]>> {
 /// Places `points[e]` material points in every element `e` of material `material[e]` (0 = empty),
 /// each with an equal share of the element's volume and mass `density[material] · V / n`.
 /// Ids follow element order, `points[e]` per element, as Anura3D numbers them.
+///
+/// `first_id[e]`, when given, is the number of points before element e in the input's element
+/// order (the solver may have reordered the elements): ids then stay those of the input.
 pub fn place<R: Real>(
     mesh: &TetMesh<R>,
     points: &[u32],
     material: &[u32],
+    first_id: Option<&[u32]>,
     density: impl Fn(u32) -> f64,
 ) -> Result<Particles<R>, String> {
     let mut p = Particles::default();
     let mut id = 0u32;
     for e in 0..mesh.elements() {
+        if let Some(f) = first_id {
+            id = f[e];
+        }
         let n = points[e];
         let Some(local) = tet_points(n) else {
             return Err(format!(

@@ -499,6 +499,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         materials,
         element_material,
         points_per_element,
+        first_point_id: None,
         fixed,
         liquid_fixed,
         traction,
@@ -519,6 +520,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         smooth_pressure: true,
         consolidation,
         probes: scene.probes.clone(),
+        engine: Default::default(),
     })
 }
 

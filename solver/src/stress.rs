@@ -1,16 +1,22 @@
 //! Strain increments from nodal velocities, the constitutive update, and the volume and position
 //! update of every particle.
 
+use crate::gather::{Layout, Slots};
 use crate::grid::Grid;
 use crate::linear_elastic::LinearElastic;
 use crate::liquid::Fluid;
 use crate::mesh::TetMesh;
 use crate::particles::Particles;
 use crate::real::Real;
+use crate::team::{Shared, Team};
 
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus the Jaumann rotation Δω σ - σ Δω with
-/// Δω = skew(L) Δt when `objective`); V *= 1 + tr Δε; x += Δt Σ N_n v_n.
+/// Δω = skew(L) Δt when `objective`); V *= 1 + tr Δε; x += Δt Σ N_n v_n. Each thread updates
+/// the particles of its elements.
+#[allow(clippy::too_many_arguments)]
 pub fn update_stress_and_move<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
     mesh: &TetMesh<R>,
     p: &mut Particles<R>,
     g: &Grid<R>,
@@ -19,47 +25,64 @@ pub fn update_stress_and_move<R: Real>(
     dt: R,
 ) {
     let half = R::of(0.5);
-    for i in 0..p.len() {
-        if !p.active[i] {
-            continue;
-        }
-        let e = p.element[i] as usize;
-        let n = mesh.shape(e, &p.x[i]);
-        let grad = &mesh.grad[e];
-        let mut l = [[R::ZERO; 3]; 3]; // velocity gradient L[a][b] = ∂v_a/∂x_b
-        let mut dx = [R::ZERO; 3];
-        for k in 0..4 {
-            let v = g.vel[mesh.corners[e][k] as usize];
-            for a in 0..3 {
-                dx[a] += n[k] * v[a];
-                for b in 0..3 {
-                    l[a][b] += v[a] * grad[k][b];
+    let xs = Shared::new(&mut p.x);
+    let us = Shared::new(&mut p.u);
+    let stresses = Shared::new(&mut p.stress);
+    let volumes = Shared::new(&mut p.volume);
+    let (active, element, material) = (&p.active, &p.element, &p.material);
+    team.run(|t| {
+        let r = layout.particle_range(t);
+        // SAFETY: the particle ranges of the threads are disjoint.
+        let (x, u, stress, volume) = unsafe {
+            (
+                xs.range(r.clone()),
+                us.range(r.clone()),
+                stresses.range(r.clone()),
+                volumes.range(r.clone()),
+            )
+        };
+        for (j, i) in r.enumerate() {
+            if !active[i] {
+                continue;
+            }
+            let e = element[i] as usize;
+            let n = mesh.shape(e, &x[j]);
+            let grad = &mesh.grad[e];
+            let mut l = [[R::ZERO; 3]; 3]; // velocity gradient L[a][b] = ∂v_a/∂x_b
+            let mut dx = [R::ZERO; 3];
+            for k in 0..4 {
+                let v = g.vel[mesh.corners[e][k] as usize];
+                for a in 0..3 {
+                    dx[a] += n[k] * v[a];
+                    for b in 0..3 {
+                        l[a][b] += v[a] * grad[k][b];
+                    }
                 }
             }
-        }
-        let de = [
-            l[0][0] * dt,
-            l[1][1] * dt,
-            l[2][2] * dt,
-            half * (l[0][1] + l[1][0]) * dt,
-            half * (l[1][2] + l[2][1]) * dt,
-            half * (l[2][0] + l[0][2]) * dt,
-        ];
-        if objective {
-            let w = [
-                half * (l[0][1] - l[1][0]) * dt, // ω_xy
-                half * (l[1][2] - l[2][1]) * dt, // ω_yz
-                half * (l[2][0] - l[0][2]) * dt, // ω_zx
+            let de = [
+                l[0][0] * dt,
+                l[1][1] * dt,
+                l[2][2] * dt,
+                half * (l[0][1] + l[1][0]) * dt,
+                half * (l[1][2] + l[2][1]) * dt,
+                half * (l[2][0] + l[0][2]) * dt,
             ];
-            rotate(&mut p.stress[i], &w);
+            if objective {
+                let w = [
+                    half * (l[0][1] - l[1][0]) * dt, // ω_xy
+                    half * (l[1][2] - l[2][1]) * dt, // ω_yz
+                    half * (l[2][0] - l[0][2]) * dt, // ω_zx
+                ];
+                rotate(&mut stress[j], &w);
+            }
+            laws[material[i] as usize].update(&mut stress[j], &de);
+            volume[j] *= R::ONE + de[0] + de[1] + de[2];
+            for a in 0..3 {
+                x[j][a] += dt * dx[a];
+                u[j][a] += dt * dx[a];
+            }
         }
-        laws[p.material[i] as usize].update(&mut p.stress[i], &de);
-        p.volume[i] *= R::ONE + de[0] + de[1] + de[2];
-        for a in 0..3 {
-            p.x[i][a] += dt * dx[a];
-            p.u[i][a] += dt * dx[a];
-        }
-    }
+    });
 }
 
 /// Pore-pressure update of saturated points (DESIGN §4): Δp = (K_w / n) (n Δε_vol,w +
@@ -72,7 +95,11 @@ pub fn update_stress_and_move<R: Real>(
 /// rate is averaged to its element's nodes (weight V N) and interpolated back with N, as
 /// Anura3D's strain smoothing does for the volumetric strain (`smooth`; without it each point
 /// takes its element's rate, as Anura3D without `STRAIN_SMOOTHING`).
+#[allow(clippy::too_many_arguments)]
 pub fn update_pore_pressure<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
     mesh: &TetMesh<R>,
     p: &mut Particles<R>,
     g: &mut Grid<R>,
@@ -83,59 +110,70 @@ pub fn update_pore_pressure<R: Real>(
     let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
         return;
     };
-    gl.rate.fill(R::ZERO);
-    gl.weight.fill(R::ZERO);
-    for i in 0..p.x.len() {
-        let Some(f) = fluids[p.material[i] as usize] else {
-            continue;
-        };
-        if !p.active[i] {
-            continue;
-        }
-        let e = p.element[i] as usize;
+    let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
+    let (vel, wvel) = (&g.vel, &gl.vel);
+    // The rate of element e's points (one per element: linear tets).
+    let rate_in = |e: usize, f: &Fluid<R>| {
         let grad = &mesh.grad[e];
         let (mut div_v, mut div_w) = (R::ZERO, R::ZERO);
         for k in 0..4 {
             let node = mesh.corners[e][k] as usize;
-            let (v, w) = (g.vel[node], gl.vel[node]);
+            let (v, w) = (vel[node], wvel[node]);
             for a in 0..3 {
                 div_v += v[a] * grad[k][a];
                 div_w += w[a] * grad[k][a];
             }
         }
-        let rate = f.kw_over_n * (f.n * div_w + (R::ONE - f.n) * div_v);
-        if !smooth {
-            lp.p[i] += rate * dt;
-            continue;
-        }
-        let n = mesh.shape(e, &p.x[i]);
-        let vol = p.volume[i];
-        for k in 0..4 {
-            let node = mesh.corners[e][k] as usize;
-            gl.rate[node] += vol * n[k] * rate;
-            gl.weight[node] += vol * n[k];
-        }
-    }
+        f.kw_over_n * (f.n * div_w + (R::ONE - f.n) * div_v)
+    };
+    let pressure = Shared::new(&mut lp.p);
     if !smooth {
+        team.run(|t| {
+            for i in layout.particle_range(t) {
+                if let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) {
+                    let rate = rate_in(p.element[i] as usize, f);
+                    // SAFETY: particle i belongs to this thread only.
+                    unsafe { pressure.range(i..i + 1)[0] += rate * dt };
+                }
+            }
+        });
         return;
     }
-    for n in 0..gl.rate.len() {
-        if gl.weight[n] > R::ZERO {
-            gl.rate[n] = gl.rate[n] / gl.weight[n];
+    layout.scatter::<2, _>(team, slots, |e, four| {
+        for i in layout.particles_of(e) {
+            let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) else {
+                continue;
+            };
+            let rate = rate_in(e, f);
+            let n = mesh.shape(e, &x[i]);
+            for (k, slot) in four.iter_mut().enumerate() {
+                slot[0] += volume[i] * n[k] * rate;
+                slot[1] += volume[i] * n[k];
+            }
         }
-    }
-    for i in 0..p.x.len() {
-        if fluids[p.material[i] as usize].is_none() || !p.active[i] {
-            continue;
+    });
+    let nodal = Shared::new(&mut gl.rate);
+    layout.gather::<2, _>(team, slots, |n, s| {
+        let r = if s[1] > R::ZERO { s[0] / s[1] } else { R::ZERO };
+        // SAFETY: node n is this thread's only.
+        unsafe { nodal.write(n, r) };
+    });
+    let nodal = &gl.rate;
+    team.run(|t| {
+        for i in layout.particle_range(t) {
+            if !active[i] || fluids[material[i] as usize].is_none() {
+                continue;
+            }
+            let e = p.element[i] as usize;
+            let n = mesh.shape(e, &x[i]);
+            let mut rate = R::ZERO;
+            for k in 0..4 {
+                rate += n[k] * nodal[mesh.corners[e][k] as usize];
+            }
+            // SAFETY: particle i belongs to this thread only.
+            unsafe { pressure.range(i..i + 1)[0] += rate * dt };
         }
-        let e = p.element[i] as usize;
-        let n = mesh.shape(e, &p.x[i]);
-        let mut rate = R::ZERO;
-        for k in 0..4 {
-            rate += n[k] * gl.rate[mesh.corners[e][k] as usize];
-        }
-        lp.p[i] += rate * dt;
-    }
+    });
 }
 
 /// Adds Ω σ - σ Ω to `s` for the skew increment Ω with Ω_xy = `w[0]`, Ω_yz = `w[1]`, Ω_zx = `w[2]`

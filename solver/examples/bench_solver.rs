@@ -1,0 +1,148 @@
+//! One configuration of the solver benchmark (`scripts/bench-solver` runs the sweep): a column
+//! of structured tetrahedra, 4 material points each, dry under gravity or saturated under a
+//! sudden top load, a fixed number of steps; prints one JSON line with the median of the
+//! repetitions (particle-steps/s overall and seconds per phase).
+//!
+//! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
+//!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
+//!  --order morton|random|none`
+//!
+//! `--order random` renumbers elements and nodes by a fixed pseudo-random permutation (the
+//! locality a mesh generator's worst case gives); `morton` applies the solver's curve ordering.
+
+use std::time::Instant;
+
+use mpm_shared::{generate, ElementType};
+use mpm_solve::case::{Case, MaterialSpec, Reorder};
+use mpm_solve::engine::{Engine, Options, PHASES};
+use mpm_solve::liquid::LiquidSpec;
+use mpm_solve::team::Pin;
+
+fn arg<'a>(a: &'a [String], key: &str) -> Option<&'a str> {
+    a.iter()
+        .position(|x| x == key)
+        .and_then(|i| a.get(i + 1))
+        .map(|s| s.as_str())
+}
+
+/// A fixed permutation of 0..n (xorshift keys, sorted).
+fn shuffle(n: usize, seed: u64) -> Vec<u32> {
+    let mut s = seed;
+    let mut keys: Vec<(u64, u32)> = (0..n as u32)
+        .map(|i| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s, i)
+        })
+        .collect();
+    keys.sort_unstable();
+    keys.into_iter().map(|(_, i)| i).collect()
+}
+
+fn main() {
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let saturated = arg(&a, "--case") == Some("saturated");
+    let cells: Vec<usize> = a
+        .iter()
+        .position(|x| x == "--cells")
+        .map(|i| vec![a[i + 1].parse().unwrap(), a[i + 2].parse().unwrap()])
+        .unwrap_or(vec![20, 200]);
+    let steps: usize = arg(&a, "--steps").map_or(20, |s| s.parse().unwrap());
+    let reps: usize = arg(&a, "--reps").map_or(3, |s| s.parse().unwrap());
+    let threads: usize = arg(&a, "--threads").map_or(0, |s| s.parse().unwrap());
+    let pin = match arg(&a, "--pin") {
+        Some("none") => Pin::None,
+        _ => Pin::Cores,
+    };
+    let first_touch = arg(&a, "--first-touch") != Some("off");
+    let order = arg(&a, "--order").unwrap_or("morton").to_string();
+
+    let (nxz, ny) = (cells[0], cells[1]);
+    let width = 0.1 * nxz as f64 / 10.0;
+    let mut model = generate::box_mesh([nxz, ny, nxz], [width, 1.0, width], ElementType::Tet4);
+    if order == "random" {
+        let e_order = shuffle(model.element_count(), 0x9e37_79b9_7f4a_7c15);
+        let n_perm = shuffle(model.node_count(), 0xd1b5_4a32_d192_ed03);
+        model = model.reordered(&e_order, &n_perm).unwrap();
+    }
+    let fixed = mpm_solve::case::confined_box(&model);
+    let soil = if saturated {
+        let liquid = LiquidSpec::new(0.4, 1000.0, 2.15e4, 1.0214e-9, 1e-6).unwrap();
+        MaterialSpec::saturated("soil", 2650.0, 1000.0, 0.3, liquid).unwrap()
+    } else {
+        MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap()
+    };
+    let mut case = Case::single_material("bench", model, soil, 4, fixed);
+    case.courant = 0.5;
+    case.damping = 0.05;
+    if saturated {
+        // Sudden 10 kPa on the top face (nodal loads of the top triangles of the box).
+        let top = case
+            .model
+            .coords
+            .chunks_exact(3)
+            .fold(f64::MIN, |m, p| m.max(p[1]));
+        let on_top: Vec<usize> = (0..case.model.node_count())
+            .filter(|&n| (case.model.node(n)[1] - top).abs() < 1e-9)
+            .collect();
+        let area = width * width / on_top.len() as f64;
+        for n in on_top {
+            case.traction[n] = [0.0, -10.0 * area, 0.0];
+        }
+    } else {
+        case.gravity = [0.0, -9.81, 0.0];
+    }
+    if order == "morton" {
+        case = case.reordered(Reorder::Morton).unwrap();
+    }
+    case.engine = Options {
+        threads,
+        pin,
+        first_touch,
+    };
+    let mut rates = Vec::new();
+    let mut phases = Vec::new();
+    let mut info = (0usize, 0usize, Vec::new());
+    for _ in 0..reps {
+        let mut engine = Engine::<f64>::new(&case, false).unwrap();
+        let np = engine.particles.len();
+        let t = Instant::now();
+        for _ in 0..steps {
+            engine.step(&case, engine.dt, None).unwrap();
+        }
+        let secs = t.elapsed().as_secs_f64();
+        rates.push(np as f64 * steps as f64 / secs);
+        phases.push(engine.phase_seconds);
+        info = (np, engine.team.threads, engine.team.pinned.clone());
+    }
+    let mut sorted = rates.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    let k = rates.iter().position(|&r| r == median).unwrap();
+    let per_phase: Vec<String> = PHASES[..5]
+        .iter()
+        .zip(phases[k])
+        .map(|(n, s)| format!("\"{n}\": {:.6e}", s / steps as f64))
+        .collect();
+    let pinned: Vec<String> = info
+        .2
+        .iter()
+        .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
+        .collect();
+    println!(
+        "{{\"case\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}}}",
+        if saturated { "saturated" } else { "dry" },
+        info.0,
+        case.model.element_count(),
+        info.1,
+        pinned.join(", "),
+        if pin == Pin::Cores { "cores" } else { "none" },
+        first_touch,
+        order,
+        steps,
+        rates,
+        median,
+        per_phase.join(", ")
+    );
+}

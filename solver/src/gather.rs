@@ -1,0 +1,187 @@
+//! The data layout of the parallel step: particles kept sorted by element, fixed per-thread
+//! ranges of elements, particles and nodes, and the race-free, deterministic particle-to-grid
+//! sum (DESIGN §5).
+//!
+//! A sum over particles onto nodes is done in two passes. Each thread goes over its elements
+//! and, for each, over that element's particles in storage order, adding into the element's
+//! four corner slots (`slots[4 e + k]`); then each thread forms the nodes of its range by adding
+//! the slots of the node's elements in element order. Every node's sum is thus taken in an
+//! order fixed by the mesh and the particle order, whatever the thread count, with no locks or
+//! atomics.
+
+use std::ops::Range;
+
+use crate::mesh::TetMesh;
+use crate::particles::Particles;
+use crate::real::Real;
+use crate::team::{balanced_ranges, Shared, Team};
+
+/// Widest slot (values per element corner) a pass uses.
+pub const WIDTH: usize = 12;
+
+/// Layout and scratch of the parallel step.
+#[derive(Debug)]
+pub struct Layout<R: Real> {
+    /// First particle of each element (particles are sorted by element), `elements + 1` long.
+    pub elem_start: Vec<u32>,
+    /// Elements of each thread (contiguous along the mesh order, balanced by particles).
+    pub element_ranges: Vec<Range<usize>>,
+    /// Nodes of each thread (balanced by their number of element corners).
+    pub node_ranges: Vec<Range<usize>>,
+    /// For each node, where its slots start in `node_slot` (`nodes + 1` long).
+    pub node_start: Vec<u32>,
+    /// Slots (4 e + k) of every node, in element order.
+    pub node_slot: Vec<u32>,
+    _real: std::marker::PhantomData<R>,
+}
+
+/// Per-corner partial sums, `4 × elements` slots of [`WIDTH`] values.
+pub type Slots<R> = Vec<[R; WIDTH]>;
+
+impl<R: Real> Layout<R> {
+    /// The layout of `mesh` for `threads` threads, with particles `p` (sorted by element).
+    pub fn new(mesh: &TetMesh<R>, p: &Particles<R>, threads: usize) -> Self {
+        let (ne, nn) = (mesh.elements(), mesh.nodes());
+        let elem_start = element_starts(&p.element, ne);
+        let element_ranges = balanced_ranges(
+            (0..ne).map(|e| 4 * u64::from(elem_start[e + 1] - elem_start[e])),
+            threads,
+        );
+        let mut node_start = vec![0u32; nn + 1];
+        for c in &mesh.corners {
+            for &n in c {
+                node_start[n as usize + 1] += 1;
+            }
+        }
+        for n in 0..nn {
+            node_start[n + 1] += node_start[n];
+        }
+        let mut fill = node_start.clone();
+        let mut node_slot = vec![0u32; 4 * ne];
+        for (e, c) in mesh.corners.iter().enumerate() {
+            for (k, &n) in c.iter().enumerate() {
+                node_slot[fill[n as usize] as usize] = (4 * e + k) as u32;
+                fill[n as usize] += 1;
+            }
+        }
+        let node_ranges = balanced_ranges(
+            (0..nn).map(|n| u64::from(node_start[n + 1] - node_start[n])),
+            threads,
+        );
+        Layout {
+            elem_start,
+            element_ranges,
+            node_ranges,
+            node_start,
+            node_slot,
+            _real: std::marker::PhantomData,
+        }
+    }
+
+    /// Zeroed slots for this layout (allocated zeroed, so pages are placed by the threads that
+    /// first write them).
+    pub fn new_slots(&self) -> Slots<R> {
+        vec![[R::ZERO; WIDTH]; 4 * (self.elem_start.len() - 1)]
+    }
+
+    /// Particles of thread `k`.
+    pub fn particle_range(&self, k: usize) -> Range<usize> {
+        let r = &self.element_ranges[k];
+        self.elem_start[r.start] as usize..self.elem_start[r.end] as usize
+    }
+
+    /// Particles of element `e`.
+    #[inline]
+    pub fn particles_of(&self, e: usize) -> Range<usize> {
+        self.elem_start[e] as usize..self.elem_start[e + 1] as usize
+    }
+
+    /// Pass 1: on every thread, for each of its elements, zeroes the element's four slots (the
+    /// first `W` values) and calls `element(e, slots)`.
+    pub fn scatter<const W: usize, F>(&self, team: &Team, slots: &mut Slots<R>, element: F)
+    where
+        F: Fn(usize, &mut [[R; WIDTH]]) + Sync,
+    {
+        let slots = Shared::new(slots);
+        let ranges = &self.element_ranges;
+        team.run(|k| {
+            let r = ranges[k].clone();
+            // SAFETY: the element ranges are disjoint, so are their slots.
+            let mine = unsafe { slots.range(4 * r.start..4 * r.end) };
+            for (j, e) in r.enumerate() {
+                let four = &mut mine[4 * j..4 * j + 4];
+                for s in four.iter_mut() {
+                    s[..W].fill(R::ZERO);
+                }
+                element(e, four);
+            }
+        });
+    }
+
+    /// Pass 2: on every thread, for each node of its range, the sum of the first `W` values of
+    /// the node's slots, in element order, handed to `node(n, sum)`.
+    pub fn gather<const W: usize, F>(&self, team: &Team, slots: &Slots<R>, node: F)
+    where
+        F: Fn(usize, [R; W]) + Sync,
+    {
+        team.run(|k| {
+            for n in self.node_ranges[k].clone() {
+                let mut sum = [R::ZERO; W];
+                for &s in
+                    &self.node_slot[self.node_start[n] as usize..self.node_start[n + 1] as usize]
+                {
+                    let v = &slots[s as usize];
+                    for c in 0..W {
+                        sum[c] += v[c];
+                    }
+                }
+                node(n, sum);
+            }
+        });
+    }
+}
+
+/// First particle of each element for particles sorted by `element`.
+pub fn element_starts(element: &[u32], elements: usize) -> Vec<u32> {
+    let mut start = vec![0u32; elements + 1];
+    for &e in element {
+        start[e as usize + 1] += 1;
+    }
+    for e in 0..elements {
+        start[e + 1] += start[e];
+    }
+    start
+}
+
+/// Stable counting sort of the particles by element when some are out of order. Returns the
+/// permutation applied (new index → old index), or `None` when the order was kept.
+pub fn sort_by_element<R: Real>(p: &mut Particles<R>, elements: usize) -> Option<Vec<u32>> {
+    if p.element.windows(2).all(|w| w[0] <= w[1]) {
+        return None;
+    }
+    let mut next = element_starts(&p.element, elements);
+    let mut order = vec![0u32; p.len()];
+    for (i, &e) in p.element.iter().enumerate() {
+        order[next[e as usize] as usize] = i as u32;
+        next[e as usize] += 1;
+    }
+    fn permute<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
+        let new: Vec<T> = order.iter().map(|&i| v[i as usize]).collect();
+        *v = new;
+    }
+    permute(&mut p.x, &order);
+    permute(&mut p.u, &order);
+    permute(&mut p.v, &order);
+    permute(&mut p.mass, &order);
+    permute(&mut p.volume, &order);
+    permute(&mut p.stress, &order);
+    permute(&mut p.element, &order);
+    permute(&mut p.material, &order);
+    permute(&mut p.id, &order);
+    permute(&mut p.active, &order);
+    if let Some(l) = &mut p.liquid {
+        permute(&mut l.w, &order);
+        permute(&mut l.p, &order);
+    }
+    Some(order)
+}
