@@ -32,13 +32,7 @@ pub fn grid_to_particle<R: Real>(
                 continue;
             }
             let n = mesh.shape(e, &x[i]);
-            let mut dv = [R::ZERO; 3];
-            for k in 0..4 {
-                let a = acc[mesh.corners[e][k] as usize];
-                for c in 0..3 {
-                    dv[c] += n[k] * a[c];
-                }
-            }
+            let dv = interpolate(mesh, e, &n, acc);
             // SAFETY: particle i (of element e) belongs to this thread only.
             let v = unsafe { &mut vel.range(i..i + 1)[0] };
             for c in 0..3 {
@@ -61,6 +55,19 @@ pub fn grid_to_particle<R: Real>(
         fixed,
         &mut g.vel,
     );
+}
+
+/// Σ N_k a_k over the corners of element `e`.
+#[inline]
+fn interpolate<R: Real>(mesh: &TetMesh<R>, e: usize, n: &[R; 4], nodal: &[V3<R>]) -> V3<R> {
+    let mut out = [R::ZERO; 3];
+    for k in 0..4 {
+        let a = nodal[mesh.corners[e][k] as usize];
+        for c in 0..3 {
+            out[c] += n[k] * a[c];
+        }
+    }
+    out
 }
 
 /// Nodal velocities from the re-mapped momentum in `slots`: zero at empty nodes and in fixed
@@ -119,13 +126,7 @@ pub fn liquid_to_particles<R: Real>(
                 continue;
             }
             let n = mesh.shape(e, &x[i]);
-            let mut dw = [R::ZERO; 3];
-            for k in 0..4 {
-                let a = acc[mesh.corners[e][k] as usize];
-                for c in 0..3 {
-                    dw[c] += n[k] * a[c];
-                }
-            }
+            let dw = interpolate(mesh, e, &n, acc);
             // SAFETY: particle i (of element e) belongs to this thread only.
             let w = unsafe { &mut w_out.range(i..i + 1)[0] };
             for c in 0..3 {

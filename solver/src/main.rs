@@ -174,13 +174,7 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
     if case.consolidation.is_some() {
         let (engine, t, w) =
             mpm_solve::consolidation::run_job::<f64>(&case, out, args.drop_lost, progress)?;
-        println!(
-            "done: {} steps of {:.3e} s, {} material points, outputs in {}",
-            engine.steps,
-            engine.dt,
-            engine.particles.len(),
-            out.display()
-        );
+        done(&engine, out);
         for (name, tr) in
             std::iter::once(("default", &t)).chain(w.as_ref().map(|w| ("workshop", w)))
         {
@@ -197,6 +191,12 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
         return Ok(());
     }
     let engine = mpm_solve::run::run::<f64>(&case, out, args.drop_lost, progress)?;
+    done(&engine, out);
+    Ok(())
+}
+
+/// The closing line of a run.
+fn done(engine: &mpm_solve::engine::Engine<f64>, out: &std::path::Path) {
     println!(
         "done: {} steps of {:.3e} s, {} material points, outputs in {}",
         engine.steps,
@@ -204,5 +204,4 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
         engine.particles.len(),
         out.display()
     );
-    Ok(())
 }
