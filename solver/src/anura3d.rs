@@ -207,6 +207,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let mut fixed = vec![[false; 3]; n];
     let mut liquid_fixed = vec![[false; 3]; n];
     let mut traction = vec![[0.0; 3]; n];
+    let mut liquid_traction = vec![[0.0; 3]; n];
     let mut point_loads = Vec::new();
     for sec in &model.sections {
         let k = sec.keyword.as_str();
@@ -231,7 +232,11 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                 }
             }
         } else if k == "START_LOAD_ON_NODES_SOLID" {
-            add_nodal_face_loads(&model, rows, &mut traction);
+            add_nodal_face_loads(&model, rows, false, &mut traction)
+                .map_err(|e| unsupported(&gfile, &format!("$${k}"), e))?;
+        } else if k == "START_LOAD_ON_NODES_LIQUID" {
+            add_nodal_face_loads(&model, rows, true, &mut liquid_traction)
+                .map_err(|e| unsupported(&gfile, &format!("$${k}"), e))?;
         } else if k == "START_LOAD_ON_MATERIAL_POINTS_SOLID" {
             point_loads.extend(face_loads_on_points(&model, rows));
         } else if k.starts_with("START_REMOVE_FIXITY_")
@@ -242,7 +247,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             || k == "START_CONTACT_VOLUME"
             || k == "START_EXCAVATION_SOLID"
         {
-            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (supported: fixities of either phase, $$START_LOAD_ON_NODES_SOLID and $$START_LOAD_ON_MATERIAL_POINTS_SOLID)"));
+            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (supported: fixities of either phase, $$START_LOAD_ON_NODES_SOLID, $$START_LOAD_ON_NODES_LIQUID and $$START_LOAD_ON_MATERIAL_POINTS_SOLID)"));
         }
     }
     let total = s.load_steps as f64 * s.time_per_load_step;
@@ -251,6 +256,20 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         for v in t.iter_mut() {
             *v *= tm;
         }
+    }
+    let (lm, liquid_curve) = curve(s.liquid_pressure, total, &cfile, "$$LIQUID_PRESSURE")?;
+    for t in liquid_traction.iter_mut() {
+        for v in t.iter_mut() {
+            *v *= lm;
+        }
+    }
+    let has_liquid_load = liquid_traction.iter().flatten().any(|&v| v != 0.0);
+    if has_liquid_load && !materials.iter().flatten().any(|m| m.liquid.is_some()) {
+        return Err(unsupported(
+            &gfile,
+            "$$START_LOAD_ON_NODES_LIQUID",
+            "loads the liquid, but no material is saturated",
+        ));
     }
     let (gm, gravity_curve) = curve(s.gravity_load, total, &cfile, "$$GRAVITY_LOAD")?;
     let g = s.gravity_vector.map(|v| v * s.gravity_acceleration * gm);
@@ -273,6 +292,8 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         traction,
         point_loads,
         traction_curve,
+        liquid_traction,
+        liquid_curve,
         gravity: g,
         gravity_curve,
         courant: s.courant,
@@ -322,20 +343,35 @@ fn face_loads_on_points(model: &Model, rows: &mpm_shared::model::Table) -> Vec<F
         .collect()
 }
 
-/// Adds the nodal forces of `$$START_LOAD_ON_NODES_SOLID` rows: per loaded face the node ids
-/// (3 corners first) and a traction vector per node; the corner tractions are interpolated
-/// linearly over the face and integrated exactly: F_a = A/12 (2 t_a + t_b + t_c).
-fn add_nodal_face_loads(model: &Model, rows: &mpm_shared::model::Table, out: &mut [[f64; 3]]) {
+/// Adds the nodal forces of `$$START_LOAD_ON_NODES_SOLID` (or `_LIQUID`) rows: per loaded face
+/// the node ids (3 corners first) and a traction vector per node; the corner tractions are
+/// interpolated linearly over the face and integrated exactly: F_a = A/12 (2 t_a + t_b + t_c).
+/// For the liquid (`normal`), Anura3D applies the load normal to the face: each component is
+/// multiplied by that of the face's outward unit normal, so negative values push into the body.
+fn add_nodal_face_loads(
+    model: &Model,
+    rows: &mpm_shared::model::Table,
+    normal: bool,
+    out: &mut [[f64; 3]],
+) -> Result<(), String> {
     let k = model.element_type.face_nodes();
-    for r in rows.rows() {
-        let ids: Vec<usize> = r[..3]
-            .iter()
-            .map(|t| t.as_int().unwrap_or(1) as usize - 1)
-            .collect();
+    let faces: Vec<[usize; 3]> = rows
+        .rows()
+        .map(|r| [0, 1, 2].map(|i| r[i].as_int().unwrap_or(1) as usize - 1))
+        .collect();
+    let normals = if normal {
+        outward_normals(model, &faces)?
+    } else {
+        vec![[1.0; 3]; faces.len()]
+    };
+    for ((r, ids), n) in rows.rows().zip(&faces).zip(&normals) {
         let t: Vec<[f64; 3]> = (0..3)
-            .map(|c| [0, 1, 2].map(|d| r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0)))
+            .map(|c| {
+                [0, 1, 2]
+                    .map(|d| n[d] * r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0))
+            })
             .collect();
-        let area = crate::scene::triangle_area(model, [ids[0], ids[1], ids[2]]);
+        let area = crate::scene::triangle_area(model, *ids);
         for i in 0..3 {
             let (j, l) = ((i + 1) % 3, (i + 2) % 3);
             for d in 0..3 {
@@ -343,4 +379,64 @@ fn add_nodal_face_loads(model: &Model, rows: &mpm_shared::model::Table, out: &mu
             }
         }
     }
+    Ok(())
+}
+
+/// Outward unit normals of boundary faces given by their corner nodes: each face is found in
+/// the element that has it, and oriented away from that element's fourth corner.
+fn outward_normals(model: &Model, faces: &[[usize; 3]]) -> Result<Vec<[f64; 3]>, String> {
+    let key = |f: [usize; 3]| {
+        let mut k = f;
+        k.sort_unstable();
+        k
+    };
+    let mut opposite: std::collections::HashMap<[usize; 3], Option<usize>> =
+        faces.iter().map(|&f| (key(f), None)).collect();
+    for e in 0..model.element_count() {
+        let c = &model.element(e)[..4];
+        for skip in 0..4 {
+            let mut f = [0usize; 3];
+            let mut j = 0;
+            for (i, &n) in c.iter().enumerate() {
+                if i != skip {
+                    f[j] = n as usize;
+                    j += 1;
+                }
+            }
+            if let Some(slot) = opposite.get_mut(&key(f)) {
+                *slot = Some(c[skip] as usize);
+            }
+        }
+    }
+    faces
+        .iter()
+        .map(|&f| {
+            let inner = opposite[&key(f)].ok_or_else(|| {
+                format!(
+                    "the loaded face with corner nodes {} {} {} is not a face of any element",
+                    f[0] + 1,
+                    f[1] + 1,
+                    f[2] + 1
+                )
+            })?;
+            let p = f.map(|n| model.node(n));
+            let q = model.node(inner);
+            let (a, b) = (
+                [0, 1, 2].map(|d| p[1][d] - p[0][d]),
+                [0, 1, 2].map(|d| p[2][d] - p[0][d]),
+            );
+            let mut n = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            let len = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let towards_inner: f64 = (0..3).map(|d| n[d] * (q[d] - p[0][d])).sum();
+            let sign = if towards_inner > 0.0 { -1.0 } else { 1.0 };
+            for v in n.iter_mut() {
+                *v *= sign / len;
+            }
+            Ok(n)
+        })
+        .collect()
 }

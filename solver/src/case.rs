@@ -189,6 +189,11 @@ pub struct Case {
     pub point_loads: Vec<FaceLoad>,
     /// Traction multiplier (face loads on nodes and on material points).
     pub traction_curve: LoadCurve,
+    /// Face loads on the liquid per model node (kN) at multiplier 1: they act on the liquid and,
+    /// as part of the total traction, on the mixture.
+    pub liquid_traction: Vec<[f64; 3]>,
+    /// Liquid load multiplier.
+    pub liquid_curve: LoadCurve,
     /// Gravity acceleration vector (m/s²) at multiplier 1.
     pub gravity: [f64; 3],
     /// Gravity multiplier.
@@ -311,6 +316,7 @@ impl Case {
         self.fixed = by_node(&self.fixed, &o.node_new);
         self.liquid_fixed = by_node(&self.liquid_fixed, &o.node_new);
         self.traction = by_node(&self.traction, &o.node_new);
+        self.liquid_traction = by_node(&self.liquid_traction, &o.node_new);
         for load in &mut self.point_loads {
             load.corners = load.corners.map(|n| o.node_new[n] as usize);
         }
@@ -347,6 +353,8 @@ impl Case {
             traction: vec![[0.0; 3]; n],
             point_loads: Vec::new(),
             traction_curve: LoadCurve::Step,
+            liquid_traction: vec![[0.0; 3]; n],
+            liquid_curve: LoadCurve::Step,
             gravity: [0.0; 3],
             gravity_curve: LoadCurve::Step,
             courant: 0.9,

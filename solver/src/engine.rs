@@ -56,6 +56,8 @@ pub struct Engine<R: Real> {
     pub fixed: Vec<[bool; 3]>,
     /// Face-load forces per computational node at multiplier 1.
     pub traction: Vec<V3<R>>,
+    /// Liquid face-load forces per computational node at multiplier 1.
+    pub liquid_traction: Vec<V3<R>>,
     /// Constitutive law per material index.
     pub laws: Vec<LinearElastic<R>>,
     /// Critical time step × Courant number.
@@ -156,10 +158,12 @@ impl<R: Real> Engine<R> {
         let mut fixed = vec![[false; 3]; mesh.nodes()];
         let mut liquid_fixed = vec![[false; 3]; mesh.nodes()];
         let mut traction = vec![[R::ZERO; 3]; mesh.nodes()];
+        let mut liquid_traction = vec![[R::ZERO; 3]; mesh.nodes()];
         for (c, &m) in mesh.model_node.iter().enumerate() {
             fixed[c] = case.fixed[m as usize];
             liquid_fixed[c] = case.liquid_fixed[m as usize];
             traction[c] = case.traction[m as usize].map(R::of);
+            liquid_traction[c] = case.liquid_traction[m as usize].map(R::of);
         }
         let laws = case
             .materials
@@ -216,6 +220,7 @@ impl<R: Real> Engine<R> {
             grid,
             fixed,
             traction,
+            liquid_traction,
             laws,
             dt,
             time: 0.0,
@@ -275,6 +280,8 @@ impl<R: Real> Engine<R> {
                 &mut self.grid,
                 &self.traction,
                 tm,
+                &self.liquid_traction,
+                R::of(case.liquid_curve.at(self.time + dt)),
                 &self.fixed,
                 &self.liquid_fixed,
                 R::of(case.damping),

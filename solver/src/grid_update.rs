@@ -63,13 +63,17 @@ pub fn grid_update<R: Real>(
 ///
 /// is solved exactly per component, so the drag never limits the step; fixed components of a
 /// phase have zero acceleration (a fixed solid takes the reaction; a fixed liquid is an
-/// impermeable face). Nodes without liquid mass follow the dry update. Returns the out-of-balance
+/// impermeable face). Loads on the liquid (`liquid_traction` × `liquid_scale`) act on the liquid
+/// and, being part of the total traction, on the mixture. Nodes without liquid mass follow the
+/// dry update. Returns the out-of-balance
 /// force ratio of the mixture, as [`grid_update`].
 #[allow(clippy::too_many_arguments)]
 pub fn grid_update_two_phase<R: Real>(
     g: &mut Grid<R>,
     traction: &[V3<R>],
     scale: R,
+    liquid_traction: &[V3<R>],
+    liquid_scale: R,
     fixed: &[[bool; 3]],
     liquid_fixed: &[[bool; 3]],
     alpha: R,
@@ -99,7 +103,9 @@ pub fn grid_update_two_phase<R: Real>(
         let (mw, mwn, q) = (gl.mass[n], gl.mass_n[n], gl.drag[n]);
         let wet = mw > eps;
         for a in 0..3 {
-            let ext = g.f_ext[n][a] + scale * traction[n][a];
+            // A load on the liquid is part of the total traction too.
+            let lt = liquid_scale * liquid_traction[n][a];
+            let ext = g.f_ext[n][a] + scale * traction[n][a] + lt;
             let fs_raw = g.f_int[n][a] + ext;
             if !fixed[n][a] {
                 unbalanced += fs_raw.f64() * fs_raw.f64();
@@ -115,9 +121,9 @@ pub fn grid_update_two_phase<R: Real>(
             // drag, which is dissipative already, and damping it would slow the flow
             // (c_v × (1 - α)). Anura3D damps it; `damp_liquid` follows Anura3D.
             let fw = if damp_liquid {
-                damp(gl.force[n][a], gl.momentum[n][a])
+                damp(gl.force[n][a] + lt, gl.momentum[n][a])
             } else {
-                gl.force[n][a]
+                gl.force[n][a] + lt
             };
             // Relative velocity w - v at the start of the step.
             let dv = gl.momentum[n][a] / mw - g.momentum[n][a] / ms;

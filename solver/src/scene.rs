@@ -389,7 +389,8 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
             }
         }
     }
-    let mut traction = vec![[0.0; 3]; model.node_count()];
+    let nodes = model.node_count();
+    let mut traction = vec![[0.0; 3]; nodes];
     let mut traction_ramp = 0.0f64;
     for tr in &scene.traction {
         let faces = physical_faces(&msh_mesh, &node_map, &tr.physical).ok_or_else(|| {
@@ -505,6 +506,8 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         traction,
         point_loads: Vec::new(),
         traction_curve: LoadCurve::ramp(traction_ramp),
+        liquid_traction: vec![[0.0; 3]; nodes],
+        liquid_curve: LoadCurve::Step,
         gravity,
         gravity_curve: LoadCurve::ramp(gravity_ramp),
         courant: t.courant,

@@ -156,3 +156,27 @@ fn dry_scenes_allocate_no_liquid_and_use_fewer_bytes_per_point() {
     assert!(d.grid.bytes() / d.grid.mass.len() < w.grid.bytes() / w.grid.mass.len());
     assert_eq!(wet.consolidation.unwrap().start, Start::Undrained);
 }
+
+#[test]
+fn a_load_on_the_liquid_raises_the_pore_pressure_and_not_the_effective_stress() {
+    // The oedometer with its 10 kPa moved from the skeleton to the liquid (a water pressure on
+    // the drained top): at equilibrium the pore pressure carries all of it.
+    let mut case = scene::load(&testdata("oedometer.toml")).unwrap();
+    let zero = vec![[0.0; 3]; case.traction.len()];
+    case.liquid_traction = std::mem::replace(&mut case.traction, zero);
+    case.consolidation = None;
+    case.end_time = 0.75;
+    case.output_times = vec![0.75];
+    let dir = tempfile::tempdir().unwrap();
+    let engine = mpm_solve::run::run::<f64>(&case, dir.path(), false, false).unwrap();
+    let p = &engine.particles;
+    let l = p.liquid.as_ref().unwrap();
+    let n = p.len() as f64;
+    let pore = -l.p.iter().sum::<f64>() / n;
+    let effective = p.stress.iter().map(|s| s[1]).sum::<f64>() / n;
+    eprintln!(
+        "mean excess pore pressure {pore:.4} kPa, mean effective sigma_yy {effective:.4} kPa"
+    );
+    assert!((pore - 10.0).abs() < 0.2, "pore pressure {pore}");
+    assert!(effective.abs() < 0.2, "effective stress {effective}");
+}
