@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use crate::case::{Case, Integration};
-use crate::gather::{element_starts, sort_by_element, Layout, Slots};
+use crate::gather::{element_starts, sort_by_element, Layout, Slots, SortScratch};
 use crate::grid::{Grid, LiquidNodes};
 use crate::linear_elastic::LinearElastic;
 use crate::liquid::Fluid;
@@ -87,6 +87,10 @@ pub struct Engine<R: Real> {
     pub layout: Layout<R>,
     /// Per-corner partial sums (scratch of the particle-to-grid passes).
     pub slots: Slots<R>,
+    /// Scratch of the re-sort by element.
+    sort_scratch: SortScratch,
+    /// Per thread, from the last locate: first point found outside (index, element), count.
+    locate_outcome: Vec<((usize, u32), u64)>,
     /// Liquid constants per material index (`None` for dry materials; all `None` in a dry case).
     pub fluids: Vec<Option<Fluid<R>>>,
     /// Fixed liquid components per computational node.
@@ -234,9 +238,11 @@ impl<R: Real> Engine<R> {
             force_error: 0.0,
             fluids,
             liquid_fixed,
+            locate_outcome: vec![((usize::MAX, 0), 0); team.threads],
             team,
             layout,
             slots,
+            sort_scratch: SortScratch::default(),
         })
     }
 
@@ -389,44 +395,40 @@ impl<R: Real> Engine<R> {
         let layout = &self.layout;
         let p = &mut self.particles;
         let elements = Shared::new(&mut p.element);
+        let actives = Shared::new(&mut p.active);
         let x = &p.x;
-        let active = &p.active;
-        let mut first_lost = vec![(usize::MAX, 0u32); self.team.threads];
-        let lost_out = Shared::new(&mut first_lost);
-        let mut outside = vec![0u64; self.team.threads];
-        let outside_out = Shared::new(&mut outside);
+        // Per thread: the first point it found outside (index, element) and how many.
+        let outcome = Shared::new(&mut self.locate_outcome);
         let drop_lost = self.drop_lost;
-        let dropped: Vec<std::sync::Mutex<Vec<usize>>> = (0..self.team.threads)
-            .map(|_| std::sync::Mutex::new(Vec::new()))
-            .collect();
         self.team.run(|t| {
             let r = layout.particle_range(t);
             // SAFETY: the particle ranges of the threads are disjoint.
-            let el = unsafe { elements.range(r.clone()) };
-            let mut mine = Vec::new();
+            let (el, active) = unsafe { (elements.range(r.clone()), actives.range(r.clone())) };
+            let (mut first, mut count) = ((usize::MAX, 0u32), 0u64);
             for (j, i) in r.enumerate() {
-                if !active[i] {
+                if !active[j] {
                     continue;
                 }
                 match walk(mesh, el[j], &x[i]) {
                     Found::In(e) => el[j] = e,
                     Found::Outside(e) => {
                         el[j] = e;
-                        mine.push(i);
+                        if count == 0 {
+                            first = (i, e);
+                        }
+                        count += 1;
                         if !drop_lost {
-                            // SAFETY: slot t is this thread's only.
-                            unsafe { lost_out.write(t, (i, e)) };
                             break;
                         }
+                        active[j] = false;
                     }
                 }
             }
             // SAFETY: slot t is this thread's only.
-            unsafe { outside_out.write(t, mine.len() as u64) };
-            *dropped[t].lock().expect("not poisoned") = mine;
+            unsafe { outcome.write(t, (first, count)) };
         });
         if !drop_lost {
-            if let Some(&(i, e)) = first_lost.iter().filter(|x| x.0 != usize::MAX).min() {
+            if let Some(&((i, e), _)) = self.locate_outcome.iter().filter(|o| o.1 > 0).min() {
                 return Err(Lost {
                     id: p.id[i],
                     step: self.steps,
@@ -438,20 +440,19 @@ impl<R: Real> Engine<R> {
                 });
             }
         }
-        for list in dropped {
-            for i in list.into_inner().expect("not poisoned") {
-                p.active[i] = false;
-            }
-        }
-        self.lost += outside.iter().sum::<u64>();
-        if let Some(order) = sort_by_element(p, mesh.elements()) {
+        self.lost += self.locate_outcome.iter().map(|o| o.1).sum::<u64>();
+        if sort_by_element(p, mesh.elements(), &mut self.sort_scratch) {
             self.layout.elem_start = element_starts(&p.element, mesh.elements());
-            let mut new_index = vec![0u32; order.len()];
-            for (new, &old) in order.iter().enumerate() {
-                new_index[old as usize] = new as u32;
-            }
-            for load in &mut self.point_loads {
-                load.0 = new_index[load.0 as usize];
+            // Point loads follow their points: old index → new index.
+            if !self.point_loads.is_empty() {
+                let sc = &mut self.sort_scratch;
+                sc.inverse.resize(sc.order.len(), 0);
+                for (new, &old) in sc.order.iter().enumerate() {
+                    sc.inverse[old as usize] = new as u32;
+                }
+                for load in &mut self.point_loads {
+                    load.0 = sc.inverse[load.0 as usize];
+                }
             }
         }
         Ok(())

@@ -153,35 +153,102 @@ pub fn element_starts(element: &[u32], elements: usize) -> Vec<u32> {
     start
 }
 
-/// Stable counting sort of the particles by element when some are out of order. Returns the
-/// permutation applied (new index → old index), or `None` when the order was kept.
-pub fn sort_by_element<R: Real>(p: &mut Particles<R>, elements: usize) -> Option<Vec<u32>> {
+/// Scratch of [`sort_by_element`], kept between steps so that re-sorting allocates nothing.
+#[derive(Debug, Default)]
+pub struct SortScratch {
+    /// New index → old index.
+    pub order: Vec<u32>,
+    /// Old index → new index, for callers that need it.
+    pub inverse: Vec<u32>,
+    next: Vec<u32>,
+    done: Vec<bool>,
+}
+
+/// Stable counting sort of the particles by element when some are out of order, permuting
+/// every array in place (cycle by cycle). Returns true when it permuted; `scratch.order` then
+/// holds the permutation (new index → old index).
+pub fn sort_by_element<R: Real>(
+    p: &mut Particles<R>,
+    elements: usize,
+    scratch: &mut SortScratch,
+) -> bool {
     if p.element.windows(2).all(|w| w[0] <= w[1]) {
-        return None;
+        return false;
     }
-    let mut next = element_starts(&p.element, elements);
-    let mut order = vec![0u32; p.len()];
+    let n = p.len();
+    scratch.next.clear();
+    scratch.next.resize(elements + 1, 0);
+    for &e in &p.element {
+        scratch.next[e as usize + 1] += 1;
+    }
+    for e in 0..elements {
+        scratch.next[e + 1] += scratch.next[e];
+    }
+    scratch.order.resize(n, 0);
     for (i, &e) in p.element.iter().enumerate() {
-        order[next[e as usize] as usize] = i as u32;
-        next[e as usize] += 1;
+        scratch.order[scratch.next[e as usize] as usize] = i as u32;
+        scratch.next[e as usize] += 1;
     }
-    fn permute<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
-        let new: Vec<T> = order.iter().map(|&i| v[i as usize]).collect();
-        *v = new;
-    }
-    permute(&mut p.x, &order);
-    permute(&mut p.u, &order);
-    permute(&mut p.v, &order);
-    permute(&mut p.mass, &order);
-    permute(&mut p.volume, &order);
-    permute(&mut p.stress, &order);
-    permute(&mut p.element, &order);
-    permute(&mut p.material, &order);
-    permute(&mut p.id, &order);
-    permute(&mut p.active, &order);
+    let (order, done) = (&scratch.order, &mut scratch.done);
+    let mut permute = |v: &mut dyn Permutable| v.permute(order, done);
+    permute(&mut p.x);
+    permute(&mut p.u);
+    permute(&mut p.v);
+    permute(&mut p.mass);
+    permute(&mut p.volume);
+    permute(&mut p.stress);
+    permute(&mut p.element);
+    permute(&mut p.material);
+    permute(&mut p.id);
+    permute(&mut p.active);
     if let Some(l) = &mut p.liquid {
-        permute(&mut l.w, &order);
-        permute(&mut l.p, &order);
+        permute(&mut l.w);
+        permute(&mut l.p);
     }
-    Some(order)
+    true
+}
+
+/// An array that can be permuted in place.
+trait Permutable {
+    /// `new[i] = old[order[i]]`, following the permutation's cycles; `done` is scratch.
+    fn permute(&mut self, order: &[u32], done: &mut Vec<bool>);
+}
+
+impl<T: Copy> Permutable for Vec<T> {
+    fn permute(&mut self, order: &[u32], done: &mut Vec<bool>) {
+        done.clear();
+        done.resize(order.len(), false);
+        for start in 0..order.len() {
+            if done[start] {
+                continue;
+            }
+            let first = self[start];
+            let mut i = start;
+            loop {
+                done[i] = true;
+                let j = order[i] as usize;
+                if j == start {
+                    self[i] = first;
+                    break;
+                }
+                self[i] = self[j];
+                i = j;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn in_place_permutation_matches_a_gather() {
+        let order: Vec<u32> = vec![3, 0, 4, 1, 2, 6, 5, 7];
+        let old: Vec<u32> = (10..18).collect();
+        let mut v = old.clone();
+        v.permute(&order, &mut Vec::new());
+        let want: Vec<u32> = order.iter().map(|&i| old[i as usize]).collect();
+        assert_eq!(v, want);
+    }
 }

@@ -141,6 +141,35 @@ fn bad_scenes_fail_with_a_clear_message_and_write_nothing() {
             .stderr(predicate::str::contains(*message).and(predicate::str::contains("scene.toml")));
         assert!(!out.exists(), "case {i} wrote outputs");
     }
+    // A consolidation table with a start it does not know, and a porosity out of range.
+    for (edit, message) in [
+        (
+            "[consolidation]\nload = 10.0\nstart = \"sudden\"\n",
+            "consolidation.start",
+        ),
+        (
+            "[material.liquid]\nporosity = 1.5\ndensity = 1000.0\nbulk_modulus = 2e4\nintrinsic_permeability = 1e-9\nviscosity = 1e-6\n",
+            "porosity must be in (0, 1)",
+        ),
+    ] {
+        let sub = dir.path().join(message.replace(' ', "_"));
+        std::fs::create_dir(&sub).unwrap();
+        let s = scene(&sub, &|t| format!("{t}\n{edit}"));
+        let out = sub.join("out");
+        fails(&s, &out).stderr(predicate::str::contains(message));
+        assert!(!out.exists());
+    }
+    // Zero threads is refused before anything is written.
+    let s = scene(dir.path(), &|t| t);
+    let out = dir.path().join("t0");
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(&s)
+        .args(["--out", out.to_str().unwrap(), "--threads", "0"])
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("--threads must be at least 1"));
+    assert!(!out.exists());
     // Unknown keys are refused with their line.
     let s = scene(dir.path(), &|t| t.replace("[time]", "[time]\nspeed = 3"));
     fails(&s, &dir.path().join("o")).stderr(
