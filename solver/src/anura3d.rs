@@ -14,6 +14,10 @@ use mpm_shared::{ElementType, Model};
 use crate::case::{Case, FaceLoad, Integration, LoadCurve, MaterialSpec, QuasiStatic};
 use crate::liquid::LiquidSpec;
 
+/// Anura3D's first time step (s): its time increment starts at this value and becomes the
+/// critical step only after the first step.
+pub const ANURA3D_FIRST_STEP: f64 = 1e-15;
+
 /// Why a case cannot run here.
 #[derive(Debug, thiserror::Error)]
 pub enum CaseError {
@@ -309,7 +313,9 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         objective_stress: s.objective_stress,
         integration,
         anura3d_time_step: true,
-        damp_liquid: true,
+        damping_rule: crate::case::DampingRule::Anura3d,
+        drag: crate::case::Drag::Implicit,
+        initial_step: Some(ANURA3D_FIRST_STEP),
         smooth_pressure: cps.get("STRAIN_SMOOTHING").is_some_and(|e| {
             e.lines
                 .first()

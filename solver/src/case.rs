@@ -160,6 +160,35 @@ pub enum Integration {
     },
 }
 
+/// Where and against which velocity local damping acts (`f ← f - α |f| sign(v)` per node and
+/// component).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DampingRule {
+    /// Anura3D's rule, for GOM input: a node whose velocity is exactly zero is not damped; in
+    /// two-phase cases the liquid's force is damped against the liquid velocity, and the
+    /// mixture's force in two parts, the solid part (effective stress, (1 - n) of the pore
+    /// pressure, the solid's loads and weight) against the solid velocity and the liquid part
+    /// (n times the liquid's force) against the liquid velocity.
+    Anura3d,
+    /// The rule of scenes: the mixture's whole force against the solid velocity (against the
+    /// force where the node is at rest, which is what Anura3D's tiny first step amounts to), and
+    /// the liquid's force not at all: in seepage the liquid's force is balanced by the drag,
+    /// which dissipates already, and damping it would slow consolidation by (1 - α).
+    Mixture,
+}
+
+/// Time integration of the Darcy drag Q (w - v) between liquid and solid (two-phase cases).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Drag {
+    /// Per node, at the end-of-step velocities (a 2×2 solve per component): stable for any
+    /// permeability, so the step is bounded by the waves alone.
+    #[default]
+    Implicit,
+    /// At the start-of-step velocities, as Anura3D: the step must also resolve the drag's
+    /// relaxation time k / (n g), which Mieremet's critical step does.
+    Explicit,
+}
+
 /// Everything a run needs.
 #[derive(Debug, Clone)]
 pub struct Case {
@@ -217,8 +246,14 @@ pub struct Case {
     /// Take Anura3D's two-phase critical time step (explicit drag and consolidation terms)
     /// rather than the implicit-drag one, so that Anura3D inputs step as Anura3D does.
     pub anura3d_time_step: bool,
-    /// Damp the liquid's force too (Anura3D does; it slows seepage by 1 - α, so scenes don't).
-    pub damp_liquid: bool,
+    /// How local damping is applied (Anura3D's rule for GOM input, the mixture rule in scenes).
+    pub damping_rule: DampingRule,
+    /// How the Darcy drag between the phases is integrated in time.
+    pub drag: Drag,
+    /// Length of the calculation's very first step (s), when it differs from the critical step:
+    /// Anura3D starts with a step of 1e-15 s, so that its first full step is damped against a
+    /// velocity that is no longer zero.
+    pub initial_step: Option<f64>,
     /// Smooth pore-pressure rates through the nodes (Anura3D's `STRAIN_SMOOTHING`; on for
     /// scenes).
     pub smooth_pressure: bool,
@@ -366,7 +401,9 @@ impl Case {
             objective_stress: false,
             integration: Integration::MaterialPoints,
             anura3d_time_step: false,
-            damp_liquid: false,
+            damping_rule: DampingRule::Mixture,
+            drag: Drag::Implicit,
+            initial_step: None,
             smooth_pressure: true,
             consolidation: None,
             probes: Vec::new(),

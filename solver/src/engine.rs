@@ -182,18 +182,20 @@ impl<R: Real> Engine<R> {
                 )
             })
             .collect();
-        // Empty elements may fill: they take the fastest material's speed.
+        // Empty elements may fill: they take the fastest material's speed. An explicit drag
+        // must be resolved by the step too: Mieremet's speed has its term.
+        let anura3d_step = case.anura3d_time_step || case.drag == crate::case::Drag::Explicit;
         let mut dt = f64::INFINITY;
         for e in 0..mesh.elements() {
             let dx = mesh.min_altitude[e].f64();
             let m = case.element_material[e] as usize;
             let c = match case.materials.get(m).and_then(|s| s.as_ref()) {
-                Some(s) => s.wave_speed_at(dx, case.anura3d_time_step),
+                Some(s) => s.wave_speed_at(dx, anura3d_step),
                 None => case
                     .materials
                     .iter()
                     .flatten()
-                    .map(|s| s.wave_speed_at(dx, case.anura3d_time_step))
+                    .map(|s| s.wave_speed_at(dx, anura3d_step))
                     .fold(0.0, f64::max),
             };
             dt = dt.min(dx / c);
@@ -291,7 +293,8 @@ impl<R: Real> Engine<R> {
                 &self.fixed,
                 &self.liquid_fixed,
                 R::of(case.damping),
-                case.damp_liquid,
+                case.damping_rule,
+                case.drag,
                 R::of(dt),
             )
         } else {
@@ -301,6 +304,7 @@ impl<R: Real> Engine<R> {
                 tm,
                 &self.fixed,
                 R::of(case.damping),
+                case.damping_rule,
             )
         };
         let t2 = Instant::now();

@@ -1,13 +1,31 @@
 //! Grid update: nodal accelerations with local damping and fixities (DESIGN §4, step 2).
 
+use crate::case::{DampingRule, Drag};
 use crate::grid::Grid;
 use crate::real::{Real, V3};
+
+/// Local damping of force `f` at a node moving with `v` (one component):
+/// f - α |f| sign(v). At rest (v = 0) Anura3D's rule leaves the force undamped; the mixture
+/// rule damps it against the motion it is about to cause (sign of f), which is what Anura3D's
+/// tiny first step amounts to for the first full step.
+#[inline]
+fn damp<R: Real>(rule: DampingRule, alpha: R, f: R, v: R) -> R {
+    let s = if v != R::ZERO {
+        v.sign()
+    } else {
+        match rule {
+            DampingRule::Anura3d => return f,
+            DampingRule::Mixture => f.sign(),
+        }
+    };
+    f - alpha * f.abs() * s
+}
 
 /// Nodes lighter than this (relative to the heaviest) are treated as empty.
 pub const MASS_EPS: f64 = 1e-12;
 
 /// a = (f_int + f_ext + traction) / m, with local damping f ← f - α |f| sign(v) per component
-/// (sign(f) where v = 0)
+/// (at rest as `rule` says, see [`DampingRule`])
 /// and zero acceleration in fixed directions. `traction` holds nodal face loads at multiplier 1,
 /// `scale` the multiplier; `fixed[n][a]` marks fixed components.
 ///
@@ -19,6 +37,7 @@ pub fn grid_update<R: Real>(
     scale: R,
     fixed: &[[bool; 3]],
     alpha: R,
+    rule: DampingRule,
 ) -> f64 {
     let (mut unbalanced, mut external) = (0.0, 0.0);
     let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
@@ -36,15 +55,10 @@ pub fn grid_update<R: Real>(
                 continue;
             }
             let ext = g.f_ext[n][a] + scale * traction[n][a];
-            let mut f = g.f_int[n][a] + ext;
+            let f = g.f_int[n][a] + ext;
             unbalanced += f.f64() * f.f64();
             external += ext.f64() * ext.f64();
-            // A node at rest is damped against the motion the force is about to cause (sign of
-            // f), as Anura3D's results show (its first step's force is scaled by 1 - α).
-            let v = g.momentum[n][a];
-            let s = if v != R::ZERO { v.sign() } else { f.sign() };
-            f -= alpha * f.abs() * s;
-            g.acc[n][a] = f / m;
+            g.acc[n][a] = damp(rule, alpha, f, g.momentum[n][a]) / m;
         }
     }
     if external > 0.0 {
@@ -54,18 +68,22 @@ pub fn grid_update<R: Real>(
     }
 }
 
-/// Two-phase grid update (DESIGN §4) with the drag treated implicitly per node: with the solid
-/// force F_s (mixture: total-stress internal force, mixture weight, loads) and the liquid force
-/// F_w (pore-pressure gradient and weight; the solid's force locally damped against its
-/// velocity),
+/// Two-phase grid update (DESIGN §4). With the mixture force F (total-stress internal force,
+/// mixture weight, loads), the liquid force F_w (pore-pressure gradient, liquid weight, loads on
+/// the liquid), the lumped masses M_s, M_w, M̄_w and drag Q, per node and component:
 ///
-///   M_w a_w = F_w - Q (w + a_w Δt - v - a_s Δt),   M_s a_s = F_s - M̄_w a_w,
+///   M_w a_w = F_w - Q (w - v),   M_s a_s = F - M̄_w a_w,
 ///
-/// is solved exactly per component, so the drag never limits the step; fixed components of a
-/// phase have zero acceleration (a fixed solid takes the reaction; a fixed liquid is an
-/// impermeable face). Loads on the liquid (`liquid_traction` × `liquid_scale`) act on the liquid
-/// and, being part of the total traction, on the mixture. Nodes without liquid mass follow the
-/// dry update. Returns the out-of-balance
+/// with the drag at the start-of-step velocities ([`Drag::Explicit`], as Anura3D) or at the
+/// end-of-step ones, w + a_w Δt and v + a_s Δt ([`Drag::Implicit`]: a 2×2 solve that never
+/// limits the step). Local damping follows `rule` ([`DampingRule`]): Anura3D's splits the
+/// mixture force into its solid part F - n F_w, damped against v, and its liquid part n F_w,
+/// damped against w (n: the node's porosity M̄_w / M_w), and damps F_w against w; the mixture
+/// rule damps F against v and leaves F_w alone. Fixed components of a phase have zero
+/// acceleration (a fixed solid takes the reaction; a fixed liquid is an impermeable face) and,
+/// as in Anura3D, zero velocity in the explicit drag and the damping. Loads on the liquid
+/// (`liquid_traction` × `liquid_scale`) act on the liquid and, being part of the total traction,
+/// on the mixture. Nodes without liquid mass follow the dry update. Returns the out-of-balance
 /// force ratio of the mixture, as [`grid_update`].
 #[allow(clippy::too_many_arguments)]
 pub fn grid_update_two_phase<R: Real>(
@@ -77,7 +95,8 @@ pub fn grid_update_two_phase<R: Real>(
     fixed: &[[bool; 3]],
     liquid_fixed: &[[bool; 3]],
     alpha: R,
-    damp_liquid: bool,
+    rule: DampingRule,
+    drag: Drag,
     dt: R,
 ) -> f64 {
     let (mut unbalanced, mut external) = (0.0, 0.0);
@@ -85,14 +104,6 @@ pub fn grid_update_two_phase<R: Real>(
     let eps = heaviest * R::of(MASS_EPS);
     g.empty_below = eps;
     let gl = g.liquid.as_mut().expect("liquid arrays");
-    let damp = |f: R, momentum: R| {
-        let s = if momentum != R::ZERO {
-            momentum.sign()
-        } else {
-            f.sign()
-        };
-        f - alpha * f.abs() * s
-    };
     for n in 0..g.mass.len() {
         let ms = g.mass[n];
         if ms <= eps {
@@ -106,35 +117,80 @@ pub fn grid_update_two_phase<R: Real>(
             // A load on the liquid is part of the total traction too.
             let lt = liquid_scale * liquid_traction[n][a];
             let ext = g.f_ext[n][a] + scale * traction[n][a] + lt;
-            let fs_raw = g.f_int[n][a] + ext;
+            let f_mix = g.f_int[n][a] + ext;
             if !fixed[n][a] {
-                unbalanced += fs_raw.f64() * fs_raw.f64();
+                unbalanced += f_mix.f64() * f_mix.f64();
                 external += ext.f64() * ext.f64();
             }
-            let fs = damp(fs_raw, g.momentum[n][a]);
             if !wet {
-                g.acc[n][a] = if fixed[n][a] { R::ZERO } else { fs / ms };
+                g.acc[n][a] = if fixed[n][a] {
+                    R::ZERO
+                } else {
+                    damp(rule, alpha, f_mix, g.momentum[n][a]) / ms
+                };
                 gl.acc[n][a] = R::ZERO;
                 continue;
             }
-            // The liquid's force is not damped by default: in seepage it is balanced by the
-            // drag, which is dissipative already, and damping it would slow the flow
-            // (c_v × (1 - α)). Anura3D damps it; `damp_liquid` follows Anura3D.
-            let fw = if damp_liquid {
-                damp(gl.force[n][a] + lt, gl.momentum[n][a])
-            } else {
-                gl.force[n][a] + lt
+            let f_w = gl.force[n][a] + lt;
+            let (fs, fw) = match rule {
+                DampingRule::Mixture => (damp(rule, alpha, f_mix, g.momentum[n][a]), f_w),
+                DampingRule::Anura3d => {
+                    // Anura3D damps against the nodal velocities of the fixity-masked phases.
+                    let v = if fixed[n][a] {
+                        R::ZERO
+                    } else {
+                        g.momentum[n][a]
+                    };
+                    let w = if liquid_fixed[n][a] {
+                        R::ZERO
+                    } else {
+                        gl.momentum[n][a]
+                    };
+                    let f_wn = mwn / mw * f_w;
+                    (
+                        damp(rule, alpha, f_mix - f_wn, v) + damp(rule, alpha, f_wn, w),
+                        damp(rule, alpha, f_w, w),
+                    )
+                }
             };
-            // Relative velocity w - v at the start of the step.
-            let dv = gl.momentum[n][a] / mw - g.momentum[n][a] / ms;
-            let qdt = q * dt;
-            let (a_s, a_w) = match (fixed[n][a], liquid_fixed[n][a]) {
-                (true, true) => (R::ZERO, R::ZERO),
-                (true, false) => (R::ZERO, (fw - q * dv) / (mw + qdt)),
-                (false, true) => (fs / ms, R::ZERO),
-                (false, false) => {
-                    let a_w = (fw - q * dv + qdt * fs / ms) / (mw + qdt * (R::ONE + mwn / ms));
-                    ((fs - mwn * a_w) / ms, a_w)
+            let (a_s, a_w) = match drag {
+                Drag::Implicit => {
+                    // Relative velocity w - v at the start of the step.
+                    let dv = gl.momentum[n][a] / mw - g.momentum[n][a] / ms;
+                    let qdt = q * dt;
+                    match (fixed[n][a], liquid_fixed[n][a]) {
+                        (true, true) => (R::ZERO, R::ZERO),
+                        (true, false) => (R::ZERO, (fw - q * dv) / (mw + qdt)),
+                        (false, true) => (fs / ms, R::ZERO),
+                        (false, false) => {
+                            let a_w =
+                                (fw - q * dv + qdt * fs / ms) / (mw + qdt * (R::ONE + mwn / ms));
+                            ((fs - mwn * a_w) / ms, a_w)
+                        }
+                    }
+                }
+                Drag::Explicit => {
+                    let v = if fixed[n][a] {
+                        R::ZERO
+                    } else {
+                        g.momentum[n][a] / ms
+                    };
+                    let w = if liquid_fixed[n][a] {
+                        R::ZERO
+                    } else {
+                        gl.momentum[n][a] / mw
+                    };
+                    let a_w = if liquid_fixed[n][a] {
+                        R::ZERO
+                    } else {
+                        (fw + q * (v - w)) / mw
+                    };
+                    let a_s = if fixed[n][a] {
+                        R::ZERO
+                    } else {
+                        (fs - mwn * a_w) / ms
+                    };
+                    (a_s, a_w)
                 }
             };
             g.acc[n][a] = a_s;

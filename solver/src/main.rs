@@ -52,6 +52,17 @@ struct Args {
     /// mesh sfcb already ordered); material-point ids stay those of the input.
     #[arg(long, value_enum, default_value = "morton")]
     reorder: ReorderArg,
+    /// Time integration of the Darcy drag in two-phase cases: `implicit` (per node, at the
+    /// end-of-step velocities: stable at any permeability) or `explicit` (at the start-of-step
+    /// velocities with Mieremet's critical step, as Anura3D: reproduces Anura3D to round-off).
+    #[arg(long, value_enum, default_value = "implicit")]
+    drag: DragArg,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum DragArg {
+    Implicit,
+    Explicit,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -138,6 +149,10 @@ fn run(args: Args) -> anyhow::Result<()> {
 fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
     let Some(out) = &args.out else {
         bail!("--out DIR is required to run a case")
+    };
+    case.drag = match args.drag {
+        DragArg::Implicit => mpm_solve::case::Drag::Implicit,
+        DragArg::Explicit => mpm_solve::case::Drag::Explicit,
     };
     case.probes.extend(&args.probe);
     case.probes.sort_unstable();

@@ -77,14 +77,15 @@ pub fn run_tracked<R: Real>(
         loop {
             if let Some(qs) = &case.quasi_static {
                 // Anura3D ends a quasi-static load step once converged or when its step counter,
-                // which starts at 1, exceeds the limit: after `limit` steps (its report then says
-                // time step limit + 1). Without a limit, at the load step's duration.
+                // which starts at 1, exceeds the limit: after `limit + 1` steps, the first of
+                // the calculation being its tiny initial step. Without a limit, at the load
+                // step's duration.
                 let done = if taken == 0 {
                     false
                 } else if engine.converged(qs.force_tolerance, qs.energy_tolerance) {
                     true
                 } else if let Some(m) = qs.max_steps {
-                    taken >= m
+                    taken > m
                 } else {
                     engine.time - begun >= (t_out - load_step_start) * (1.0 - 1e-12)
                 };
@@ -98,8 +99,12 @@ pub fn run_tracked<R: Real>(
                 return Err(RunError::MaxSteps(engine.steps, engine.time));
             }
             let left = t_out - engine.time;
-            let (dt, snap) = if case.quasi_static.is_some() || engine.dt < left {
-                (engine.dt, None)
+            let step = match case.initial_step {
+                Some(h) if engine.steps == 0 => h.min(engine.dt),
+                _ => engine.dt,
+            };
+            let (dt, snap) = if case.quasi_static.is_some() || step < left {
+                (step, None)
             } else {
                 (left, Some(t_out))
             };
