@@ -36,6 +36,18 @@ pub fn run<R: Real>(
     run_tracked(case, dir, drop_lost, progress).map(|(e, _)| e)
 }
 
+/// [`run`], handing the engine to `observe` after each output is written (e.g. to compare the
+/// material points with another code's at every load step).
+pub fn run_observed<R: Real>(
+    case: &Case,
+    dir: &Path,
+    drop_lost: bool,
+    progress: bool,
+    observe: &mut dyn FnMut(&Engine<R>),
+) -> Result<Engine<R>, RunError> {
+    drive(case, dir, drop_lost, progress, observe).map(|(e, _)| e)
+}
+
 /// [`run`], and for a consolidation case (`case.consolidation`) its start state and the
 /// record of every output time against Terzaghi.
 pub fn run_tracked<R: Real>(
@@ -43,6 +55,16 @@ pub fn run_tracked<R: Real>(
     dir: &Path,
     drop_lost: bool,
     progress: bool,
+) -> Result<(Engine<R>, Option<Tracker>), RunError> {
+    drive(case, dir, drop_lost, progress, &mut |_| {})
+}
+
+fn drive<R: Real>(
+    case: &Case,
+    dir: &Path,
+    drop_lost: bool,
+    progress: bool,
+    observe: &mut dyn FnMut(&Engine<R>),
 ) -> Result<(Engine<R>, Option<Tracker>), RunError> {
     let wall = Instant::now();
     let mut engine = Engine::<R>::new(case, drop_lost).map_err(RunError::Setup)?;
@@ -121,6 +143,7 @@ pub fn run_tracked<R: Real>(
         if let Some(t) = &mut tracker {
             t.record(&engine);
         }
+        observe(&engine);
         engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
     }
     if let Some(b) = bar {
