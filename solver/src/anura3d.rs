@@ -127,17 +127,27 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let mats = model.materials();
     let max_index = mats.iter().map(|m| m.index).max().unwrap_or(0).max(0) as usize;
     let mut materials: Vec<Option<MaterialSpec>> = vec![None; max_index + 1];
+    let (mut drained, mut coupled) = (false, false);
     for m in &mats {
         let item = format!("material {} \"{}\"", m.index, m.name);
-        let saturated = match m.kind.as_str() {
-            "dry_material" => false,
-            "saturated_material_coupled" => true,
+        #[derive(PartialEq)]
+        enum Kind {
+            Dry,
+            Coupled,
+            Drained,
+            UndrainedTotal,
+        }
+        let kind = match m.kind.as_str() {
+            "dry_material" => Kind::Dry,
+            "saturated_material_coupled" => Kind::Coupled,
+            "saturated_material_drained" => Kind::Drained,
+            "saturated_material_undrained_total" => Kind::UndrainedTotal,
             other => {
                 return Err(unsupported(
                     &gfile,
                     &item,
                     format!(
-                        "MATERIAL_TYPE {other} is not supported yet (dry_material and saturated_material_coupled are)"
+                        "MATERIAL_TYPE {other} is not supported yet (dry_material, saturated_material_coupled, saturated_material_drained and saturated_material_undrained_total are)"
                     ),
                 ))
             }
@@ -157,33 +167,64 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                 .ok_or_else(|| unsupported(&gfile, &item, format!("missing or non-numeric $${k}")))
         };
         let n = get("POROSITY_SOLID").unwrap_or(0.0);
-        let spec = if saturated {
-            let liquid = LiquidSpec::new(
-                n,
-                get("DENSITY_LIQUID")?,
-                get("BULK_MODULUS_LIQUID")?,
-                get("INTRINSIC_PERMEABILITY_LIQUID")?,
-                get("DYNAMIC_VISCOSITY_LIQUID")?,
-            )
-            .map_err(|e| unsupported(&gfile, &item, e))?;
-            MaterialSpec::saturated(
-                &m.name,
-                get("DENSITY_SOLID")?,
-                get("YOUNG_MODULUS")?,
-                get("POISSON_RATIO")?,
-                liquid,
-            )
-        } else {
+        match kind {
+            Kind::Drained => drained = true,
+            Kind::Coupled => coupled = true,
+            _ => {}
+        }
+        let spec = match kind {
+            Kind::Coupled => {
+                let liquid = LiquidSpec::new(
+                    n,
+                    get("DENSITY_LIQUID")?,
+                    get("BULK_MODULUS_LIQUID")?,
+                    get("INTRINSIC_PERMEABILITY_LIQUID")?,
+                    get("DYNAMIC_VISCOSITY_LIQUID")?,
+                )
+                .map_err(|e| unsupported(&gfile, &item, e))?;
+                MaterialSpec::saturated(
+                    &m.name,
+                    get("DENSITY_SOLID")?,
+                    get("YOUNG_MODULUS")?,
+                    get("POISSON_RATIO")?,
+                    liquid,
+                )
+            }
             // A dry material's mass is that of its solid grains: (1 - n) ρs.
-            MaterialSpec::new(
+            Kind::Dry => MaterialSpec::new(
                 &m.name,
                 (1.0 - n) * get("DENSITY_SOLID")?,
                 get("YOUNG_MODULUS")?,
                 get("POISSON_RATIO")?,
-            )
+            ),
+            Kind::Drained => MaterialSpec::drained(
+                &m.name,
+                n,
+                get("DENSITY_SOLID")?,
+                get("DENSITY_LIQUID")?,
+                get("YOUNG_MODULUS")?,
+                get("POISSON_RATIO")?,
+            ),
+            Kind::UndrainedTotal => MaterialSpec::undrained_total(
+                &m.name,
+                n,
+                get("DENSITY_SOLID")?,
+                get("DENSITY_LIQUID")?,
+                get("YOUNG_MODULUS")?,
+                get("POISSON_RATIO")?,
+            ),
         }
         .map_err(|e| unsupported(&gfile, &item, e))?;
         materials[m.index.max(0) as usize] = Some(spec);
+    }
+    if drained && coupled {
+        // Anura3D turns on its submerged calculation for the whole run when it reads a drained
+        // material, which changes how coupled materials weigh and build pore pressure.
+        return Err(unsupported(
+            &gfile,
+            "MATERIAL_TYPE",
+            "saturated_material_drained together with saturated_material_coupled is not supported (Anura3D then runs a submerged calculation)",
+        ));
     }
     let element_material: Vec<u32> = model
         .element_materials()
@@ -316,7 +357,8 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         damping_rule: crate::case::DampingRule::Anura3d,
         drag: crate::case::Drag::Implicit,
         initial_step: Some(ANURA3D_FIRST_STEP),
-        smooth_pressure: cps.get("STRAIN_SMOOTHING").is_some_and(|e| {
+        smooth_pressure: false,
+        strain_smoothing: cps.get("STRAIN_SMOOTHING").is_some_and(|e| {
             e.lines
                 .first()
                 .and_then(|l| l.split_whitespace().next())

@@ -41,6 +41,12 @@ pub struct MaterialSpec {
     pub name: String,
     /// Mass of solid per unit volume in t/m³ (kg/m³ ÷ 1000): (1 - n) ρs.
     pub density: f64,
+    /// Weight per unit volume over g (t/m³): the mass density, except for Anura3D's single-phase
+    /// saturated types (a drained soil weighs its buoyant (1 - n)(ρs - ρw)).
+    pub weight_density: f64,
+    /// Density of the critical wave speed sqrt(E_oed / ρ) (t/m³): the mass density, except for
+    /// Anura3D's undrained-total soil, whose step Anura3D takes with the dry (1 - n) ρs.
+    pub wave_density: f64,
     /// Young's modulus (kPa).
     pub young: f64,
     /// Poisson's ratio.
@@ -68,6 +74,8 @@ impl MaterialSpec {
         Ok(MaterialSpec {
             name: name.to_string(),
             density: density_kg_m3 / 1000.0,
+            weight_density: density_kg_m3 / 1000.0,
+            wave_density: density_kg_m3 / 1000.0,
             young,
             poisson,
             liquid: None,
@@ -91,6 +99,42 @@ impl MaterialSpec {
             poisson,
         )?;
         m.liquid = Some(liquid);
+        Ok(m)
+    }
+
+    /// Anura3D's `saturated_material_drained`: a single-phase soil of solid mass (1 - n) ρs
+    /// whose weight is the buoyant (1 - n) (ρs - ρw) (densities in kg/m³): effective stresses
+    /// under a water table at rest, no pore pressure computed.
+    pub fn drained(
+        name: &str,
+        porosity: f64,
+        grain_density_kg_m3: f64,
+        liquid_density_kg_m3: f64,
+        young: f64,
+        poisson: f64,
+    ) -> Result<Self, String> {
+        check_porosity(porosity)?;
+        let mut m = MaterialSpec::new(name, (1.0 - porosity) * grain_density_kg_m3, young, poisson)?;
+        m.weight_density = (1.0 - porosity) * (grain_density_kg_m3 - liquid_density_kg_m3) / 1000.0;
+        Ok(m)
+    }
+
+    /// Anura3D's `saturated_material_undrained_total`: a single-phase soil of the saturated mass
+    /// and weight (1 - n) ρs + n ρw (kg/m³), stresses total, no pore pressure computed (its
+    /// near-incompressibility comes from the user's Poisson's ratio); the critical step uses
+    /// the dry density (1 - n) ρs, as Anura3D.
+    pub fn undrained_total(
+        name: &str,
+        porosity: f64,
+        grain_density_kg_m3: f64,
+        liquid_density_kg_m3: f64,
+        young: f64,
+        poisson: f64,
+    ) -> Result<Self, String> {
+        check_porosity(porosity)?;
+        let saturated = (1.0 - porosity) * grain_density_kg_m3 + porosity * liquid_density_kg_m3;
+        let mut m = MaterialSpec::new(name, saturated, young, poisson)?;
+        m.wave_density = (1.0 - porosity) * grain_density_kg_m3 / 1000.0;
         Ok(m)
     }
 
@@ -119,7 +163,15 @@ impl MaterialSpec {
 
     /// P-wave speed of the dry skeleton, sqrt(E_oed / ρ) (m/s).
     pub fn wave_speed(&self) -> f64 {
-        (self.oedometric() / self.density).sqrt()
+        (self.oedometric() / self.wave_density).sqrt()
+    }
+}
+
+fn check_porosity(n: f64) -> Result<(), String> {
+    if (0.0..1.0).contains(&n) {
+        Ok(())
+    } else {
+        Err(format!("porosity must be in [0, 1), got {n}"))
     }
 }
 
@@ -254,9 +306,13 @@ pub struct Case {
     /// Anura3D starts with a step of 1e-15 s, so that its first full step is damped against a
     /// velocity that is no longer zero.
     pub initial_step: Option<f64>,
-    /// Smooth pore-pressure rates through the nodes (Anura3D's `STRAIN_SMOOTHING`; on for
-    /// scenes).
+    /// Smooth pore-pressure rates through the nodes (V N-weighted averages, interpolated back
+    /// with N; scenes).
     pub smooth_pressure: bool,
+    /// Anura3D's strain smoothing (`$$STRAIN_SMOOTHING 1`): the volumetric strain increments of
+    /// both phases averaged element → node → element, material by material
+    /// ([`crate::smoothing`]); it replaces `smooth_pressure` when on.
+    pub strain_smoothing: bool,
     /// A consolidation run compared with Terzaghi (scenes with `[consolidation]`).
     pub consolidation: Option<crate::consolidation::ConsolidationSpec>,
     /// Material-point ids written to `history.csv`.
@@ -405,6 +461,7 @@ impl Case {
             drag: Drag::Implicit,
             initial_step: None,
             smooth_pressure: true,
+            strain_smoothing: false,
             consolidation: None,
             probes: Vec::new(),
             engine: Default::default(),

@@ -95,6 +95,12 @@ pub struct Engine<R: Real> {
     pub fluids: Vec<Option<Fluid<R>>>,
     /// Fixed liquid components per computational node.
     pub liquid_fixed: Vec<[bool; 3]>,
+    /// Anura3D's strain smoothing, when the case asks for it.
+    pub smoothing: Option<crate::smoothing::StrainSmoothing<R>>,
+    /// Per material index: weight density / mass density (1 but for Anura3D's drained soil).
+    weight_ratio: Vec<f64>,
+    /// Per material index: the gravity acceleration of this step times its weight ratio.
+    gravity_by_material: Vec<V3<R>>,
 }
 
 /// How the engine uses the machine.
@@ -220,7 +226,18 @@ impl<R: Real> Engine<R> {
                 Some(crate::mixed::Mixed::new(mesh.elements(), filling))
             }
         };
+        let weight_ratio: Vec<f64> = case
+            .materials
+            .iter()
+            .map(|m| m.as_ref().map_or(1.0, |s| s.weight_density / s.density))
+            .collect();
+        let smoothing = case
+            .strain_smoothing
+            .then(|| crate::smoothing::StrainSmoothing::new(mesh.nodes(), &case.element_material));
         Ok(Engine {
+            smoothing,
+            gravity_by_material: vec![[R::ZERO; 3]; weight_ratio.len()],
+            weight_ratio,
             mesh,
             particles,
             grid,
@@ -254,6 +271,9 @@ impl<R: Real> Engine<R> {
         let t0 = Instant::now();
         let gm = case.gravity_curve.at(self.time + dt);
         let gravity = case.gravity.map(|g| R::of(g * gm));
+        for (gv, &ratio) in self.gravity_by_material.iter_mut().zip(&self.weight_ratio) {
+            *gv = case.gravity.map(|g| R::of(g * gm * ratio));
+        }
         let tm = R::of(case.traction_curve.at(self.time + dt));
         particle_to_grid::particle_to_grid(
             &self.team,
@@ -261,7 +281,7 @@ impl<R: Real> Engine<R> {
             &mut self.slots,
             &self.mesh,
             &self.particles,
-            gravity,
+            &self.gravity_by_material,
             self.mixed.as_mut(),
             &mut self.grid,
         );
@@ -330,6 +350,17 @@ impl<R: Real> Engine<R> {
             R::of(dt),
         );
         let t3 = Instant::now();
+        if let Some(sm) = &mut self.smoothing {
+            sm.compute(
+                &self.team,
+                &self.layout,
+                &mut self.slots,
+                &self.mesh,
+                &self.particles,
+                &self.grid,
+                R::of(dt),
+            );
+        }
         stress::update_pore_pressure(
             &self.team,
             &self.layout,
@@ -339,6 +370,7 @@ impl<R: Real> Engine<R> {
             &mut self.grid,
             &self.fluids,
             case.smooth_pressure,
+            self.smoothing.as_ref(),
             R::of(dt),
         );
         stress::update_stress_and_move(
@@ -349,6 +381,7 @@ impl<R: Real> Engine<R> {
             &self.grid,
             &self.laws,
             case.objective_stress,
+            self.smoothing.as_ref(),
             R::of(dt),
         );
         if let Some(m) = &self.mixed {

@@ -28,6 +28,7 @@ pub mod particles;
 pub mod real;
 pub mod run;
 pub mod scene;
+pub mod smoothing;
 pub mod stress;
 pub mod team;
 pub mod terzaghi;

@@ -21,7 +21,8 @@ fn traction<R: Real>(s: &[R; 6], dn: &V3<R>) -> V3<R> {
 }
 
 /// Maps every active particle to the nodes of its element: mass, momentum, internal force
-/// -Σ V (σ' + p I) ∇N and gravity. `gravity` is the acceleration with its multiplier applied.
+/// -Σ V (σ' + p I) ∇N and gravity. `gravity[m]` is the acceleration (multiplier applied) that
+/// gives the weight of material m's points from their mass.
 /// Under mixed integration the effective-stress force of full elements comes from their Gauss
 /// point instead of their points (the element sums are formed here too).
 #[allow(clippy::too_many_arguments)]
@@ -31,7 +32,7 @@ pub fn particle_to_grid<R: Real>(
     slots: &mut Slots<R>,
     mesh: &TetMesh<R>,
     p: &Particles<R>,
-    gravity: V3<R>,
+    gravity: &[V3<R>],
     mixed: Option<&mut Mixed<R>>,
     g: &mut Grid<R>,
 ) {
@@ -85,6 +86,7 @@ pub fn particle_to_grid<R: Real>(
             }
             let n = mesh.shape(e, &p.x[i]);
             let (m, v) = (p.mass[i], p.v[i]);
+            let gravity = &gravity[p.material[i] as usize];
             let vol = if full { R::ZERO } else { p.volume[i] };
             let mut s = p.stress[i].map(|c| vol * c);
             if let Some(l) = &p.liquid {

@@ -523,6 +523,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         drag: crate::case::Drag::Implicit,
         initial_step: None,
         smooth_pressure: true,
+        strain_smoothing: false,
         consolidation,
         probes: scene.probes.clone(),
         engine: Default::default(),

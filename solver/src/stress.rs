@@ -8,11 +8,13 @@ use crate::liquid::Fluid;
 use crate::mesh::TetMesh;
 use crate::particles::Particles;
 use crate::real::Real;
+use crate::smoothing::StrainSmoothing;
 use crate::team::{Shared, Team};
 
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus the Jaumann rotation Δω σ - σ Δω with
-/// Δω = skew(L) Δt when `objective`); V *= 1 + tr Δε; x += Δt Σ N_n v_n. Each thread updates
-/// the particles of its elements.
+/// Δω = skew(L) Δt when `objective`); V *= 1 + tr Δε; x += Δt Σ N_n v_n. With `smoothing`, the
+/// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
+/// increment ([`crate::smoothing`]). Each thread updates the particles of its elements.
 #[allow(clippy::too_many_arguments)]
 pub fn update_stress_and_move<R: Real>(
     team: &Team,
@@ -22,9 +24,11 @@ pub fn update_stress_and_move<R: Real>(
     g: &Grid<R>,
     laws: &[LinearElastic<R>],
     objective: bool,
+    smoothing: Option<&StrainSmoothing<R>>,
     dt: R,
 ) {
     let half = R::of(0.5);
+    let third = R::ONE / R::of(3.0);
     let xs = Shared::new(&mut p.x);
     let us = Shared::new(&mut p.u);
     let stresses = Shared::new(&mut p.stress);
@@ -59,7 +63,7 @@ pub fn update_stress_and_move<R: Real>(
                     }
                 }
             }
-            let de = [
+            let mut de = [
                 l[0][0] * dt,
                 l[1][1] * dt,
                 l[2][2] * dt,
@@ -67,6 +71,13 @@ pub fn update_stress_and_move<R: Real>(
                 half * (l[1][2] + l[2][1]) * dt,
                 half * (l[2][0] + l[0][2]) * dt,
             ];
+            if let Some(sm) = smoothing {
+                let [es, _] = sm.element_mean(mesh, e, material[i]);
+                let c = (de[0] + de[1] + de[2] - es) * third;
+                for d in de.iter_mut().take(3) {
+                    *d -= c;
+                }
+            }
             if objective {
                 let w = [
                     half * (l[0][1] - l[1][0]) * dt, // ω_xy
@@ -94,7 +105,8 @@ pub fn update_stress_and_move<R: Real>(
 /// that grow near drained faces. The rate is therefore smoothed through the nodes: each point's
 /// rate is averaged to its element's nodes (weight V N) and interpolated back with N, as
 /// Anura3D's strain smoothing does for the volumetric strain (`smooth`; without it each point
-/// takes its element's rate, as Anura3D without `STRAIN_SMOOTHING`).
+/// takes its element's rate, as Anura3D without `STRAIN_SMOOTHING`). With Anura3D's strain
+/// `smoothing` both increments are its smoothed ones instead.
 #[allow(clippy::too_many_arguments)]
 pub fn update_pore_pressure<R: Real>(
     team: &Team,
@@ -105,11 +117,29 @@ pub fn update_pore_pressure<R: Real>(
     g: &mut Grid<R>,
     fluids: &[Option<Fluid<R>>],
     smooth: bool,
+    smoothing: Option<&StrainSmoothing<R>>,
     dt: R,
 ) {
     let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
         return;
     };
+    if let Some(sm) = smoothing {
+        let pressure = Shared::new(&mut lp.p);
+        let (active, material, element) = (&p.active, &p.material, &p.element);
+        team.run(|t| {
+            for i in layout.particle_range(t) {
+                if let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) {
+                    let [es, ew] = sm.element_mean(mesh, element[i] as usize, material[i]);
+                    // SAFETY: particle i belongs to this thread only.
+                    unsafe {
+                        pressure.range(i..i + 1)[0] +=
+                            f.kw_over_n * (f.n * ew + (R::ONE - f.n) * es)
+                    };
+                }
+            }
+        });
+        return;
+    }
     let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
     let (vel, wvel) = (&g.vel, &gl.vel);
     // The rate of element e's points (one per element: linear tets).

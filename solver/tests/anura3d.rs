@@ -21,6 +21,11 @@ const CASES: &[&str] = &[
     "3066_Gravitation_QS_MPMMIXED_2Phase_Gravity_Damping",
     // A linear load on the liquid (its reported points are still at rest after the step).
     "4005_LinearLoad_DYN_MPMMIXED_pressure_2019.1",
+    "4007_lineartraction",
+    "4008_lineargravity",
+    // Single-phase saturated types: drained (buoyant weight) and undrained total.
+    "3072_Gravitation_QS_MPMMIXED_Drained_Gravity_Damping",
+    "3074_Gravitation_QS_MPMMIXED_UndrainedTotal_Gravity_Damping",
 ];
 
 fn benchmarks() -> Option<PathBuf> {
