@@ -339,6 +339,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         traction_curve,
         liquid_traction,
         liquid_curve,
+        liquid_load_on_mixture: false,
         gravity: g,
         gravity_curve,
         courant: s.courant,

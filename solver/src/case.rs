@@ -114,7 +114,8 @@ impl MaterialSpec {
         poisson: f64,
     ) -> Result<Self, String> {
         check_porosity(porosity)?;
-        let mut m = MaterialSpec::new(name, (1.0 - porosity) * grain_density_kg_m3, young, poisson)?;
+        let mut m =
+            MaterialSpec::new(name, (1.0 - porosity) * grain_density_kg_m3, young, poisson)?;
         m.weight_density = (1.0 - porosity) * (grain_density_kg_m3 - liquid_density_kg_m3) / 1000.0;
         Ok(m)
     }
@@ -275,6 +276,10 @@ pub struct Case {
     pub liquid_traction: Vec<[f64; 3]>,
     /// Liquid load multiplier.
     pub liquid_curve: LoadCurve,
+    /// Whether a load on the liquid also loads the mixture (a water pressure on a drained face
+    /// is part of the total traction). Anura3D applies it to the liquid's equation alone, so
+    /// GOM input runs without; scenes with.
+    pub liquid_load_on_mixture: bool,
     /// Gravity acceleration vector (m/s²) at multiplier 1.
     pub gravity: [f64; 3],
     /// Gravity multiplier.
@@ -446,6 +451,7 @@ impl Case {
             traction_curve: LoadCurve::Step,
             liquid_traction: vec![[0.0; 3]; n],
             liquid_curve: LoadCurve::Step,
+            liquid_load_on_mixture: true,
             gravity: [0.0; 3],
             gravity_curve: LoadCurve::Step,
             courant: 0.9,

@@ -293,6 +293,7 @@ impl<R: Real> Engine<R> {
             &self.particles,
             &self.fluids,
             gravity,
+            self.mixed.as_ref(),
             &mut self.grid,
         );
         particle_to_grid::add_point_loads(
@@ -315,6 +316,7 @@ impl<R: Real> Engine<R> {
                 R::of(case.damping),
                 case.damping_rule,
                 case.drag,
+                case.liquid_load_on_mixture,
                 R::of(dt),
             )
         } else {

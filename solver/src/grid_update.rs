@@ -82,8 +82,9 @@ pub fn grid_update<R: Real>(
 /// rule damps F against v and leaves F_w alone. Fixed components of a phase have zero
 /// acceleration (a fixed solid takes the reaction; a fixed liquid is an impermeable face) and,
 /// as in Anura3D, zero velocity in the explicit drag and the damping. Loads on the liquid
-/// (`liquid_traction` × `liquid_scale`) act on the liquid and, being part of the total traction,
-/// on the mixture. Nodes without liquid mass follow the dry update. Returns the out-of-balance
+/// (`liquid_traction` × `liquid_scale`) act on the liquid and, with `liquid_load_on_mixture`,
+/// as part of the total traction, on the mixture too (Anura3D applies them to the liquid
+/// alone). Nodes without liquid mass follow the dry update. Returns the out-of-balance
 /// force ratio of the mixture, as [`grid_update`].
 #[allow(clippy::too_many_arguments)]
 pub fn grid_update_two_phase<R: Real>(
@@ -97,6 +98,7 @@ pub fn grid_update_two_phase<R: Real>(
     alpha: R,
     rule: DampingRule,
     drag: Drag,
+    liquid_load_on_mixture: bool,
     dt: R,
 ) -> f64 {
     let (mut unbalanced, mut external) = (0.0, 0.0);
@@ -114,9 +116,12 @@ pub fn grid_update_two_phase<R: Real>(
         let (mw, mwn, q) = (gl.mass[n], gl.mass_n[n], gl.drag[n]);
         let wet = mw > eps;
         for a in 0..3 {
-            // A load on the liquid is part of the total traction too.
             let lt = liquid_scale * liquid_traction[n][a];
-            let ext = g.f_ext[n][a] + scale * traction[n][a] + lt;
+            let ext = if liquid_load_on_mixture {
+                g.f_ext[n][a] + scale * traction[n][a] + lt
+            } else {
+                g.f_ext[n][a] + scale * traction[n][a]
+            };
             let f_mix = g.f_int[n][a] + ext;
             if !fixed[n][a] {
                 unbalanced += f_mix.f64() * f_mix.f64();

@@ -42,6 +42,7 @@ pub fn particle_to_grid<R: Real>(
             Shared::new(&mut m.stress),
             Shared::new(&mut m.full),
             filling,
+            Shared::new(&mut m.pressure),
         )
     });
     layout.scatter::<10, _>(team, slots, |e, four| {
@@ -49,13 +50,16 @@ pub fn particle_to_grid<R: Real>(
         let range = layout.particles_of(e);
         // Mixed integration: is the element full, and its mean stress.
         let mut full = false;
-        if let Some((stress, flags, filling)) = &mixed_sums {
-            let (mut v, mut s) = (R::ZERO, [R::ZERO; 6]);
+        if let Some((stress, flags, filling, pressure)) = &mixed_sums {
+            let (mut v, mut s, mut pm) = (R::ZERO, [R::ZERO; 6], R::ZERO);
             for i in range.clone() {
                 if p.active[i] {
                     v += p.volume[i];
                     for c in 0..6 {
                         s[c] += p.volume[i] * p.stress[i][c];
+                    }
+                    if let Some(l) = &p.liquid {
+                        pm += p.volume[i] * l.p[i];
                     }
                 }
             }
@@ -64,14 +68,23 @@ pub fn particle_to_grid<R: Real>(
                 for c in s.iter_mut() {
                     *c /= v;
                 }
+                pm /= v;
             }
             // SAFETY: element e is this thread's only.
             unsafe {
                 stress.write(e, s);
                 flags.write(e, full);
+                pressure.write(e, pm);
             }
             if full {
                 let ve = mesh.volume[e];
+                // The Gauss point's total stress: effective plus pore pressure.
+                let mut s = s;
+                if p.liquid.is_some() {
+                    for c in s.iter_mut().take(3) {
+                        *c += pm;
+                    }
+                }
                 for (k, slot) in four.iter_mut().enumerate() {
                     let f = traction(&s, &grad[k]);
                     for a in 0..3 {
@@ -90,7 +103,7 @@ pub fn particle_to_grid<R: Real>(
             let vol = if full { R::ZERO } else { p.volume[i] };
             let mut s = p.stress[i].map(|c| vol * c);
             if let Some(l) = &p.liquid {
-                let vp = p.volume[i] * l.p[i];
+                let vp = vol * l.p[i];
                 s[0] += vp;
                 s[1] += vp;
                 s[2] += vp;
@@ -150,6 +163,8 @@ pub fn add_point_loads<R: Real>(
 /// The liquid's share of particle to grid (two-phase, DESIGN §4): liquid masses M_w and M̄_w,
 /// drag Q, liquid momentum, the liquid force -Σ V p ∇N + M_w g, and the liquid's weight added to
 /// the mixture's external force. Points of dry materials (`fluids[m]` is `None`) add nothing.
+/// Under `mixed` integration, full elements (as the solid pass found them) integrate the
+/// pore-pressure force at their Gauss point.
 #[allow(clippy::too_many_arguments)]
 pub fn liquid_to_grid<R: Real>(
     team: &Team,
@@ -159,6 +174,7 @@ pub fn liquid_to_grid<R: Real>(
     p: &Particles<R>,
     fluids: &[Option<Fluid<R>>],
     gravity: V3<R>,
+    mixed: Option<&Mixed<R>>,
     g: &mut Grid<R>,
 ) {
     let (Some(lp), Some(gl)) = (&p.liquid, &mut g.liquid) else {
@@ -166,6 +182,17 @@ pub fn liquid_to_grid<R: Real>(
     };
     layout.scatter::<12, _>(team, slots, |e, four| {
         let grad = &mesh.grad[e];
+        // A full element under mixed integration takes its pore-pressure force at the Gauss
+        // point (its volume times the mean pore pressure), as the solid pass does.
+        let full = mixed.is_some_and(|m| m.full[e]);
+        if let (true, Some(m)) = (full, mixed) {
+            let vp = mesh.volume[e] * m.pressure[e];
+            for (k, slot) in four.iter_mut().enumerate() {
+                for a in 0..3 {
+                    slot[6 + a] -= vp * grad[k][a];
+                }
+            }
+        }
         for i in layout.particles_of(e) {
             let Some(f) = fluids[p.material[i] as usize] else {
                 continue;
@@ -176,7 +203,8 @@ pub fn liquid_to_grid<R: Real>(
             let n = mesh.shape(e, &p.x[i]);
             let vol = p.volume[i];
             let mw = f.rho_w * vol;
-            let (pw, w) = (lp.p[i] * vol, lp.w[i]);
+            let pw = if full { R::ZERO } else { lp.p[i] * vol };
+            let w = lp.w[i];
             for (k, slot) in four.iter_mut().enumerate() {
                 let nk = n[k];
                 slot[0] += mw * nk;

@@ -508,6 +508,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         traction_curve: LoadCurve::ramp(traction_ramp),
         liquid_traction: vec![[0.0; 3]; nodes],
         liquid_curve: LoadCurve::Step,
+        liquid_load_on_mixture: true,
         gravity,
         gravity_curve: LoadCurve::ramp(gravity_ramp),
         courant: t.courant,
