@@ -57,6 +57,7 @@ impl<R: Real> StrainSmoothing<R> {
 
     /// Computes the nodal smoothed strain increments of this step from the nodal velocities of
     /// both phases (`g.vel`, and the liquid's when the case has one).
+    #[allow(clippy::too_many_arguments)]
     pub fn compute(
         &mut self,
         team: &Team,
