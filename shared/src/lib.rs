@@ -2,11 +2,15 @@
 //!
 //! - [`model`]: the Anura3D model (geometry plus every GOM section, typed where understood);
 //! - [`gom`]: Anura3D `.GOM` reader and writer; [`cps`]: Anura3D `.CPS` reader;
+//! - [`bms`]: Anura3D benchmark tables (`.BMS`, `.BMR`) reader; [`anura3d_vtk`]: Anura3D's
+//!   material-point VTK output reader;
 //! - [`msh`]: Gmsh `.msh` reader (2.2 and 4.1, ASCII and binary) and conversion to the model;
 //! - [`vtu`]: ParaView VTU and PVD writers;
 //! - [`io`]: standard input/output and atomic file writes; [`text`]: scanning and formatting.
 #![warn(missing_docs)]
 
+pub mod anura3d_vtk;
+pub mod bms;
 pub mod cps;
 pub mod error;
 pub mod generate;

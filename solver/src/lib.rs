@@ -10,6 +10,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod anura3d;
+pub mod anura3d_compare;
 pub mod case;
 pub mod consolidation;
 pub mod engine;

@@ -1,9 +1,11 @@
 //! Anura3D's 3D benchmarks with expected results, dry and saturated (`../shared/anura3d`,
 //! found through `ANURA3D_BENCHMARKS`): the material-point positions, displacements, stresses
 //! and pore pressures its expected `.BMS` files report, reproduced at the reported time.
-//! Skipped when the variable is unset.
+//! Skipped, visibly, when the variable is unset; a failure when it names no benchmark folder.
 
 use std::path::{Path, PathBuf};
+
+use mpm_solve::anura3d_compare::compare;
 
 /// The dry 3D cases with expected results: material-point (1005, 1006) and mixed (1007-1012)
 /// integration, normal and objective stress, tolerances and damping factors.
@@ -28,61 +30,35 @@ const CASES: &[&str] = &[
     "3074_Gravitation_QS_MPMMIXED_UndrainedTotal_Gravity_Damping",
 ];
 
+/// The benchmark folder: `ANURA3D_BENCHMARKS`, relative to the workspace root when relative.
+/// Unset (or empty): `None`, and the test says it is skipped. Set to a folder that does not
+/// hold the benchmarks: a failure, not a silent skip.
 fn benchmarks() -> Option<PathBuf> {
-    let dir = std::env::var_os("ANURA3D_BENCHMARKS")?;
-    let p = PathBuf::from(dir).join("Benchmarks/Pre-Commit_Tests");
-    p.is_dir().then_some(p)
+    let dir = std::env::var_os("ANURA3D_BENCHMARKS").filter(|d| !d.is_empty());
+    let Some(dir) = dir else {
+        eprintln!("ANURA3D_BENCHMARKS not set: Anura3D benchmark comparison skipped");
+        return None;
+    };
+    let dir = PathBuf::from(dir);
+    let root = if dir.is_relative() {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(&dir)
+    } else {
+        dir.clone()
+    };
+    let p = root.join("Benchmarks/Pre-Commit_Tests");
+    assert!(
+        p.is_dir(),
+        "ANURA3D_BENCHMARKS={} is set but {} is not a folder",
+        dir.display(),
+        p.display()
+    );
+    Some(p)
 }
 
-/// One reported material point: time, id, then X Y Z, Ux Uy Uz, σxx σyy σzz σxy σyz σzx and
-/// the pore pressure (WPressure).
-struct Row {
-    time: f64,
-    id: u32,
-    values: [f64; 13],
-}
-
-/// Reads the material-point table of a `.BMS` file.
-fn read_bms(path: &Path) -> Vec<Row> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut rows = Vec::new();
-    let mut header: Option<Vec<String>> = None;
-    for line in text.lines() {
-        let words: Vec<&str> = line.split_whitespace().collect();
-        if words.first() == Some(&"LoadStep") {
-            header = Some(words.iter().map(|w| w.to_string()).collect());
-            continue;
-        }
-        let Some(h) = &header else { continue };
-        if words.len() != h.len() {
-            continue;
-        }
-        let col = |name: &str| -> f64 {
-            let i = h.iter().position(|x| x == name).unwrap();
-            words[i].parse().unwrap()
-        };
-        let names = [
-            "X",
-            "Y",
-            "Z",
-            "Ux",
-            "Uy",
-            "Uz",
-            "SigmaXX",
-            "SigmaYY",
-            "SigmaZZ",
-            "SigmaXY",
-            "SigmaYZ",
-            "SigmaZX",
-            "WPressure",
-        ];
-        rows.push(Row {
-            time: col("Time"),
-            id: col("ID_MP") as u32,
-            values: names.map(col),
-        });
-    }
-    rows
+/// Reads a `.BMS` file with the shared reader.
+fn read_bms(path: &Path) -> mpm_shared::bms::Bms {
+    let data = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    mpm_shared::bms::read_bms(&data, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn find(dir: &Path, suffix: &str) -> PathBuf {
@@ -101,7 +77,6 @@ fn find(dir: &Path, suffix: &str) -> PathBuf {
 #[test]
 fn benchmarks_reproduce_the_expected_material_points() {
     let Some(root) = benchmarks() else {
-        eprintln!("ANURA3D_BENCHMARKS not set: skipped");
         return;
     };
     let mut report = Vec::new();
@@ -110,61 +85,39 @@ fn benchmarks_reproduce_the_expected_material_points() {
         let gom = find(&dir, ".GOM");
         let cps = find(&dir, ".CPS_001");
         let expected = read_bms(&find(&dir, "_expected.BMS"));
-        assert!(!expected.is_empty(), "{name}: no rows read");
+        assert!(!expected.material_points.is_empty(), "{name}: no rows read");
         let (case, _) = mpm_solve::anura3d::load(&gom, &cps).unwrap();
         let out = tempfile::tempdir().unwrap();
         let engine = mpm_solve::run::run::<f64>(&case, out.path(), false, false).unwrap();
-        let p = &engine.particles;
-        // Each column's scale: values far below it are round-off in Anura3D's report (1e-27).
-        let mut scale = [0.0f64; 13];
-        for r in &expected {
-            for (s, v) in scale.iter_mut().zip(r.values) {
-                *s = s.max(v.abs());
-            }
-        }
-        let mut worst: f64 = 0.0;
-        for r in &expected {
-            let rel_t = (engine.time - r.time).abs() / r.time;
-            assert!(rel_t < 1e-3, "{name}: time {} vs {}", engine.time, r.time);
-            let i = p.id.iter().position(|&id| id == r.id).unwrap();
-            let pore = p.liquid.as_ref().map_or(0.0, |l| l.p[i]);
-            let ours = [
-                p.x[i][0],
-                p.x[i][1],
-                p.x[i][2],
-                p.u[i][0],
-                p.u[i][1],
-                p.u[i][2],
-                p.stress[i][0],
-                p.stress[i][1],
-                p.stress[i][2],
-                p.stress[i][3],
-                p.stress[i][4],
-                p.stress[i][5],
-                pore,
-            ];
-            for c in 0..13 {
-                let want = r.values[c];
-                // 1% of the value, or of 1e-3 of the column's largest value for near-zeros;
-                // the report prints 4 significant digits (0.05% rounding).
-                let tol = 0.01 * want.abs().max(1e-3 * scale[c]);
-                let err = (ours[c] - want).abs();
-                assert!(
-                    err <= tol.max(1e-12),
-                    "{name}: point {} column {c}: {} vs expected {want}",
-                    r.id,
-                    ours[c]
-                );
-                if want.abs() > (1e-3 * scale[c]).max(1e-12) {
-                    worst = worst.max(err / want.abs());
-                }
-            }
+        let c = compare(&engine, &expected);
+        assert!(
+            c.time_matches(),
+            "{name}: time {} vs {}",
+            c.time,
+            c.expected_time
+        );
+        assert!(
+            c.missing.is_empty(),
+            "{name}: points {:?} missing",
+            c.missing
+        );
+        // 1% of the value, or of 1e-3 of the column's largest value for near-zeros; the report
+        // prints 4 significant digits (0.05% rounding).
+        if let Some(w) = c.worst_at {
+            assert!(
+                c.worst <= 0.01,
+                "{name}: point {} column {}: {} vs expected {}",
+                w.id,
+                w.column,
+                w.ours,
+                w.expected
+            );
         }
         report.push(format!(
             "{name}: {} points, t = {:.4e} s, worst relative difference {:.3}%",
-            expected.len(),
+            c.points,
             engine.time,
-            100.0 * worst
+            100.0 * c.worst_plain
         ));
     }
     for line in report {
