@@ -114,6 +114,8 @@ pub struct Settings {
     /// `TOLERATED_ERROR_SOLID`: tolerated out-of-balance force ratio and kinetic-energy ratio
     /// of the quasi-static convergence check.
     pub tolerated_error_solid: [f64; 2],
+    /// `TOLERATED_ERROR_LIQUID`: the same for the liquid (default 0.01, 0.01).
+    pub tolerated_error_liquid: [f64; 2],
     /// `OUTPUT_MATERIAL_POINTS` (1-based ids).
     pub output_material_points: Vec<u32>,
 }
@@ -507,6 +509,7 @@ impl Cps {
         };
         let output_material_points = self.output_material_points()?;
         let tolerated_error_solid = self.pair("TOLERATED_ERROR_SOLID", [0.01, 0.01])?;
+        let tolerated_error_liquid = self.pair("TOLERATED_ERROR_LIQUID", [0.01, 0.01])?;
         Ok(Settings {
             load_steps: load_steps as u32,
             time_per_load_step: self.real("TIME_PER_LOADSTEP", 0.0)?,
@@ -528,6 +531,7 @@ impl Cps {
             quasi_static: self.flag("QUASISTATIC_CONVERGENCE")?,
             objective_stress: self.flag("APPLY_OBJECTIVE_STRESS")?,
             tolerated_error_solid,
+            tolerated_error_liquid,
             output_material_points,
         })
     }

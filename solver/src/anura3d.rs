@@ -351,6 +351,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             max_steps: s.max_time_steps,
             force_tolerance: s.tolerated_error_solid[0],
             energy_tolerance: s.tolerated_error_solid[1],
+            liquid_force_tolerance: s.tolerated_error_liquid[0],
         }),
         objective_stress: s.objective_stress,
         integration,

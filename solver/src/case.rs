@@ -198,6 +198,9 @@ pub struct QuasiStatic {
     pub force_tolerance: f64,
     /// Tolerated ratio kinetic energy / external work.
     pub energy_tolerance: f64,
+    /// Tolerated ratio |free out-of-balance force| / |free external force| of the liquid
+    /// (Anura3D's `TOLERATED_ERROR_LIQUID`; two-phase cases).
+    pub liquid_force_tolerance: f64,
 }
 
 /// How stresses are integrated (Anura3D's `COMPUTATION_METHOD`).

@@ -81,6 +81,8 @@ pub struct Engine<R: Real> {
     /// |free out-of-balance force| / |free external force| of the last step (0 when there
     /// is no external force).
     pub force_error: f64,
+    /// The same ratio for the liquid of two-phase cases (0 in dry ones).
+    pub liquid_force_error: f64,
     /// The thread team.
     pub team: Team,
     /// Per-thread ranges and the node-to-corner map of the parallel sums.
@@ -255,6 +257,7 @@ impl<R: Real> Engine<R> {
             point_loads,
             mixed,
             force_error: 0.0,
+            liquid_force_error: 0.0,
             fluids,
             liquid_fixed,
             locate_outcome: vec![((usize::MAX, 0), 0); team.threads],
@@ -304,7 +307,7 @@ impl<R: Real> Engine<R> {
             &mut self.grid,
         );
         let t1 = Instant::now();
-        self.force_error = if self.grid.liquid.is_some() {
+        (self.force_error, self.liquid_force_error) = if self.grid.liquid.is_some() {
             grid_update::grid_update_two_phase(
                 &mut self.grid,
                 &self.traction,
@@ -317,17 +320,19 @@ impl<R: Real> Engine<R> {
                 case.damping_rule,
                 case.drag,
                 case.liquid_load_on_mixture,
+                gravity,
                 R::of(dt),
             )
         } else {
-            grid_update::grid_update(
+            let f = grid_update::grid_update(
                 &mut self.grid,
                 &self.traction,
                 tm,
                 &self.fixed,
                 R::of(case.damping),
                 case.damping_rule,
-            )
+            );
+            (f, 0.0)
         };
         let t2 = Instant::now();
         grid_to_particle::grid_to_particle(
@@ -415,15 +420,18 @@ impl<R: Real> Engine<R> {
         Ok(())
     }
 
-    /// Anura3D's quasi-static convergence test: out-of-balance force and kinetic energy (per
-    /// unit of external work) within the tolerances.
-    pub fn converged(&self, force_tolerance: f64, energy_tolerance: f64) -> bool {
+    /// Anura3D's quasi-static convergence test: out-of-balance forces of the mixture and of the
+    /// liquid and the kinetic energy (per unit of external work) within the tolerances.
+    pub fn converged(&self, qs: &crate::case::QuasiStatic) -> bool {
+        let (force_tolerance, energy_tolerance) = (qs.force_tolerance, qs.energy_tolerance);
         let kinetic = if self.external_work != 0.0 {
             (self.kinetic_energy() / self.external_work).abs()
         } else {
             0.0
         };
-        self.force_error <= force_tolerance && kinetic <= energy_tolerance
+        self.force_error <= force_tolerance
+            && self.liquid_force_error <= qs.liquid_force_tolerance
+            && kinetic <= energy_tolerance
     }
 
     /// Finds every point's element (each thread walks its own points), stops at the first

@@ -85,7 +85,10 @@ pub fn grid_update<R: Real>(
 /// (`liquid_traction` × `liquid_scale`) act on the liquid and, with `liquid_load_on_mixture`,
 /// as part of the total traction, on the mixture too (Anura3D applies them to the liquid
 /// alone). Nodes without liquid mass follow the dry update. Returns the out-of-balance
-/// force ratio of the mixture, as [`grid_update`].
+/// force ratios of the mixture, as [`grid_update`], and of the liquid: |F_w + Q (v - w)| /
+/// |M_w g + loads + Q (v - w)| over the free liquid components (start-of-step velocities, as
+/// Anura3D's convergence check; 0 without external force). `gravity` is the acceleration of
+/// this step.
 #[allow(clippy::too_many_arguments)]
 pub fn grid_update_two_phase<R: Real>(
     g: &mut Grid<R>,
@@ -99,9 +102,11 @@ pub fn grid_update_two_phase<R: Real>(
     rule: DampingRule,
     drag: Drag,
     liquid_load_on_mixture: bool,
+    gravity: V3<R>,
     dt: R,
-) -> f64 {
+) -> (f64, f64) {
     let (mut unbalanced, mut external) = (0.0, 0.0);
+    let (mut unbalanced_w, mut external_w) = (0.0, 0.0);
     let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
     let eps = heaviest * R::of(MASS_EPS);
     g.empty_below = eps;
@@ -137,6 +142,17 @@ pub fn grid_update_two_phase<R: Real>(
                 continue;
             }
             let f_w = gl.force[n][a] + lt;
+            if !liquid_fixed[n][a] {
+                let v = if fixed[n][a] {
+                    R::ZERO
+                } else {
+                    g.momentum[n][a] / ms
+                };
+                let qvw = q * (v - gl.momentum[n][a] / mw);
+                let (out, ext) = (f_w + qvw, mw * gravity[a] + lt + qvw);
+                unbalanced_w += out.f64() * out.f64();
+                external_w += ext.f64() * ext.f64();
+            }
             let (fs, fw) = match rule {
                 DampingRule::Mixture => (damp(rule, alpha, f_mix, g.momentum[n][a]), f_w),
                 DampingRule::Anura3d => {
@@ -202,9 +218,6 @@ pub fn grid_update_two_phase<R: Real>(
             gl.acc[n][a] = a_w;
         }
     }
-    if external > 0.0 {
-        (unbalanced / external).sqrt()
-    } else {
-        0.0
-    }
+    let ratio = |u: f64, e: f64| if e > 0.0 { (u / e).sqrt() } else { 0.0 };
+    (ratio(unbalanced, external), ratio(unbalanced_w, external_w))
 }

@@ -104,7 +104,7 @@ fn drive<R: Real>(
                 // step's duration.
                 let done = if taken == 0 {
                     false
-                } else if engine.converged(qs.force_tolerance, qs.energy_tolerance) {
+                } else if engine.converged(qs) {
                     true
                 } else if let Some(m) = qs.max_steps {
                     taken > m
