@@ -11,6 +11,7 @@
 
 pub mod anura3d;
 pub mod anura3d_compare;
+pub mod anura3d_keys;
 pub mod case;
 pub mod consolidation;
 pub mod engine;
