@@ -417,6 +417,10 @@ fn evaluate(
                     row.reason = Some(refusal_reason(item, message));
                     row.status = Status::Refused(msg);
                 }
+                CaseError::Key(r) => {
+                    row.reason = Some(refusal_reason(&format!("$${}", r.key), &r.what));
+                    row.status = Status::Refused(msg);
+                }
                 _ => row.status = Status::Unreadable(msg),
             }
             return row;

@@ -24,6 +24,9 @@ pub enum CaseError {
     /// Reading the files failed.
     #[error(transparent)]
     Read(#[from] mpm_shared::Error),
+    /// A key that can change results holds a value this solver does not model.
+    #[error(transparent)]
+    Key(#[from] crate::anura3d_keys::Refusal),
     /// The case asks for something this solver does not model (yet).
     #[error("{file}: {item}: {message}")]
     Unsupported {
@@ -49,6 +52,8 @@ fn curve(m: Multiplier, total: f64, file: &str, key: &str) -> Result<(f64, LoadC
     Ok(match m {
         Multiplier::Off => (0.0, LoadCurve::Step),
         Multiplier::Step { value } => (value, LoadCurve::Step),
+        // A "linear" multiplier that does not change is a constant one.
+        Multiplier::Linear { start, end } if start == end => (end, LoadCurve::Step),
         Multiplier::Linear { start, end } => {
             if start != 0.0 {
                 return Err(unsupported(
@@ -80,6 +85,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         eprintln!("mpm-solve: warning: {w}");
     }
     let s = cps.settings()?;
+    check_keys(&model, &cps, &gfile, &cfile)?;
     if model.element_type == ElementType::Tri3 {
         return Err(unsupported(
             &gfile,
@@ -371,6 +377,48 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         engine: Default::default(),
     };
     Ok((case, s))
+}
+
+/// Checks every GOM section (outside material blocks) and every CPS key against the key table
+/// ([`crate::anura3d_keys`]): keys that would change results and are not modelled stop the case
+/// unless they hold their inert value. GOM sections the table does not know are named in a
+/// warning (unknown CPS keys are, when the CPS is read).
+fn check_keys(model: &Model, cps: &Cps, gfile: &str, cfile: &str) -> Result<(), CaseError> {
+    use crate::anura3d_keys::{check, status, KeyKind, KeyStatus};
+    for sec in &model.sections {
+        let key = sec.keyword.as_str();
+        if mpm_shared::model::is_material_key(key) {
+            continue;
+        }
+        let lines: Vec<String> = match &sec.body {
+            Body::Table { rows, .. } if rows.is_empty() => Vec::new(),
+            Body::Table { rows, .. } => vec![format!("{} rows", rows.len())],
+            Body::PerElement(t) => {
+                let nonzero = t
+                    .rows()
+                    .flatten()
+                    .filter(|v| v.as_f64().is_some_and(|x| x != 0.0))
+                    .count();
+                if nonzero == 0 {
+                    Vec::new()
+                } else {
+                    vec![format!("{nonzero} non-zero values")]
+                }
+            }
+            Body::Text(l) => l.clone(),
+            Body::Opaque(l) if mpm_shared::model::opaque_is_empty(l) => Vec::new(),
+            Body::Opaque(l) => l.clone(),
+            _ => continue,
+        };
+        if status(KeyKind::GomSection, key) == KeyStatus::Unknown {
+            eprintln!("mpm-solve: warning: {gfile}: section $${key} is not known to this solver and is ignored");
+        }
+        check(KeyKind::GomSection, key, &lines, gfile, 0)?;
+    }
+    for e in &cps.entries {
+        check(KeyKind::CpsKey, &e.keyword, &e.lines, cfile, e.line)?;
+    }
+    Ok(())
 }
 
 /// The loads of `$$START_LOAD_ON_MATERIAL_POINTS_SOLID` rows (3 corners first, then a traction

@@ -3,9 +3,9 @@
 //! with `*` standing for any text), each with a short reason; the compatibility matrix
 //! (`solver/examples/anura3d_compat.rs`) prints it for every key the benchmark suite uses.
 //!
-//! The table describes the loader as it is. [`KeyStatus::Unchecked`] marks keys the loader
-//! neither models nor refuses although they can change results: a case that sets them runs
-//! without them. Those are the gaps to close (model them, or refuse non-inert values).
+//! The loader checks every key against this table before it builds a case
+//! ([`check`]): a key that can change results and is not modelled stops the run unless it holds
+//! its inert value, naming the key, its value and the file.
 
 use std::fmt;
 
@@ -44,9 +44,6 @@ pub enum KeyStatus {
     RefusedUnlessInert(&'static str),
     /// Always refused: why.
     Refused(&'static str),
-    /// Neither modelled nor refused although it can change results (a gap): what it does; the
-    /// inert value.
-    Unchecked(&'static str),
     /// Not in [`KEYS`].
     Unknown,
 }
@@ -58,14 +55,13 @@ impl fmt::Display for KeyStatus {
             KeyStatus::Ignored(w) => write!(f, "ignored: {w}"),
             KeyStatus::RefusedUnlessInert(w) => write!(f, "refused unless inert: {w}"),
             KeyStatus::Refused(w) => write!(f, "refused: {w}"),
-            KeyStatus::Unchecked(w) => write!(f, "NOT CHECKED: {w}"),
             KeyStatus::Unknown => write!(f, "not in the key table"),
         }
     }
 }
 
 use KeyKind::{CpsKey, GomSection, MaterialKey};
-use KeyStatus::{Ignored, Modelled, RefusedUnlessInert, Unchecked};
+use KeyStatus::{Ignored, Modelled, RefusedUnlessInert};
 
 /// Every known key: kind, key (a `*` stands for any text), status with its reason. An exact key
 /// wins over a pattern; among patterns the first match wins.
@@ -81,7 +77,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         GomSection,
         "FORMULATION",
-        Unchecked("double-point (separate liquid material points) is not modelled; inert: single-point"),
+        RefusedUnlessInert("double-point (separate liquid material points) is not modelled; inert: single-point"),
     ),
     (
         GomSection,
@@ -91,7 +87,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         GomSection,
         "STARTDAMPING",
-        Unchecked("per-element local damping (values > 0 switch it on); inert: all 0"),
+        RefusedUnlessInert("per-element local damping (values > 0 switch it on); inert: all 0"),
     ),
     // --- GOM: boundary conditions and loads.
     (GomSection, "START_FIXITY_*_SOLID", Modelled),
@@ -132,7 +128,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         GomSection,
         "INITIAL_VELOCITY_MATERIAL_POINT",
-        Unchecked("initial material-point velocities (with CPS $$INITIAL_VELOCITY 1); inert: an empty list"),
+        RefusedUnlessInert("initial material-point velocities (with CPS $$INITIAL_VELOCITY 1); inert: an empty list"),
     ),
     (
         GomSection,
@@ -199,17 +195,17 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         GomSection,
         "MOVING_MESH_CORNER_NODES",
-        Unchecked("moving mesh (on when corner nodes are given); inert: absent or empty"),
+        RefusedUnlessInert("moving mesh (on when corner nodes are given); inert: absent or empty"),
     ),
     (
         GomSection,
         "COMPRESSING_MESH_CORNER_NODES",
-        Unchecked("moving mesh, compressed part; inert: absent or empty"),
+        RefusedUnlessInert("moving mesh, compressed part; inert: absent or empty"),
     ),
     (
         GomSection,
         "EXTENDING_MESH_CORNER_NODES",
-        Unchecked("moving mesh, extended part; inert: absent or empty"),
+        RefusedUnlessInert("moving mesh, extended part; inert: absent or empty"),
     ),
     (
         GomSection,
@@ -224,7 +220,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     // --- GOM material blocks.
     (MaterialKey, "MATERIAL_INDEX", Modelled),
     (MaterialKey, "MATERIAL_NAME", Ignored("a label")),
-    (MaterialKey, "MATERIAL_TYPE", Modelled), // dry_material, saturated_material_coupled; others refused
+    (MaterialKey, "MATERIAL_TYPE", Modelled), // dry, saturated coupled, drained, undrained total; others refused
     (MaterialKey, "MATERIAL_MODEL_SOLID", Modelled), // linear_elasticity; others refused
     (MaterialKey, "POROSITY_SOLID", Modelled),
     (MaterialKey, "DENSITY_SOLID", Modelled),
@@ -247,7 +243,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         MaterialKey,
         "POISSON_RATIO_UNDRAINED",
-        Ignored("for undrained material types, which are refused"),
+        Ignored("for undrained effective-stress materials, which are refused"),
     ),
     (
         MaterialKey,
@@ -355,18 +351,15 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (CpsKey, "TOLERATED_ERROR_SOLID", Modelled),
     (CpsKey, "MAXIMUM_TIME_STEPS", Modelled), // the quasi-static step limit
     (CpsKey, "APPLY_OBJECTIVE_STRESS", Modelled),
-    (CpsKey, "STRAIN_SMOOTHING", Modelled), // pore-pressure smoothing of saturated points
+    (CpsKey, "STRAIN_SMOOTHING", Modelled), // volumetric strain smoothing of both phases
     (CpsKey, "OUTPUT_NUMBER_OF_MATERIAL_POINTS", Modelled), // output: probes
     (CpsKey, "OUTPUT_MATERIAL_POINTS", Modelled),           // output: probes
-    (
-        CpsKey,
-        "TOLERATED_ERROR_LIQUID",
-        Unchecked("liquid tolerances of Anura3D's two-phase quasi-static convergence check"),
-    ),
+    // The liquid's force tolerance; its kinetic-energy tolerance is not checked.
+    (CpsKey, "TOLERATED_ERROR_LIQUID", Modelled),
     (
         CpsKey,
         "TOTAL_TIME",
-        Unchecked("time reached by earlier stages (staged calculations); inert: 0"),
+        RefusedUnlessInert("time reached by earlier stages (staged calculations); inert: 0"),
     ),
     (
         CpsKey,
@@ -392,83 +385,83 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         CpsKey,
         "MASS_SCALING",
-        Unchecked("mass scaling (parsed, not applied); inert: flag 0"),
+        RefusedUnlessInert("mass scaling (parsed, not applied); inert: flag 0"),
     ),
     (
         CpsKey,
         "BULK_VISCOSITY_DAMPING",
-        Unchecked("bulk viscosity damping; inert: flag 0"),
+        RefusedUnlessInert("bulk viscosity damping; inert: flag 0"),
     ),
     (
         CpsKey,
         "APPLY_SMOOTHENING_LIQUID_PRESSURE_INCREMENT",
-        Unchecked("smoothing of liquid pressure increments; inert: 0"),
+        RefusedUnlessInert("smoothing of liquid pressure increments; inert: 0"),
     ),
     (
         CpsKey,
         "FIX_SOLID_SKELETON",
-        Unchecked("solid points kept in place; inert: 0"),
+        RefusedUnlessInert("solid points kept in place; inert: 0"),
     ),
     (
         CpsKey,
         "APPLY_POROSITY_UPDATE",
-        Unchecked("porosity updated with volumetric strain; inert: 0"),
+        RefusedUnlessInert("porosity updated with volumetric strain; inert: 0"),
     ),
     (
         CpsKey,
         "APPLY_MATERIAL_UPDATE",
-        Unchecked("material changes between stages; inert: 0"),
+        RefusedUnlessInert("material changes between stages; inert: 0"),
     ),
     (
         CpsKey,
         "CONTACT_FORMULATION",
-        Unchecked("contact algorithm; inert: 0"),
+        RefusedUnlessInert("contact algorithm; inert: 0"),
     ),
     (
         CpsKey,
         "SUBMERGED_CALCULATION",
-        Unchecked("submerged (buoyant) weight; inert: first value 0"),
+        RefusedUnlessInert("submerged (buoyant) weight; inert: first value 0"),
     ),
     (
         CpsKey,
         "RESET_DISPLACEMENTS",
-        Unchecked("displacements reset to zero at the start; inert: 0"),
+        RefusedUnlessInert("displacements reset to zero at the start; inert: 0"),
     ),
     // --- CPS: initial state and hydraulics.
     (
         CpsKey,
         "K0_PROCEDURE",
-        Unchecked("initial stresses (and pore pressures) by the K0 procedure; inert: 0"),
+        RefusedUnlessInert("initial stresses (and pore pressures) by the K0 procedure; inert: 0"),
     ),
     (
         CpsKey,
         "INITIAL_WATER_PRESSURE",
-        Unchecked("initial pore pressure of every saturated point; inert: 0"),
+        RefusedUnlessInert("initial pore pressure of every saturated point; inert: 0"),
     ),
     (
         CpsKey,
         "INITIAL_VELOCITY",
-        Unchecked("initial material-point velocities from the GOM; inert: 0"),
+        RefusedUnlessInert("initial material-point velocities from the GOM; inert: 0"),
     ),
     (
         CpsKey,
         "MP_STRESS_INITIALIZATION_FROMFILE",
-        Unchecked("initial stresses read from a file; inert: 0"),
+        RefusedUnlessInert("initial stresses read from a file; inert: 0"),
     ),
     (
         CpsKey,
         "APPLY_SEEPAGE_FACE",
-        Unchecked("seepage face boundary; inert: 0"),
+        RefusedUnlessInert("seepage face boundary; inert: 0"),
     ),
     (
         CpsKey,
         "APPLY_INFILTRATION",
-        Unchecked("infiltration boundary; inert: 0"),
+        RefusedUnlessInert("infiltration boundary; inert: 0"),
     ),
     (
         CpsKey,
         "HYDRAULIC_HEAD",
-        Unchecked("prescribed hydraulic head; inert: off"),
+        RefusedUnlessInert("prescribed hydraulic head; inert: off"),
     ),
     (
         CpsKey,
@@ -537,6 +530,67 @@ pub fn lookup(kind: KeyKind, key: &str) -> Option<(&'static str, KeyStatus)> {
         .find(|e| e.1 == key)
         .or_else(|| of_kind().find(|e| e.1.contains('*') && matches(e.1, key)))
         .map(|e| (e.1, e.2))
+}
+
+/// Whether `lines` (a CPS key's value lines, or a GOM section's text lines) hold the inert value
+/// of a key refused unless inert: an empty list (nothing, or a count of 0), a first word that
+/// is 0 (`0`, `0.0`: a switch that is off), `off`, or the single-point formulation.
+pub fn is_inert(lines: &[String]) -> bool {
+    let words: Vec<&str> = lines.iter().flat_map(|l| l.split_whitespace()).collect();
+    match words.first() {
+        None => true,
+        Some(&w) => {
+            w.parse::<f64>().is_ok_and(|v| v == 0.0)
+                || w.eq_ignore_ascii_case("off")
+                || w.eq_ignore_ascii_case("single-point")
+        }
+    }
+}
+
+/// Why a key stops a case.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{file}: $${key} = {value:?}{at}: {what}")]
+pub struct Refusal {
+    /// The file holding the key.
+    pub file: String,
+    /// The key or section.
+    pub key: String,
+    /// Its value (first line), as written.
+    pub value: String,
+    /// `" (line N)"` when the line is known.
+    pub at: String,
+    /// What is not modelled, and the value that would be accepted.
+    pub what: String,
+}
+
+/// Checks `key` of `kind` with its value `lines` (line `line` of `file`, 0 when unknown)
+/// against the table: a refused key, or one refused unless inert holding another value, is a
+/// [`Refusal`]. Unknown keys pass (the caller warns).
+pub fn check(
+    kind: KeyKind,
+    key: &str,
+    lines: &[String],
+    file: &str,
+    line: usize,
+) -> Result<(), Refusal> {
+    let what = match status(kind, key) {
+        KeyStatus::Refused(w) => w,
+        KeyStatus::RefusedUnlessInert(w) if !is_inert(lines) => w,
+        _ => return Ok(()),
+    };
+    Err(Refusal {
+        file: file.to_string(),
+        key: key.to_string(),
+        value: lines
+            .first()
+            .map_or(String::new(), |l| l.trim().to_string()),
+        at: if line > 0 {
+            format!(" (line {line})")
+        } else {
+            String::new()
+        },
+        what: format!("not modelled ({what})"),
+    })
 }
 
 /// What the loader does with `key` of `kind` ([`KeyStatus::Unknown`] when not in [`KEYS`]).
