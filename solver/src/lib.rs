@@ -3,7 +3,8 @@
 //!
 //! One module per stage: [`particle_to_grid`], [`grid_update`], [`grid_to_particle`],
 //! [`stress`], [`locate`]; the law in [`linear_elastic`]; set-up in [`mesh`], [`particles`],
-//! [`case`] and [`scene`]; files in [`output`]; the driver in [`run`].
+//! [`case`] and [`scene`]; files in [`output`]; the driver in [`run`]; scenes written as
+//! Anura3D cases in [`export_anura3d`].
 #![warn(missing_docs)]
 // Kernels index several arrays (shape values, gradients, components) in lockstep, which reads
 // better as index loops; and `!(x > 0.0)` is deliberate where NaN must be rejected too.
@@ -15,6 +16,7 @@ pub mod anura3d_keys;
 pub mod case;
 pub mod consolidation;
 pub mod engine;
+pub mod export_anura3d;
 pub mod gather;
 pub mod grid;
 pub mod grid_to_particle;

@@ -1,7 +1,8 @@
 //! `mpm-solve`: explicit material point method on tetrahedral meshes.
 //!
 //! `mpm-solve SCENE.toml --out DIR` runs a TOML scene on a Gmsh mesh; `mpm-solve CASE.GOM --out
-//! DIR` runs an Anura3D case (features it does not model are refused by name).
+//! DIR` runs an Anura3D case (features it does not model are refused by name);
+//! `mpm-solve SCENE.toml --export-anura3d DIR` writes the scene as an Anura3D case instead.
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -16,6 +17,7 @@ use mpm_shared::cps::Cps;
 /// Examples:
 ///   mpm-solve testdata/column_gravity.toml --out out/column
 ///   mpm-solve case.GOM --check
+///   mpm-solve testdata/column_gravity.toml --export-anura3d out/a3d
 #[derive(Debug, Parser)]
 #[command(version, verbatim_doc_comment)]
 struct Args {
@@ -37,6 +39,10 @@ struct Args {
     /// Only read and check the input, print a summary and exit.
     #[arg(long)]
     check: bool,
+    /// Write the scene as an Anura3D case, DIR/NAME.GOM and DIR/NAME.CPS_001 (NAME: the scene
+    /// file's stem), and exit without running; what Anura3D cannot reproduce is refused by name.
+    #[arg(long, value_name = "DIR")]
+    export_anura3d: Option<PathBuf>,
     /// Worker threads [default: all cores available to the process]. Results are
     /// byte-identical for any count.
     #[arg(long)]
@@ -99,6 +105,20 @@ fn run(args: Args) -> anyhow::Result<()> {
         .input
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if let Some(dir) = &args.export_anura3d {
+        if !is_scene {
+            bail!(
+                "--export-anura3d needs a TOML scene; {} is not one",
+                args.input.display()
+            );
+        }
+        let done = mpm_solve::export_anura3d::export_scene(&args.input, dir)?;
+        for n in &done.notes {
+            eprintln!("mpm-solve: warning: {n}");
+        }
+        println!("wrote {} and {}", done.gom.display(), done.cps.display());
+        return Ok(());
+    }
     if is_scene {
         let case = mpm_solve::scene::load(&args.input)?;
         println!(

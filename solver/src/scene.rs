@@ -252,8 +252,72 @@ fn parse_plane(s: &str) -> Option<(usize, f64)> {
     Some((axis, v.trim().parse().ok()?))
 }
 
+/// A `[[material]]` entry as the scene gives it (densities in kg/m³, as written).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialInput {
+    /// The physical volume it fills (also the material's name).
+    pub physical: String,
+    /// Density (kg/m³): of the material when dry, of its grains when saturated.
+    pub density: f64,
+    /// Young's modulus (kPa).
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// Material points per element.
+    pub points_per_element: u32,
+    /// The pore liquid of a saturated material.
+    pub liquid: Option<LiquidInput>,
+}
+
+/// A `[material.liquid]` entry as the scene gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiquidInput {
+    /// Porosity n.
+    pub porosity: f64,
+    /// Liquid density (kg/m³).
+    pub density: f64,
+    /// Bulk modulus of the liquid (kPa).
+    pub bulk_modulus: f64,
+    /// Intrinsic permeability (m²).
+    pub intrinsic_permeability: f64,
+    /// Dynamic viscosity (kPa·s).
+    pub viscosity: f64,
+    /// Pore pressure at t = 0 (kPa).
+    pub initial_pore_pressure: f64,
+}
+
+/// A `[[traction]]` entry with the faces its physical surface resolved to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TractionInput {
+    /// The physical surface.
+    pub physical: String,
+    /// Its triangles: model node ids (0-based) of their corners, in the mesh file's order.
+    pub faces: Vec<[u32; 3]>,
+    /// Traction vector (kPa).
+    pub traction: [f64; 3],
+    /// Seconds to full load (0: sudden).
+    pub ramp: f64,
+}
+
+/// A scene resolved against its mesh: the case it runs, plus the scene's own values that the
+/// case no longer holds as written (for exporting it to another program).
+#[derive(Debug, Clone)]
+pub struct Resolved {
+    /// The case the scene runs.
+    pub case: Case,
+    /// The scene's material entries by model material index (entry 0 unused).
+    pub materials: Vec<Option<MaterialInput>>,
+    /// The scene's tractions in file order.
+    pub tractions: Vec<TractionInput>,
+}
+
 /// Reads a scene file and builds the case it describes.
 pub fn load(path: &Path) -> Result<Case, SceneError> {
+    resolve(path).map(|r| r.case)
+}
+
+/// Reads a scene file into the case it describes and the scene values behind it.
+pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| SceneError::Parse {
         file: file.clone(),
@@ -289,6 +353,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
     // Materials: model material k is the k-th physical volume group by tag (see msh::to_model).
     let names: Vec<String> = model.materials().iter().map(|m| m.name.clone()).collect();
     let mut materials = vec![None; names.len() + 1];
+    let mut inputs: Vec<Option<MaterialInput>> = vec![None; names.len() + 1];
     let mut points = vec![0u32; names.len() + 1];
     for m in &scene.material {
         let item = format!("material \"{}\"", m.physical);
@@ -317,6 +382,21 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         .map_err(|e| invalid(item.clone(), e))?;
         materials[k] = Some(spec);
         points[k] = m.points_per_element;
+        inputs[k] = Some(MaterialInput {
+            physical: m.physical.clone(),
+            density: m.density,
+            young: m.young,
+            poisson: m.poisson,
+            points_per_element: m.points_per_element,
+            liquid: m.liquid.as_ref().map(|l| LiquidInput {
+                porosity: l.porosity,
+                density: l.density,
+                bulk_modulus: l.bulk_modulus,
+                intrinsic_permeability: l.intrinsic_permeability,
+                viscosity: l.viscosity,
+                initial_pore_pressure: l.initial_pore_pressure,
+            }),
+        });
     }
     let element_material: Vec<u32> = model
         .element_materials()
@@ -392,6 +472,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
     let nodes = model.node_count();
     let mut traction = vec![[0.0; 3]; nodes];
     let mut traction_ramp = 0.0f64;
+    let mut tractions = Vec::with_capacity(scene.traction.len());
     for tr in &scene.traction {
         let faces = physical_faces(&msh_mesh, &node_map, &tr.physical).ok_or_else(|| {
             invalid(
@@ -401,6 +482,12 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         })?;
         add_face_loads(&model, &faces, tr.traction, &mut traction);
         traction_ramp = traction_ramp.max(tr.ramp);
+        tractions.push(TractionInput {
+            physical: tr.physical.clone(),
+            faces,
+            traction: tr.traction,
+            ramp: tr.ramp,
+        });
     }
     let gravity = scene.gravity.as_ref().map_or([0.0; 3], |g| g.vector);
     let gravity_ramp = scene.gravity.as_ref().map_or(0.0, |g| g.ramp);
@@ -490,7 +577,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
             }
         })
         .collect();
-    Ok(Case {
+    let case = Case {
         name: path
             .file_stem()
             .map(|s| s.to_string_lossy().to_string())
@@ -528,6 +615,11 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         consolidation,
         probes: scene.probes.clone(),
         engine: Default::default(),
+    };
+    Ok(Resolved {
+        case,
+        materials: inputs,
+        tractions,
     })
 }
 
