@@ -366,6 +366,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         drag: crate::case::Drag::Implicit,
         initial_step: Some(ANURA3D_FIRST_STEP),
         smooth_pressure: false,
+        fixed_liquid_mass: true,
         strain_smoothing: cps.get("STRAIN_SMOOTHING").is_some_and(|e| {
             e.lines
                 .first()

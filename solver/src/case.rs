@@ -317,6 +317,9 @@ pub struct Case {
     /// Smooth pore-pressure rates through the nodes (V N-weighted averages, interpolated back
     /// with N; scenes).
     pub smooth_pressure: bool,
+    /// Keep each point's liquid mass (and its weight and drag) at that of its initial volume,
+    /// as Anura3D does; otherwise it follows the point's volume (n ρw V at constant porosity).
+    pub fixed_liquid_mass: bool,
     /// Anura3D's strain smoothing (`$$STRAIN_SMOOTHING 1`): the volumetric strain increments of
     /// both phases averaged element → node → element, material by material
     /// ([`crate::smoothing`]); it replaces `smooth_pressure` when on.
@@ -471,6 +474,7 @@ impl Case {
             initial_step: None,
             smooth_pressure: true,
             strain_smoothing: false,
+            fixed_liquid_mass: false,
             consolidation: None,
             probes: Vec::new(),
             engine: Default::default(),

@@ -156,11 +156,14 @@ impl<R: Real> Engine<R> {
         }
         let two_phase = case.has_liquid();
         if two_phase {
-            particles.add_liquid(|m| {
-                case.materials[m as usize]
-                    .as_ref()
-                    .map_or(0.0, |s| s.initial_pore_pressure)
-            });
+            particles.add_liquid(
+                |m| {
+                    case.materials[m as usize]
+                        .as_ref()
+                        .map_or(0.0, |s| s.initial_pore_pressure)
+                },
+                case.fixed_liquid_mass,
+            );
         }
         let fluids: Vec<Option<Fluid<R>>> = case
             .materials
@@ -597,6 +600,7 @@ fn first_touch<R: Real>(team: &Team, layout: &Layout<R>, p: Particles<R>) -> Par
     let liquid = p.liquid.as_ref().map(|l| crate::particles::LiquidPoints {
         w: copy(team, layout, &l.w),
         p: copy(team, layout, &l.p),
+        volume0: l.volume0.as_ref().map(|v| copy(team, layout, v)),
     });
     Particles {
         x: copy(team, layout, &p.x),

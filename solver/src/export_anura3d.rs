@@ -595,7 +595,9 @@ fn cps_file(case: &crate::case::Case, v: CpsValues) -> Cps {
     let (g_abs, dir) = if g_abs > 0.0 {
         (g_abs, g.map(|c| c / g_abs))
     } else {
-        (0.0, [0.0, -1.0, 0.0])
+        // Without gravity (GRAVITY_LOAD off) Anura3D still needs g: it turns intrinsic
+        // permeability into conductivity with it (a 0 makes its drag 0/0).
+        (crate::liquid::G, [0.0, -1.0, 0.0])
     };
     let r = real_to_string;
     let damping = if case.damping > 0.0 {

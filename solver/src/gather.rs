@@ -204,6 +204,9 @@ pub fn sort_by_element<R: Real>(
     if let Some(l) = &mut p.liquid {
         permute(&mut l.w);
         permute(&mut l.p);
+        if let Some(v0) = &mut l.volume0 {
+            permute(v0);
+        }
     }
     true
 }

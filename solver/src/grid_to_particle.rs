@@ -132,7 +132,8 @@ pub fn liquid_to_particles<R: Real>(
             for c in 0..3 {
                 w[c] += dt * dw[c];
             }
-            let mw = f.rho_w * volume[i];
+            // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
+            let mw = f.rho_w * lp.volume0.as_ref().map_or(volume[i], |v0| v0[i]);
             for (k, slot) in four.iter_mut().enumerate() {
                 for c in 0..3 {
                     slot[c] += mw * n[k] * w[c];

@@ -76,10 +76,11 @@ pub fn grid_update<R: Real>(
 ///
 /// with the drag at the start-of-step velocities ([`Drag::Explicit`], as Anura3D) or at the
 /// end-of-step ones, w + a_w Δt and v + a_s Δt ([`Drag::Implicit`]: a 2×2 solve that never
-/// limits the step). Local damping follows `rule` ([`DampingRule`]): Anura3D's splits the
-/// mixture force into its solid part F - n F_w, damped against v, and its liquid part n F_w,
-/// damped against w (n: the node's porosity M̄_w / M_w), and damps F_w against w; the mixture
-/// rule damps F against v and leaves F_w alone. Fixed components of a phase have zero
+/// limits the step). Local damping follows `rule` ([`DampingRule`]): Anura3D's damps F_w
+/// against w and splits the mixture force into its solid part F - n F_w, damped against v, and
+/// its liquid part n F_w, damped against the liquid velocity already updated with its explicit
+/// acceleration, w + a_w Δt (n: the node's porosity M̄_w / M_w); the mixture rule damps F
+/// against v and leaves F_w alone. Fixed components of a phase have zero
 /// acceleration (a fixed solid takes the reaction; a fixed liquid is an impermeable face) and,
 /// as in Anura3D, zero velocity in the explicit drag and the damping. Loads on the liquid
 /// (`liquid_traction` × `liquid_scale`) act on the liquid and, with `liquid_load_on_mixture`,
@@ -142,36 +143,45 @@ pub fn grid_update_two_phase<R: Real>(
                 continue;
             }
             let f_w = gl.force[n][a] + lt;
+            // Start-of-step velocities of the fixity-masked phases (Anura3D's nodal velocities).
+            let v = if fixed[n][a] {
+                R::ZERO
+            } else {
+                g.momentum[n][a] / ms
+            };
+            let w = if liquid_fixed[n][a] {
+                R::ZERO
+            } else {
+                gl.momentum[n][a] / mw
+            };
             if !liquid_fixed[n][a] {
-                let v = if fixed[n][a] {
-                    R::ZERO
-                } else {
-                    g.momentum[n][a] / ms
-                };
-                let qvw = q * (v - gl.momentum[n][a] / mw);
+                let qvw = q * (v - w);
                 let (out, ext) = (f_w + qvw, mw * gravity[a] + lt + qvw);
                 unbalanced_w += out.f64() * out.f64();
                 external_w += ext.f64() * ext.f64();
             }
-            let (fs, fw) = match rule {
-                DampingRule::Mixture => (damp(rule, alpha, f_mix, g.momentum[n][a]), f_w),
+            let fw = match rule {
+                DampingRule::Mixture => f_w,
+                DampingRule::Anura3d => damp(rule, alpha, f_w, w),
+            };
+            // The liquid's acceleration with the drag at the start-of-step velocities.
+            let a_w_explicit = if liquid_fixed[n][a] {
+                R::ZERO
+            } else {
+                (fw + q * (v - w)) / mw
+            };
+            let fs = match rule {
+                DampingRule::Mixture => damp(rule, alpha, f_mix, g.momentum[n][a]),
                 DampingRule::Anura3d => {
-                    // Anura3D damps against the nodal velocities of the fixity-masked phases.
-                    let v = if fixed[n][a] {
-                        R::ZERO
-                    } else {
-                        g.momentum[n][a]
-                    };
-                    let w = if liquid_fixed[n][a] {
-                        R::ZERO
-                    } else {
-                        gl.momentum[n][a]
+                    // Anura3D damps the liquid part of the mixture's force against the liquid
+                    // velocity it has just updated (with the explicit drag), the solid part
+                    // against the start-of-step solid velocity.
+                    let w_end = match drag {
+                        Drag::Explicit => w + a_w_explicit * dt,
+                        Drag::Implicit => w,
                     };
                     let f_wn = mwn / mw * f_w;
-                    (
-                        damp(rule, alpha, f_mix - f_wn, v) + damp(rule, alpha, f_wn, w),
-                        damp(rule, alpha, f_w, w),
-                    )
+                    damp(rule, alpha, f_mix - f_wn, v) + damp(rule, alpha, f_wn, w_end)
                 }
             };
             let (a_s, a_w) = match drag {
@@ -191,27 +201,12 @@ pub fn grid_update_two_phase<R: Real>(
                     }
                 }
                 Drag::Explicit => {
-                    let v = if fixed[n][a] {
-                        R::ZERO
-                    } else {
-                        g.momentum[n][a] / ms
-                    };
-                    let w = if liquid_fixed[n][a] {
-                        R::ZERO
-                    } else {
-                        gl.momentum[n][a] / mw
-                    };
-                    let a_w = if liquid_fixed[n][a] {
-                        R::ZERO
-                    } else {
-                        (fw + q * (v - w)) / mw
-                    };
                     let a_s = if fixed[n][a] {
                         R::ZERO
                     } else {
-                        (fs - mwn * a_w) / ms
+                        (fs - mwn * a_w_explicit) / ms
                     };
-                    (a_s, a_w)
+                    (a_s, a_w_explicit)
                 }
             };
             g.acc[n][a] = a_s;

@@ -202,14 +202,17 @@ pub fn liquid_to_grid<R: Real>(
             }
             let n = mesh.shape(e, &p.x[i]);
             let vol = p.volume[i];
-            let mw = f.rho_w * vol;
+            // The liquid's mass, weight and drag are taken on the initial volume where the
+            // case holds the liquid mass fixed.
+            let vw = lp.volume0.as_ref().map_or(vol, |v0| v0[i]);
+            let mw = f.rho_w * vw;
             let pw = if full { R::ZERO } else { lp.p[i] * vol };
             let w = lp.w[i];
             for (k, slot) in four.iter_mut().enumerate() {
                 let nk = n[k];
                 slot[0] += mw * nk;
                 slot[1] += f.n * mw * nk;
-                slot[2] += f.drag * vol * nk;
+                slot[2] += f.drag * vw * nk;
                 for a in 0..3 {
                     slot[3 + a] += mw * nk * w[a];
                     slot[6 + a] += mw * nk * gravity[a] - pw * grad[k][a];

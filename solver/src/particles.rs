@@ -37,6 +37,10 @@ pub struct LiquidPoints<R: Real> {
     pub w: Vec<V3<R>>,
     /// Pore pressure (kPa, compression negative, as Anura3D).
     pub p: Vec<R>,
+    /// The volume a point's liquid mass, weight and drag are taken on, when it is held at the
+    /// initial volume (Anura3D keeps a point's liquid mass constant); `None`: the current
+    /// volume (the liquid mass n ρw V follows the point's volume at constant porosity).
+    pub volume0: Option<Vec<R>>,
 }
 
 impl<R: Real> Particles<R> {
@@ -53,24 +57,32 @@ impl<R: Real> Particles<R> {
     /// Bytes of state per point (more when the liquid is modelled).
     pub fn bytes_per_point(&self) -> usize {
         let r = std::mem::size_of::<R>();
-        let liquid = if self.liquid.is_some() { 4 * r } else { 0 };
+        let liquid = match &self.liquid {
+            None => 0,
+            Some(l) if l.volume0.is_some() => 5 * r,
+            Some(_) => 4 * r,
+        };
         (3 + 3 + 3 + 1 + 1 + 6) * r + 4 + 4 + 4 + 1 + liquid
     }
 
-    /// Adds the liquid state, every point starting at rest with pore pressure `p0(material)`.
-    pub fn add_liquid(&mut self, p0: impl Fn(u32) -> f64) {
+    /// Adds the liquid state, every point starting at rest with pore pressure `p0(material)`;
+    /// with `fixed_liquid_mass`, the liquid's mass is kept at that of the initial volume.
+    pub fn add_liquid(&mut self, p0: impl Fn(u32) -> f64, fixed_liquid_mass: bool) {
         self.liquid = Some(LiquidPoints {
             w: vec![[R::ZERO; 3]; self.len()],
             p: self.material.iter().map(|&m| R::of(p0(m))).collect(),
+            volume0: fixed_liquid_mass.then(|| self.volume.clone()),
         });
     }
 }
 
 /// Barycentric positions of Anura3D's material points in a tetrahedron for the supported counts:
-/// 1 (centroid) and 4 (the 4-point Gauss rule, a = 0.1381966, b = 0.5854102).
+/// 1 (centroid) and 4 (the 4-point Gauss rule, a = (5 - √5)/20 ≈ 0.1381966,
+/// b = (5 + 3√5)/20 ≈ 0.5854102, exactly as Anura3D places them).
 pub fn tet_points(n: u32) -> Option<Vec<[f64; 4]>> {
-    const A: f64 = 0.1381966;
-    const B: f64 = 0.5854102;
+    // (5 - √5)/20 and (5 + 3√5)/20, written out (sqrt is not const).
+    const A: f64 = 0.138_196_601_125_010_5;
+    const B: f64 = 0.585_410_196_624_968_5;
     match n {
         0 => Some(Vec::new()),
         1 => Some(vec![[0.25; 4]]),

@@ -612,6 +612,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         initial_step: None,
         smooth_pressure: true,
         strain_smoothing: false,
+        fixed_liquid_mass: false,
         consolidation,
         probes: scene.probes.clone(),
         engine: Default::default(),

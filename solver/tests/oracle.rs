@@ -1,0 +1,228 @@
+//! Point-by-point comparisons with Anura3D itself: a scene is exported as a GOM/CPS pair
+//! (`--export-anura3d`), run by the Anura3D binary that `ANURA3D_ORACLE` names (built by
+//! `../shared/anura3d-oracle/build.sh`) and by `mpm-solve` on the same files, and every material
+//! point is compared (by id) at the end of every load step. Skipped, visibly, when the variable
+//! is unset; a failure when it names no file.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use mpm_shared::anura3d_vtk::{read_step, MaterialPointState};
+use mpm_solve::case::Drag;
+use mpm_solve::consolidation::{ConsolidationSpec, Layer, Start};
+use mpm_solve::terzaghi;
+
+fn testdata(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../testdata")
+        .join(name)
+}
+
+/// The Anura3D binary, or `None` (skipped) when `ANURA3D_ORACLE` is unset.
+fn oracle() -> Option<PathBuf> {
+    let Some(bin) = std::env::var_os("ANURA3D_ORACLE").filter(|v| !v.is_empty()) else {
+        eprintln!("ANURA3D_ORACLE not set: comparison with Anura3D skipped");
+        return None;
+    };
+    let bin = PathBuf::from(bin);
+    assert!(
+        bin.is_file(),
+        "ANURA3D_ORACLE={} is not a file",
+        bin.display()
+    );
+    Some(bin)
+}
+
+/// Runs Anura3D on `dir/NAME.GOM` + `dir/NAME.CPS_001` in `dir`.
+fn run_oracle(bin: &Path, dir: &Path, name: &str) {
+    let out = Command::new(bin)
+        .arg(name)
+        .current_dir(dir)
+        .output()
+        .expect("run Anura3D");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("Calculation finished."),
+        "Anura3D did not finish:\n{}",
+        &text[text.len().saturating_sub(2000)..]
+    );
+}
+
+/// One load step's material points, ordered by id: displacement, effective stress, pore
+/// pressure and position.
+#[derive(Debug, Clone, Default)]
+struct Step {
+    u: Vec<[f64; 3]>,
+    s: Vec<[f64; 6]>,
+    p: Vec<f64>,
+    y: Vec<f64>,
+}
+
+fn from_anura3d(points: &[MaterialPointState]) -> Step {
+    let mut st = Step::default();
+    for (k, m) in points.iter().enumerate() {
+        assert_eq!(m.id as usize, k + 1, "Anura3D's material points are 1..N");
+        st.u.push(m.displacement_solid);
+        st.s.push(m.eff_stress_solid);
+        st.p.push(m.pressure_liquid.unwrap_or(0.0));
+        st.y.push(m.position[1]);
+    }
+    st
+}
+
+/// Runs `mpm-solve` on the exported files with `drag`; one [`Step`] per load step.
+fn run_ours(gom: &Path, cps: &Path, drag: Drag) -> Vec<Step> {
+    let (mut case, _) = mpm_solve::anura3d::load(gom, cps).unwrap();
+    case.drag = drag;
+    let out = tempfile::tempdir().unwrap();
+    let mut steps = Vec::new();
+    mpm_solve::run::run_observed::<f64>(&case, out.path(), false, false, &mut |e| {
+        let p = &e.particles;
+        let mut order: Vec<usize> = (0..p.len()).collect();
+        order.sort_by_key(|&i| p.id[i]);
+        let l = p.liquid.as_ref();
+        steps.push(Step {
+            u: order.iter().map(|&i| p.u[i]).collect(),
+            s: order.iter().map(|&i| p.stress[i]).collect(),
+            p: order.iter().map(|&i| l.map_or(0.0, |l| l.p[i])).collect(),
+            y: order.iter().map(|&i| p.x[i][1]).collect(),
+        });
+    })
+    .unwrap();
+    steps
+}
+
+/// Largest and RMS difference of one field over every point and component, relative to the
+/// field's largest Anura3D value at that step.
+fn diff<const N: usize>(a: &[[f64; N]], b: &[[f64; N]]) -> (f64, f64) {
+    assert_eq!(a.len(), b.len(), "different numbers of material points");
+    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let scale = if scale > 0.0 { scale } else { 1.0 };
+    let (mut max, mut sum, mut n) = (0.0f64, 0.0, 0usize);
+    for (x, y) in a.iter().zip(b) {
+        for c in 0..N {
+            let d = (x[c] - y[c]).abs() / scale;
+            max = max.max(d);
+            sum += d * d;
+            n += 1;
+        }
+    }
+    (max, (sum / n as f64).sqrt())
+}
+
+/// Per load step: (max, RMS) of u, σ' and p.
+fn compare(anura: &[Step], ours: &[Step]) -> Vec<[(f64, f64); 3]> {
+    assert_eq!(anura.len(), ours.len(), "different numbers of load steps");
+    anura
+        .iter()
+        .zip(ours)
+        .map(|(a, b)| {
+            let pa: Vec<[f64; 1]> = a.p.iter().map(|&v| [v]).collect();
+            let pb: Vec<[f64; 1]> = b.p.iter().map(|&v| [v]).collect();
+            [diff(&a.u, &b.u), diff(&a.s, &b.s), diff(&pa, &pb)]
+        })
+        .collect()
+}
+
+fn table(title: &str, rows: &[[(f64, f64); 3]]) -> String {
+    let mut s = format!(
+        "{title}\n| load step | u max | u RMS | σ' max | σ' RMS | p max | p RMS |\n|---:|---:|---:|---:|---:|---:|---:|\n"
+    );
+    for (k, r) in rows.iter().enumerate() {
+        s.push_str(&format!(
+            "| {} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} |\n",
+            k + 1,
+            r[0].0,
+            r[0].1,
+            r[1].0,
+            r[1].1,
+            r[2].0,
+            r[2].1
+        ));
+    }
+    s
+}
+
+/// RMS over points of (excess pore pressure - Terzaghi) / u0 at each load step.
+fn terzaghi_rms(layer: &Layer, steps: &[Step], times: &[f64]) -> Vec<f64> {
+    steps
+        .iter()
+        .zip(times)
+        .map(|(st, &t)| {
+            let tv = layer.tv(t);
+            let sum: f64 =
+                st.p.iter()
+                    .zip(&st.y)
+                    .map(|(&p, &y)| {
+                        let zeta = ((layer.top - y) / layer.height).clamp(0.0, 1.0);
+                        let e = (-p - layer.u0 * terzaghi::excess_pressure(zeta, tv)) / layer.u0;
+                        e * e
+                    })
+                    .sum();
+            (sum / st.p.len() as f64).sqrt()
+        })
+        .collect()
+}
+
+#[test]
+fn consolidation_column_matches_anura3d_point_by_point() {
+    let Some(bin) = oracle() else { return };
+    let scene = testdata("oracle_column.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let files = mpm_solve::export_anura3d::export_scene(&scene, dir.path()).unwrap();
+    let name = files.gom.file_stem().unwrap().to_string_lossy().to_string();
+    run_oracle(&bin, dir.path(), &name);
+    let case = mpm_solve::scene::load(&scene).unwrap();
+    let anura: Vec<Step> = (1..=case.output_times.len() as u32)
+        .map(|k| from_anura3d(&read_step(dir.path(), &name, k).unwrap()))
+        .collect();
+    let explicit = compare(&anura, &run_ours(&files.gom, &files.cps, Drag::Explicit));
+    let implicit = compare(&anura, &run_ours(&files.gom, &files.cps, Drag::Implicit));
+    eprintln!(
+        "{}",
+        table(
+            "mpm-solve --drag explicit against Anura3D (relative to each field's largest Anura3D value)",
+            &explicit
+        )
+    );
+    eprintln!(
+        "{}",
+        table("mpm-solve --drag implicit against Anura3D", &implicit)
+    );
+    // Against Terzaghi, both codes on the same files.
+    let spec = ConsolidationSpec {
+        load: 10.0,
+        start: Start::Rest,
+        compare_rest: false,
+    };
+    let layer = Layer::of(&case, &spec).unwrap();
+    let ours = run_ours(&files.gom, &files.cps, Drag::Implicit);
+    let (ta, to) = (
+        terzaghi_rms(&layer, &anura, &case.output_times),
+        terzaghi_rms(&layer, &ours, &case.output_times),
+    );
+    eprintln!("| T_v | Anura3D RMS / u0 | mpm-solve (implicit drag) RMS / u0 |\n|---:|---:|---:|");
+    for (k, t) in case.output_times.iter().enumerate() {
+        eprintln!("| {:.3} | {:.4} | {:.4} |", layer.tv(*t), ta[k], to[k]);
+    }
+    for (k, r) in explicit.iter().enumerate() {
+        for (f, name) in r.iter().zip(["u", "σ'", "p"]) {
+            assert!(
+                f.0 <= 1e-4,
+                "explicit drag, load step {}: {name} differs by {:.2e} of its largest value",
+                k + 1,
+                f.0
+            );
+        }
+    }
+    for (k, r) in implicit.iter().enumerate() {
+        for (f, name) in r.iter().zip(["u", "σ'", "p"]) {
+            assert!(
+                f.1 <= 1e-2,
+                "implicit drag, load step {}: {name} RMS difference {:.2e}",
+                k + 1,
+                f.1
+            );
+        }
+    }
+}
