@@ -245,13 +245,13 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
     }
     if case.has_liquid() && case.damping > 0.0 {
         notes.push(format!(
-            "damping.local: Anura3D (and mpm-solve on the exported GOM) damps the liquid by {} too; the scene damps the solid only",
+            "damping.local: Anura3D (and mpm-solve on the exported GOM) damps the liquid by {} too, and the mixture's solid and liquid parts separately; the scene damps the mixture against the solid's velocity only",
             case.damping
         ));
     }
 
     if smooths(case) {
-        notes.push("STRAIN_SMOOTHING 1: Anura3D smooths the solid's volumetric strain as well as the pore pressure; mpm-solve smooths the pore pressure only".into());
+        notes.push("STRAIN_SMOOTHING 1: Anura3D (and mpm-solve on the exported GOM) smooths the volumetric strain of both phases element by element; the scene smooths pore-pressure rates through V N-weighted nodal averages".into());
     }
     let mesh = Tet10Mesh::of(&case.model, &case.fixed, &case.liquid_fixed)
         .ok_or_else(|| refuse("mesh", "Anura3D's 3D export needs tetrahedra".into()))?;
@@ -273,7 +273,7 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
 }
 
 /// Whether the CPS switches `STRAIN_SMOOTHING` on: when the case smooths pore pressures and has
-/// some (for a dry case Anura3D's smoothing would act on the solid strain, which mpm-solve does
+/// some (for a dry case Anura3D's smoothing would act on the solid strain, which the scene does
 /// not smooth).
 fn smooths(case: &crate::case::Case) -> bool {
     case.smooth_pressure && case.has_liquid()
@@ -592,6 +592,9 @@ struct CpsValues<'a> {
 fn cps_file(case: &crate::case::Case, v: CpsValues) -> Cps {
     let g = case.gravity;
     let g_abs = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    // Without gravity the load is off, but the acceleration keeps Anura3D's default: Anura3D
+    // turns the intrinsic permeability into a hydraulic conductivity with it (ρw g κ / μ), and
+    // 0 there makes a saturated material's drag infinite.
     let (g_abs, dir) = if g_abs > 0.0 {
         (g_abs, g.map(|c| c / g_abs))
     } else {
@@ -667,5 +670,54 @@ fn cps_file(case: &crate::case::Case, v: CpsValues) -> Cps {
                 line: 0,
             })
             .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mpm_shared::generate::box_mesh;
+
+    #[test]
+    fn mid_edge_nodes_of_a_4_node_box_are_those_of_the_10_node_box() {
+        // The structured 10-node box has a node at the midpoint of every edge of the 4-node one
+        // (same elements, same corner order): adding mid-edge nodes must give the same geometry
+        // node for node, and as many nodes.
+        let (n, size) = ([2, 3, 2], [1.0, 1.5, 0.5]);
+        let tet4 = box_mesh(n, size, ElementType::Tet4);
+        let tet10 = box_mesh(n, size, ElementType::Tet10);
+        let fixed: Vec<[bool; 3]> = (0..tet4.node_count())
+            .map(|i| {
+                let p = tet4.node(i);
+                [p[0] == 0.0, p[1] == 0.0, p[0] == 0.0 && p[2] == 0.0]
+            })
+            .collect();
+        let mesh = Tet10Mesh::of(&tet4, &fixed, &fixed).unwrap();
+        assert_eq!(mesh.coords.len(), tet10.coords.len());
+        assert_eq!(mesh.connectivity.len(), tet10.connectivity.len());
+        for (a, b) in mesh.connectivity.iter().zip(&tet10.connectivity) {
+            assert_eq!(mesh.node(*a).as_slice(), tet10.node(*b as usize));
+        }
+        // New nodes follow the original ones in order of first appearance.
+        let mut seen = tet4.node_count() as u32;
+        for el in mesh.connectivity.chunks_exact(10) {
+            for &m in &el[4..] {
+                assert!(m < seen + 1 && m >= tet4.node_count() as u32);
+                seen = seen.max(m + 1);
+            }
+        }
+        // A mid-edge node is fixed in a component where both corners are: on the planes
+        // x = 0 and y = 0, and on the line x = z = 0.
+        for (i, f) in mesh.fixed.iter().enumerate() {
+            let p = mesh.node(i as u32);
+            assert_eq!(*f, [p[0] == 0.0, p[1] == 0.0, p[0] == 0.0 && p[2] == 0.0]);
+        }
+    }
+
+    #[test]
+    fn names_anura3d_would_cut_are_made_one_token() {
+        assert_eq!(safe_name("soil"), "soil");
+        assert_eq!(safe_name("soft clay/2"), "soft_clay_2");
+        assert_eq!(safe_name(""), "material");
     }
 }
