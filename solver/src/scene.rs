@@ -525,6 +525,7 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
         smooth_pressure: true,
         consolidation,
         probes: scene.probes.clone(),
+        prescribed: None,
         engine: Default::default(),
     })
 }
