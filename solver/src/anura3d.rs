@@ -253,6 +253,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let points_per_element = model
         .material_points_per_element()
         .ok_or_else(|| unsupported(&gfile, "$$START_NUMBER_OF_MATERIAL_POINTS", "missing"))?;
+    reject_contact_and_moving_mesh(&cps, &model, &cfile, &gfile)?;
     // Fixities and loads.
     let n = model.node_count();
     let mut fixed = vec![[false; 3]; n];
@@ -292,13 +293,12 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             point_loads.extend(face_loads_on_points(&model, rows));
         } else if k.starts_with("START_REMOVE_FIXITY_")
             || k.starts_with("START_LOAD_ON_")
-            || k.starts_with("PRESCRIBED_")
+            || (k.starts_with("PRESCRIBED_") && !crate::prescribed::SECTIONS.contains(&k))
             || k.starts_with("ABSORBING_")
             || k.starts_with("START_FIXITY_")
-            || k == "START_CONTACT_VOLUME"
             || k == "START_EXCAVATION_SOLID"
         {
-            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (supported: fixities of either phase, $$START_LOAD_ON_NODES_SOLID, $$START_LOAD_ON_NODES_LIQUID and $$START_LOAD_ON_MATERIAL_POINTS_SOLID)"));
+            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (supported: fixities of either phase, $$START_LOAD_ON_NODES_SOLID, $$START_LOAD_ON_NODES_LIQUID, $$START_LOAD_ON_MATERIAL_POINTS_SOLID and $$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME or _SURFACE)"));
         }
     }
     let total = s.load_steps as f64 * s.time_per_load_step;
@@ -322,6 +322,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             "loads the liquid, but no material is saturated",
         ));
     }
+    let prescribed = prescribed_velocity(&model, &s, &materials, total, &gfile, &cfile)?;
     let (gm, gravity_curve) = curve(s.gravity_load, total, &cfile, "$$GRAVITY_LOAD")?;
     let g = s.gravity_vector.map(|v| v * s.gravity_acceleration * gm);
     let output_times = (1..=s.load_steps)
@@ -375,6 +376,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         }),
         consolidation: None,
         probes: s.output_material_points.clone(),
+        prescribed,
         engine: Default::default(),
     };
     Ok((case, s))
@@ -420,6 +422,76 @@ fn check_keys(model: &Model, cps: &Cps, gfile: &str, cfile: &str) -> Result<(), 
         check(KeyKind::CpsKey, &e.keyword, &e.lines, cfile, e.line)?;
     }
     Ok(())
+}
+
+/// Refuses what this solver does not model and would change the results: contact between
+/// bodies (`$$CONTACT_FORMULATION 1`: Anura3D then computes the bodies of the
+/// `$$START_CONTACT_VOLUME` rows with separate velocity fields) and the moving mesh (any of the
+/// `$$..._MESH_CORNER_NODES` sections listing nodes). `$$START_CONTACT_VOLUME` rows with contact
+/// off, `$$MOVING_MESH_DIRECTION` and `$$MOVING_MESH_REFERENCE_MATERIAL_INDEX` switch nothing on
+/// and are accepted.
+fn reject_contact_and_moving_mesh(
+    cps: &Cps,
+    model: &Model,
+    cfile: &str,
+    gfile: &str,
+) -> Result<(), CaseError> {
+    let contact = cps.get("CONTACT_FORMULATION").and_then(|e| {
+        e.lines
+            .first()
+            .and_then(|l| l.split_whitespace().next())
+            .map(|w| w != "0")
+    });
+    if contact == Some(true) {
+        return Err(unsupported(
+            cfile,
+            "$$CONTACT_FORMULATION",
+            "contact between bodies is not modelled yet; 0 computes them as one continuum (Anura3D's results change with it)",
+        ));
+    }
+    if let Some(k) = crate::prescribed::moving_mesh(model) {
+        return Err(unsupported(
+            gfile,
+            &format!("$${k}"),
+            "the moving mesh is not modelled yet; without the $$..._MESH_CORNER_NODES sections the mesh stays fixed (Anura3D's results change with it)",
+        ));
+    }
+    Ok(())
+}
+
+/// The prescribed material-point velocities of the GOM with the CPS `$$PRESCRIBED_VELOCITY`
+/// multiplier; `None` when there are none or the multiplier is `off` (Anura3D then ignores the
+/// rows).
+fn prescribed_velocity(
+    model: &Model,
+    s: &Settings,
+    materials: &[Option<MaterialSpec>],
+    total: f64,
+    gfile: &str,
+    cfile: &str,
+) -> Result<Option<crate::prescribed::PrescribedVelocity>, CaseError> {
+    let rows = crate::prescribed::read_rows(model)
+        .map_err(|(item, message)| unsupported(gfile, &item, message))?;
+    if rows.is_empty() {
+        return Ok(None);
+    }
+    if s.prescribed_velocity == Multiplier::Off {
+        eprintln!("mpm-solve: warning: {gfile}: the prescribed material-point velocities are not applied: $$PRESCRIBED_VELOCITY is off in {cfile}");
+        return Ok(None);
+    }
+    if materials.iter().flatten().any(|m| m.liquid.is_some()) {
+        return Err(unsupported(
+            gfile,
+            "$$PRESCRIBED_MATERIAL_POINT_VELOCITY",
+            "prescribed velocities are not supported yet in cases with a saturated material",
+        ));
+    }
+    let (scale, curve) = curve(s.prescribed_velocity, total, cfile, "$$PRESCRIBED_VELOCITY")?;
+    Ok(Some(crate::prescribed::PrescribedVelocity {
+        rows,
+        scale,
+        curve,
+    }))
 }
 
 /// The loads of `$$START_LOAD_ON_MATERIAL_POINTS_SOLID` rows (3 corners first, then a traction

@@ -110,10 +110,16 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "START_LOAD_ON_*",
         RefusedUnlessInert("other load systems (liquid on material points, gas, system B); inert: an empty list"),
     ),
+    // Velocities prescribed on the points of listed elements (with CPS $$PRESCRIBED_VELOCITY).
+    (
+        GomSection,
+        "PRESCRIBED_MATERIAL_POINT_VELOCITY_*",
+        Modelled,
+    ),
     (
         GomSection,
         "PRESCRIBED_*",
-        RefusedUnlessInert("prescribed nodal or material-point velocities; inert: an empty list"),
+        RefusedUnlessInert("prescribed nodal velocities; inert: an empty list"),
     ),
     (
         GomSection,
@@ -133,7 +139,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         GomSection,
         "START_CONTACT_VOLUME",
-        RefusedUnlessInert("contact between bodies; inert: 0 (an empty list)"),
+        Ignored("the bodies of the contact algorithm, which acts only with CPS $$CONTACT_FORMULATION 1 (refused)"),
     ),
     (
         GomSection,
@@ -371,11 +377,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "LIQUID_PRESSURE_B",
         Ignored("multiplies load system B, whose sections are refused unless empty"),
     ),
-    (
-        CpsKey,
-        "PRESCRIBED_VELOCITY",
-        Ignored("multiplies prescribed velocities, whose sections are refused unless empty"),
-    ),
+    (CpsKey, "PRESCRIBED_VELOCITY", Modelled), // multiplier of the prescribed velocities
     (
         CpsKey,
         "GAS_PRESSURE*",

@@ -328,6 +328,9 @@ pub struct Case {
     pub consolidation: Option<crate::consolidation::ConsolidationSpec>,
     /// Material-point ids written to `history.csv`.
     pub probes: Vec<u32>,
+    /// Velocities prescribed on the material points of some elements (Anura3D's
+    /// `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_*`); `None`: none, or the multiplier is off.
+    pub prescribed: Option<crate::prescribed::PrescribedVelocity>,
     /// Threads, pinning and first touch of the run (not physics: results do not depend on it).
     pub engine: crate::engine::Options,
 }
@@ -422,6 +425,13 @@ impl Case {
         for load in &mut self.point_loads {
             load.corners = load.corners.map(|n| o.node_new[n] as usize);
         }
+        if let Some(pv) = self.prescribed.take() {
+            let mut new_of_old = vec![0u32; o.order.len()];
+            for (new, &old) in o.order.iter().enumerate() {
+                new_of_old[old as usize] = new as u32;
+            }
+            self.prescribed = Some(pv.renumbered(&new_of_old));
+        }
         self.model = model;
         Ok(self)
     }
@@ -477,6 +487,7 @@ impl Case {
             fixed_liquid_mass: false,
             consolidation: None,
             probes: Vec::new(),
+            prescribed: None,
             engine: Default::default(),
         }
     }

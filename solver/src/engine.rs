@@ -103,6 +103,8 @@ pub struct Engine<R: Real> {
     weight_ratio: Vec<f64>,
     /// Per material index: the gravity acceleration of this step times its weight ratio.
     gravity_by_material: Vec<V3<R>>,
+    /// Velocities prescribed on material points (only when the case has them).
+    pub prescribed: Option<crate::prescribed::Prescribed<R>>,
 }
 
 /// How the engine uses the machine.
@@ -220,6 +222,10 @@ impl<R: Real> Engine<R> {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
         }
         let point_loads = resolve_point_loads(&mesh, &particles, case)?;
+        let prescribed = case
+            .prescribed
+            .as_ref()
+            .map(|pv| crate::prescribed::Prescribed::new(pv, &mesh, &particles));
         let layout = Layout::new(&mesh, &particles, team.threads);
         if options.first_touch {
             particles = first_touch(&team, &layout, particles);
@@ -263,6 +269,7 @@ impl<R: Real> Engine<R> {
             liquid_force_error: 0.0,
             fluids,
             liquid_fixed,
+            prescribed,
             locate_outcome: vec![((usize::MAX, 0), 0); team.threads],
             team,
             layout,
@@ -338,6 +345,13 @@ impl<R: Real> Engine<R> {
             (f, 0.0)
         };
         let t2 = Instant::now();
+        let pm = case
+            .prescribed
+            .as_ref()
+            .map_or(R::ZERO, |pv| R::of(pv.multiplier(self.time + dt)));
+        if let Some(pr) = &self.prescribed {
+            pr.after_grid_update(&mut self.grid, &mut self.particles, pm);
+        }
         grid_to_particle::grid_to_particle(
             &self.team,
             &self.layout,
@@ -359,6 +373,9 @@ impl<R: Real> Engine<R> {
             &self.liquid_fixed,
             R::of(dt),
         );
+        if let Some(pr) = &mut self.prescribed {
+            pr.after_remap(&self.mesh, &mut self.grid, &mut self.particles, pm);
+        }
         let t3 = Instant::now();
         if let Some(sm) = &mut self.smoothing {
             sm.compute(
@@ -493,8 +510,8 @@ impl<R: Real> Engine<R> {
         self.lost += self.locate_outcome.iter().map(|o| o.1).sum::<u64>();
         if sort_by_element(p, mesh.elements(), &mut self.sort_scratch) {
             self.layout.elem_start = element_starts(&p.element, mesh.elements());
-            // Point loads follow their points: old index → new index.
-            if !self.point_loads.is_empty() {
+            // Point loads and prescribed points follow their points: old index → new index.
+            if !self.point_loads.is_empty() || self.prescribed.is_some() {
                 let sc = &mut self.sort_scratch;
                 sc.inverse.resize(sc.order.len(), 0);
                 for (new, &old) in sc.order.iter().enumerate() {
@@ -502,6 +519,9 @@ impl<R: Real> Engine<R> {
                 }
                 for load in &mut self.point_loads {
                     load.0 = sc.inverse[load.0 as usize];
+                }
+                if let Some(pr) = &mut self.prescribed {
+                    pr.follow(&sc.inverse);
                 }
             }
         }

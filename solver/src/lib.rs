@@ -29,6 +29,7 @@ pub mod mixed;
 pub mod output;
 pub mod particle_to_grid;
 pub mod particles;
+pub mod prescribed;
 pub mod real;
 pub mod run;
 pub mod scene;

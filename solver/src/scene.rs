@@ -615,6 +615,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         fixed_liquid_mass: false,
         consolidation,
         probes: scene.probes.clone(),
+        prescribed: None,
         engine: Default::default(),
     };
     Ok(Resolved {
