@@ -5,7 +5,7 @@ use crate::grid::Grid;
 use crate::real::{Real, V3};
 
 /// Local damping of force `f` at a node moving with `v` (one component):
-/// f - α |f| sign(v). At rest (v = 0) Anura3D's rule leaves the force undamped; the mixture
+/// f - α |f| sign(v). At rest (v = 0) Anura3D's rule leaves the force undamped; the scenes'
 /// rule damps it against the motion it is about to cause (sign of f), which is what Anura3D's
 /// tiny first step amounts to for the first full step.
 #[inline]
@@ -15,7 +15,7 @@ fn damp<R: Real>(rule: DampingRule, alpha: R, f: R, v: R) -> R {
     } else {
         match rule {
             DampingRule::Anura3d => return f,
-            DampingRule::Mixture => f.sign(),
+            DampingRule::Phases => f.sign(),
         }
     };
     f - alpha * f.abs() * s
@@ -79,8 +79,8 @@ pub fn grid_update<R: Real>(
 /// limits the step). Local damping follows `rule` ([`DampingRule`]): Anura3D's damps F_w
 /// against w and splits the mixture force into its solid part F - n F_w, damped against v, and
 /// its liquid part n F_w, damped against the liquid velocity already updated with its explicit
-/// acceleration, w + a_w Δt (n: the node's porosity M̄_w / M_w); the mixture rule damps F
-/// against v and leaves F_w alone. Fixed components of a phase have zero
+/// acceleration, w + a_w Δt (n: the node's porosity M̄_w / M_w); the scenes' rule damps the
+/// same two parts against the start-of-step v and w and leaves F_w alone. Fixed components of a phase have zero
 /// acceleration (a fixed solid takes the reaction; a fixed liquid is an impermeable face) and,
 /// as in Anura3D, zero velocity in the explicit drag and the damping. Loads on the liquid
 /// (`liquid_traction` × `liquid_scale`) act on the liquid and, with `liquid_load_on_mixture`,
@@ -161,7 +161,7 @@ pub fn grid_update_two_phase<R: Real>(
                 external_w += ext.f64() * ext.f64();
             }
             let fw = match rule {
-                DampingRule::Mixture => f_w,
+                DampingRule::Phases => f_w,
                 DampingRule::Anura3d => damp(rule, alpha, f_w, w),
             };
             // The liquid's acceleration with the drag at the start-of-step velocities.
@@ -171,7 +171,11 @@ pub fn grid_update_two_phase<R: Real>(
                 (fw + q * (v - w)) / mw
             };
             let fs = match rule {
-                DampingRule::Mixture => damp(rule, alpha, f_mix, g.momentum[n][a]),
+                DampingRule::Phases => {
+                    let f_wn = mwn / mw * f_w;
+                    damp(rule, alpha, f_mix - f_wn, g.momentum[n][a])
+                        + damp(rule, alpha, f_wn, gl.momentum[n][a])
+                }
                 DampingRule::Anura3d => {
                     // Anura3D damps the liquid part of the mixture's force against the liquid
                     // velocity it has just updated (with the explicit drag), the solid part

@@ -117,6 +117,9 @@ struct Gravity {
 #[serde(deny_unknown_fields)]
 struct Damping {
     local: f64,
+    /// "phases" (default) or "anura3d" (see `case::DampingRule`).
+    #[serde(default)]
+    rule: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -498,6 +501,16 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
             format!("must be in [0, 1), got {damping}"),
         ));
     }
+    let damping_rule = match scene.damping.as_ref().and_then(|d| d.rule.as_deref()) {
+        None | Some("phases") => crate::case::DampingRule::Phases,
+        Some("anura3d") => crate::case::DampingRule::Anura3d,
+        Some(other) => {
+            return Err(invalid(
+                "damping.rule".into(),
+                format!("expected \"phases\" or \"anura3d\", got \"{other}\""),
+            ))
+        }
+    };
     // Consolidation runs may set their times by time factor (c_v of the saturated material).
     let consolidation = match &scene.consolidation {
         None => None,
@@ -607,7 +620,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         objective_stress: false,
         integration: Integration::MaterialPoints,
         anura3d_time_step: false,
-        damping_rule: crate::case::DampingRule::Mixture,
+        damping_rule,
         drag: crate::case::Drag::Implicit,
         initial_step: None,
         smooth_pressure: true,
