@@ -85,7 +85,6 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         eprintln!("mpm-solve: warning: {w}");
     }
     let s = cps.settings()?;
-    check_keys(&model, &cps, &gfile, &cfile)?;
     if model.element_type == ElementType::Tri3 {
         return Err(unsupported(
             &gfile,
@@ -129,6 +128,8 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             format!("must be positive, got {}", s.time_per_load_step),
         ));
     }
+    // Every other key: modelled, irrelevant, or refused unless inert.
+    check_keys(&model, &cps, &gfile, &cfile)?;
     // Materials.
     let mats = model.materials();
     let max_index = mats.iter().map(|m| m.index).max().unwrap_or(0).max(0) as usize;
@@ -253,7 +254,6 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let points_per_element = model
         .material_points_per_element()
         .ok_or_else(|| unsupported(&gfile, "$$START_NUMBER_OF_MATERIAL_POINTS", "missing"))?;
-    reject_contact_and_moving_mesh(&cps, &model, &cfile, &gfile)?;
     // Fixities and loads.
     let n = model.node_count();
     let mut fixed = vec![[false; 3]; n];
@@ -420,41 +420,6 @@ fn check_keys(model: &Model, cps: &Cps, gfile: &str, cfile: &str) -> Result<(), 
     }
     for e in &cps.entries {
         check(KeyKind::CpsKey, &e.keyword, &e.lines, cfile, e.line)?;
-    }
-    Ok(())
-}
-
-/// Refuses what this solver does not model and would change the results: contact between
-/// bodies (`$$CONTACT_FORMULATION 1`: Anura3D then computes the bodies of the
-/// `$$START_CONTACT_VOLUME` rows with separate velocity fields) and the moving mesh (any of the
-/// `$$..._MESH_CORNER_NODES` sections listing nodes). `$$START_CONTACT_VOLUME` rows with contact
-/// off, `$$MOVING_MESH_DIRECTION` and `$$MOVING_MESH_REFERENCE_MATERIAL_INDEX` switch nothing on
-/// and are accepted.
-fn reject_contact_and_moving_mesh(
-    cps: &Cps,
-    model: &Model,
-    cfile: &str,
-    gfile: &str,
-) -> Result<(), CaseError> {
-    let contact = cps.get("CONTACT_FORMULATION").and_then(|e| {
-        e.lines
-            .first()
-            .and_then(|l| l.split_whitespace().next())
-            .map(|w| w != "0")
-    });
-    if contact == Some(true) {
-        return Err(unsupported(
-            cfile,
-            "$$CONTACT_FORMULATION",
-            "contact between bodies is not modelled yet; 0 computes them as one continuum (Anura3D's results change with it)",
-        ));
-    }
-    if let Some(k) = crate::prescribed::moving_mesh(model) {
-        return Err(unsupported(
-            gfile,
-            &format!("$${k}"),
-            "the moving mesh is not modelled yet; without the $$..._MESH_CORNER_NODES sections the mesh stays fixed (Anura3D's results change with it)",
-        ));
     }
     Ok(())
 }

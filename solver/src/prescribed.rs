@@ -20,7 +20,7 @@
 //! marked points and masked nodes, in a fixed order, so the results do not depend on the number
 //! of threads, and the work per step is proportional to the number of marked points.
 
-use mpm_shared::model::{Body, Token};
+use mpm_shared::model::Body;
 use mpm_shared::Model;
 
 use crate::case::LoadCurve;
@@ -159,36 +159,6 @@ pub fn read_rows(model: &Model) -> Result<Vec<PrescribedElement>, (String, Strin
         ));
     }
     Ok(out)
-}
-
-/// The moving-mesh sections that switch Anura3D's moving mesh on when they list nodes.
-pub const MOVING_MESH_SECTIONS: [&str; 3] = [
-    "EXTENDING_MESH_CORNER_NODES",
-    "COMPRESSING_MESH_CORNER_NODES",
-    "MOVING_MESH_CORNER_NODES",
-];
-
-/// The first moving-mesh corner-node section of `model` that lists nodes (Anura3D then moves
-/// the mesh with the reference material every step), if any. `$$MOVING_MESH_DIRECTION` and
-/// `$$MOVING_MESH_REFERENCE_MATERIAL_INDEX` alone switch nothing on.
-pub fn moving_mesh(model: &Model) -> Option<&str> {
-    model
-        .sections
-        .iter()
-        .find(|s| {
-            MOVING_MESH_SECTIONS.contains(&s.keyword.as_str())
-                && match &s.body {
-                    Body::Table { rows, .. } => rows
-                        .rows()
-                        .flat_map(|r| r.iter())
-                        .any(|t| matches!(t, Token::Int(_))),
-                    Body::Opaque(lines) | Body::Text(lines) => {
-                        lines.iter().any(|l| !l.trim().is_empty())
-                    }
-                    _ => false,
-                }
-        })
-        .map(|s| s.keyword.as_str())
 }
 
 /// The engine's side: marked points, masked nodes and the scratch of the nodal mean, all

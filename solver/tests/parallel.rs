@@ -98,3 +98,26 @@ fn two_phase_outputs_do_not_depend_on_threads_or_pinning() {
     std::fs::write(&scene, text).unwrap();
     check_identical(&scene, &["--reorder", "hilbert"]);
 }
+
+#[test]
+fn anura3d_two_phase_outputs_do_not_depend_on_threads_or_pinning() {
+    // The GOM route's own kernels: Anura3D's strain smoothing and damping split, and MPM-MIXED
+    // pore pressures at Gauss points, on an exported consolidation column.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(testdata("oracle_column.toml"))
+        .unwrap()
+        .replace(
+            "mesh = \"oracle_column_tet4.msh\"",
+            &format!("mesh = {:?}", testdata("oracle_column_tet4.msh")),
+        )
+        .replace("end_tv = 0.5", "end_tv = 0.05");
+    let scene = dir.path().join("column.toml");
+    std::fs::write(&scene, text).unwrap();
+    let files = mpm_solve::export_anura3d::export_scene(&scene, dir.path()).unwrap();
+    let cps = std::fs::read_to_string(&files.cps)
+        .unwrap()
+        .replace("MPM-MP\n", "MPM-MIXED\n");
+    assert!(cps.contains("MPM-MIXED"));
+    std::fs::write(&files.cps, cps).unwrap();
+    check_identical(&files.gom, &["--reorder", "hilbert", "--drag", "explicit"]);
+}
