@@ -44,37 +44,42 @@ impl<R: Real> Mixed<R> {
     /// mean pore pressure in two-phase cases (Anura3D keeps one pore pressure per Gauss point
     /// too).
     pub fn smooth_stresses(&self, team: &Team, layout: &Layout<R>, p: &mut Particles<R>) {
-        if let Some(l) = &mut p.liquid {
-            let pressure = Shared::new(&mut l.p);
-            let (active, volume) = (&p.active, &p.volume);
-            team.run(|k| {
-                for e in layout.element_ranges[k].clone() {
-                    if !self.full[e] {
-                        continue;
-                    }
-                    let range = layout.particles_of(e);
-                    // SAFETY: the particles of element e belong to this thread only.
-                    let pe = unsafe { pressure.range(range.clone()) };
-                    let (mut v, mut mean) = (R::ZERO, R::ZERO);
-                    for (j, i) in range.clone().enumerate() {
-                        if active[i] {
-                            v += volume[i];
-                            mean += volume[i] * pe[j];
-                        }
-                    }
-                    if v > R::ZERO {
-                        mean /= v;
-                        for (j, i) in range.enumerate() {
-                            if active[i] {
-                                pe[j] = mean;
-                            }
-                        }
-                    }
-                }
-            });
-        }
-        let stress = Shared::new(&mut p.stress);
         let (active, volume) = (&p.active, &p.volume);
+        if let Some(l) = &mut p.liquid {
+            let (add, div) = (
+                |m: &mut R, w: R, v: &R| *m += w * *v,
+                |m: &mut R, v: R| *m /= v,
+            );
+            self.average(team, layout, active, volume, &mut l.p, add, div);
+        }
+        let add = |m: &mut [R; 6], w: R, v: &[R; 6]| {
+            for c in 0..6 {
+                m[c] += w * v[c];
+            }
+        };
+        let div = |m: &mut [R; 6], v: R| {
+            for c in m.iter_mut() {
+                *c /= v;
+            }
+        };
+        self.average(team, layout, active, volume, &mut p.stress, add, div);
+    }
+
+    /// Sets the values of the active points of every full element to their volume-weighted
+    /// mean; `add(sum, weight, value)` accumulates one point, `div(sum, total)` divides by the
+    /// total volume. Each thread treats its own elements.
+    #[allow(clippy::too_many_arguments)]
+    fn average<T: Copy + Default + Send + Sync>(
+        &self,
+        team: &Team,
+        layout: &Layout<R>,
+        active: &[bool],
+        volume: &[R],
+        values: &mut [T],
+        add: impl Fn(&mut T, R, &T) + Sync,
+        div: impl Fn(&mut T, R) + Sync,
+    ) {
+        let values = Shared::new(values);
         team.run(|k| {
             for e in layout.element_ranges[k].clone() {
                 if !self.full[e] {
@@ -82,23 +87,19 @@ impl<R: Real> Mixed<R> {
                 }
                 let range = layout.particles_of(e);
                 // SAFETY: the particles of element e belong to this thread only.
-                let s = unsafe { stress.range(range.clone()) };
-                let (mut v, mut mean) = (R::ZERO, [R::ZERO; 6]);
+                let x = unsafe { values.range(range.clone()) };
+                let (mut v, mut mean) = (R::ZERO, T::default());
                 for (j, i) in range.clone().enumerate() {
                     if active[i] {
                         v += volume[i];
-                        for c in 0..6 {
-                            mean[c] += volume[i] * s[j][c];
-                        }
+                        add(&mut mean, volume[i], &x[j]);
                     }
                 }
                 if v > R::ZERO {
-                    for c in mean.iter_mut() {
-                        *c /= v;
-                    }
+                    div(&mut mean, v);
                     for (j, i) in range.enumerate() {
                         if active[i] {
-                            s[j] = mean;
+                            x[j] = mean;
                         }
                     }
                 }

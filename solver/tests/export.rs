@@ -365,9 +365,9 @@ fn saturated_oedometer_exports_loads_and_runs_alike() {
         .iter()
         .all(|t| *t == [0.0; 3]));
     // The GOM route follows Anura3D's rules (its step, strain smoothing, liquid mass, first
-    // step); with the scene's rules instead it computes the scene's problem to rounding.
+    // step; tests/oracle.rs compares it with Anura3D); with the scene's rules instead it
+    // computes the scene's problem to rounding.
     assert!(gc.strain_smoothing && sc.smooth_pressure);
-    check_runs(&sc, &gc, 2e-2);
     gc.anura3d_time_step = false;
     gc.strain_smoothing = false;
     gc.smooth_pressure = true;
