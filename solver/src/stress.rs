@@ -11,8 +11,8 @@ use crate::real::Real;
 use crate::smoothing::StrainSmoothing;
 use crate::team::{Shared, Team};
 
-/// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus the Jaumann rotation Δω σ - σ Δω with
-/// Δω = skew(L) Δt when `objective`); V *= 1 + tr Δε; x += Δt Σ N_n v_n. With `smoothing`, the
+/// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
+/// the rotation Δω σ - σ Δω with Δω = skew(L) Δt and -tr(Δε) σ); V *= 1 + tr Δε; x += Δt Σ N_n v_n. With `smoothing`, the
 /// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
 /// increment ([`crate::smoothing`]). Each thread updates the particles of its elements.
 #[allow(clippy::too_many_arguments)]
@@ -84,7 +84,13 @@ pub fn update_stress_and_move<R: Real>(
                     half * (l[1][2] - l[2][1]) * dt, // ω_yz
                     half * (l[2][0] - l[0][2]) * dt, // ω_zx
                 ];
+                // Anura3D's objective update (its "Hill" rate): the co-rotation and the
+                // change of volume, -tr(Δε) σ, both of the start-of-step stress.
+                let (s0, ev) = (stress[j], de[0] + de[1] + de[2]);
                 rotate(&mut stress[j], &w);
+                for (s, v) in stress[j].iter_mut().zip(s0) {
+                    *s -= ev * v;
+                }
             }
             laws[material[i] as usize].update(&mut stress[j], &de);
             volume[j] *= R::ONE + de[0] + de[1] + de[2];

@@ -281,3 +281,68 @@ fn workshop_set_up_no_worse_than_anura3d_against_terzaghi() {
         );
     }
 }
+
+/// Benchmark 4005 run for four load steps instead of its one quasi-static step: a load on the
+/// liquid, MPM-MIXED, objective stress and strain smoothing together, against Anura3D, point by
+/// point (needs `ANURA3D_BENCHMARKS` too).
+#[test]
+fn liquid_load_mixed_objective_smoothing_match_anura3d() {
+    let Some(bin) = oracle() else { return };
+    let Some(root) = std::env::var_os("ANURA3D_BENCHMARKS").filter(|v| !v.is_empty()) else {
+        eprintln!("ANURA3D_BENCHMARKS not set: skipped");
+        return;
+    };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(root);
+    let case = root.join(
+        "Benchmarks/Pre-Commit_Tests/4005_LinearLoad_DYN_MPMMIXED_pressure_2019.1/test-4005.A3D",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(case.join("test-4005.GOM"), dir.path().join("c.GOM")).unwrap();
+    // Four dynamic load steps with a sudden load and light damping.
+    let mut cps = String::new();
+    let mut set: Option<&str> = None;
+    for line in std::fs::read_to_string(case.join("test-4005.CPS_001"))
+        .unwrap()
+        .lines()
+    {
+        if let Some(v) = set.take() {
+            cps.push_str(v);
+        } else {
+            cps.push_str(line);
+            set = match line.trim() {
+                "$$NUMBER_OF_LOADSTEPS" => Some("4"),
+                "$$TIME_PER_LOADSTEP" => Some("0.0005"),
+                "$$QUASISTATIC_CONVERGENCE" => Some("0"),
+                "$$HOMOGENEOUS_LOCAL_DAMPING" => Some("1 0.05"),
+                "$$LIQUID_PRESSURE" => Some("step 1.0 1.0"),
+                _ => None,
+            };
+        }
+        cps.push('\n');
+    }
+    std::fs::write(dir.path().join("c.CPS_001"), cps).unwrap();
+    run_oracle(&bin, dir.path(), "c");
+    let anura: Vec<Step> = (1..=4)
+        .map(|k| from_anura3d(&read_step(dir.path(), "c", k).unwrap()))
+        .collect();
+    let ours = run_ours(
+        &dir.path().join("c.GOM"),
+        &dir.path().join("c.CPS_001"),
+        Drag::Explicit,
+    );
+    let rows = compare(&anura, &ours);
+    eprintln!(
+        "{}",
+        table("4005 over four load steps, --drag explicit", &rows)
+    );
+    for (k, r) in rows.iter().enumerate() {
+        for (f, name) in r.iter().zip(["u", "σ'", "p"]) {
+            assert!(
+                f.0 <= 1e-10,
+                "load step {}: {name} differs by {:.2e}",
+                k + 1,
+                f.0
+            );
+        }
+    }
+}
