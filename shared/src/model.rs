@@ -783,6 +783,27 @@ pub fn inverse(p: &[u32], n: usize) -> Option<Vec<u32>> {
     Some(inv)
 }
 
+/// The sections every GOM opens with, in Anura3D's order: dimension, element type, the
+/// single-point formulation, counters, nodes and connectivity (their values come from the
+/// model's own fields when it is written).
+pub fn geometry_sections() -> Vec<Section> {
+    let placeholder = |k: &str, body: Body| Section {
+        keyword: k.into(),
+        body,
+    };
+    vec![
+        placeholder("DIMENSION", Body::Dimension),
+        placeholder("ELEMENTTYPE", Body::ElementType),
+        Section {
+            keyword: "FORMULATION".into(),
+            body: Body::Text(vec!["single-point".into()]),
+        },
+        placeholder("STARTCOUNTERS", Body::Counters),
+        placeholder("STARTNODES", Body::Nodes),
+        placeholder("STARTELEMCON", Body::Connectivity),
+    ]
+}
+
 impl Model {
     /// A mesh-only model in Anura3D's layout: header and geometry sections, empty fixity lists
     /// for the three phases, one material block (index and name) per entry of `materials`, and
@@ -803,14 +824,7 @@ impl Model {
             keyword: k.into(),
             body,
         };
-        let mut sections = vec![
-            placeholder("DIMENSION", Body::Dimension),
-            placeholder("ELEMENTTYPE", Body::ElementType),
-            text("FORMULATION", "single-point"),
-            placeholder("STARTCOUNTERS", Body::Counters),
-            placeholder("STARTNODES", Body::Nodes),
-            placeholder("STARTELEMCON", Body::Connectivity),
-        ];
+        let mut sections = geometry_sections();
         for kind in ["SURFACE", "LINE", "POINT"] {
             for phase in ["SOLID", "LIQUID", "GAS"] {
                 sections.push(placeholder(

@@ -3,36 +3,8 @@
 
 use mpm_shared::Model;
 
-/// How a load grows with time.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum LoadCurve {
-    /// Full value from the first step.
-    Step,
-    /// Linear from 0 at t = 0 to 1 at t = `over`, then 1.
-    Ramp {
-        /// Seconds to full load.
-        over: f64,
-    },
-}
-
-impl LoadCurve {
-    /// A ramp over `over` seconds, or a step when `over` is 0.
-    pub fn ramp(over: f64) -> Self {
-        if over > 0.0 {
-            LoadCurve::Ramp { over }
-        } else {
-            LoadCurve::Step
-        }
-    }
-
-    /// Multiplier at time `t`.
-    pub fn at(&self, t: f64) -> f64 {
-        match *self {
-            LoadCurve::Step => 1.0,
-            LoadCurve::Ramp { over } => (t / over).min(1.0),
-        }
-    }
-}
+pub use crate::grid_update::{DampingRule, Drag};
+pub use crate::load_curve::LoadCurve;
 
 /// A linear elastic solid material, dry or saturated with a pore liquid.
 #[derive(Debug, Clone, PartialEq)]
@@ -214,37 +186,6 @@ pub enum Integration {
         /// Degree of filling from which an element counts as full.
         filling: f64,
     },
-}
-
-/// Where and against which velocity local damping acts (`f ← f - α |f| sign(v)` per node and
-/// component).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DampingRule {
-    /// Anura3D's rule, for GOM input: a node whose velocity is exactly zero is not damped; in
-    /// two-phase cases the liquid's force is damped against the liquid velocity, and the
-    /// mixture's force in two parts, the solid part (effective stress, (1 - n) of the pore
-    /// pressure, the solid's loads and weight) against the solid velocity and the liquid part
-    /// (n times the liquid's force) against the liquid velocity.
-    Anura3d,
-    /// The rule of scenes: the mixture's force is damped in the same two parts, each against its
-    /// own phase's start-of-step velocity (against the force where the node is at rest, which is
-    /// what Anura3D's tiny first step amounts to), and the liquid's own force not at all: in
-    /// seepage it is balanced by the drag, which dissipates already, and damping it would slow
-    /// consolidation by (1 - α). Against Terzaghi this beats Anura3D's rule at every output of
-    /// the default job's workshop set-up (docs/anura3d-fidelity.md).
-    Phases,
-}
-
-/// Time integration of the Darcy drag Q (w - v) between liquid and solid (two-phase cases).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Drag {
-    /// Per node, at the end-of-step velocities (a 2×2 solve per component): stable for any
-    /// permeability, so the step is bounded by the waves alone.
-    #[default]
-    Implicit,
-    /// At the start-of-step velocities, as Anura3D: the step must also resolve the drag's
-    /// relaxation time k / (n g), which Mieremet's critical step does.
-    Explicit,
 }
 
 /// Everything a run needs.

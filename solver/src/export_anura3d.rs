@@ -467,14 +467,7 @@ fn gom_model(r: &Resolved, mesh: Tet10Mesh, loads: Table, notes: &mut Vec<String
         keyword: k.into(),
         body,
     };
-    let mut sections = vec![
-        placeholder("DIMENSION", Body::Dimension),
-        placeholder("ELEMENTTYPE", Body::ElementType),
-        text("FORMULATION", &["single-point"]),
-        placeholder("STARTCOUNTERS", Body::Counters),
-        placeholder("STARTNODES", Body::Nodes),
-        placeholder("STARTELEMCON", Body::Connectivity),
-    ];
+    let mut sections = mpm_shared::model::geometry_sections();
     let fixity_rows = |f: &[[bool; 3]]| {
         let mut t = Table::new();
         for (n, x) in f.iter().enumerate() {

@@ -23,6 +23,7 @@ pub mod grid_to_particle;
 pub mod grid_update;
 pub mod linear_elastic;
 pub mod liquid;
+pub mod load_curve;
 pub mod locate;
 pub mod mesh;
 pub mod mixed;

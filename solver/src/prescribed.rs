@@ -23,8 +23,8 @@
 use mpm_shared::model::Body;
 use mpm_shared::Model;
 
-use crate::case::LoadCurve;
 use crate::grid::Grid;
+use crate::load_curve::LoadCurve;
 use crate::mesh::TetMesh;
 use crate::particles::Particles;
 use crate::real::{Real, V3};
