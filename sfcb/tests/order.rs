@@ -29,8 +29,13 @@ fn models() -> Vec<(String, Model)> {
         )
     })
     .collect();
-    if let Some(root) = std::env::var_os("ANURA3D_BENCHMARKS") {
-        let mut stack = vec![PathBuf::from(root)];
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let found = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    if found.is_none() {
+        eprintln!("ANURA3D_BENCHMARKS not set: the suite's meshes are not ordered here");
+    }
+    if let Some(root) = found {
+        let mut stack = vec![root];
         while let Some(d) = stack.pop() {
             for e in std::fs::read_dir(&d).unwrap().flatten() {
                 let p = e.path();

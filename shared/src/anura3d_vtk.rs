@@ -724,16 +724,15 @@ mod tests {
     /// step-1 files back.
     #[test]
     fn reads_the_oracle_output_of_1005_3d() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
         let (Some(oracle), Some(suite)) = (
-            std::env::var_os("ANURA3D_ORACLE"),
-            std::env::var_os("ANURA3D_BENCHMARKS"),
+            crate::suite::anura3d_oracle(&root).unwrap_or_else(|e| panic!("{e}")),
+            crate::suite::anura3d_benchmarks(&root).unwrap_or_else(|e| panic!("{e}")),
         ) else {
             eprintln!("ANURA3D_ORACLE or ANURA3D_BENCHMARKS not set: oracle VTK test skipped");
             return;
         };
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-        let oracle = root.join(oracle);
-        let case = root.join(suite).join(
+        let case = suite.join(
             "Benchmarks/Pre-Commit_Tests/1005_Oedometer_QS_MPMMP_1Phase_NormalStress_3D/test-1005_3D.A3D",
         );
         assert!(

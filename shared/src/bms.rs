@@ -724,21 +724,8 @@ Number of load steps                               1                            
     }
 
     fn suite() -> Option<std::path::PathBuf> {
-        let dir = std::env::var_os("ANURA3D_BENCHMARKS")?;
-        let p = std::path::PathBuf::from(dir);
-        let p = if p.is_relative() {
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("..")
-                .join(p)
-        } else {
-            p
-        };
-        assert!(
-            p.is_dir(),
-            "ANURA3D_BENCHMARKS={} is not a folder",
-            p.display()
-        );
-        Some(p)
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        crate::suite::anura3d_benchmarks(&root).unwrap_or_else(|e| panic!("{e}"))
     }
 
     fn walk(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {

@@ -311,6 +311,21 @@ impl Cps {
                 "file ends without '$$END' (truncated?)",
             ));
         }
+        // Anura3D reads its CPS top to bottom, so a repeated key silently takes its last value:
+        // almost always an edit that missed the first one. Say so instead of guessing (unknown
+        // keys are only warned about, once).
+        let mut first_line = std::collections::HashMap::new();
+        for e in entries.iter().filter(|e| KNOWN.contains(&e.keyword.as_str())) {
+            if let Some(first) = first_line.insert(e.keyword.as_str(), e.line) {
+                return Err(Error::format(
+                    at(e.line, None),
+                    format!(
+                        "'$${}' is given twice (lines {first} and {}); keep one",
+                        e.keyword, e.line
+                    ),
+                ));
+            }
+        }
         let mut warnings = Vec::new();
         let mut warned: Vec<&str> = Vec::new();
         for e in &entries {
@@ -689,5 +704,11 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("without '$$END'"), "{e}");
+        let twice = SRC.replace("$$END", "$$COURANT_NUMBER\n0.9\n$$END");
+        let e = Cps::read(twice.as_bytes(), "t").unwrap_err().to_string();
+        assert!(
+            e.contains("t:29: '$$COURANT_NUMBER' is given twice (lines 6 and 29)"),
+            "{e}"
+        );
     }
 }

@@ -43,12 +43,14 @@ impl fmt::Display for Location {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// The file could not be opened, read or written.
-    #[error("{path}: {source}")]
+    // The OS error is part of the message rather than a `source`, so that a chain printed
+    // with `{:#}` does not say it twice.
+    #[error("{path}: {}", io_reason(cause))]
     Io {
         /// The file concerned.
         path: PathBuf,
         /// The operating-system error.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The content does not follow the format.
     #[error("{at}: {message}")]
@@ -89,7 +91,7 @@ impl Error {
     pub fn io(path: &Path, source: std::io::Error) -> Self {
         Error::Io {
             path: path.to_path_buf(),
-            source,
+            cause: source,
         }
     }
 
@@ -112,3 +114,14 @@ impl Error {
 
 /// Result alias for this crate.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// The OS error in plain words, without the `(os error N)` suffix where a plain phrase exists.
+fn io_reason(e: &std::io::Error) -> String {
+    use std::io::ErrorKind as K;
+    match e.kind() {
+        K::NotFound => "no such file or folder".into(),
+        K::PermissionDenied => "permission denied".into(),
+        K::AlreadyExists => "already exists".into(),
+        _ => e.to_string(),
+    }
+}

@@ -6,6 +6,7 @@
 //!   material-point VTK output reader;
 //! - [`msh`]: Gmsh `.msh` reader (2.2 and 4.1, ASCII and binary) and conversion to the model;
 //! - [`vtu`]: ParaView VTU and PVD writers;
+//! - [`suite`]: where tests find Anura3D's benchmark suite and binary;
 //! - [`io`]: standard input/output and atomic file writes; [`text`]: scanning and formatting.
 #![warn(missing_docs)]
 
@@ -18,6 +19,7 @@ pub mod gom;
 pub mod io;
 pub mod model;
 pub mod msh;
+pub mod suite;
 pub mod text;
 pub mod vtu;
 

@@ -8,13 +8,12 @@ use mpm_shared::cps::Cps;
 use mpm_shared::gom;
 
 fn benchmarks() -> Option<PathBuf> {
-    match std::env::var_os("ANURA3D_BENCHMARKS") {
-        Some(p) if Path::new(&p).is_dir() => Some(PathBuf::from(p)),
-        _ => {
-            eprintln!("ANURA3D_BENCHMARKS not set: skipping the Anura3D compatibility checks");
-            None
-        }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let found = mpm_shared::suite::anura3d_benchmarks(&root).unwrap_or_else(|e| panic!("{e}"));
+    if found.is_none() {
+        eprintln!("ANURA3D_BENCHMARKS not set: skipping the Anura3D compatibility checks");
     }
+    found
 }
 
 fn files(root: &Path, pred: &dyn Fn(&str) -> bool) -> Vec<PathBuf> {

@@ -436,7 +436,7 @@ fn evaluate(
         }
     };
     let ran = catch_unwind(AssertUnwindSafe(|| {
-        mpm_solve::run::run::<f64>(&case, tmp.path(), false, false)
+        mpm_solve::run::run::<f64>(&case, tmp.path(), &Default::default())
     }));
     let engine = match ran {
         Err(p) => {

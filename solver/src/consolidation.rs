@@ -293,11 +293,10 @@ pub fn write_csv(
 pub fn run_job<R: Real>(
     case: &Case,
     dir: &Path,
-    drop_lost: bool,
-    progress: bool,
+    options: &crate::run::RunOptions,
 ) -> Result<(Engine<R>, Tracker, Option<Tracker>), crate::run::RunError> {
     let spec = case.consolidation.expect("a consolidation case");
-    let (engine, tracker) = crate::run::run_tracked::<R>(case, dir, drop_lost, progress)?;
+    let (engine, tracker) = crate::run::run_tracked::<R>(case, dir, options)?;
     let tracker = tracker.expect("consolidation cases are tracked");
     let workshop = if spec.compare_rest && spec.start != Start::Rest {
         let mut twin = case.clone();
@@ -306,14 +305,13 @@ pub fn run_job<R: Real>(
             compare_rest: false,
             ..spec
         });
-        let (_, t) =
-            crate::run::run_tracked::<R>(&twin, &dir.join("workshop"), drop_lost, progress)?;
+        let (_, t) = crate::run::run_tracked::<R>(&twin, &dir.join("workshop"), options)?;
         t
     } else {
         None
     };
     write_csv(dir, &tracker, workshop.as_ref())?;
-    write_png(dir, &tracker, workshop.as_ref())?;
+    write_png(dir, &case.name, &tracker, workshop.as_ref())?;
     Ok((engine, tracker, workshop))
 }
 
@@ -346,15 +344,16 @@ fn font() -> Option<&'static [u8]> {
 
 /// Writes `consolidation.png` into `dir` (atomically): pore-pressure isochrones against
 /// Terzaghi on the left (points of the default run as dots, Terzaghi as lines), settlement
-/// against time on the right.
+/// against time on the right; `name` (the case) heads both.
 pub fn write_png(
     dir: &Path,
+    name: &str,
     default: &Tracker,
     workshop: Option<&Tracker>,
 ) -> mpm_shared::Result<()> {
     let path = dir.join("consolidation.png");
     let tmp = dir.join(".consolidation.tmp.png");
-    draw(&tmp, default, workshop).map_err(|e| {
+    draw(&tmp, name, default, workshop).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         mpm_shared::Error::io(&path, std::io::Error::other(e.to_string()))
     })?;
@@ -363,6 +362,7 @@ pub fn write_png(
 
 fn draw(
     path: &Path,
+    name: &str,
     default: &Tracker,
     workshop: Option<&Tracker>,
 ) -> Result<(), Box<dyn std::error::Error>> {
@@ -380,7 +380,7 @@ fn draw(
     if text {
         chart
             .caption(
-                "Excess pore pressure / u0 against depth / H",
+                format!("{name}: excess pore pressure against depth"),
                 ("sans-serif", 22),
             )
             .x_label_area_size(40)
@@ -390,8 +390,8 @@ fn draw(
     if text {
         chart
             .configure_mesh()
-            .x_desc("u / u0")
-            .y_desc("z / H")
+            .x_desc("excess pore pressure u / u0 (u0: initial excess pressure)")
+            .y_desc("depth below the drained top z / H")
             .draw()?;
     } else {
         chart.configure_mesh().disable_mesh().draw()?;
@@ -412,8 +412,10 @@ fn draw(
             colour.stroke_width(2),
         ))?;
         if text {
-            line.label(format!("T_v = {tv}"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+            line.label(format!(
+                "T_v = {tv}: Terzaghi (line), material points (dots)"
+            ))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
         }
     }
     if text {
@@ -433,7 +435,7 @@ fn draw(
     if text {
         chart
             .caption(
-                "Settlement of the top (mm) against time (s)",
+                format!("{name}: settlement of the top against time"),
                 ("sans-serif", 22),
             )
             .x_label_area_size(40)
@@ -443,8 +445,8 @@ fn draw(
     if text {
         chart
             .configure_mesh()
-            .x_desc("t (s)")
-            .y_desc("settlement (mm)")
+            .x_desc("time t (s)")
+            .y_desc("settlement of the top (mm)")
             .draw()?;
     } else {
         chart.configure_mesh().disable_mesh().draw()?;

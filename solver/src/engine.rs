@@ -195,28 +195,7 @@ impl<R: Real> Engine<R> {
                 )
             })
             .collect();
-        // Empty elements may fill: they take the fastest material's speed. An explicit drag
-        // must be resolved by the step too: Mieremet's speed has its term.
-        let anura3d_step = case.anura3d_time_step || case.drag == crate::case::Drag::Explicit;
-        let mut dt = f64::INFINITY;
-        for e in 0..mesh.elements() {
-            let dx = mesh.min_altitude[e].f64();
-            let m = case.element_material[e] as usize;
-            let c = match case.materials.get(m).and_then(|s| s.as_ref()) {
-                Some(s) => s.wave_speed_at(dx, anura3d_step),
-                None => case
-                    .materials
-                    .iter()
-                    .flatten()
-                    .map(|s| s.wave_speed_at(dx, anura3d_step))
-                    .fold(0.0, f64::max),
-            };
-            dt = dt.min(dx / c);
-        }
-        let dt = case.courant * dt;
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(format!("critical time step is not positive ({dt})"));
-        }
+        let dt = crate::time_step::critical(case, mesh.elements(), |e| mesh.min_altitude[e].f64())?;
         let mut grid = Grid::new(mesh.nodes());
         if two_phase {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));

@@ -8,9 +8,10 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use clap::Parser;
-use mpm_shared::cps::Cps;
+use mpm_solve::run::Progress;
+use mpm_solve::units;
 
 /// Run an explicit MPM simulation.
 ///
@@ -36,9 +37,29 @@ struct Args {
     /// Deactivate material points that leave the mesh (counted in run.json) instead of stopping.
     #[arg(long)]
     drop_lost: bool,
-    /// Only read and check the input, print a summary and exit.
+    /// With --drop-lost, the share of the material points (0 to 1) that may leave the mesh
+    /// before the run stops with an error (it stops anyway when every point has left).
+    #[arg(long, default_value_t = 0.1, value_name = "FRACTION", value_parser = fraction)]
+    max_lost: f64,
+    /// Refuse to start a run whose outputs are predicted to take more than this on disk
+    /// (e.g. 500MB, 20GB); a run is also refused when they would not fit in the free space.
+    #[arg(long, default_value = "4GB", value_name = "SIZE", value_parser = size)]
+    max_output: f64,
+    /// Refuse to start a run predicted to take more time steps than this (the critical step
+    /// follows the stiffest, lightest material and the smallest element).
+    #[arg(long, default_value = "1e8", value_name = "N", value_parser = positive)]
+    max_steps: f64,
+    /// Read and check the input, print what a run would cost (material points, time step,
+    /// steps, output volume, memory, a rough wall time) and exit without running.
     #[arg(long)]
     check: bool,
+    /// No progress on standard error.
+    #[arg(long, short)]
+    quiet: bool,
+    /// Seconds between progress lines when standard error is not a terminal (a log file of a
+    /// batch job); on a terminal a progress bar is drawn instead.
+    #[arg(long, default_value_t = 5.0, value_name = "SECONDS", value_parser = positive)]
+    progress_every: f64,
     /// Write the scene as an Anura3D case, DIR/NAME.GOM and DIR/NAME.CPS_001 (NAME: the scene
     /// file's stem), and exit without running; what Anura3D cannot reproduce is refused by name.
     #[arg(long, value_name = "DIR")]
@@ -100,11 +121,93 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(args: Args) -> anyhow::Result<()> {
-    let is_scene = args
-        .input
+/// `--max-lost`: a share in [0, 1].
+fn fraction(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "expected a fraction from 0 to 1 (0.1 = 10 %), got {s}"
+        )),
+    }
+}
+
+/// A positive number (`1e8` allowed).
+fn positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("expected a positive number, got {s}")),
+    }
+}
+
+/// `--max-output`: bytes, with an optional k, M, G or T (powers of 1000) and an optional B.
+fn size(s: &str) -> Result<f64, String> {
+    let t = s.trim();
+    let t = t.strip_suffix(['B', 'b']).unwrap_or(t);
+    let (num, scale) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => {
+            let scale = match c.to_ascii_uppercase() {
+                'K' => 1e3,
+                'M' => 1e6,
+                'G' => 1e9,
+                'T' => 1e12,
+                _ => return Err(format!("expected a size such as 500MB or 20GB, got {s}")),
+            };
+            (&t[..i], scale)
+        }
+        _ => (t, 1.0),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v * scale),
+        _ => Err(format!("expected a size such as 500MB or 20GB, got {s}")),
+    }
+}
+
+/// What the input file is, from its name.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Input {
+    Scene,
+    Gom,
+}
+
+fn input_kind(path: &std::path::Path) -> anyhow::Result<Input> {
+    if mpm_shared::io::is_stdio(path) {
+        return Ok(Input::Gom);
+    }
+    let ext = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "toml" => Ok(Input::Scene),
+        e if e == "gom" || e.starts_with("gom_stage") => Ok(Input::Gom),
+        "msh" => {
+            bail!(
+            "{} is a Gmsh mesh; mpm-solve runs a scene or an Anura3D case. Either write a scene \
+             that names it (a TOML file with `mesh = \"{}\"`, materials and fixities by physical \
+             group, times: see testdata/column_gravity.toml and the README's \"Your first hour\"), \
+             or convert it with `sfcb {} CASE.GOM` and give the GOM with a CPS",
+            path.display(),
+            path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default(),
+            path.display()
+        )
+        }
+        "cps_001" | "cps" => bail!(
+            "{} holds calculation parameters; give the geometry CASE.GOM (its CPS beside it, or \
+             --cps {})",
+            path.display(),
+            path.display()
+        ),
+        _ => bail!(
+            "{}: expected a TOML scene (.toml) or an Anura3D geometry (.GOM), or `-` for a GOM on \
+             standard input",
+            path.display()
+        ),
+    }
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    let kind = input_kind(&args.input)?;
+    let is_scene = kind == Input::Scene;
     if let Some(dir) = &args.export_anura3d {
         if !is_scene {
             bail!(
@@ -119,56 +222,67 @@ fn run(args: Args) -> anyhow::Result<()> {
         println!("wrote {} and {}", done.gom.display(), done.cps.display());
         return Ok(());
     }
-    if is_scene {
+    let case = if is_scene {
         let case = mpm_solve::scene::load(&args.input)?;
         println!(
-            "{}: {} elements, {} nodes, {} s in outputs of {} s",
+            "{}: {} elements, {} nodes; {} simulated in {} output(s)",
             args.input.display(),
-            case.model.element_count(),
-            case.model.node_count(),
-            case.end_time,
-            case.output_times.first().copied().unwrap_or(0.0)
+            units::count(case.model.element_count() as f64),
+            units::count(case.model.node_count() as f64),
+            units::duration(case.end_time),
+            case.output_times.len()
         );
-        if args.check {
-            return Ok(());
-        }
-        return solve(case, &args);
-    }
-    let cps_path = match (&args.cps, mpm_shared::io::is_stdio(&args.input)) {
-        (Some(p), _) => p.clone(),
-        (None, true) => bail!("reading the GOM from standard input needs --cps FILE"),
-        (None, false) => args.input.with_extension("CPS_001"),
-    };
-    if args.check {
-        let model = mpm_shared::read_model(&args.input)?;
-        let data =
-            std::fs::read(&cps_path).with_context(|| format!("reading {}", cps_path.display()))?;
-        let (cps, warnings) = Cps::read(&data, &cps_path.display().to_string())?;
-        for w in warnings {
-            eprintln!("mpm-solve: warning: {w}");
-        }
-        let settings = cps.settings()?;
+        case
+    } else {
+        let cps_path = match (&args.cps, mpm_shared::io::is_stdio(&args.input)) {
+            (Some(p), _) => p.clone(),
+            (None, true) => bail!("reading the GOM from standard input needs --cps FILE"),
+            (None, false) => {
+                let p = args.input.with_extension("CPS_001");
+                if !p.exists() {
+                    bail!(
+                        "{}: no calculation parameters beside it: expected {}; give them with --cps FILE",
+                        args.input.display(),
+                        p.display()
+                    );
+                }
+                p
+            }
+        };
+        let (case, settings) = mpm_solve::anura3d::load(&args.input, &cps_path)?;
         println!(
             "{}: {} {} elements, {} nodes, {} materials; {} load step(s) of {} s, Courant {}",
             mpm_shared::display_name(&args.input),
-            model.element_count(),
-            model.element_type.keyword(),
-            model.node_count(),
-            model.materials().len(),
+            case.model.element_count(),
+            case.model.element_type.keyword(),
+            case.model.node_count(),
+            case.model.materials().len(),
             settings.load_steps,
             settings.time_per_load_step,
             settings.courant
         );
-        return Ok(());
-    }
-    let (case, _settings) = mpm_solve::anura3d::load(&args.input, &cps_path)?;
+        case
+    };
     solve(case, &args)
 }
 
 /// Runs `case` with the command line's probes, output folder and options.
 fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
-    let Some(out) = &args.out else {
-        bail!("--out DIR is required to run a case")
+    let out = match (&args.out, args.check) {
+        (_, true) => None,
+        (Some(out), false) => {
+            if out.exists() && !out.is_dir() {
+                bail!(
+                    "--out {}: is a file; --out names a folder for the outputs (created if missing)",
+                    out.display()
+                );
+            }
+            Some(out.as_path())
+        }
+        (None, false) => bail!(
+            "--out DIR is required to run a case (a folder for the outputs, created if missing); \
+             --check only predicts what a run would cost"
+        ),
     };
     case.drag = match args.drag {
         DragArg::Implicit => mpm_solve::case::Drag::Implicit,
@@ -205,10 +319,47 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
         _ => how,
     };
     let case = case.reordered(how).map_err(anyhow::Error::msg)?;
-    let progress = std::io::stderr().is_terminal();
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let plan = mpm_solve::preflight::plan(&case, threads).map_err(anyhow::Error::msg)?;
+    let limits = mpm_solve::preflight::Limits {
+        max_output_bytes: args.max_output,
+        max_steps: args.max_steps,
+    };
+    let Some(out) = out else {
+        println!("{plan}");
+        plan.check(&limits, None)?;
+        // Probes are checked against the points the run would place.
+        mpm_solve::engine::Engine::<f64>::with_options(
+            &case,
+            false,
+            mpm_solve::engine::Options {
+                threads: 1,
+                pin: mpm_solve::team::Pin::None,
+                first_touch: false,
+            },
+        )
+        .map_err(anyhow::Error::msg)
+        .and_then(|e| Ok(mpm_solve::run::check_probes(&case, &e)?))?;
+        return Ok(());
+    };
+    plan.check(&limits, Some(out))?;
+    let options = mpm_solve::run::RunOptions {
+        drop_lost: args.drop_lost,
+        max_lost: args.max_lost,
+        progress: if args.quiet {
+            Progress::Off
+        } else if std::io::stderr().is_terminal() {
+            Progress::Bar
+        } else {
+            Progress::Lines {
+                every: args.progress_every,
+            }
+        },
+    };
     if case.consolidation.is_some() {
-        let (engine, t, w) =
-            mpm_solve::consolidation::run_job::<f64>(&case, out, args.drop_lost, progress)?;
+        let (engine, t, w) = mpm_solve::consolidation::run_job::<f64>(&case, out, &options)?;
         done(&engine, out);
         for (name, tr) in
             std::iter::once(("default", &t)).chain(w.as_ref().map(|w| ("workshop", w)))
@@ -225,18 +376,25 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    let engine = mpm_solve::run::run::<f64>(&case, out, args.drop_lost, progress)?;
+    let engine = mpm_solve::run::run::<f64>(&case, out, &options)?;
     done(&engine, out);
     Ok(())
 }
 
 /// The closing line of a run.
 fn done(engine: &mpm_solve::engine::Engine<f64>, out: &std::path::Path) {
+    let lost = if engine.lost > 0 {
+        format!(", {} left the mesh", units::count(engine.lost as f64))
+    } else {
+        String::new()
+    };
     println!(
-        "done: {} steps of {:.3e} s, {} material points, outputs in {}",
-        engine.steps,
-        engine.dt,
-        engine.particles.len(),
+        "done: {} simulated in {} step{} of {}, {} material points{lost}; outputs in {}",
+        units::duration(engine.time),
+        units::count(engine.steps as f64),
+        if engine.steps == 1 { "" } else { "s" },
+        units::duration(engine.dt),
+        units::count(engine.particles.len() as f64),
         out.display()
     );
 }

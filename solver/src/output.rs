@@ -165,7 +165,10 @@ pub fn peak_rss_bytes() -> u64 {
         .map_or(0, |kb| kb * 1024)
 }
 
-/// Writes `run.json`.
+/// Version of the layout of `run.json`: raised whenever a key is renamed or changes meaning.
+pub const RUN_JSON_SCHEMA: u32 = 1;
+
+/// Writes `run.json` (strict JSON: a non-finite number is written as null).
 pub fn write_summary<R: Real>(
     dir: &Path,
     case: &Case,
@@ -185,7 +188,9 @@ pub fn write_summary<R: Real>(
         0.0
     };
     let grid_bytes = engine.grid.bytes() as f64 / n.max(1) as f64;
+    // serde_json writes a non-finite number as null, so the file stays strict JSON.
     let json = serde_json::json!({
+        "schema_version": RUN_JSON_SCHEMA,
         "case": case.name,
         "inputs": case.inputs,
         "threads": engine.team.threads,

@@ -580,7 +580,20 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
             format!("must be given and positive, got {interval}"),
         ));
     }
-    let n_out = (end / interval).round().max(1.0) as usize;
+    let n_out = (end / interval).round().max(1.0);
+    if n_out > crate::preflight::MAX_OUTPUTS {
+        return Err(invalid(
+            "time.output_interval".into(),
+            format!(
+                "{} asks for {} outputs over {}; at most {} are allowed (each writes a particle file): give a longer interval",
+                crate::units::duration(interval),
+                crate::units::count(n_out),
+                crate::units::duration(end),
+                crate::units::count(crate::preflight::MAX_OUTPUTS)
+            ),
+        ));
+    }
+    let n_out = n_out as usize;
     let output_times = (1..=n_out)
         .map(|k| {
             if k == n_out {

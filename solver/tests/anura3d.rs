@@ -119,24 +119,14 @@ fn inputs(name: &str, dir: &Path, drop: &[&str], set: &[(&str, &str)]) -> (PathB
 /// Unset (or empty): `None`, and the test says it is skipped. Set to a folder that does not
 /// hold the benchmarks: a failure, not a silent skip.
 fn benchmarks() -> Option<PathBuf> {
-    let dir = std::env::var_os("ANURA3D_BENCHMARKS").filter(|d| !d.is_empty());
-    let Some(dir) = dir else {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let found = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    let Some(root) = found else {
         eprintln!("ANURA3D_BENCHMARKS not set: Anura3D benchmark comparison skipped");
         return None;
     };
-    let dir = PathBuf::from(dir);
-    let root = if dir.is_relative() {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(&dir)
-    } else {
-        dir.clone()
-    };
     let p = root.join("Benchmarks/Pre-Commit_Tests");
-    assert!(
-        p.is_dir(),
-        "ANURA3D_BENCHMARKS={} is set but {} is not a folder",
-        dir.display(),
-        p.display()
-    );
+    assert!(p.is_dir(), "{} is not a folder", p.display());
     Some(p)
 }
 
@@ -175,7 +165,7 @@ fn benchmarks_reproduce_the_expected_material_points() {
         assert!(!expected.material_points.is_empty(), "{name}: no rows read");
         let (case, _) = mpm_solve::anura3d::load(&gom, &cps).unwrap();
         let out = tempfile::tempdir().unwrap();
-        let engine = mpm_solve::run::run::<f64>(&case, out.path(), false, false).unwrap();
+        let engine = mpm_solve::run::run::<f64>(&case, out.path(), &Default::default()).unwrap();
         let c = compare(&engine, &expected);
         assert!(
             c.time_matches(),

@@ -168,8 +168,8 @@ fn check_runs(a: &Case, b: &Case, tol: f64) {
     let (ids, x0) = start(a);
     assert_eq!((ids.clone(), x0), start(b));
     let dir = tempfile::tempdir().unwrap();
-    let ra = mpm_solve::run::run::<f64>(a, &dir.path().join("a"), false, false).unwrap();
-    let rb = mpm_solve::run::run::<f64>(b, &dir.path().join("b"), false, false).unwrap();
+    let ra = mpm_solve::run::run::<f64>(a, &dir.path().join("a"), &Default::default()).unwrap();
+    let rb = mpm_solve::run::run::<f64>(b, &dir.path().join("b"), &Default::default()).unwrap();
     let (pa, pb) = (&ra.particles, &rb.particles);
     assert_eq!(pa.id, pb.id);
     let big_u = pa.u.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -541,7 +541,9 @@ fn anura3d_displacements(dir: &Path, stem: &str) -> Vec<(u32, [f64; 3])> {
 
 #[test]
 fn anura3d_runs_the_exports() {
-    let Some(oracle) = std::env::var_os("ANURA3D_ORACLE") else {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let found = mpm_shared::suite::anura3d_oracle(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    let Some(oracle) = found else {
         // Written past the test harness's capture, so that the skip shows in a plain run.
         let _ = writeln!(
             std::io::stderr(),
@@ -570,8 +572,8 @@ fn anura3d_runs_the_exports() {
         let theirs = anura3d_displacements(&work, &stem);
         assert!(!theirs.is_empty());
         let (case, _) = mpm_solve::anura3d::load(&gom, &cps).unwrap();
-        let ours =
-            mpm_solve::run::run::<f64>(&case, &dir.path().join(&stem), false, false).unwrap();
+        let ours = mpm_solve::run::run::<f64>(&case, &dir.path().join(&stem), &Default::default())
+            .unwrap();
         let p = &ours.particles;
         let u = |id: u32| p.u[p.id.iter().position(|&i| i == id).unwrap()];
         let big = theirs

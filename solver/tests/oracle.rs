@@ -20,17 +20,12 @@ fn testdata(name: &str) -> PathBuf {
 
 /// The Anura3D binary, or `None` (skipped) when `ANURA3D_ORACLE` is unset.
 fn oracle() -> Option<PathBuf> {
-    let Some(bin) = std::env::var_os("ANURA3D_ORACLE").filter(|v| !v.is_empty()) else {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let found = mpm_shared::suite::anura3d_oracle(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    if found.is_none() {
         eprintln!("ANURA3D_ORACLE not set: comparison with Anura3D skipped");
-        return None;
-    };
-    let bin = PathBuf::from(bin);
-    assert!(
-        bin.is_file(),
-        "ANURA3D_ORACLE={} is not a file",
-        bin.display()
-    );
-    Some(bin)
+    }
+    found
 }
 
 /// Runs Anura3D on `dir/NAME.GOM` + `dir/NAME.CPS_001` in `dir`.
@@ -76,7 +71,7 @@ fn run_ours(gom: &Path, cps: &Path, drag: Drag) -> Vec<Step> {
     case.drag = drag;
     let out = tempfile::tempdir().unwrap();
     let mut steps = Vec::new();
-    mpm_solve::run::run_observed::<f64>(&case, out.path(), false, false, &mut |e| {
+    mpm_solve::run::run_observed::<f64>(&case, out.path(), &Default::default(), &mut |e| {
         let p = &e.particles;
         let mut order: Vec<usize> = (0..p.len()).collect();
         order.sort_by_key(|&i| p.id[i]);
@@ -263,7 +258,7 @@ fn workshop_set_up_no_worse_than_anura3d_against_terzaghi() {
     let job = mpm_solve::scene::load(&testdata("oedometer.toml")).unwrap();
     let out = tempfile::tempdir().unwrap();
     let (_, _, workshop) =
-        mpm_solve::consolidation::run_job::<f64>(&job, out.path(), false, false).unwrap();
+        mpm_solve::consolidation::run_job::<f64>(&job, out.path(), &Default::default()).unwrap();
     let ours = workshop.expect("the default job runs the workshop set-up too");
     eprintln!("| T_v | Anura3D RMS / u0 | mpm-solve workshop column RMS / u0 |\n|---:|---:|---:|");
     assert_eq!(ours.records.len(), theirs.len());
@@ -288,11 +283,12 @@ fn workshop_set_up_no_worse_than_anura3d_against_terzaghi() {
 #[test]
 fn liquid_load_mixed_objective_smoothing_match_anura3d() {
     let Some(bin) = oracle() else { return };
-    let Some(root) = std::env::var_os("ANURA3D_BENCHMARKS").filter(|v| !v.is_empty()) else {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let found = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    let Some(root) = found else {
         eprintln!("ANURA3D_BENCHMARKS not set: skipped");
         return;
     };
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(root);
     let case = root.join(
         "Benchmarks/Pre-Commit_Tests/4005_LinearLoad_DYN_MPMMIXED_pressure_2019.1/test-4005.A3D",
     );

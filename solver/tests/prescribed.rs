@@ -172,15 +172,16 @@ fn run(
 ) {
     let dir = tempfile::tempdir().unwrap();
     let mut frames = Vec::new();
-    let engine = mpm_solve::run::run_observed::<f64>(case, dir.path(), false, false, &mut |e| {
-        let p = &e.particles;
-        let mut pts: Vec<_> = (0..p.len())
-            .map(|i| (p.id[i], p.x[i], p.u[i], p.v[i], p.stress[i]))
-            .collect();
-        pts.sort_by_key(|q| q.0);
-        frames.push((e.time, pts));
-    })
-    .unwrap();
+    let engine =
+        mpm_solve::run::run_observed::<f64>(case, dir.path(), &Default::default(), &mut |e| {
+            let p = &e.particles;
+            let mut pts: Vec<_> = (0..p.len())
+                .map(|i| (p.id[i], p.x[i], p.u[i], p.v[i], p.stress[i]))
+                .collect();
+            pts.sort_by_key(|q| q.0);
+            frames.push((e.time, pts));
+        })
+        .unwrap();
     (engine, frames)
 }
 

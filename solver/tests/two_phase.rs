@@ -28,7 +28,7 @@ fn default_job_beats_anura3d_and_matches_terzaghi() {
     let case = scene::load(&testdata("oedometer.toml")).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let (_, default, workshop) =
-        consolidation::run_job::<f64>(&case, dir.path(), false, false).unwrap();
+        consolidation::run_job::<f64>(&case, dir.path(), &Default::default()).unwrap();
     let workshop = workshop.expect("the job also runs the workshop set-up");
     let at = |t: &consolidation::Tracker, tv: f64| {
         *t.records
@@ -100,7 +100,7 @@ fn permeability_sweep_is_stable_at_the_courant_step_and_undrained_at_the_low_end
         let case = sweep_case(kappa, 0.03);
         let dir = tempfile::tempdir().unwrap();
         let (engine, tracker) =
-            mpm_solve::run::run_tracked::<f64>(&case, dir.path(), false, false).unwrap();
+            mpm_solve::run::run_tracked::<f64>(&case, dir.path(), &Default::default()).unwrap();
         let tracker = tracker.unwrap();
         let u0 = tracker.layer.u0;
         steps.push(engine.dt);
@@ -168,7 +168,7 @@ fn a_load_on_the_liquid_raises_the_pore_pressure_and_not_the_effective_stress() 
     case.end_time = 0.75;
     case.output_times = vec![0.75];
     let dir = tempfile::tempdir().unwrap();
-    let engine = mpm_solve::run::run::<f64>(&case, dir.path(), false, false).unwrap();
+    let engine = mpm_solve::run::run::<f64>(&case, dir.path(), &Default::default()).unwrap();
     let p = &engine.particles;
     let l = p.liquid.as_ref().unwrap();
     let n = p.len() as f64;

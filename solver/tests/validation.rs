@@ -16,7 +16,7 @@ fn column_under_self_weight_matches_rho_g_depth() {
     let dir = tempfile::tempdir().unwrap();
     let case = scene::load(&testdata("column_gravity.toml")).unwrap();
     assert!(case.model.element_count() >= 1000);
-    let engine = mpm_solve::run::run::<f64>(&case, dir.path(), false, false).unwrap();
+    let engine = mpm_solve::run::run::<f64>(&case, dir.path(), &Default::default()).unwrap();
     let p = &engine.particles;
     let rho_g = 2.0 * 9.81;
     let (mut num, mut den, mut count) = (0.0, 0.0, 0);
@@ -203,7 +203,8 @@ fn anura3d_oedometer_settles_by_q_h_over_e_oed() {
     let q = 5.0;
     let gom = write_oedometer_case(dir.path(), q, "MPM-MP");
     let (case, _) = mpm_solve::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
-    let engine = mpm_solve::run::run::<f64>(&case, &dir.path().join("out"), false, false).unwrap();
+    let engine =
+        mpm_solve::run::run::<f64>(&case, &dir.path().join("out"), &Default::default()).unwrap();
     let eoed = mpm_solve::linear_elastic::LinearElastic::<f64>::oedometric(1000.0, 0.3);
     let p = &engine.particles;
     // Uniform strain -q/E_oed: every point's vertical displacement is -q y0 / E_oed.
@@ -272,7 +273,8 @@ fn mixed_integration_settles_like_material_points_with_one_stress_per_element() 
     let q = 5.0;
     let gom = write_oedometer_case(dir.path(), q, "MPM-MIXED");
     let (case, _) = mpm_solve::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
-    let engine = mpm_solve::run::run::<f64>(&case, &dir.path().join("out"), false, false).unwrap();
+    let engine =
+        mpm_solve::run::run::<f64>(&case, &dir.path().join("out"), &Default::default()).unwrap();
     let p = &engine.particles;
     let mut by_element: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
     for i in 0..p.len() {
