@@ -158,7 +158,13 @@ fn run(args: Args) -> anyhow::Result<()> {
                     levels,
                     cubic: !args.no_cubic,
                 },
-            );
+            )
+            .with_context(|| {
+                format!(
+                    "{}: cannot order the elements along the curve",
+                    mpm_shared::display_name(&args.input)
+                )
+            })?;
             seconds.insert("keys", ord.seconds[0]);
             seconds.insert("sort", ord.seconds[1]);
             seconds.insert("renumber", ord.seconds[2]);
