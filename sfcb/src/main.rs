@@ -108,6 +108,13 @@ fn run(args: Args) -> anyhow::Result<()> {
     let t_start = Instant::now();
     let model = mpm_shared::read_model(&args.input)?;
     let t_read = t_start.elapsed().as_secs_f64();
+    // Duplicates do not stop the ordering, but they disconnect the elements around them.
+    let duplicates = mpm_shared::coincident::pairs(&model);
+    if let Some(w) =
+        mpm_shared::coincident::warning(&mpm_shared::display_name(&args.input), &duplicates)
+    {
+        eprintln!("sfcb: warning: {w}");
+    }
     if let Some(l) = args.levels {
         let max = if model.dimension.coords() == 3 {
             21
