@@ -12,6 +12,10 @@ use sfcb::{metrics, order};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+/// Version of the `--report` JSON layout; raised when a field is renamed, removed or changes
+/// meaning (new fields keep it).
+const REPORT_SCHEMA_VERSION: u32 = 1;
+
 /// Which curve orders the elements.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Curve {
@@ -228,7 +232,10 @@ fn run(args: Args) -> anyhow::Result<()> {
                 .unwrap_or_else(|| metrics::face_neighbours(&model));
             metrics::partition_quality(&model, &nb, &part, &order::weights(&model), p)
         });
+        // serde_json writes a NaN or infinite f64 as null, so the report is strict JSON
+        // whatever the numbers (metrics::tests::non_finite_numbers_become_null checks it).
         let report = serde_json::json!({
+            "schema_version": REPORT_SCHEMA_VERSION,
             "input": mpm_shared::display_name(&args.input),
             "output": mpm_shared::display_name(&args.output),
             "dimension": model.dimension.coords(),
