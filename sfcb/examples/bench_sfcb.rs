@@ -45,7 +45,8 @@ fn time_core(model: &Model, threads: usize, reps: usize) -> (f64, u64) {
         let mut hash = 0;
         for _ in 0..reps {
             let t = Instant::now();
-            let o = order::order(model, opts(order::Curve::Morton));
+            let o = order::order(model, opts(order::Curve::Morton))
+                .expect("benchmark meshes have finite coordinates");
             times.push(t.elapsed().as_secs_f64());
             hash = fnv(&o.order, &o.node_new);
         }
@@ -245,7 +246,8 @@ fn main() {
             let shuffled = model
                 .reordered(&shuffle(n, 1), &shuffle(model.node_count(), 2))
                 .unwrap();
-            let o = order::order(&shuffled, opts(order::Curve::Morton));
+            let o = order::order(&shuffled, opts(order::Curve::Morton))
+                .expect("benchmark meshes have finite coordinates");
             let ordered = shuffled.reordered(&o.order, &o.node_new).unwrap();
             let (ts, to, tg) = (
                 time_gather(&shuffled, reps),
@@ -285,7 +287,8 @@ fn main() {
                 metrics::merge_pieces(n, &nb, &mut morton, &w, 20);
                 let secs = t.elapsed().as_secs_f64();
                 let cut_mm = row("morton + merge pieces", &morton, &ordered, Some(secs));
-                let oh = order::order(&shuffled, opts(order::Curve::Hilbert));
+                let oh = order::order(&shuffled, opts(order::Curve::Hilbert))
+                    .expect("benchmark meshes have finite coordinates");
                 let hil = shuffled.reordered(&oh.order, &oh.node_new).unwrap();
                 let wh = order::weights(&hil);
                 let mut hp = order::partitions(&wh, p);

@@ -12,6 +12,10 @@ use sfcb::{metrics, order};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+/// Version of the `--report` JSON layout; raised when a field is renamed, removed or changes
+/// meaning (new fields keep it).
+const REPORT_SCHEMA_VERSION: u32 = 1;
+
 /// Which curve orders the elements.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Curve {
@@ -108,6 +112,13 @@ fn run(args: Args) -> anyhow::Result<()> {
     let t_start = Instant::now();
     let model = mpm_shared::read_model(&args.input)?;
     let t_read = t_start.elapsed().as_secs_f64();
+    // Duplicates do not stop the ordering, but they disconnect the elements around them.
+    let duplicates = mpm_shared::coincident::pairs(&model);
+    if let Some(w) =
+        mpm_shared::coincident::warning(&mpm_shared::display_name(&args.input), &duplicates)
+    {
+        eprintln!("sfcb: warning: {w}");
+    }
     if let Some(l) = args.levels {
         let max = if model.dimension.coords() == 3 {
             21
@@ -158,7 +169,13 @@ fn run(args: Args) -> anyhow::Result<()> {
                     levels,
                     cubic: !args.no_cubic,
                 },
-            );
+            )
+            .with_context(|| {
+                format!(
+                    "{}: cannot order the elements along the curve",
+                    mpm_shared::display_name(&args.input)
+                )
+            })?;
             seconds.insert("keys", ord.seconds[0]);
             seconds.insert("sort", ord.seconds[1]);
             seconds.insert("renumber", ord.seconds[2]);
@@ -215,7 +232,10 @@ fn run(args: Args) -> anyhow::Result<()> {
                 .unwrap_or_else(|| metrics::face_neighbours(&model));
             metrics::partition_quality(&model, &nb, &part, &order::weights(&model), p)
         });
+        // serde_json writes a NaN or infinite f64 as null, so the report is strict JSON
+        // whatever the numbers (metrics::tests::non_finite_numbers_become_null checks it).
         let report = serde_json::json!({
+            "schema_version": REPORT_SCHEMA_VERSION,
             "input": mpm_shared::display_name(&args.input),
             "output": mpm_shared::display_name(&args.output),
             "dimension": model.dimension.coords(),

@@ -197,6 +197,33 @@ mod tests {
     }
 
     #[test]
+    fn non_finite_numbers_become_null() {
+        // The report is built with json! and written with to_string_pretty (main.rs); a NaN or
+        // infinity must come out as null, never as a bare NaN/Infinity token.
+        let l = Locality {
+            mean_id_spread: f64::NAN,
+            max_id_spread: 3,
+            mean_cache_lines: f64::INFINITY,
+        };
+        let text =
+            serde_json::to_string_pretty(&serde_json::json!({ "l": l, "x": f64::NEG_INFINITY }))
+                .unwrap();
+        let back: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(
+            back["l"]["mean_id_spread"],
+            serde_json::Value::Null,
+            "{text}"
+        );
+        assert_eq!(
+            back["l"]["mean_cache_lines"],
+            serde_json::Value::Null,
+            "{text}"
+        );
+        assert_eq!(back["x"], serde_json::Value::Null, "{text}");
+        assert_eq!(back["l"]["max_id_spread"], 3);
+    }
+
+    #[test]
     fn locality_counts_lines_and_spread() {
         let m = generate::box_mesh([1, 1, 1], [1.0; 3], ElementType::Tet4);
         let l = locality(&m);

@@ -24,6 +24,52 @@ pub fn spread2(v: u64) -> u64 {
     x
 }
 
+/// Axis names for messages.
+const AXES: [char; 3] = ['x', 'y', 'z'];
+
+/// Why no curve grid can be laid over a set of points.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BoundsError {
+    /// A coordinate is NaN or infinite.
+    #[error("node {node} has {axis} = {value}; coordinates must be finite numbers")]
+    Coordinate {
+        /// The node, 1-based (the GOM's node number).
+        node: usize,
+        /// The axis.
+        axis: char,
+        /// The value.
+        value: f64,
+    },
+    /// An axis's extent (max − min) overflows to infinity.
+    #[error(
+        "the {axis} extent of the mesh (max {max:e} − min {min:e}) is not a finite number; \
+         coordinates that far apart cannot be ordered (scale or shift the mesh)"
+    )]
+    Extent {
+        /// The axis.
+        axis: char,
+        /// Smallest coordinate along it.
+        min: f64,
+        /// Largest coordinate along it.
+        max: f64,
+    },
+}
+
+/// The first NaN or infinite coordinate of `coords` as an error (cold: only after a failed
+/// check).
+#[cold]
+fn first_non_finite(coords: &[f64], dim: usize) -> BoundsError {
+    let i = coords
+        .iter()
+        .position(|v| !v.is_finite())
+        .expect("called only when a coordinate is not finite");
+    BoundsError::Coordinate {
+        node: i / dim + 1,
+        axis: AXES[i % dim],
+        value: coords[i],
+    }
+}
+
 /// The quantisation grid: per-axis origin and scale so that q = floor((c - lo) * scale).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grid {
@@ -40,18 +86,40 @@ pub struct Grid {
 impl Grid {
     /// The grid over points `coords` (`dim` per point): lo = per-axis minimum, side = the largest
     /// extent for every axis (`cubic`), or each axis's own extent.
-    pub fn bounding(coords: &[f64], dim: usize, levels: u32, cubic: bool) -> Grid {
+    ///
+    /// Refuses a NaN or infinite coordinate (naming the first such node, 1-based) and an axis
+    /// whose extent max − min overflows: either would send every centroid to the same cell.
+    pub fn bounding(
+        coords: &[f64],
+        dim: usize,
+        levels: u32,
+        cubic: bool,
+    ) -> Result<Grid, BoundsError> {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
+        // One pass: a flag rather than a branch per value keeps the loop as fast as before;
+        // the offending node is looked for only when the flag is set.
+        let mut all_finite = true;
         for p in coords.chunks_exact(dim) {
             for a in 0..dim {
                 lo[a] = lo[a].min(p[a]);
                 hi[a] = hi[a].max(p[a]);
+                all_finite &= p[a].is_finite();
             }
+        }
+        if !all_finite {
+            return Err(first_non_finite(coords, dim));
         }
         let mut side = [0.0; 3];
         for a in 0..dim {
             side[a] = if hi[a] > lo[a] { hi[a] - lo[a] } else { 0.0 };
+            if !side[a].is_finite() {
+                return Err(BoundsError::Extent {
+                    axis: AXES[a],
+                    min: lo[a],
+                    max: hi[a],
+                });
+            }
         }
         if cubic {
             let s = side.iter().copied().fold(0.0, f64::max);
@@ -61,12 +129,12 @@ impl Grid {
             lo[a] = 0.0;
             side[a] = 0.0;
         }
-        Grid {
+        Ok(Grid {
             lo,
             side,
             levels,
             dim,
-        }
+        })
     }
 
     /// Position of `c` along axis `a` scaled to [0, 1] (0 when the axis has no extent).
@@ -162,7 +230,7 @@ mod tests {
         for (dim, levels) in [(3usize, 21u32), (3, 1), (3, 5), (2, 31), (2, 3), (2, 16)] {
             let pts: Vec<f64> = [-3.5, 2.0, 0.25, 10.0, 7.0, 1.0][..2 * dim].to_vec();
             for cubic in [true, false] {
-                let g = Grid::bounding(&pts, dim, levels, cubic);
+                let g = Grid::bounding(&pts, dim, levels, cubic).unwrap();
                 for i in 0..20_000 {
                     let mut c = [0.0; 3];
                     for (a, ca) in c.iter_mut().enumerate().take(dim) {
@@ -190,8 +258,43 @@ mod tests {
     }
 
     #[test]
+    fn non_finite_coordinates_and_extents_are_refused() {
+        // ±1e308 are finite, but their distance is not.
+        let far = [0.0, -1e308, 0.0, 1.0, 1e308, 1.0];
+        for cubic in [true, false] {
+            assert_eq!(
+                Grid::bounding(&far, 3, 21, cubic),
+                Err(BoundsError::Extent {
+                    axis: 'y',
+                    min: -1e308,
+                    max: 1e308
+                })
+            );
+        }
+        // The first bad value is named by its node (1-based) and axis.
+        let bad = [0.0, 0.0, 1.0, 1.0, f64::NAN, f64::INFINITY];
+        let e = Grid::bounding(&bad, 2, 31, true).unwrap_err();
+        assert!(
+            matches!(e, BoundsError::Coordinate { node: 3, axis: 'x', value } if value.is_nan()),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("node 3 has x = NaN"), "{e}");
+        let inf = [0.0, 0.0, 0.0, 1.0, 1.0, f64::NEG_INFINITY];
+        assert_eq!(
+            Grid::bounding(&inf, 3, 21, true),
+            Err(BoundsError::Coordinate {
+                node: 2,
+                axis: 'z',
+                value: f64::NEG_INFINITY
+            })
+        );
+        // Large but representable extents are fine.
+        assert!(Grid::bounding(&[-4e307, 0.0, 0.0, 4e307, 1.0, 1.0], 3, 21, true).is_ok());
+    }
+
+    #[test]
     fn boundary_goes_to_the_upper_half() {
-        let g = Grid::bounding(&[0.0, 0.0, 0.0, 1.0, 1.0, 1.0], 3, 1, true);
+        let g = Grid::bounding(&[0.0, 0.0, 0.0, 1.0, 1.0, 1.0], 3, 1, true).unwrap();
         assert_eq!(g.key(&[0.5, 0.0, 0.0]), 1);
         assert_eq!(g.key(&[0.0, 0.5, 0.0]), 2);
         assert_eq!(g.key(&[0.4999, 0.5, 0.5]), 6);

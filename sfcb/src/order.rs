@@ -4,6 +4,7 @@
 use mpm_shared::{Error, Model};
 use rayon::prelude::*;
 
+pub use crate::morton::BoundsError;
 use crate::morton::Grid;
 
 /// The space-filling curve that orders the elements.
@@ -61,10 +62,13 @@ pub fn centroid(model: &Model, e: usize, out: &mut [f64; 3]) {
 
 /// Orders the elements of `model` along the curve of their centroids and renumbers the vertices
 /// in order of first use. The result does not depend on the number of threads.
-pub fn order(model: &Model, opts: Options) -> Ordering {
+///
+/// Fails when a coordinate is NaN or infinite or an axis's extent is not finite (the error
+/// names the node or the axis; callers add the file).
+pub fn order(model: &Model, opts: Options) -> Result<Ordering, BoundsError> {
     let d = model.dimension.coords();
     let t0 = std::time::Instant::now();
-    let grid = Grid::bounding(&model.coords, d, opts.levels, opts.cubic);
+    let grid = Grid::bounding(&model.coords, d, opts.levels, opts.cubic)?;
     let n = model.element_count();
     let per = model.element_type.nodes();
     let corners = model.element_type.corners();
@@ -106,7 +110,7 @@ pub fn order(model: &Model, opts: Options) -> Ordering {
     let shared_keys = keys.windows(2).filter(|w| w[0] == w[1]).count();
     let node_new = first_use_numbering(model, &order);
     let t3 = std::time::Instant::now();
-    Ordering {
+    Ok(Ordering {
         order,
         node_new,
         keys,
@@ -116,7 +120,7 @@ pub fn order(model: &Model, opts: Options) -> Ordering {
             (t2 - t1).as_secs_f64(),
             (t3 - t2).as_secs_f64(),
         ],
-    }
+    })
 }
 
 /// How many elements ahead the random reads are prefetched.

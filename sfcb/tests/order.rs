@@ -69,7 +69,7 @@ fn ordering_is_a_bijection_and_everything_follows_its_element_and_nodes() {
             (x, order::Curve::Hilbert),
         ]
     }) {
-        let ord = order::order(&m, opts(&m, curve));
+        let ord = order::order(&m, opts(&m, curve)).unwrap();
         assert!(
             mpm_shared::model::inverse(&ord.order, m.element_count()).is_some(),
             "{name}"
@@ -133,7 +133,7 @@ fn ordering_is_a_bijection_and_everything_follows_its_element_and_nodes() {
             }
         }
         // Ordering the ordered model changes nothing.
-        let again = order::order(&r, opts(&r, curve));
+        let again = order::order(&r, opts(&r, curve)).unwrap();
         let rr = r.reordered(&again.order, &again.node_new).unwrap();
         assert!(gom::write(&rr) == gom::write(&r), "{name}: not idempotent");
     }
@@ -300,7 +300,7 @@ mod properties {
             let mut outputs = Vec::new();
             for seed in [s1, s2] {
                 let m = base.reordered(&shuffle(base.element_count(), seed), &shuffle(base.node_count(), !seed)).unwrap();
-                let o = order::order(&m, opts(&m, curve));
+                let o = order::order(&m, opts(&m, curve)).unwrap();
                 prop_assert!(mpm_shared::model::inverse(&o.order, m.element_count()).is_some());
                 prop_assert!(mpm_shared::model::inverse(&o.node_new, m.node_count()).is_some());
                 let r = m.reordered(&o.order, &o.node_new).unwrap();
@@ -309,7 +309,7 @@ mod properties {
                         prop_assert_eq!(r.node(*a as usize), m.node(*b as usize));
                     }
                 }
-                let again = order::order(&r, opts(&r, curve));
+                let again = order::order(&r, opts(&r, curve)).unwrap();
                 let rr = r.reordered(&again.order, &again.node_new).unwrap();
                 let bytes = gom::write(&r);
                 prop_assert!(gom::write(&rr) == bytes, "not idempotent");

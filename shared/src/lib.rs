@@ -7,11 +7,13 @@
 //! - [`msh`]: Gmsh `.msh` reader (2.2 and 4.1, ASCII and binary) and conversion to the model;
 //! - [`vtu`]: ParaView VTU and PVD writers;
 //! - [`suite`]: where tests find Anura3D's benchmark suite and binary;
+//! - [`coincident`]: coincident duplicate nodes, found and described for a warning;
 //! - [`io`]: standard input/output and atomic file writes; [`text`]: scanning and formatting.
 #![warn(missing_docs)]
 
 pub mod anura3d_vtk;
 pub mod bms;
+pub mod coincident;
 pub mod cps;
 pub mod error;
 pub mod generate;

@@ -79,6 +79,10 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let gfile = mpm_shared::display_name(gom);
     let cfile = cps_path.display().to_string();
     let model = mpm_shared::read_model(gom)?;
+    if let Some(w) = mpm_shared::coincident::warning(&gfile, &mpm_shared::coincident::pairs(&model))
+    {
+        eprintln!("mpm-solve: warning: {w}");
+    }
     let data = mpm_shared::io::read_input(cps_path)?;
     let (cps, warnings) = Cps::read(&data, &cfile)?;
     for w in warnings {

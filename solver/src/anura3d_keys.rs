@@ -600,6 +600,49 @@ pub fn status(kind: KeyKind, key: &str) -> KeyStatus {
     lookup(kind, key).map_or(KeyStatus::Unknown, |e| e.1)
 }
 
+/// Where [`markdown`] is written in the repository, relative to its root.
+pub const DOC_PATH: &str = "docs/anura3d-keys.md";
+
+/// The key table as Markdown, one table per [`KeyKind`] in [`KEYS`]' order: key, status and
+/// reason (a refused-unless-inert key's inert value in its status). `docs/anura3d-keys.md` is
+/// this text; a test keeps the two equal.
+pub fn markdown() -> String {
+    // Table cells may not hold a bare `|`.
+    let cell = |s: &str| s.replace('|', "\\|");
+    let mut out = String::from(
+        "# Anura3D keys\n\n\
+         <!-- Generated from solver/src/anura3d_keys.rs (KEYS) by anura3d_keys::markdown(); do not \
+         edit. Regenerate: UPDATE_DOCS=1 cargo test -p mpm-solve --test keys -->\n\n\
+         What `mpm-solve` does with each key of an Anura3D case: **modelled** (computed as \
+         Anura3D does), **ignored** (cannot change the results of a case the loader accepts), \
+         **refused unless inert** (the run stops before the first step, naming the key, its value, \
+         the file and, for CPS keys, the line, unless the key holds its inert value, shown in \
+         brackets) or **refused**. A `*` stands for any text; an exact key wins over a pattern, \
+         and among patterns the first listed wins. GOM sections and CPS keys not listed are \
+         named in a warning and ignored.\n",
+    );
+    for kind in [KeyKind::GomSection, KeyKind::MaterialKey, KeyKind::CpsKey] {
+        out += &format!(
+            "\n## {}s\n\n| Key | Status | Reason |\n|---|---|---|\n",
+            kind.label()
+        );
+        for (_, key, status) in KEYS.iter().filter(|e| e.0 == kind) {
+            let (status, reason) = match *status {
+                KeyStatus::Modelled => ("modelled".to_string(), ""),
+                KeyStatus::Ignored(why) => ("ignored".to_string(), why),
+                KeyStatus::RefusedUnlessInert(what) => match what.rsplit_once("; inert: ") {
+                    Some((what, inert)) => (format!("refused unless inert ({inert})"), what),
+                    None => ("refused unless inert".to_string(), what),
+                },
+                KeyStatus::Refused(why) => ("refused".to_string(), why),
+                KeyStatus::Unknown => ("unknown".to_string(), ""),
+            };
+            out += &format!("| `$${key}` | {} | {} |\n", cell(&status), cell(reason));
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -633,6 +676,26 @@ mod tests {
         assert_eq!(status(CpsKey, "NO_SUCH_KEY"), KeyStatus::Unknown);
         // Kinds are separate name spaces.
         assert_eq!(status(GomSection, "COURANT_NUMBER"), KeyStatus::Unknown);
+    }
+
+    #[test]
+    fn markdown_has_a_row_per_entry_under_its_kind() {
+        let md = markdown();
+        let rows = md.lines().filter(|l| l.starts_with("| `$$")).count();
+        assert_eq!(rows, KEYS.len());
+        let gom = md.find("## GOM sections").unwrap();
+        let material = md.find("## GOM material keys").unwrap();
+        let cps = md.find("## CPS keys").unwrap();
+        assert!(gom < material && material < cps);
+        let formulation = md
+            .find("| `$$FORMULATION` | refused unless inert (single-point) | double-point")
+            .unwrap();
+        assert!(gom < formulation && formulation < material);
+        let total_time = md
+            .find("| `$$TOTAL_TIME` | refused unless inert (0) |")
+            .unwrap();
+        assert!(total_time > cps);
+        assert!(md.contains("| `$$MATERIAL_NAME` | ignored | a label |\n"));
     }
 
     #[test]

@@ -333,7 +333,16 @@ impl Case {
                 levels: 21,
                 cubic: true,
             },
-        );
+        )
+        .map_err(|e| {
+            // Built-in cases have no input files to name.
+            let from = if self.inputs.is_empty() {
+                "the case".to_string()
+            } else {
+                self.inputs.join(", ")
+            };
+            format!("{from}: --reorder cannot order the mesh: {e}")
+        })?;
         let model = self
             .model
             .reordered(&o.order, &o.node_new)
