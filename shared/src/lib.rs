@@ -18,6 +18,7 @@ pub mod gom;
 pub mod io;
 pub mod model;
 pub mod msh;
+pub mod points;
 pub mod text;
 pub mod vtu;
 
