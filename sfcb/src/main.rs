@@ -68,7 +68,10 @@ struct Args {
     /// Write a JSON report (timings, locality before and after) to FILE, `-` for standard output.
     #[arg(long, value_name = "FILE")]
     report: Option<PathBuf>,
-    /// Remap the material-point ids of a CPS file to the new element order: --cps IN.CPS OUT.CPS.
+    /// Remap the material-point ids of a CPS file to the new element order, for running OUT in
+    /// Anura3D: --cps IN.CPS OUT.CPS. OUT.CPS is marked ($$OUTPUT_MATERIAL_POINTS_GOM_ORDER) so
+    /// that mpm-solve still reports the points by their input ids. Not needed for mpm-solve
+    /// alone: the GOM keeps each element's input number, so the original CPS fits it.
     #[arg(long, num_args = 2, value_names = ["IN.CPS", "OUT.CPS"])]
     cps: Option<Vec<PathBuf>>,
     /// Worker threads [default: all available cores]. The output does not depend on it.
@@ -139,7 +142,10 @@ fn run(args: Args) -> anyhow::Result<()> {
             for w in warnings {
                 eprintln!("sfcb: warning: {w}");
             }
-            Some(cps)
+            // Points are named by their input ids from here on, whatever order the input
+            // GOM's elements are in (see mpm_shared::points).
+            let ids = mpm_shared::points::cps_input_ids(&cps, &model)?;
+            Some((cps, ids))
         }
         None => None,
     };
@@ -151,11 +157,8 @@ fn run(args: Args) -> anyhow::Result<()> {
     let mut seconds = BTreeMap::new();
     seconds.insert("read", t_read);
     let mut shared_keys = 0;
-    let (model, order) = match args.curve {
-        Curve::None => {
-            let order: Vec<u32> = (0..model.element_count() as u32).collect();
-            (model, order)
-        }
+    let model = match args.curve {
+        Curve::None => model,
         _ => {
             let curve = if args.curve == Curve::Hilbert {
                 order::Curve::Hilbert
@@ -183,7 +186,7 @@ fn run(args: Args) -> anyhow::Result<()> {
             let t = Instant::now();
             let reordered = model.reordered(&ord.order, &ord.node_new)?;
             seconds.insert("remap", t.elapsed().as_secs_f64());
-            (reordered, ord.order)
+            reordered
         }
     };
     let mut neighbours = None;
@@ -198,18 +201,10 @@ fn run(args: Args) -> anyhow::Result<()> {
         part.into_iter().map(|v| v as i32).collect()
     });
     let mut cps_out = None;
-    if let (Some(mut cps), Some(paths)) = (cps_in, &args.cps) {
-        let points = model.material_points_per_element().with_context(|| {
-            "--cps needs $$START_NUMBER_OF_MATERIAL_POINTS in the GOM to number material points"
-        })?;
-        // `points` is in the new order; rebuild the old-order counts to map old ids.
-        let mut old_points = vec![0u32; points.len()];
-        for (new, &old) in order.iter().enumerate() {
-            old_points[old as usize] = points[new];
-        }
-        let ids = cps.output_material_points()?;
-        let new_ids = order::remap_material_points(&old_points, &order, &ids)?;
-        cps.set_output_material_points(&new_ids);
+    if let (Some((mut cps, ids)), Some(paths)) = (cps_in, &args.cps) {
+        // File ids of the written GOM, so that Anura3D picks the same points, marked so that
+        // mpm-solve still reports them by their input ids.
+        mpm_shared::points::remap_cps(&mut cps, &ids, &model)?;
         cps_out = Some((paths[1].clone(), cps.write()));
     }
     let t = Instant::now();

@@ -330,9 +330,13 @@ fn cps_material_points_follow_their_elements() {
     let base = generate::box_mesh([3, 2, 2], [1.0, 1.0, 1.0], ElementType::Tet10);
     let n = base.element_count();
     let perm: Vec<u32> = (0..n as u32).rev().collect();
-    let m = base
+    let mut m = base
         .reordered(&perm, &(0..base.node_count() as u32).collect::<Vec<_>>())
         .unwrap();
+    // A GOM numbered this way from elsewhere: no record of another input order, so its own
+    // order is the input's.
+    m.sections
+        .retain(|s| s.keyword != mpm_shared::points::INPUT_ELEMENTS);
     let gom_in = dir.path().join("in.GOM");
     mpm_shared::write_gom_file(&m, &gom_in).unwrap();
     let ids: Vec<u32> = vec![1, 2, 5, 40, 4 * n as u32];
@@ -372,4 +376,75 @@ fn cps_material_points_follow_their_elements() {
         assert_eq!(centroid(&m, eo), centroid(&out, en), "point {old} -> {new}");
         assert_eq!((*old - 1) % 4, (*new - 1) % 4);
     }
+    // The written pair says which numbering its ids use, and mpm-solve's reading of them gives
+    // back the input ids.
+    let tag = c.get(mpm_shared::points::CPS_FILE_ORDER).expect("marked");
+    let input_of = out
+        .input_elements()
+        .unwrap()
+        .expect("input numbers recorded");
+    assert_eq!(tag.lines, [mpm_shared::points::file_order_tag(&input_of)]);
+    assert_eq!(mpm_shared::points::cps_input_ids(&c, &out).unwrap(), ids);
+}
+
+#[test]
+fn cps_ids_of_an_ordered_gom_are_its_input_ids() {
+    use mpm_shared::{generate, ElementType};
+    let dir = tempfile::tempdir().unwrap();
+    let base = generate::box_mesh([3, 2, 2], [1.0, 1.0, 1.0], ElementType::Tet4);
+    let n = base.element_count();
+    let perm: Vec<u32> = (0..n as u32).rev().collect();
+    // An ordered GOM (it records base's order) and a CPS naming points of base.
+    let m = base
+        .reordered(&perm, &(0..base.node_count() as u32).collect::<Vec<_>>())
+        .unwrap();
+    let gom_in = dir.path().join("in.GOM");
+    mpm_shared::write_gom_file(&m, &gom_in).unwrap();
+    let ids: Vec<u32> = vec![1, 7, 4 * n as u32];
+    let cps = format!(
+        "### Anura3D_2021 ###\n$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n3\n$$OUTPUT_MATERIAL_POINTS\n{}\n$$END\n",
+        ids.iter().map(|i| i.to_string()).collect::<Vec<_>>().join("\n")
+    );
+    let cps_in = dir.path().join("in.CPS_001");
+    std::fs::write(&cps_in, cps).unwrap();
+    let (gom_out, cps_out) = (dir.path().join("out.GOM"), dir.path().join("out.CPS_001"));
+    Command::cargo_bin("sfcb")
+        .unwrap()
+        .args([&gom_in, &gom_out])
+        .arg("--curve")
+        .arg("hilbert")
+        .arg("--cps")
+        .args([&cps_in, &cps_out])
+        .assert()
+        .success();
+    let out = gom::read(&std::fs::read(&gom_out).unwrap(), "out").unwrap();
+    let (c, _) = mpm_shared::cps::Cps::read(&std::fs::read(&cps_out).unwrap(), "out.CPS").unwrap();
+    let centroid = |model: &Model, e: usize| {
+        let mut c = [0.0; 3];
+        order::centroid(model, e, &mut c);
+        c
+    };
+    for (old, new) in ids.iter().zip(c.output_material_points().unwrap()) {
+        assert_eq!(
+            centroid(&base, (*old as usize - 1) / 4),
+            centroid(&out, (new as usize - 1) / 4),
+            "point {old} -> {new}"
+        );
+    }
+    assert_eq!(mpm_shared::points::cps_input_ids(&c, &out).unwrap(), ids);
+    // The remapped CPS does not fit the GOM it came from: refused, naming the fix.
+    let e = mpm_shared::points::cps_input_ids(&c, &m)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("another ordered GOM") && e.contains("sfcb --cps"),
+        "{e}"
+    );
+    let e = mpm_shared::points::cps_input_ids(&c, &base)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("carries no $$START_INPUT_ELEMENT_NUMBERS"),
+        "{e}"
+    );
 }

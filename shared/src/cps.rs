@@ -206,6 +206,7 @@ const KNOWN: &[&str] = &[
     "VISUALIZATION_OPTION",
     "OUTPUT_NUMBER_OF_MATERIAL_POINTS",
     "OUTPUT_MATERIAL_POINTS",
+    crate::points::CPS_FILE_ORDER,
     "INITIAL_WATER_PRESSURE",
     "APPLY_POROSITY_UPDATE",
     "INITIAL_VELOCITY",
@@ -622,6 +623,33 @@ impl Cps {
                 _ => {}
             }
         }
+    }
+
+    /// Sets `keyword` to `lines`: the first entry with it is replaced, or a new one is added
+    /// after `$$OUTPUT_MATERIAL_POINTS` (at the end when there is none).
+    pub fn set(&mut self, keyword: &str, lines: Vec<String>) {
+        if let Some(e) = self.entries.iter_mut().find(|e| e.keyword == keyword) {
+            e.lines = lines;
+            return;
+        }
+        let at = self
+            .entries
+            .iter()
+            .position(|e| e.keyword == "OUTPUT_MATERIAL_POINTS")
+            .map_or(self.entries.len(), |i| i + 1);
+        self.entries.insert(
+            at,
+            Entry {
+                keyword: keyword.to_string(),
+                lines,
+                line: 0,
+            },
+        );
+    }
+
+    /// Removes every entry with `keyword`.
+    pub fn remove(&mut self, keyword: &str) {
+        self.entries.retain(|e| e.keyword != keyword);
     }
 
     /// Writes the CPS back in its original order.

@@ -21,6 +21,7 @@ pub mod gom;
 pub mod io;
 pub mod model;
 pub mod msh;
+pub mod points;
 pub mod suite;
 pub mod text;
 pub mod vtu;

@@ -342,7 +342,7 @@ pub enum Body {
         rows: Table,
     },
     /// One row per element, in element order (`$$STARTELMMAT`, `$$STARTDAMPING`,
-    /// `$$START_NUMBER_OF_MATERIAL_POINTS`).
+    /// `$$START_NUMBER_OF_MATERIAL_POINTS`, `$$START_INPUT_ELEMENT_NUMBERS`).
     PerElement(Table),
     /// A section that holds no ids (material properties, scalars, file names), kept line by line.
     Text(Vec<String>),
@@ -395,7 +395,10 @@ pub fn classify(keyword: &str, et: ElementType) -> Kind {
         "STARTCOUNTERS" => Kind::Counters,
         "STARTNODES" => Kind::Nodes,
         "STARTELEMCON" => Kind::Connectivity,
-        "STARTELMMAT" | "STARTDAMPING" | "START_NUMBER_OF_MATERIAL_POINTS" => Kind::PerElement,
+        "STARTELMMAT"
+        | "STARTDAMPING"
+        | "START_NUMBER_OF_MATERIAL_POINTS"
+        | crate::points::INPUT_ELEMENTS => Kind::PerElement,
         k if k.starts_with("START_FIXITY_") || k.starts_with("START_REMOVE_FIXITY_") => {
             Kind::Counted(one)
         }
@@ -674,6 +677,11 @@ impl Model {
     /// nodes, element-ordered sections are permuted, node ids and element ids in every table are
     /// remapped. Refuses to run when a section that may hold ids is not understood.
     ///
+    /// Each element's number in the original input is kept in
+    /// [`crate::points::INPUT_ELEMENTS`]: added (from `order`) when the model has none, permuted
+    /// with the other per-element sections when it has one, so that chained reorders keep the
+    /// first input's numbers and material-point ids survive (see [`crate::points`]).
+    ///
     /// Both maps must be permutations (checked).
     pub fn reordered(&self, order: &[u32], node_new: &[u32]) -> crate::Result<Model> {
         if let Some(k) = self.first_unremappable() {
@@ -755,7 +763,7 @@ impl Model {
                 body,
             });
         }
-        Ok(Model {
+        let mut model = Model {
             version: self.version.clone(),
             line_ending: self.line_ending,
             dimension: self.dimension,
@@ -763,7 +771,11 @@ impl Model {
             coords,
             connectivity,
             sections,
-        })
+        };
+        if self.per_element(crate::points::INPUT_ELEMENTS).is_none() {
+            model.set_input_elements(order);
+        }
+        Ok(model)
     }
 }
 

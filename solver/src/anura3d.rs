@@ -243,6 +243,16 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         .iter()
         .map(|&m| m.max(0) as u32)
         .collect();
+    let input_element: Vec<u32> = match model.input_elements() {
+        Ok(m) => m.unwrap_or_else(|| (0..model.element_count() as u32).collect()),
+        Err(e) => {
+            return Err(unsupported(
+                &gfile,
+                &format!("$${}", mpm_shared::points::INPUT_ELEMENTS),
+                e.to_string(),
+            ))
+        }
+    };
     for (e, &m) in element_material.iter().enumerate() {
         if m as usize >= materials.len() || (m != 0 && materials[m as usize].is_none()) {
             return Err(unsupported(
@@ -250,7 +260,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                 "$$STARTELMMAT",
                 format!(
                     "element {} refers to material {m}, which is not defined",
-                    e + 1
+                    input_element[e] + 1
                 ),
             ));
         }
@@ -258,6 +268,9 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let points_per_element = model
         .material_points_per_element()
         .ok_or_else(|| unsupported(&gfile, "$$START_NUMBER_OF_MATERIAL_POINTS", "missing"))?;
+    // Point ids and messages follow the original input's element numbers (a GOM sfcb ordered
+    // carries them); the CPS's ids are input ids unless sfcb --cps marked them as file ids.
+    let probes = mpm_shared::points::cps_input_ids(&cps, &model)?;
     // Fixities and loads.
     let n = model.node_count();
     let mut fixed = vec![[false; 3]; n];
@@ -342,7 +355,8 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         materials,
         element_material,
         points_per_element,
-        first_point_id: None,
+        input_element,
+        input_node: (0..n as u32).collect(),
         fixed,
         liquid_fixed,
         traction,
@@ -379,7 +393,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                 .is_some_and(|w| w != "0")
         }),
         consolidation: None,
-        probes: s.output_material_points.clone(),
+        probes,
         prescribed,
         engine: Default::default(),
     };

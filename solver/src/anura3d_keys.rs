@@ -74,6 +74,9 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (GomSection, "STARTELEMCON", Modelled),
     (GomSection, "STARTELMMAT", Modelled),
     (GomSection, "START_NUMBER_OF_MATERIAL_POINTS", Modelled), // first column: solid points
+    // Written by sfcb: each element's number in the original input; point ids and messages
+    // follow it. Anura3D skips it.
+    (GomSection, "START_INPUT_ELEMENT_NUMBERS", Modelled),
     (
         GomSection,
         "FORMULATION",
@@ -360,6 +363,9 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (CpsKey, "STRAIN_SMOOTHING", Modelled), // volumetric strain smoothing of both phases
     (CpsKey, "OUTPUT_NUMBER_OF_MATERIAL_POINTS", Modelled), // output: probes
     (CpsKey, "OUTPUT_MATERIAL_POINTS", Modelled),           // output: probes
+    // Written by sfcb --cps: the probes are ids in the ordered GOM's order (element count and
+    // checksum of its input numbers); converted back to input ids. Anura3D skips it.
+    (CpsKey, "OUTPUT_MATERIAL_POINTS_GOM_ORDER", Modelled),
     // The liquid's force tolerance; its kinetic-energy tolerance is not checked.
     (CpsKey, "TOLERATED_ERROR_LIQUID", Modelled),
     (

@@ -203,9 +203,14 @@ pub struct Case {
     pub element_material: Vec<u32>,
     /// Material points per element.
     pub points_per_element: Vec<u32>,
-    /// Points before each element in the input's element order, when the elements were
-    /// reordered (so point ids stay the input's); `None`: ids follow the element order.
-    pub first_point_id: Option<Vec<u32>>,
+    /// The original input element (0-based) of each element: the GOM's
+    /// `$$START_INPUT_ELEMENT_NUMBERS` when it has one (a mesh sfcb ordered), else its own
+    /// order, followed through the solver's reordering. Material-point ids count the points in
+    /// this original order, and messages name elements by it (plus 1).
+    pub input_element: Vec<u32>,
+    /// The node (0-based) of the file read for each model node, followed through the solver's
+    /// reordering: messages name nodes by it (plus 1).
+    pub input_node: Vec<u32>,
     /// Fixed velocity components per model node.
     pub fixed: Vec<[bool; 3]>,
     /// Fixed liquid velocity components per model node (impermeable faces); used only where a
@@ -319,7 +324,8 @@ pub enum Reorder {
 impl Case {
     /// The case with its elements ordered along a space-filling curve and its nodes renumbered
     /// by first use (sfcb's ordering), every per-element and per-node datum following, and the
-    /// material-point ids kept those of the input. `Reorder::None` returns it unchanged.
+    /// material-point ids and the numbers messages give kept those of the input
+    /// ([`Case::input_element`], [`Case::input_node`]). `Reorder::None` returns it unchanged.
     pub fn reordered(mut self, how: Reorder) -> Result<Case, String> {
         let curve = match how {
             Reorder::None => return Ok(self),
@@ -347,20 +353,8 @@ impl Case {
             .model
             .reordered(&o.order, &o.node_new)
             .map_err(|e| e.to_string())?;
-        let old_first: Vec<u32> = match &self.first_point_id {
-            Some(f) => f.clone(),
-            None => self
-                .points_per_element
-                .iter()
-                .scan(0u32, |acc, &n| {
-                    let first = *acc;
-                    *acc += n;
-                    Some(first)
-                })
-                .collect(),
-        };
         let by_element = |v: &[u32]| o.order.iter().map(|&e| v[e as usize]).collect::<Vec<u32>>();
-        self.first_point_id = Some(by_element(&old_first));
+        self.input_element = by_element(&self.input_element);
         self.element_material = by_element(&self.element_material);
         self.points_per_element = by_element(&self.points_per_element);
         fn by_node<T: Copy>(v: &[T], node_new: &[u32]) -> Vec<T> {
@@ -370,6 +364,7 @@ impl Case {
             }
             out
         }
+        self.input_node = by_node(&self.input_node, &o.node_new);
         self.fixed = by_node(&self.fixed, &o.node_new);
         self.liquid_fixed = by_node(&self.liquid_fixed, &o.node_new);
         self.traction = by_node(&self.traction, &o.node_new);
@@ -386,6 +381,22 @@ impl Case {
         }
         self.model = model;
         Ok(self)
+    }
+
+    /// The 1-based input number of element `e` (0-based, the case's order), for messages.
+    pub fn element_number(&self, e: usize) -> u32 {
+        self.input_element.get(e).map_or(e as u32, |&k| k) + 1
+    }
+
+    /// The 1-based input number of model node `n` (0-based, the case's order), for messages.
+    pub fn node_number(&self, n: usize) -> u32 {
+        self.input_node.get(n).map_or(n as u32, |&k| k) + 1
+    }
+
+    /// How the case's material points are numbered: by input element (see
+    /// [`Case::input_element`]).
+    pub fn point_ids(&self) -> mpm_shared::points::PointIds {
+        mpm_shared::points::PointIds::new(&self.points_per_element, Some(&self.input_element))
     }
 
     /// True when some material is saturated: the run then allocates and computes the liquid.
@@ -411,7 +422,8 @@ impl Case {
             materials: vec![None, Some(material)],
             element_material: vec![1; n_el],
             points_per_element: vec![points; n_el],
-            first_point_id: None,
+            input_element: (0..n_el as u32).collect(),
+            input_node: (0..n as u32).collect(),
             liquid_fixed: fixed.clone(),
             fixed,
             traction: vec![[0.0; 3]; n],

@@ -40,7 +40,7 @@ pub struct Lost {
     pub y: f64,
     /// Position.
     pub z: f64,
-    /// Last element (1-based).
+    /// Last element (1-based, input numbering).
     pub element: u32,
 }
 
@@ -105,6 +105,8 @@ pub struct Engine<R: Real> {
     gravity_by_material: Vec<V3<R>>,
     /// Velocities prescribed on material points (only when the case has them).
     pub prescribed: Option<crate::prescribed::Prescribed<R>>,
+    /// Input element (0-based) of each element, so that messages name elements as the input.
+    input_element: Vec<u32>,
 }
 
 /// How the engine uses the machine.
@@ -140,17 +142,32 @@ impl<R: Real> Engine<R> {
     /// [`Engine::new`] with the given thread options.
     pub fn with_options(case: &Case, drop_lost: bool, options: Options) -> Result<Self, String> {
         let team = Team::new(options.threads, options.pin)?;
-        let mesh = TetMesh::<R>::new(&case.model).map_err(|e| e.to_string())?;
+        let mesh = TetMesh::<R>::new(&case.model).map_err(|e| match e {
+            // Named by its number in the input, not in the solver's order.
+            crate::mesh::MeshError::BadElement { element, volume } => {
+                crate::mesh::MeshError::BadElement {
+                    element: case.element_number(element - 1) as usize,
+                    volume,
+                }
+                .to_string()
+            }
+            e => e.to_string(),
+        })?;
         let density = |m: u32| {
             case.materials[m as usize]
                 .as_ref()
                 .map_or(0.0, |s| s.density)
         };
+        let ids = case.point_ids();
+        let first_id: Vec<u32> = (0..mesh.elements())
+            .map(|e| ids.input_first(e) as u32)
+            .collect();
         let mut particles = particles::place(
             &mesh,
             &case.points_per_element,
             &case.element_material,
-            case.first_point_id.as_deref(),
+            Some(&first_id),
+            &|e| case.element_number(e),
             density,
         )?;
         if particles.is_empty() {
@@ -225,6 +242,7 @@ impl<R: Real> Engine<R> {
             .strain_smoothing
             .then(|| crate::smoothing::StrainSmoothing::new(mesh.nodes(), &case.element_material));
         Ok(Engine {
+            input_element: case.input_element.clone(),
             smoothing,
             gravity_by_material: vec![[R::ZERO; 3]; weight_ratio.len()],
             weight_ratio,
@@ -482,7 +500,7 @@ impl<R: Real> Engine<R> {
                     x: p.x[i][0].f64(),
                     y: p.x[i][1].f64(),
                     z: p.x[i][2].f64(),
-                    element: e + 1,
+                    element: self.input_element[e as usize] + 1,
                 });
             }
         }
@@ -561,7 +579,7 @@ fn resolve_point_loads<R: Real>(
             }
         }
         if carriers.is_empty() {
-            let ids = load.corners.map(|m| m + 1);
+            let ids = load.corners.map(|m| case.node_number(m));
             return Err(format!(
                 "the load on material points of the face with corner nodes {} {} {} has no filled element next to it",
                 ids[0], ids[1], ids[2]

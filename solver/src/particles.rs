@@ -105,11 +105,13 @@ pub fn tet_points(n: u32) -> Option<Vec<[f64; 4]>> {
 ///
 /// `first_id[e]`, when given, is the number of points before element e in the input's element
 /// order (the solver may have reordered the elements): ids then stay those of the input.
+/// `number(e)` is element e's 1-based input number, for messages.
 pub fn place<R: Real>(
     mesh: &TetMesh<R>,
     points: &[u32],
     material: &[u32],
     first_id: Option<&[u32]>,
+    number: &dyn Fn(usize) -> u32,
     density: impl Fn(u32) -> f64,
 ) -> Result<Particles<R>, String> {
     let mut p = Particles::default();
@@ -122,7 +124,7 @@ pub fn place<R: Real>(
         let Some(local) = tet_points(n) else {
             return Err(format!(
                 "element {}: {n} material points per element is not supported (use 1 or 4)",
-                e + 1
+                number(e)
             ));
         };
         for l in local {

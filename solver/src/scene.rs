@@ -603,6 +603,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
             }
         })
         .collect();
+    let element_count = model.element_count();
     let case = Case {
         name: path
             .file_stem()
@@ -613,7 +614,8 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         materials,
         element_material,
         points_per_element,
-        first_point_id: None,
+        input_element: (0..element_count as u32).collect(),
+        input_node: (0..nodes as u32).collect(),
         fixed,
         liquid_fixed,
         traction,
