@@ -6,6 +6,7 @@
 //!   material-point VTK output reader;
 //! - [`msh`]: Gmsh `.msh` reader (2.2 and 4.1, ASCII and binary) and conversion to the model;
 //! - [`vtu`]: ParaView VTU and PVD writers;
+//! - [`points`]: material-point ids and input element numbers that survive reordering;
 //! - [`suite`]: where tests find Anura3D's benchmark suite and binary;
 //! - [`coincident`]: coincident duplicate nodes, found and described for a warning;
 //! - [`io`]: standard input/output and atomic file writes; [`text`]: scanning and formatting.

@@ -133,7 +133,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         ));
     }
     // Every other key: modelled, irrelevant, or refused unless inert.
-    check_keys(&model, &cps, &gfile, &cfile)?;
+    check_keys(&model, &cps, gom, &gfile, &cfile)?;
     // Materials.
     let mats = model.materials();
     let max_index = mats.iter().map(|m| m.index).max().unwrap_or(0).max(0) as usize;
@@ -404,7 +404,13 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
 /// ([`crate::anura3d_keys`]): keys that would change results and are not modelled stop the case
 /// unless they hold their inert value. GOM sections the table does not know are named in a
 /// warning (unknown CPS keys are, when the CPS is read).
-fn check_keys(model: &Model, cps: &Cps, gfile: &str, cfile: &str) -> Result<(), CaseError> {
+fn check_keys(
+    model: &Model,
+    cps: &Cps,
+    gom: &Path,
+    gfile: &str,
+    cfile: &str,
+) -> Result<(), CaseError> {
     use crate::anura3d_keys::{check, status, KeyKind, KeyStatus};
     for sec in &model.sections {
         let key = sec.keyword.as_str();
@@ -434,12 +440,29 @@ fn check_keys(model: &Model, cps: &Cps, gfile: &str, cfile: &str) -> Result<(), 
         if status(KeyKind::GomSection, key) == KeyStatus::Unknown {
             eprintln!("mpm-solve: warning: {gfile}: section $${key} is not known to this solver and is ignored");
         }
-        check(KeyKind::GomSection, key, &lines, gfile, 0)?;
+        // The model does not keep line numbers; a refusal looks its section up in the file.
+        check(KeyKind::GomSection, key, &lines, gfile, 0)
+            .map_err(|r| r.at_line(section_line(gom, key)))?;
     }
     for e in &cps.entries {
         check(KeyKind::CpsKey, &e.keyword, &e.lines, cfile, e.line)?;
     }
     Ok(())
+}
+
+/// The 1-based line of the section `$$key` in the GOM file `path` (0 when it cannot be read
+/// again, as from standard input).
+fn section_line(path: &Path, key: &str) -> usize {
+    if mpm_shared::io::is_stdio(path) {
+        return 0;
+    }
+    let Ok(data) = std::fs::read(path) else {
+        return 0;
+    };
+    let head = format!("$${key}");
+    data.split(|&b| b == b'\n')
+        .position(|l| String::from_utf8_lossy(l).trim() == head)
+        .map_or(0, |i| i + 1)
 }
 
 /// The prescribed material-point velocities of the GOM with the CPS `$$PRESCRIBED_VELOCITY`

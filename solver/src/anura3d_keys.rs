@@ -571,6 +571,16 @@ pub struct Refusal {
     pub what: String,
 }
 
+impl Refusal {
+    /// The refusal with its line set (when `line` > 0 and none was known).
+    pub fn at_line(mut self, line: usize) -> Self {
+        if line > 0 && self.at.is_empty() {
+            self.at = format!(" (line {line})");
+        }
+        self
+    }
+}
+
 /// Checks `key` of `kind` with its value `lines` (line `line` of `file`, 0 when unknown)
 /// against the table: a refused key, or one refused unless inert holding another value, is a
 /// [`Refusal`]. Unknown keys pass (the caller warns).

@@ -383,6 +383,22 @@ impl Case {
         Ok(self)
     }
 
+    /// The computational mesh of the model, an inverted or flat element named by its number
+    /// in the input (not in the solver's order).
+    pub fn tet_mesh<R: crate::real::Real>(
+        &self,
+    ) -> Result<crate::mesh::TetMesh<R>, crate::mesh::MeshError> {
+        crate::mesh::TetMesh::<R>::new(&self.model).map_err(|e| match e {
+            crate::mesh::MeshError::BadElement { element, volume } => {
+                crate::mesh::MeshError::BadElement {
+                    element: self.element_number(element - 1) as usize,
+                    volume,
+                }
+            }
+            e => e,
+        })
+    }
+
     /// The 1-based input number of element `e` (0-based, the case's order), for messages.
     pub fn element_number(&self, e: usize) -> u32 {
         self.input_element.get(e).map_or(e as u32, |&k| k) + 1

@@ -142,17 +142,7 @@ impl<R: Real> Engine<R> {
     /// [`Engine::new`] with the given thread options.
     pub fn with_options(case: &Case, drop_lost: bool, options: Options) -> Result<Self, String> {
         let team = Team::new(options.threads, options.pin)?;
-        let mesh = TetMesh::<R>::new(&case.model).map_err(|e| match e {
-            // Named by its number in the input, not in the solver's order.
-            crate::mesh::MeshError::BadElement { element, volume } => {
-                crate::mesh::MeshError::BadElement {
-                    element: case.element_number(element - 1) as usize,
-                    volume,
-                }
-                .to_string()
-            }
-            e => e.to_string(),
-        })?;
+        let mesh = case.tet_mesh::<R>().map_err(|e| e.to_string())?;
         let density = |m: u32| {
             case.materials[m as usize]
                 .as_ref()

@@ -7,7 +7,6 @@ use std::fmt;
 use std::path::Path;
 
 use crate::case::Case;
-use crate::mesh::TetMesh;
 use crate::units;
 
 /// Bytes one material point takes in a `particles_NNNNN.vtu` file: position, displacement and
@@ -140,7 +139,7 @@ pub enum PreflightError {
 /// Predicts what running `case` on `threads` threads will cost. Errors where the mesh or time
 /// step is unusable (inverted elements, no stiffness).
 pub fn plan(case: &Case, threads: usize) -> Result<Plan, String> {
-    let mesh = TetMesh::<f64>::new(&case.model).map_err(|e| e.to_string())?;
+    let mesh = case.tet_mesh::<f64>().map_err(|e| e.to_string())?;
     let dt = crate::time_step::critical(case, mesh.elements(), |e| mesh.min_altitude[e])?;
     let points: u64 = case
         .points_per_element

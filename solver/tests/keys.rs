@@ -163,12 +163,11 @@ fn every_refused_key_stops_a_case_naming_key_value_and_place() {
         );
         let dir = tempfile::tempdir().unwrap();
         let (gom, cps, file, line) = match kind {
-            KeyKind::GomSection => (
-                set_section(&base_gom, &key, &value),
-                BASE_CPS.to_string(),
-                "box.GOM",
-                None,
-            ),
+            KeyKind::GomSection => {
+                let gom = set_section(&base_gom, &key, &value);
+                let line = gom.lines().position(|l| l == format!("$${key}")).unwrap() + 1;
+                (gom, BASE_CPS.to_string(), "box.GOM", Some(line))
+            }
             KeyKind::MaterialKey => (
                 base_gom.replacen(
                     "$$MATERIAL_TYPE",
