@@ -84,7 +84,7 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
         .args(["--curve", "none"])
         .assert()
         .failure()
-        .stderr(predicate::str::contains("nope.GOM").and(predicate::str::contains("No such file")));
+        .stderr(predicate::str::contains("nope.GOM").and(predicate::str::contains("no such file")));
     // Truncated GOM.
     let golden = std::fs::read(testdata("cube_tet4.GOM")).unwrap();
     let cut = dir.path().join("cut.GOM");
