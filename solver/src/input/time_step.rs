@@ -2,7 +2,7 @@
 //! to cross an element. The engine steps with it and the pre-flight check predicts the step
 //! count from it, so both read it from here.
 
-use crate::case::{Case, Drag};
+use crate::input::case::{Case, Drag};
 
 /// Courant number × min over elements of (smallest altitude / fastest wave speed), in s;
 /// `min_altitude(e)` is element `e`'s smallest altitude (m). An error when it is not positive

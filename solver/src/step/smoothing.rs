@@ -9,12 +9,12 @@
 //! keeps its deviatoric and shear increments (the three normal increments are shifted equally);
 //! the pore pressure takes Δp = (K_w / n) (n ε̄_w + (1 - n) ε̄_s).
 
-use crate::gather::{Layout, Slots, WIDTH};
-use crate::grid::Grid;
-use crate::mesh::TetMesh;
-use crate::particles::Particles;
+use crate::element::mesh::TetMesh;
+use crate::parallel::gather::{Layout, Slots, WIDTH};
+use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
-use crate::team::{Shared, Team};
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
 
 /// Materials summed in one pass over the slots: three values each (V ε_s, V ε_w, V).
 const PER_PASS: usize = WIDTH / 3;

@@ -1,6 +1,6 @@
 //! Material points, stored as structure of arrays, and their initial placement by Anura3D's rule.
 
-use crate::mesh::TetMesh;
+use crate::element::mesh::TetMesh;
 use crate::real::{Real, V3};
 
 /// Material-point state (one entry per point in every array).

@@ -1,17 +1,17 @@
 //! Grid to particle, MUSL: FLIP velocity update, then momentum re-mapped to the nodes for the
 //! velocities that drive strain, stress, volume and position (DESIGN §4, step 3), on the team.
 
-use crate::gather::{Layout, Slots};
-use crate::grid::Grid;
-use crate::liquid::Fluid;
-use crate::mesh::TetMesh;
-use crate::particles::Particles;
+use crate::element::mesh::TetMesh;
+use crate::material::liquid::Fluid;
+use crate::parallel::gather::{Layout, Slots};
+use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
-use crate::team::{Shared, Team};
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
 
 /// Updates particle velocities from nodal accelerations (FLIP), then re-maps momentum to get
 /// the nodal velocities (fixed components and empty nodes zero) that drive strain, stress,
-/// volume and position (see [`crate::stress`]).
+/// volume and position (see [`crate::step::stress`]).
 #[allow(clippy::too_many_arguments)]
 pub fn grid_to_particle<R: Real>(
     team: &Team,

@@ -4,33 +4,14 @@
 
 use std::path::Path;
 
-use crate::case::Case;
-use crate::engine::Engine;
-use crate::liquid::LiquidSpec;
+use crate::driver::engine::Engine;
+use crate::driver::run::{run_with, RunError, RunOptions};
+use crate::input::case::Case;
+use crate::jobs::terzaghi;
+use crate::material::liquid::LiquidSpec;
 use crate::real::Real;
-use crate::terzaghi;
 
-/// How the run starts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Start {
-    /// At rest, the load applied suddenly (Anura3D's workshop set-up): the column first responds
-    /// dynamically.
-    Rest,
-    /// In the undrained state Terzaghi assumes at t = 0+: the load shared between pore pressure
-    /// and skeleton as an undrained 1D compression, so there is no dynamic transient.
-    Undrained,
-}
-
-/// A consolidation run's settings (`[consolidation]` of a scene).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ConsolidationSpec {
-    /// Top load q (kPa, compression positive).
-    pub load: f64,
-    /// Initial state.
-    pub start: Start,
-    /// Also run the workshop-style configuration (at rest, sudden load) and report both.
-    pub compare_rest: bool,
-}
+pub use crate::input::case::{ConsolidationSpec, Start};
 
 /// The layer and material constants the comparison needs.
 #[derive(Debug, Clone, Copy)]
@@ -123,29 +104,6 @@ fn tet_volume(model: &mpm_shared::Model, e: usize) -> f64 {
         + a[2] * (b[0] * c[1] - b[1] * c[0]))
         .abs()
         / 6.0
-}
-
-/// Puts every saturated point in the undrained state under the load: vertical strain
-/// ε = -q / (E_oed + K_w/n), effective stress D ε, pore pressure (K_w/n) ε.
-pub fn apply_undrained_start<R: Real>(engine: &mut Engine<R>, layer: &Layer) {
-    let eps = layer.undrained_strain();
-    let p = &mut engine.particles;
-    let Some(lp) = p.liquid.as_mut() else {
-        return;
-    };
-    for i in 0..p.x.len() {
-        if engine.fluids[p.material[i] as usize].is_none() {
-            continue;
-        }
-        let law = &engine.laws[p.material[i] as usize];
-        let mut s = [R::ZERO; 6];
-        law.update(
-            &mut s,
-            &[R::ZERO, R::of(eps), R::ZERO, R::ZERO, R::ZERO, R::ZERO],
-        );
-        p.stress[i] = s;
-        lp.p[i] = R::of(layer.kw_over_n * eps);
-    }
 }
 
 /// One output time of a consolidation run.
@@ -287,17 +245,59 @@ pub fn write_csv(
     )
 }
 
+/// The consolidation comparison as an observer of the run: it takes the start state and
+/// records every output time against Terzaghi.
+struct Observer {
+    layer: Layer,
+    start: Start,
+    tracker: Option<Tracker>,
+}
+
+impl<R: Real> crate::driver::run::Observer<R> for Observer {
+    fn on_start(&mut self, engine: &Engine<R>) -> Result<(), RunError> {
+        self.tracker = Some(Tracker::new(engine, self.layer, self.start));
+        Ok(())
+    }
+
+    fn on_output(&mut self, engine: &Engine<R>) {
+        if let Some(t) = &mut self.tracker {
+            t.record(engine);
+        }
+    }
+}
+
+/// Runs the consolidation case `case` into `dir`: its final engine and the record of every
+/// output time against Terzaghi.
+pub fn run_tracked<R: Real>(
+    case: &Case,
+    dir: &Path,
+    options: &RunOptions,
+) -> Result<(Engine<R>, Tracker), RunError> {
+    let spec = case
+        .consolidation
+        .ok_or_else(|| RunError::Setup("the case has no [consolidation] table".into()))?;
+    let mut observer = Observer {
+        layer: Layer::of(case, &spec).map_err(RunError::Setup)?,
+        start: spec.start,
+        tracker: None,
+    };
+    let engine = run_with(case, dir, options, &mut observer)?;
+    let tracker = observer.tracker.expect("on_start ran");
+    Ok((engine, tracker))
+}
+
 /// Runs a consolidation case into `dir` (and, with `compare_rest`, its workshop-style twin
 /// into `dir/workshop`), then writes `consolidation.csv` and `consolidation.png` into `dir`.
 /// Returns the default run's engine and both records.
 pub fn run_job<R: Real>(
     case: &Case,
     dir: &Path,
-    options: &crate::run::RunOptions,
-) -> Result<(Engine<R>, Tracker, Option<Tracker>), crate::run::RunError> {
-    let spec = case.consolidation.expect("a consolidation case");
-    let (engine, tracker) = crate::run::run_tracked::<R>(case, dir, options)?;
-    let tracker = tracker.expect("consolidation cases are tracked");
+    options: &RunOptions,
+) -> Result<(Engine<R>, Tracker, Option<Tracker>), RunError> {
+    let spec = case
+        .consolidation
+        .ok_or_else(|| RunError::Setup("the case has no [consolidation] table".into()))?;
+    let (engine, tracker) = run_tracked::<R>(case, dir, options)?;
     let workshop = if spec.compare_rest && spec.start != Start::Rest {
         let mut twin = case.clone();
         twin.consolidation = Some(ConsolidationSpec {
@@ -305,8 +305,9 @@ pub fn run_job<R: Real>(
             compare_rest: false,
             ..spec
         });
-        let (_, t) = crate::run::run_tracked::<R>(&twin, &dir.join("workshop"), options)?;
-        t
+        twin.initial_state = None;
+        let (_, t) = run_tracked::<R>(&twin, &dir.join("workshop"), options)?;
+        Some(t)
     } else {
         None
     };

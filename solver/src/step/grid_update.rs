@@ -1,7 +1,7 @@
 //! Grid update: nodal accelerations with local damping and fixities (DESIGN §4, step 2).
 
-use crate::grid::Grid;
 use crate::real::{Real, V3};
+use crate::state::grid::Grid;
 
 /// Local damping of force `f` at a node moving with `v` (one component):
 /// f - α |f| sign(v). At rest (v = 0) Anura3D's rule leaves the force undamped; the scenes'

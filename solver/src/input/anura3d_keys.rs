@@ -1,4 +1,4 @@
-//! What [`crate::anura3d::load`] does with each Anura3D input key: GOM sections, keys of GOM
+//! What [`crate::input::anura3d::load`] does with each Anura3D input key: GOM sections, keys of GOM
 //! material blocks and CPS keys. One table, [`KEYS`], one entry per key (or per family of keys,
 //! with `*` standing for any text), each with a short reason; the compatibility matrix
 //! (`solver/examples/anura3d_compat.rs`) prints it for every key the benchmark suite uses.

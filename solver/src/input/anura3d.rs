@@ -11,8 +11,8 @@ use mpm_shared::cps::{Cps, Method, Multiplier, Settings};
 use mpm_shared::model::{Body, Token};
 use mpm_shared::{ElementType, Model};
 
-use crate::case::{Case, FaceLoad, Integration, LoadCurve, MaterialSpec, QuasiStatic};
-use crate::liquid::LiquidSpec;
+use crate::input::case::{Case, FaceLoad, Integration, LoadCurve, MaterialSpec, QuasiStatic};
+use crate::material::liquid::LiquidSpec;
 
 /// Anura3D's first time step (s): its time increment starts at this value and becomes the
 /// critical step only after the first step.
@@ -26,7 +26,7 @@ pub enum CaseError {
     Read(#[from] mpm_shared::Error),
     /// A key that can change results holds a value this solver does not model.
     #[error(transparent)]
-    Key(#[from] crate::anura3d_keys::Refusal),
+    Key(#[from] crate::input::anura3d_keys::Refusal),
     /// The case asks for something this solver does not model (yet).
     #[error("{file}: {item}: {message}")]
     Unsupported {
@@ -310,7 +310,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             point_loads.extend(face_loads_on_points(&model, rows));
         } else if k.starts_with("START_REMOVE_FIXITY_")
             || k.starts_with("START_LOAD_ON_")
-            || (k.starts_with("PRESCRIBED_") && !crate::prescribed::SECTIONS.contains(&k))
+            || (k.starts_with("PRESCRIBED_") && !crate::step::prescribed::SECTIONS.contains(&k))
             || k.starts_with("ABSORBING_")
             || k.starts_with("START_FIXITY_")
             || k == "START_EXCAVATION_SOLID"
@@ -381,8 +381,8 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         objective_stress: s.objective_stress,
         integration,
         anura3d_time_step: true,
-        damping_rule: crate::case::DampingRule::Anura3d,
-        drag: crate::case::Drag::Implicit,
+        damping_rule: crate::input::case::DampingRule::Anura3d,
+        drag: crate::input::case::Drag::Implicit,
         initial_step: Some(ANURA3D_FIRST_STEP),
         smooth_pressure: false,
         fixed_liquid_mass: true,
@@ -393,6 +393,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                 .is_some_and(|w| w != "0")
         }),
         consolidation: None,
+        initial_state: None,
         probes,
         prescribed,
         engine: Default::default(),
@@ -401,7 +402,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
 }
 
 /// Checks every GOM section (outside material blocks) and every CPS key against the key table
-/// ([`crate::anura3d_keys`]): keys that would change results and are not modelled stop the case
+/// ([`crate::input::anura3d_keys`]): keys that would change results and are not modelled stop the case
 /// unless they hold their inert value. GOM sections the table does not know are named in a
 /// warning (unknown CPS keys are, when the CPS is read).
 fn check_keys(
@@ -411,7 +412,7 @@ fn check_keys(
     gfile: &str,
     cfile: &str,
 ) -> Result<(), CaseError> {
-    use crate::anura3d_keys::{check, status, KeyKind, KeyStatus};
+    use crate::input::anura3d_keys::{check, status, KeyKind, KeyStatus};
     for sec in &model.sections {
         let key = sec.keyword.as_str();
         if mpm_shared::model::is_material_key(key) {
@@ -475,8 +476,8 @@ fn prescribed_velocity(
     total: f64,
     gfile: &str,
     cfile: &str,
-) -> Result<Option<crate::prescribed::PrescribedVelocity>, CaseError> {
-    let rows = crate::prescribed::read_rows(model)
+) -> Result<Option<crate::step::prescribed::PrescribedVelocity>, CaseError> {
+    let rows = crate::step::prescribed::read_rows(model)
         .map_err(|(item, message)| unsupported(gfile, &item, message))?;
     if rows.is_empty() {
         return Ok(None);
@@ -493,7 +494,7 @@ fn prescribed_velocity(
         ));
     }
     let (scale, curve) = curve(s.prescribed_velocity, total, cfile, "$$PRESCRIBED_VELOCITY")?;
-    Ok(Some(crate::prescribed::PrescribedVelocity {
+    Ok(Some(crate::step::prescribed::PrescribedVelocity {
         rows,
         scale,
         curve,
@@ -508,7 +509,7 @@ fn face_loads_on_points(model: &Model, rows: &mpm_shared::model::Table) -> Vec<F
     rows.rows()
         .map(|r| {
             let corners = [0, 1, 2].map(|i| r[i].as_int().unwrap_or(1) as usize - 1);
-            let area = crate::scene::triangle_area(model, corners);
+            let area = crate::input::scene::triangle_area(model, corners);
             let mut force = [0.0; 3];
             for c in 0..3 {
                 for (d, f) in force.iter_mut().enumerate() {
@@ -548,7 +549,7 @@ fn add_nodal_face_loads(
                     .map(|d| n[d] * r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0))
             })
             .collect();
-        let area = crate::scene::triangle_area(model, *ids);
+        let area = crate::input::scene::triangle_area(model, *ids);
         for i in 0..3 {
             let (j, l) = ((i + 1) % 3, (i + 2) % 3);
             for d in 0..3 {

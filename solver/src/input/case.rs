@@ -3,8 +3,8 @@
 
 use mpm_shared::Model;
 
-pub use crate::grid_update::{DampingRule, Drag};
-pub use crate::load_curve::LoadCurve;
+pub use crate::step::grid_update::{DampingRule, Drag};
+pub use crate::step::load_curve::LoadCurve;
 
 /// A linear elastic solid material, dry or saturated with a pore liquid.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,7 +24,7 @@ pub struct MaterialSpec {
     /// Poisson's ratio.
     pub poisson: f64,
     /// The pore liquid of a saturated (two-phase) material; `None` for a dry one.
-    pub liquid: Option<crate::liquid::LiquidSpec>,
+    pub liquid: Option<crate::material::liquid::LiquidSpec>,
     /// Pore pressure at t = 0 (kPa, compression negative), for saturated materials.
     pub initial_pore_pressure: f64,
 }
@@ -62,7 +62,7 @@ impl MaterialSpec {
         grain_density_kg_m3: f64,
         young: f64,
         poisson: f64,
-        liquid: crate::liquid::LiquidSpec,
+        liquid: crate::material::liquid::LiquidSpec,
     ) -> Result<Self, String> {
         let mut m = MaterialSpec::new(
             name,
@@ -113,12 +113,12 @@ impl MaterialSpec {
 
     /// Oedometric modulus (kPa).
     pub fn oedometric(&self) -> f64 {
-        crate::linear_elastic::LinearElastic::<f64>::oedometric(self.young, self.poisson)
+        crate::material::linear_elastic::LinearElastic::<f64>::oedometric(self.young, self.poisson)
     }
 
     /// Fastest wave speed on an element of size `dx` (m/s): sqrt(E_oed / ρ) when dry; for a
     /// saturated material the two-phase speed, with the drag treated implicitly
-    /// ([`crate::liquid::LiquidSpec::wave_speed_implicit_drag`]) or, for `anura3d_step`,
+    /// ([`crate::material::liquid::LiquidSpec::wave_speed_implicit_drag`]) or, for `anura3d_step`,
     /// Anura3D's formula with its explicit-drag and consolidation terms (smaller, so as safe).
     pub fn wave_speed_at(&self, dx: f64, anura3d_step: bool) -> f64 {
         match &self.liquid {
@@ -270,17 +270,20 @@ pub struct Case {
     pub fixed_liquid_mass: bool,
     /// Anura3D's strain smoothing (`$$STRAIN_SMOOTHING 1`): the volumetric strain increments of
     /// both phases averaged element → node → element, material by material
-    /// ([`crate::smoothing`]); it replaces `smooth_pressure` when on.
+    /// ([`crate::step::smoothing`]); it replaces `smooth_pressure` when on.
     pub strain_smoothing: bool,
     /// A consolidation run compared with Terzaghi (scenes with `[consolidation]`).
-    pub consolidation: Option<crate::consolidation::ConsolidationSpec>,
+    pub consolidation: Option<ConsolidationSpec>,
+    /// A uniform initial state of the saturated points (the undrained start of a consolidation
+    /// run); `None`: at rest.
+    pub initial_state: Option<UndrainedState>,
     /// Material-point ids written to `history.csv`.
     pub probes: Vec<u32>,
     /// Velocities prescribed on the material points of some elements (Anura3D's
     /// `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_*`); `None`: none, or the multiplier is off.
-    pub prescribed: Option<crate::prescribed::PrescribedVelocity>,
+    pub prescribed: Option<crate::step::prescribed::PrescribedVelocity>,
     /// Threads, pinning and first touch of the run (not physics: results do not depend on it).
-    pub engine: crate::engine::Options,
+    pub engine: crate::parallel::team::Options,
 }
 
 /// Fixities of a laterally confined box (an oedometer): nodes on the x and z faces of the
@@ -387,10 +390,10 @@ impl Case {
     /// in the input (not in the solver's order).
     pub fn tet_mesh<R: crate::real::Real>(
         &self,
-    ) -> Result<crate::mesh::TetMesh<R>, crate::mesh::MeshError> {
-        crate::mesh::TetMesh::<R>::new(&self.model).map_err(|e| match e {
-            crate::mesh::MeshError::BadElement { element, volume } => {
-                crate::mesh::MeshError::BadElement {
+    ) -> Result<crate::element::mesh::TetMesh<R>, crate::element::mesh::MeshError> {
+        crate::element::mesh::TetMesh::<R>::new(&self.model).map_err(|e| match e {
+            crate::element::mesh::MeshError::BadElement { element, volume } => {
+                crate::element::mesh::MeshError::BadElement {
                     element: self.element_number(element - 1) as usize,
                     volume,
                 }
@@ -466,9 +469,57 @@ impl Case {
             strain_smoothing: false,
             fixed_liquid_mass: false,
             consolidation: None,
+            initial_state: None,
             probes: Vec::new(),
             prescribed: None,
             engine: Default::default(),
         }
+    }
+}
+
+/// How the run starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Start {
+    /// At rest, the load applied suddenly (Anura3D's workshop set-up): the column first responds
+    /// dynamically.
+    Rest,
+    /// In the undrained state Terzaghi assumes at t = 0+: the load shared between pore pressure
+    /// and skeleton as an undrained 1D compression, so there is no dynamic transient.
+    Undrained,
+}
+
+/// A consolidation run's settings (`[consolidation]` of a scene).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConsolidationSpec {
+    /// Top load q (kPa, compression positive).
+    pub load: f64,
+    /// Initial state.
+    pub start: Start,
+    /// Also run the workshop-style configuration (at rest, sudden load) and report both.
+    pub compare_rest: bool,
+}
+
+/// The undrained state of a 1D compression under a top load, which Terzaghi assumes at t = 0+:
+/// every saturated point starts with vertical strain ε = -q / (E_oed + K_w/n), the effective
+/// stress of that strain and pore pressure (K_w/n) ε.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UndrainedState {
+    /// Vertical (y) strain ε.
+    pub vertical_strain: f64,
+    /// Pore pressure (kPa, compression negative).
+    pub pore_pressure: f64,
+}
+
+impl UndrainedState {
+    /// The undrained state of `material` (saturated) under the top load `load` (kPa,
+    /// compression positive).
+    pub fn under(material: &MaterialSpec, load: f64) -> Option<Self> {
+        let l = material.liquid.as_ref()?;
+        let kw_over_n = l.bulk_modulus / l.porosity;
+        let eps = -load / (material.oedometric() + kw_over_n);
+        Some(UndrainedState {
+            vertical_strain: eps,
+            pore_pressure: kw_over_n * eps,
+        })
     }
 }

@@ -1,14 +1,14 @@
 //! Particle to grid: lumped masses, momentum, internal and gravity forces (DESIGN §4, step 1),
-//! summed element by element and then node by node on the team (see [`crate::gather`]).
+//! summed element by element and then node by node on the team (see [`crate::parallel::gather`]).
 
-use crate::gather::{Layout, Slots};
-use crate::grid::Grid;
-use crate::liquid::Fluid;
-use crate::mesh::TetMesh;
-use crate::mixed::Mixed;
-use crate::particles::Particles;
+use crate::element::mesh::TetMesh;
+use crate::material::liquid::Fluid;
+use crate::parallel::gather::{Layout, Slots};
+use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
-use crate::team::{Shared, Team};
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
+use crate::step::mixed::Mixed;
 
 /// f = σ ∇N for symmetric σ (xx yy zz xy yz zx).
 #[inline]

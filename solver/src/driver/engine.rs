@@ -2,17 +2,20 @@
 
 use std::time::Instant;
 
-use crate::case::{Case, Integration};
-use crate::gather::{element_starts, sort_by_element, Layout, Slots, SortScratch};
-use crate::grid::{Grid, LiquidNodes};
-use crate::linear_elastic::LinearElastic;
-use crate::liquid::Fluid;
-use crate::locate::{walk, Found};
-use crate::mesh::TetMesh;
-use crate::particles::{self, Particles};
+use crate::element::locate::{walk, Found};
+use crate::element::mesh::TetMesh;
+use crate::input::case::{Case, Integration};
+use crate::material::linear_elastic::LinearElastic;
+use crate::material::liquid::Fluid;
+use crate::parallel::gather::{element_starts, sort_by_element, Layout, Slots, SortScratch};
+pub use crate::parallel::team::Options;
+use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
-use crate::team::{Pin, Shared, Team};
-use crate::{grid_to_particle, grid_update, particle_to_grid, stress};
+use crate::state::grid::{Grid, LiquidNodes};
+use crate::state::particles::{self, Particles};
+use crate::step::grid_update::{DampingRule, Drag};
+use crate::step::load_curve::LoadCurve;
+use crate::step::{grid_to_particle, grid_update, particle_to_grid, stress};
 
 /// Phases timed in `run.json`.
 pub const PHASES: [&str; 6] = [
@@ -44,8 +47,54 @@ pub struct Lost {
     pub element: u32,
 }
 
+/// What a step reads of the case besides the state: loads and their curves, damping, drag and
+/// the stress-update switches, resolved once when the engine is built.
+#[derive(Debug, Clone)]
+pub struct StepConfig {
+    /// Gravity acceleration vector (m/s²) at multiplier 1.
+    pub gravity: [f64; 3],
+    /// Gravity multiplier.
+    pub gravity_curve: LoadCurve,
+    /// Traction multiplier (face loads on nodes and on material points).
+    pub traction_curve: LoadCurve,
+    /// Liquid load multiplier.
+    pub liquid_curve: LoadCurve,
+    /// Local damping factor α.
+    pub damping: f64,
+    /// How local damping is applied.
+    pub damping_rule: DampingRule,
+    /// How the Darcy drag is integrated in time.
+    pub drag: Drag,
+    /// Whether a load on the liquid also loads the mixture.
+    pub liquid_load_on_mixture: bool,
+    /// Smooth pore-pressure rates through the nodes.
+    pub smooth_pressure: bool,
+    /// Jaumann (objective) stress rate.
+    pub objective_stress: bool,
+}
+
+impl StepConfig {
+    /// The step configuration of `case`.
+    pub fn of(case: &Case) -> Self {
+        StepConfig {
+            gravity: case.gravity,
+            gravity_curve: case.gravity_curve,
+            traction_curve: case.traction_curve,
+            liquid_curve: case.liquid_curve,
+            damping: case.damping,
+            damping_rule: case.damping_rule,
+            drag: case.drag,
+            liquid_load_on_mixture: case.liquid_load_on_mixture,
+            smooth_pressure: case.smooth_pressure,
+            objective_stress: case.objective_stress,
+        }
+    }
+}
+
 /// Solver state and preallocated buffers.
 pub struct Engine<R: Real> {
+    /// What each step reads of the case.
+    pub config: StepConfig,
     /// Computational mesh.
     pub mesh: TetMesh<R>,
     /// Material points.
@@ -77,7 +126,7 @@ pub struct Engine<R: Real> {
     /// Face loads carried by points: (point index, force at multiplier 1).
     pub point_loads: Vec<(u32, V3<R>)>,
     /// Per-element sums for mixed integration (empty under material-point integration).
-    pub mixed: Option<crate::mixed::Mixed<R>>,
+    pub mixed: Option<crate::step::mixed::Mixed<R>>,
     /// |free out-of-balance force| / |free external force| of the last step (0 when there
     /// is no external force).
     pub force_error: f64,
@@ -98,38 +147,15 @@ pub struct Engine<R: Real> {
     /// Fixed liquid components per computational node.
     pub liquid_fixed: Vec<[bool; 3]>,
     /// Anura3D's strain smoothing, when the case asks for it.
-    pub smoothing: Option<crate::smoothing::StrainSmoothing<R>>,
+    pub smoothing: Option<crate::step::smoothing::StrainSmoothing<R>>,
     /// Per material index: weight density / mass density (1 but for Anura3D's drained soil).
     weight_ratio: Vec<f64>,
     /// Per material index: the gravity acceleration of this step times its weight ratio.
     gravity_by_material: Vec<V3<R>>,
     /// Velocities prescribed on material points (only when the case has them).
-    pub prescribed: Option<crate::prescribed::Prescribed<R>>,
+    pub prescribed: Option<crate::step::prescribed::Prescribed<R>>,
     /// Input element (0-based) of each element, so that messages name elements as the input.
     input_element: Vec<u32>,
-}
-
-/// How the engine uses the machine.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Options {
-    /// Worker threads (0: one per core available).
-    pub threads: usize,
-    /// Thread placement.
-    pub pin: Pin,
-    /// Let each thread initialise (first touch) the particle arrays of its range, so that their
-    /// pages are placed near it; off: the main thread's placement, for measurement.
-    pub first_touch: bool,
-}
-
-impl Default for Options {
-    /// One thread per core, placed by the OS, first touch on.
-    fn default() -> Self {
-        Options {
-            threads: 0,
-            pin: Pin::None,
-            first_touch: true,
-        }
-    }
 }
 
 impl<R: Real> Engine<R> {
@@ -174,6 +200,24 @@ impl<R: Real> Engine<R> {
                 case.fixed_liquid_mass,
             );
         }
+        if let (Some(s), Some(lp)) = (&case.initial_state, particles.liquid.as_mut()) {
+            // Saturated points start in the given undrained state.
+            for i in 0..particles.x.len() {
+                let m = particles.material[i] as usize;
+                let Some(spec) = case.materials[m].as_ref().filter(|s| s.liquid.is_some()) else {
+                    continue;
+                };
+                let law = LinearElastic::<R>::new(spec.young, spec.poisson);
+                let mut stress = [R::ZERO; 6];
+                let eps = R::of(s.vertical_strain);
+                law.update(
+                    &mut stress,
+                    &[R::ZERO, eps, R::ZERO, R::ZERO, R::ZERO, R::ZERO],
+                );
+                particles.stress[i] = stress;
+                lp.p[i] = R::of(s.pore_pressure);
+            }
+        }
         let fluids: Vec<Option<Fluid<R>>> = case
             .materials
             .iter()
@@ -202,7 +246,9 @@ impl<R: Real> Engine<R> {
                 )
             })
             .collect();
-        let dt = crate::time_step::critical(case, mesh.elements(), |e| mesh.min_altitude[e].f64())?;
+        let dt = crate::input::time_step::critical(case, mesh.elements(), |e| {
+            mesh.min_altitude[e].f64()
+        })?;
         let mut grid = Grid::new(mesh.nodes());
         if two_phase {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
@@ -211,7 +257,7 @@ impl<R: Real> Engine<R> {
         let prescribed = case
             .prescribed
             .as_ref()
-            .map(|pv| crate::prescribed::Prescribed::new(pv, &mesh, &particles));
+            .map(|pv| crate::step::prescribed::Prescribed::new(pv, &mesh, &particles));
         let layout = Layout::new(&mesh, &particles, team.threads);
         if options.first_touch {
             particles = first_touch(&team, &layout, particles);
@@ -220,7 +266,7 @@ impl<R: Real> Engine<R> {
         let mixed = match case.integration {
             Integration::MaterialPoints => None,
             Integration::Mixed { filling } => {
-                Some(crate::mixed::Mixed::new(mesh.elements(), filling))
+                Some(crate::step::mixed::Mixed::new(mesh.elements(), filling))
             }
         };
         let weight_ratio: Vec<f64> = case
@@ -228,10 +274,11 @@ impl<R: Real> Engine<R> {
             .iter()
             .map(|m| m.as_ref().map_or(1.0, |s| s.weight_density / s.density))
             .collect();
-        let smoothing = case
-            .strain_smoothing
-            .then(|| crate::smoothing::StrainSmoothing::new(mesh.nodes(), &case.element_material));
+        let smoothing = case.strain_smoothing.then(|| {
+            crate::step::smoothing::StrainSmoothing::new(mesh.nodes(), &case.element_material)
+        });
         Ok(Engine {
+            config: StepConfig::of(case),
             input_element: case.input_element.clone(),
             smoothing,
             gravity_by_material: vec![[R::ZERO; 3]; weight_ratio.len()],
@@ -267,8 +314,9 @@ impl<R: Real> Engine<R> {
 
     /// One explicit MUSL step of length `dt`; `snap_to` sets the clock exactly when the step
     /// ends on an output time (so times print as given, not as sums of steps).
-    pub fn step(&mut self, case: &Case, dt: f64, snap_to: Option<f64>) -> Result<(), Lost> {
+    pub fn step(&mut self, dt: f64, snap_to: Option<f64>) -> Result<(), Lost> {
         let t0 = Instant::now();
+        let case = &self.config;
         let gm = case.gravity_curve.at(self.time + dt);
         let gravity = case.gravity.map(|g| R::of(g * gm));
         for (gv, &ratio) in self.gravity_by_material.iter_mut().zip(&self.weight_ratio) {
@@ -332,10 +380,10 @@ impl<R: Real> Engine<R> {
             (f, 0.0)
         };
         let t2 = Instant::now();
-        let pm = case
+        let pm = self
             .prescribed
             .as_ref()
-            .map_or(R::ZERO, |pv| R::of(pv.multiplier(self.time + dt)));
+            .map_or(R::ZERO, |pr| R::of(pr.multiplier(self.time + dt)));
         if let Some(pr) = &self.prescribed {
             pr.after_grid_update(&mut self.grid, &mut self.particles, pm);
         }
@@ -429,7 +477,7 @@ impl<R: Real> Engine<R> {
 
     /// Anura3D's quasi-static convergence test: out-of-balance forces of the mixture and of the
     /// liquid and the kinetic energy (per unit of external work) within the tolerances.
-    pub fn converged(&self, qs: &crate::case::QuasiStatic) -> bool {
+    pub fn converged(&self, qs: &crate::input::case::QuasiStatic) -> bool {
         let (force_tolerance, energy_tolerance) = (qs.force_tolerance, qs.energy_tolerance);
         let kinetic = if self.external_work != 0.0 {
             (self.kinetic_energy() / self.external_work).abs()
@@ -604,11 +652,14 @@ fn first_touch<R: Real>(team: &Team, layout: &Layout<R>, p: Particles<R>) -> Par
         unsafe { out.set_len(v.len()) };
         out
     }
-    let liquid = p.liquid.as_ref().map(|l| crate::particles::LiquidPoints {
-        w: copy(team, layout, &l.w),
-        p: copy(team, layout, &l.p),
-        volume0: l.volume0.as_ref().map(|v| copy(team, layout, v)),
-    });
+    let liquid = p
+        .liquid
+        .as_ref()
+        .map(|l| crate::state::particles::LiquidPoints {
+            w: copy(team, layout, &l.w),
+            p: copy(team, layout, &l.p),
+            volume0: l.volume0.as_ref().map(|v| copy(team, layout, v)),
+        });
     Particles {
         x: copy(team, layout, &p.x),
         u: copy(team, layout, &p.u),

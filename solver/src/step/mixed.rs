@@ -8,12 +8,12 @@
 //! update equals the mean of the points' updates: storing the stress at the points only and
 //! averaging it each step is exact, and needs no Gauss-point state that would have to follow
 //! elements as they fill and empty. The element sums are formed in
-//! [`crate::particle_to_grid::particle_to_grid`].
+//! [`crate::step::particle_to_grid::particle_to_grid`].
 
-use crate::gather::Layout;
-use crate::particles::Particles;
+use crate::parallel::gather::Layout;
+use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
-use crate::team::{Shared, Team};
+use crate::state::particles::Particles;
 
 /// Per-element state, allocated once.
 #[derive(Debug, Clone)]

@@ -134,7 +134,7 @@ impl<R: Real> Fluid<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::linear_elastic::LinearElastic;
+    use crate::material::linear_elastic::LinearElastic;
 
     /// Anura3D's workshop oedometer (2D, right triangles with 0.1 m legs, so Δx = 0.1/√2)
     /// reports MaxWaveSpeed 0.1932E+03 and MinTimeStep 0.3660E-03.

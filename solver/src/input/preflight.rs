@@ -6,8 +6,8 @@
 use std::fmt;
 use std::path::Path;
 
-use crate::case::Case;
-use crate::units;
+use crate::driver::units;
+use crate::input::case::Case;
 
 /// Bytes one material point takes in a `particles_NNNNN.vtu` file: position, displacement and
 /// velocity (3 × f64 each), stress (6 × f64), material, element and id (i32), and the vertex
@@ -140,7 +140,7 @@ pub enum PreflightError {
 /// step is unusable (inverted elements, no stiffness).
 pub fn plan(case: &Case, threads: usize) -> Result<Plan, String> {
     let mesh = case.tet_mesh::<f64>().map_err(|e| e.to_string())?;
-    let dt = crate::time_step::critical(case, mesh.elements(), |e| mesh.min_altitude[e])?;
+    let dt = crate::input::time_step::critical(case, mesh.elements(), |e| mesh.min_altitude[e])?;
     let points: u64 = case
         .points_per_element
         .iter()

@@ -9,8 +9,8 @@ use mpm_shared::io::write_output_with;
 use mpm_shared::text::real_to_string;
 use mpm_shared::vtu::{self, Cells, DataArray, Encoding, Piece, Values};
 
-use crate::case::Case;
-use crate::engine::Engine;
+use crate::driver::engine::Engine;
+use crate::input::case::Case;
 use crate::real::Real;
 
 /// Accumulates the time series and writes the files.
@@ -176,7 +176,7 @@ pub fn write_summary<R: Real>(
     wall: f64,
     stepping: f64,
 ) -> mpm_shared::Result<()> {
-    let phases: serde_json::Map<String, serde_json::Value> = crate::engine::PHASES
+    let phases: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
         .iter()
         .zip(engine.phase_seconds)
         .map(|(k, v)| (k.to_string(), serde_json::json!(v)))
@@ -195,8 +195,8 @@ pub fn write_summary<R: Real>(
         "inputs": case.inputs,
         "threads": engine.team.threads,
         "pinning": match case.engine.pin {
-            crate::team::Pin::None => "none",
-            crate::team::Pin::Cores => "cores",
+            crate::parallel::team::Pin::None => "none",
+            crate::parallel::team::Pin::Cores => "cores",
         },
         "pinned_cores": engine.team.pinned,
         "first_touch": case.engine.first_touch,

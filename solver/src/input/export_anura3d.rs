@@ -24,9 +24,9 @@ use mpm_shared::model::{Body, LineEnding, Refs, Section, Table, Token};
 use mpm_shared::text::real_to_string;
 use mpm_shared::{Dimension, ElementType, Model};
 
-use crate::case::LoadCurve;
-use crate::consolidation::Start;
-use crate::scene::{self, Resolved, SceneError};
+use crate::input::case::LoadCurve;
+use crate::input::case::Start;
+use crate::input::scene::{self, Resolved, SceneError};
 
 /// The version line written at the top of both files (the one the benchmark suite uses).
 const VERSION: &str = "### Anura3D_2021 ###";
@@ -275,7 +275,7 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
 /// Whether the CPS switches `STRAIN_SMOOTHING` on: when the case smooths pore pressures and has
 /// some (for a dry case Anura3D's smoothing would act on the solid strain, which the scene does
 /// not smooth).
-fn smooths(case: &crate::case::Case) -> bool {
+fn smooths(case: &crate::input::case::Case) -> bool {
     case.smooth_pressure && case.has_liquid()
 }
 
@@ -582,7 +582,7 @@ struct CpsValues<'a> {
 }
 
 /// The CPS: the scene's controls, every other key at the inert value of Anura3D's template.
-fn cps_file(case: &crate::case::Case, v: CpsValues) -> Cps {
+fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
     let g = case.gravity;
     let g_abs = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
     // Without gravity the load is off, but the acceleration keeps Anura3D's default: Anura3D
@@ -593,7 +593,7 @@ fn cps_file(case: &crate::case::Case, v: CpsValues) -> Cps {
     } else {
         // Without gravity (GRAVITY_LOAD off) Anura3D still needs g: it turns intrinsic
         // permeability into conductivity with it (a 0 makes its drag 0/0).
-        (crate::liquid::G, [0.0, -1.0, 0.0])
+        (crate::material::liquid::G, [0.0, -1.0, 0.0])
     };
     let r = real_to_string;
     let damping = if case.damping > 0.0 {

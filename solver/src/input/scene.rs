@@ -39,9 +39,9 @@ use serde::Deserialize;
 use mpm_shared::msh::{self, MshMesh};
 use mpm_shared::Model;
 
-use crate::case::{Case, Integration, LoadCurve, MaterialSpec};
-use crate::consolidation::{ConsolidationSpec, Start};
-use crate::liquid::LiquidSpec;
+use crate::input::case::{Case, Integration, LoadCurve, MaterialSpec};
+use crate::input::case::{ConsolidationSpec, Start, UndrainedState};
+use crate::material::liquid::LiquidSpec;
 
 /// The scene file's content.
 #[derive(Debug, Deserialize)]
@@ -502,8 +502,8 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         ));
     }
     let damping_rule = match scene.damping.as_ref().and_then(|d| d.rule.as_deref()) {
-        None | Some("phases") => crate::case::DampingRule::Phases,
-        Some("anura3d") => crate::case::DampingRule::Anura3d,
+        None | Some("phases") => crate::input::case::DampingRule::Phases,
+        Some("anura3d") => crate::input::case::DampingRule::Anura3d,
         Some(other) => {
             return Err(invalid(
                 "damping.rule".into(),
@@ -581,15 +581,15 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         ));
     }
     let n_out = (end / interval).round().max(1.0);
-    if n_out > crate::preflight::MAX_OUTPUTS {
+    if n_out > crate::input::preflight::MAX_OUTPUTS {
         return Err(invalid(
             "time.output_interval".into(),
             format!(
                 "{} asks for {} outputs over {}; at most {} are allowed (each writes a particle file): give a longer interval",
-                crate::units::duration(interval),
-                crate::units::count(n_out),
-                crate::units::duration(end),
-                crate::units::count(crate::preflight::MAX_OUTPUTS)
+                crate::driver::units::duration(interval),
+                crate::driver::units::count(n_out),
+                crate::driver::units::duration(end),
+                crate::driver::units::count(crate::input::preflight::MAX_OUTPUTS)
             ),
         ));
     }
@@ -604,6 +604,24 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         })
         .collect();
     let element_count = model.element_count();
+    // The undrained start is an initial state of the saturated points, resolved here.
+    let initial_state = match &consolidation {
+        Some(c) if c.start == Start::Undrained => {
+            let sat: Vec<&MaterialSpec> = materials
+                .iter()
+                .flatten()
+                .filter(|m| m.liquid.is_some())
+                .collect();
+            let [m] = sat.as_slice() else {
+                return Err(invalid(
+                    "consolidation".into(),
+                    "a consolidation run needs exactly one saturated material".into(),
+                ));
+            };
+            UndrainedState::under(m, c.load)
+        }
+        _ => None,
+    };
     let case = Case {
         name: path
             .file_stem()
@@ -636,12 +654,13 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         integration: Integration::MaterialPoints,
         anura3d_time_step: false,
         damping_rule,
-        drag: crate::case::Drag::Implicit,
+        drag: crate::input::case::Drag::Implicit,
         initial_step: None,
         smooth_pressure: true,
         strain_smoothing: false,
         fixed_liquid_mass: false,
         consolidation,
+        initial_state,
         probes: scene.probes.clone(),
         prescribed: None,
         engine: Default::default(),

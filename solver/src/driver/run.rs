@@ -3,12 +3,11 @@
 use std::path::Path;
 use std::time::Instant;
 
-use crate::case::Case;
-use crate::consolidation::{apply_undrained_start, Layer, Start, Tracker};
-use crate::engine::Engine;
-use crate::output::{self, Output};
+use crate::driver::engine::Engine;
+use crate::driver::output::{self, Output};
+use crate::driver::units;
+use crate::input::case::Case;
 use crate::real::Real;
-use crate::units;
 
 /// Why a run stopped early.
 #[derive(Debug, thiserror::Error)]
@@ -18,7 +17,7 @@ pub enum RunError {
     Setup(String),
     /// A material point left the mesh.
     #[error(transparent)]
-    Lost(#[from] crate::engine::Lost),
+    Lost(#[from] crate::driver::engine::Lost),
     /// Writing an output failed.
     #[error(transparent)]
     Output(#[from] mpm_shared::Error),
@@ -94,9 +93,36 @@ impl Default for RunOptions {
     }
 }
 
+/// What watches a run from outside the engine (a job such as the consolidation comparison,
+/// or a test comparing with another code): told when the engine is set up and after each
+/// output is written.
+pub trait Observer<R: Real> {
+    /// The engine is set up, no step taken yet.
+    fn on_start(&mut self, _engine: &Engine<R>) -> Result<(), RunError> {
+        Ok(())
+    }
+
+    /// An output was written at the engine's current time.
+    fn on_output(&mut self, _engine: &Engine<R>) {}
+}
+
+/// An observer that only looks at outputs.
+struct OnOutput<F>(F);
+
+impl<R: Real, F: FnMut(&Engine<R>)> Observer<R> for OnOutput<F> {
+    fn on_output(&mut self, engine: &Engine<R>) {
+        (self.0)(engine)
+    }
+}
+
+/// No observer.
+struct Unobserved;
+
+impl<R: Real> Observer<R> for Unobserved {}
+
 /// Runs `case` to its end time, writing into `dir`. Returns the engine's final state.
 pub fn run<R: Real>(case: &Case, dir: &Path, options: &RunOptions) -> Result<Engine<R>, RunError> {
-    run_tracked(case, dir, options).map(|(e, _)| e)
+    drive(case, dir, options, &mut Unobserved)
 }
 
 /// [`run`], handing the engine to `observe` after each output is written (e.g. to compare the
@@ -107,38 +133,29 @@ pub fn run_observed<R: Real>(
     options: &RunOptions,
     observe: &mut dyn FnMut(&Engine<R>),
 ) -> Result<Engine<R>, RunError> {
-    drive(case, dir, options, observe).map(|(e, _)| e)
+    drive(case, dir, options, &mut OnOutput(observe))
 }
 
-/// [`run`], and for a consolidation case (`case.consolidation`) its start state and the
-/// record of every output time against Terzaghi.
-pub fn run_tracked<R: Real>(
+/// [`run`] with an [`Observer`].
+pub fn run_with<R: Real>(
     case: &Case,
     dir: &Path,
     options: &RunOptions,
-) -> Result<(Engine<R>, Option<Tracker>), RunError> {
-    drive(case, dir, options, &mut |_| {})
+    observer: &mut dyn Observer<R>,
+) -> Result<Engine<R>, RunError> {
+    drive(case, dir, options, observer)
 }
 
 fn drive<R: Real>(
     case: &Case,
     dir: &Path,
     options: &RunOptions,
-    observe: &mut dyn FnMut(&Engine<R>),
-) -> Result<(Engine<R>, Option<Tracker>), RunError> {
+    observer: &mut dyn Observer<R>,
+) -> Result<Engine<R>, RunError> {
     let wall = Instant::now();
     let mut engine = Engine::<R>::new(case, options.drop_lost).map_err(RunError::Setup)?;
     check_probes(case, &engine)?;
-    let mut tracker = match &case.consolidation {
-        None => None,
-        Some(spec) => {
-            let layer = Layer::of(case, spec).map_err(RunError::Setup)?;
-            if spec.start == Start::Undrained {
-                apply_undrained_start(&mut engine, &layer);
-            }
-            Some(Tracker::new(&engine, layer, spec.start))
-        }
-    };
+    observer.on_start(&engine)?;
     let mut out = Output::new(dir, case, &engine)?;
     let total_steps = (case.end_time / engine.dt).ceil() as u64;
     let mut report = Reporter::new(options.progress, total_steps, case.end_time);
@@ -182,7 +199,7 @@ fn drive<R: Real>(
             } else {
                 (left, Some(t_out))
             };
-            engine.step(case, dt, snap)?;
+            engine.step(dt, snap)?;
             taken += 1;
             if options.drop_lost && engine.lost > 0 {
                 check_lost(&engine, options.max_lost)?;
@@ -193,15 +210,12 @@ fn drive<R: Real>(
         stepping += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         out.write(&engine)?;
-        if let Some(t) = &mut tracker {
-            t.record(&engine);
-        }
-        observe(&engine);
+        observer.on_output(&engine);
         engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
     }
     report.finish();
     output::write_summary(dir, case, &engine, wall.elapsed().as_secs_f64(), stepping)?;
-    Ok((engine, tracker))
+    Ok(engine)
 }
 
 /// Refuses probe ids that name no material point of the case (before any step is taken).

@@ -1,20 +1,20 @@
 //! Strain increments from nodal velocities, the constitutive update, and the volume and position
 //! update of every particle.
 
-use crate::gather::{Layout, Slots};
-use crate::grid::Grid;
-use crate::linear_elastic::LinearElastic;
-use crate::liquid::Fluid;
-use crate::mesh::TetMesh;
-use crate::particles::Particles;
+use crate::element::mesh::TetMesh;
+use crate::material::linear_elastic::LinearElastic;
+use crate::material::liquid::Fluid;
+use crate::parallel::gather::{Layout, Slots};
+use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
-use crate::smoothing::StrainSmoothing;
-use crate::team::{Shared, Team};
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
+use crate::step::smoothing::StrainSmoothing;
 
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
 /// the rotation Δω σ - σ Δω with Δω = skew(L) Δt and -tr(Δε) σ); V *= 1 + tr Δε; x += Δt Σ N_n v_n. With `smoothing`, the
 /// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
-/// increment ([`crate::smoothing`]). Each thread updates the particles of its elements.
+/// increment ([`crate::step::smoothing`]). Each thread updates the particles of its elements.
 #[allow(clippy::too_many_arguments)]
 pub fn update_stress_and_move<R: Real>(
     team: &Team,

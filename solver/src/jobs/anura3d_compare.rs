@@ -9,7 +9,7 @@
 
 use mpm_shared::bms::{Bms, MaterialPointRecord};
 
-use crate::engine::Engine;
+use crate::driver::engine::Engine;
 use crate::real::Real;
 
 /// The compared columns of the `.BMS`, in the order of [`values_of`].

@@ -1,7 +1,7 @@
 //! Particle relocation: from its previous element, a point walks to the face neighbour across
 //! the face with the most negative barycentric coordinate until it is inside.
 
-use crate::mesh::TetMesh;
+use crate::element::mesh::TetMesh;
 use crate::real::{Real, V3};
 
 /// Where a walk ended.

@@ -4,7 +4,7 @@
 //!
 //! Results never depend on the thread count: kernels only split work whose parts are written
 //! to disjoint places, and every sum is formed in an order fixed by the data (see
-//! [`crate::gather`] and [`Team::sum_blocks`]).
+//! [`crate::parallel::gather`] and [`Team::sum_blocks`]).
 
 use std::ops::Range;
 
@@ -204,5 +204,29 @@ mod tests {
             sums.iter().all(|s| s.to_bits() == sums[0].to_bits()),
             "{sums:?}"
         );
+    }
+}
+
+/// How a run uses the machine: threads, their placement, first touch (not physics: results do
+/// not depend on it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Options {
+    /// Worker threads (0: one per core available).
+    pub threads: usize,
+    /// Thread placement.
+    pub pin: Pin,
+    /// Let each thread initialise (first touch) the particle arrays of its range, so that their
+    /// pages are placed near it; off: the main thread's placement, for measurement.
+    pub first_touch: bool,
+}
+
+impl Default for Options {
+    /// One thread per core, placed by the OS, first touch on.
+    fn default() -> Self {
+        Options {
+            threads: 0,
+            pin: Pin::None,
+            first_touch: true,
+        }
     }
 }

@@ -11,10 +11,10 @@
 
 use std::ops::Range;
 
-use crate::mesh::TetMesh;
-use crate::particles::Particles;
+use crate::element::mesh::TetMesh;
+use crate::parallel::team::{balanced_ranges, Shared, Team};
 use crate::real::Real;
-use crate::team::{balanced_ranges, Shared, Team};
+use crate::state::particles::Particles;
 
 /// Widest slot (values per element corner) a pass uses.
 pub const WIDTH: usize = 12;

@@ -23,11 +23,11 @@
 use mpm_shared::model::Body;
 use mpm_shared::Model;
 
-use crate::grid::Grid;
-use crate::load_curve::LoadCurve;
-use crate::mesh::TetMesh;
-use crate::particles::Particles;
+use crate::element::mesh::TetMesh;
 use crate::real::{Real, V3};
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
+use crate::step::load_curve::LoadCurve;
 
 /// One row of a prescribed-velocity section.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -165,6 +165,9 @@ pub fn read_rows(model: &Model) -> Result<Vec<PrescribedElement>, (String, Strin
 /// allocated at set-up.
 #[derive(Debug, Clone)]
 pub struct Prescribed<R: Real> {
+    /// The multiplier: scale × curve (Anura3D's `PRESCRIBED_VELOCITY`).
+    scale: f64,
+    curve: LoadCurve,
     /// Prescribed components.
     directions: [bool; 3],
     /// Listed elements, ascending, without repeats.
@@ -213,6 +216,8 @@ impl<R: Real> Prescribed<R> {
             .collect();
         let n = nodes.len();
         Prescribed {
+            scale: spec.scale,
+            curve: spec.curve,
             directions: spec.directions(),
             elements,
             nodes,
@@ -222,6 +227,11 @@ impl<R: Real> Prescribed<R> {
             first: vec![[R::ZERO; 3]; n],
             sum: vec![[R::ZERO; 3]; n],
         }
+    }
+
+    /// The multiplier at time `t` (as [`PrescribedVelocity::multiplier`]).
+    pub fn multiplier(&self, t: f64) -> f64 {
+        self.scale * self.curve.at(t)
     }
 
     /// Number of marked points.

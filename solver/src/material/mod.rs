@@ -1,0 +1,4 @@
+//! Constitutive laws of the solid and the pore liquid's constants.
+
+pub mod linear_elastic;
+pub mod liquid;
