@@ -399,10 +399,9 @@ pub fn classify(keyword: &str, et: ElementType) -> Kind {
         "STARTCOUNTERS" => Kind::Counters,
         "STARTNODES" => Kind::Nodes,
         "STARTELEMCON" => Kind::Connectivity,
-        "STARTELMMAT"
-        | "STARTDAMPING"
-        | "START_NUMBER_OF_MATERIAL_POINTS"
-        | INPUT_ELEMENTS => Kind::PerElement,
+        "STARTELMMAT" | "STARTDAMPING" | "START_NUMBER_OF_MATERIAL_POINTS" | INPUT_ELEMENTS => {
+            Kind::PerElement
+        }
         k if k.starts_with("START_FIXITY_") || k.starts_with("START_REMOVE_FIXITY_") => {
             Kind::Counted(one)
         }

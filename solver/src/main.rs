@@ -8,7 +8,7 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::bail;
+use anyhow::{bail, Context};
 use clap::Parser;
 use mpm_solve::driver::run::Progress;
 use mpm_solve::driver::units;
@@ -206,6 +206,16 @@ fn input_kind(path: &std::path::Path) -> anyhow::Result<Input> {
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
+    if args.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    // Reading, ordering and set-up run on rayon's pool: size it as the run's team.
+    if let Some(n) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("sizing the thread pool")?;
+    }
     let kind = input_kind(&args.input)?;
     let is_scene = kind == Input::Scene;
     if let Some(dir) = &args.export_anura3d {

@@ -7,7 +7,7 @@ use crate::element::mesh::TetMesh;
 use crate::input::case::{Case, Integration};
 use crate::material::linear_elastic::LinearElastic;
 use crate::material::liquid::Fluid;
-use crate::parallel::gather::{element_starts, sort_by_element, Layout, Slots, SortScratch};
+use crate::parallel::gather::{sort_by_element, Layout, Slots, SortScratch};
 pub use crate::parallel::team::Options;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
@@ -544,7 +544,7 @@ impl<R: Real> Engine<R> {
         }
         self.lost += self.locate_outcome.iter().map(|o| o.1).sum::<u64>();
         if sort_by_element(p, mesh.elements(), &mut self.sort_scratch) {
-            self.layout.elem_start = element_starts(&p.element, mesh.elements());
+            self.layout.set_particle_elements(&p.element);
             // Point loads and prescribed points follow their points: old index → new index.
             if !self.point_loads.is_empty() || self.prescribed.is_some() {
                 let sc = &mut self.sort_scratch;

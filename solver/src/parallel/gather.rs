@@ -21,17 +21,21 @@ pub const WIDTH: usize = 12;
 
 /// Layout and scratch of the parallel step.
 #[derive(Debug)]
+///
+/// The fields are private: the parallel passes write through raw pointers into the ranges they
+/// describe, so only this module may change them, keeping the element ranges disjoint and
+/// covering `0..elements` and `elem_start` non-decreasing (checked in debug builds).
 pub struct Layout<R: Real> {
     /// First particle of each element (particles are sorted by element), `elements + 1` long.
-    pub elem_start: Vec<u32>,
+    elem_start: Vec<u32>,
     /// Elements of each thread (contiguous along the mesh order, balanced by particles).
-    pub element_ranges: Vec<Range<usize>>,
+    element_ranges: Vec<Range<usize>>,
     /// Nodes of each thread (balanced by their number of element corners).
-    pub node_ranges: Vec<Range<usize>>,
+    node_ranges: Vec<Range<usize>>,
     /// For each node, where its slots start in `node_slot` (`nodes + 1` long).
-    pub node_start: Vec<u32>,
+    node_start: Vec<u32>,
     /// Slots (4 e + k) of every node, in element order.
-    pub node_slot: Vec<u32>,
+    node_slot: Vec<u32>,
     _real: std::marker::PhantomData<R>,
 }
 
@@ -68,14 +72,49 @@ impl<R: Real> Layout<R> {
             (0..nn).map(|n| u64::from(node_start[n + 1] - node_start[n])),
             threads,
         );
-        Layout {
+        let layout = Layout {
             elem_start,
             element_ranges,
             node_ranges,
             node_start,
             node_slot,
             _real: std::marker::PhantomData,
+        };
+        layout.debug_check();
+        layout
+    }
+
+    /// The invariants the unsafe passes rely on: contiguous element ranges covering all
+    /// elements in order (so disjoint), and particle starts that never decrease.
+    fn debug_check(&self) {
+        if cfg!(debug_assertions) {
+            let ne = self.elem_start.len() - 1;
+            let mut next = 0;
+            for r in &self.element_ranges {
+                assert!(
+                    r.start == next && r.end >= r.start,
+                    "element ranges not contiguous"
+                );
+                next = r.end;
+            }
+            assert_eq!(next, ne, "element ranges do not cover the mesh");
+            assert!(
+                self.elem_start.windows(2).all(|w| w[0] <= w[1]),
+                "particle starts decrease"
+            );
         }
+    }
+
+    /// Re-reads where each element's particles start after the particles were re-sorted by
+    /// element (`element`: each particle's element, non-decreasing).
+    pub fn set_particle_elements(&mut self, element: &[u32]) {
+        self.elem_start = element_starts(element, self.elem_start.len() - 1);
+        self.debug_check();
+    }
+
+    /// Elements of thread `k`.
+    pub fn element_range(&self, k: usize) -> Range<usize> {
+        self.element_ranges[k].clone()
     }
 
     /// Zeroed slots for this layout (allocated zeroed, so pages are placed by the threads that

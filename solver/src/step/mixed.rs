@@ -81,7 +81,7 @@ impl<R: Real> Mixed<R> {
     ) {
         let values = Shared::new(values);
         team.run(|k| {
-            for e in layout.element_ranges[k].clone() {
+            for e in layout.element_range(k) {
                 if !self.full[e] {
                     continue;
                 }
