@@ -69,7 +69,13 @@ fn main() {
     let fixed = mpm_solve::input::case::confined_box(&model);
     let soil = if saturated {
         let liquid = LiquidSpec::new(0.4, 1000.0, 2.15e4, 1.0214e-9, 1e-6).unwrap();
-        MaterialSpec::saturated("soil", 2650.0, 1000.0, 0.3, liquid).unwrap()
+        MaterialSpec::saturated(
+            "soil",
+            2650.0,
+            mpm_solve::material::law::LawSpec::linear_elastic(1000.0, 0.3).unwrap(),
+            liquid,
+        )
+        .unwrap()
     } else {
         MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap()
     };

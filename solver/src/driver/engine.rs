@@ -5,14 +5,14 @@ use std::time::Instant;
 use crate::element::locate::{walk, Found};
 use crate::element::mesh::TetMesh;
 use crate::input::case::{Case, Integration};
-use crate::material::linear_elastic::LinearElastic;
+use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::gather::{sort_by_element, Layout, Slots, SortScratch};
 pub use crate::parallel::team::Options;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::{Grid, LiquidNodes};
-use crate::state::particles::{self, Particles};
+use crate::state::particles::{self, FieldVisitor, Particles};
 use crate::step::grid_update::{DampingRule, Drag};
 use crate::step::load_curve::LoadCurve;
 use crate::step::{grid_to_particle, grid_update, particle_to_grid, stress};
@@ -108,7 +108,7 @@ pub struct Engine<R: Real> {
     /// Liquid face-load forces per computational node at multiplier 1.
     pub liquid_traction: Vec<V3<R>>,
     /// Constitutive law per material index.
-    pub laws: Vec<LinearElastic<R>>,
+    pub laws: Vec<Law<R>>,
     /// Critical time step × Courant number.
     pub dt: f64,
     /// Simulated time.
@@ -189,6 +189,15 @@ impl<R: Real> Engine<R> {
         if particles.is_empty() {
             return Err("the case has no material points (every element is empty)".into());
         }
+        // The laws' state slab: as many values per point as the most demanding law keeps.
+        particles.state_len = case
+            .materials
+            .iter()
+            .flatten()
+            .map(|m| m.law.state_len())
+            .max()
+            .unwrap_or(0);
+        particles.state = vec![R::ZERO; particles.state_len * particles.len()];
         let two_phase = case.has_liquid();
         if two_phase {
             particles.add_liquid(
@@ -207,13 +216,11 @@ impl<R: Real> Engine<R> {
                 let Some(spec) = case.materials[m].as_ref().filter(|s| s.liquid.is_some()) else {
                     continue;
                 };
-                let law = LinearElastic::<R>::new(spec.young, spec.poisson);
+                let law = spec.law.build::<R>();
                 let mut stress = [R::ZERO; 6];
                 let eps = R::of(s.vertical_strain);
-                law.update(
-                    &mut stress,
-                    &[R::ZERO, eps, R::ZERO, R::ZERO, R::ZERO, R::ZERO],
-                );
+                let de = [R::ZERO, eps, R::ZERO, R::ZERO, R::ZERO, R::ZERO];
+                law.update(&mut stress, &de, &mut []);
                 particles.stress[i] = stress;
                 lp.p[i] = R::of(s.pore_pressure);
             }
@@ -236,15 +243,7 @@ impl<R: Real> Engine<R> {
         let laws = case
             .materials
             .iter()
-            .map(|m| {
-                m.as_ref().map_or(
-                    LinearElastic {
-                        lambda: R::ZERO,
-                        shear: R::ZERO,
-                    },
-                    |s| LinearElastic::new(s.young, s.poisson),
-                )
-            })
+            .map(|m| m.as_ref().map_or(Law::Void, |s| s.law.build()))
             .collect();
         let dt = crate::input::time_step::critical(case, mesh.elements(), |e| {
             mesh.min_altitude[e].f64()
@@ -631,46 +630,41 @@ fn resolve_point_loads<R: Real>(
 
 /// The particle arrays copied range by range on the threads that own the ranges, so that each
 /// range's pages are first touched (and placed) by its thread.
-fn first_touch<R: Real>(team: &Team, layout: &Layout<R>, p: Particles<R>) -> Particles<R> {
-    fn copy<T: Copy + Default + Send + Sync, R: Real>(
-        team: &Team,
-        layout: &Layout<R>,
-        v: &[T],
-    ) -> Vec<T> {
-        let mut out: Vec<T> = Vec::with_capacity(v.len());
-        let spare = out.spare_capacity_mut();
-        let dst = Shared::new(spare);
-        team.run(|t| {
-            let r = layout.particle_range(t);
-            // SAFETY: the particle ranges are disjoint and cover 0..len.
-            let d = unsafe { dst.range(r.clone()) };
-            for (slot, &x) in d.iter_mut().zip(&v[r]) {
-                slot.write(x);
-            }
-        });
-        // SAFETY: every element was written above (the ranges cover all particles).
-        unsafe { out.set_len(v.len()) };
-        out
+fn first_touch<R: Real>(team: &Team, layout: &Layout<R>, mut p: Particles<R>) -> Particles<R> {
+    struct Copy<'a, R: Real> {
+        team: &'a Team,
+        layout: &'a Layout<R>,
     }
-    let liquid = p
-        .liquid
-        .as_ref()
-        .map(|l| crate::state::particles::LiquidPoints {
-            w: copy(team, layout, &l.w),
-            p: copy(team, layout, &l.p),
-            volume0: l.volume0.as_ref().map(|v| copy(team, layout, v)),
-        });
-    Particles {
-        x: copy(team, layout, &p.x),
-        u: copy(team, layout, &p.u),
-        v: copy(team, layout, &p.v),
-        mass: copy(team, layout, &p.mass),
-        volume: copy(team, layout, &p.volume),
-        stress: copy(team, layout, &p.stress),
-        element: copy(team, layout, &p.element),
-        material: copy(team, layout, &p.material),
-        id: copy(team, layout, &p.id),
-        active: copy(team, layout, &p.active),
-        liquid,
+    impl<R: Real> FieldVisitor for Copy<'_, R> {
+        fn field<T: std::marker::Copy + Default + Send + Sync>(
+            &mut self,
+            v: &mut Vec<T>,
+            k: usize,
+        ) {
+            let mut out: Vec<T> = Vec::with_capacity(v.len());
+            let spare = out.spare_capacity_mut();
+            let dst = Shared::new(spare);
+            let src = &v[..];
+            let layout = self.layout;
+            self.team.run(|t| {
+                let r = layout.particle_range(t);
+                let r = k * r.start..k * r.end;
+                // SAFETY: the particle ranges are disjoint and cover 0..len, so their k-value
+                // chunks are disjoint and cover 0..k len.
+                let d = unsafe { dst.range(r.clone()) };
+                for (slot, &x) in d.iter_mut().zip(&src[r]) {
+                    slot.write(x);
+                }
+            });
+            debug_assert_eq!(
+                v.len(),
+                k * layout.particle_range(self.team.threads - 1).end
+            );
+            // SAFETY: every element was written above (the ranges cover all particles).
+            unsafe { out.set_len(v.len()) };
+            *v = out;
+        }
     }
+    p.visit_fields(&mut Copy { team, layout });
+    p
 }

@@ -12,6 +12,7 @@ use mpm_shared::model::{Body, Token};
 use mpm_shared::{ElementType, Model};
 
 use crate::input::case::{Case, FaceLoad, Integration, LoadCurve, MaterialSpec, QuasiStatic};
+use crate::material::law::{LawError, LawSpec};
 use crate::material::liquid::LiquidSpec;
 
 /// Anura3D's first time step (s): its time increment starts at this value and becomes the
@@ -163,16 +164,19 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                 ))
             }
         };
+        // The law by its name, from the block's own keys (the factory).
         let model_name = m.get("MATERIAL_MODEL_SOLID").unwrap_or("");
-        if model_name != "linear_elasticity" {
-            return Err(unsupported(
+        let law = LawSpec::by_name(model_name, &|k| m.get_f64(k)).map_err(|e| match e {
+            LawError::Unknown(_) => unsupported(
                 &gfile,
                 &item,
                 format!(
-                    "MATERIAL_MODEL_SOLID {model_name} is not supported yet (linear_elasticity is)"
+                    "MATERIAL_MODEL_SOLID {model_name} is not supported yet ({} is)",
+                    crate::material::law::KNOWN.join(", ")
                 ),
-            ));
-        }
+            ),
+            LawError::Parameter(p) => unsupported(&gfile, &item, p),
+        })?;
         let get = |k: &str| {
             m.get_f64(k)
                 .ok_or_else(|| unsupported(&gfile, &item, format!("missing or non-numeric $${k}")))
@@ -193,36 +197,23 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                     get("DYNAMIC_VISCOSITY_LIQUID")?,
                 )
                 .map_err(|e| unsupported(&gfile, &item, e))?;
-                MaterialSpec::saturated(
-                    &m.name,
-                    get("DENSITY_SOLID")?,
-                    get("YOUNG_MODULUS")?,
-                    get("POISSON_RATIO")?,
-                    liquid,
-                )
+                MaterialSpec::saturated(&m.name, get("DENSITY_SOLID")?, law, liquid)
             }
             // A dry material's mass is that of its solid grains: (1 - n) ρs.
-            Kind::Dry => MaterialSpec::new(
-                &m.name,
-                (1.0 - n) * get("DENSITY_SOLID")?,
-                get("YOUNG_MODULUS")?,
-                get("POISSON_RATIO")?,
-            ),
+            Kind::Dry => MaterialSpec::with_law(&m.name, (1.0 - n) * get("DENSITY_SOLID")?, law),
             Kind::Drained => MaterialSpec::drained(
                 &m.name,
                 n,
                 get("DENSITY_SOLID")?,
                 get("DENSITY_LIQUID")?,
-                get("YOUNG_MODULUS")?,
-                get("POISSON_RATIO")?,
+                law,
             ),
             Kind::UndrainedTotal => MaterialSpec::undrained_total(
                 &m.name,
                 n,
                 get("DENSITY_SOLID")?,
                 get("DENSITY_LIQUID")?,
-                get("YOUNG_MODULUS")?,
-                get("POISSON_RATIO")?,
+                law,
             ),
         }
         .map_err(|e| unsupported(&gfile, &item, e))?;

@@ -3,10 +3,12 @@
 
 use mpm_shared::Model;
 
+use crate::material::law::LawSpec;
+
 pub use crate::step::grid_update::{DampingRule, Drag};
 pub use crate::step::load_curve::LoadCurve;
 
-/// A linear elastic solid material, dry or saturated with a pore liquid.
+/// A solid material (its constitutive law and densities), dry or saturated with a pore liquid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MaterialSpec {
     /// Name.
@@ -19,10 +21,8 @@ pub struct MaterialSpec {
     /// Density of the critical wave speed sqrt(E_oed / ρ) (t/m³): the mass density, except for
     /// Anura3D's undrained-total soil, whose step Anura3D takes with the dry (1 - n) ρs.
     pub wave_density: f64,
-    /// Young's modulus (kPa).
-    pub young: f64,
-    /// Poisson's ratio.
-    pub poisson: f64,
+    /// The constitutive law of the solid skeleton.
+    pub law: LawSpec,
     /// The pore liquid of a saturated (two-phase) material; `None` for a dry one.
     pub liquid: Option<crate::material::liquid::LiquidSpec>,
     /// Pore pressure at t = 0 (kPa, compression negative), for saturated materials.
@@ -30,26 +30,24 @@ pub struct MaterialSpec {
 }
 
 impl MaterialSpec {
-    /// Checks and converts: `density_kg_m3` in kg/m³, `young` in kPa.
+    /// A linear elastic material, checked and converted: `density_kg_m3` in kg/m³, `young` in
+    /// kPa.
     pub fn new(name: &str, density_kg_m3: f64, young: f64, poisson: f64) -> Result<Self, String> {
+        let law = LawSpec::linear_elastic(young, poisson).map_err(|e| e.to_string())?;
+        Self::with_law(name, density_kg_m3, law)
+    }
+
+    /// A dry material of density `density_kg_m3` (kg/m³) following `law`.
+    pub fn with_law(name: &str, density_kg_m3: f64, law: LawSpec) -> Result<Self, String> {
         if !(density_kg_m3 > 0.0) {
             return Err(format!("density must be positive, got {density_kg_m3}"));
-        }
-        if !(young > 0.0) {
-            return Err(format!("Young's modulus must be positive, got {young}"));
-        }
-        if !(poisson > -1.0 && poisson < 0.5) {
-            return Err(format!(
-                "Poisson's ratio must be in (-1, 0.5), got {poisson}"
-            ));
         }
         Ok(MaterialSpec {
             name: name.to_string(),
             density: density_kg_m3 / 1000.0,
             weight_density: density_kg_m3 / 1000.0,
             wave_density: density_kg_m3 / 1000.0,
-            young,
-            poisson,
+            law,
             liquid: None,
             initial_pore_pressure: 0.0,
         })
@@ -60,16 +58,11 @@ impl MaterialSpec {
     pub fn saturated(
         name: &str,
         grain_density_kg_m3: f64,
-        young: f64,
-        poisson: f64,
+        law: LawSpec,
         liquid: crate::material::liquid::LiquidSpec,
     ) -> Result<Self, String> {
-        let mut m = MaterialSpec::new(
-            name,
-            (1.0 - liquid.porosity) * grain_density_kg_m3,
-            young,
-            poisson,
-        )?;
+        let mut m =
+            MaterialSpec::with_law(name, (1.0 - liquid.porosity) * grain_density_kg_m3, law)?;
         m.liquid = Some(liquid);
         Ok(m)
     }
@@ -82,12 +75,10 @@ impl MaterialSpec {
         porosity: f64,
         grain_density_kg_m3: f64,
         liquid_density_kg_m3: f64,
-        young: f64,
-        poisson: f64,
+        law: LawSpec,
     ) -> Result<Self, String> {
         check_porosity(porosity)?;
-        let mut m =
-            MaterialSpec::new(name, (1.0 - porosity) * grain_density_kg_m3, young, poisson)?;
+        let mut m = MaterialSpec::with_law(name, (1.0 - porosity) * grain_density_kg_m3, law)?;
         m.weight_density = (1.0 - porosity) * (grain_density_kg_m3 - liquid_density_kg_m3) / 1000.0;
         Ok(m)
     }
@@ -101,19 +92,18 @@ impl MaterialSpec {
         porosity: f64,
         grain_density_kg_m3: f64,
         liquid_density_kg_m3: f64,
-        young: f64,
-        poisson: f64,
+        law: LawSpec,
     ) -> Result<Self, String> {
         check_porosity(porosity)?;
         let saturated = (1.0 - porosity) * grain_density_kg_m3 + porosity * liquid_density_kg_m3;
-        let mut m = MaterialSpec::new(name, saturated, young, poisson)?;
+        let mut m = MaterialSpec::with_law(name, saturated, law)?;
         m.wave_density = (1.0 - porosity) * grain_density_kg_m3 / 1000.0;
         Ok(m)
     }
 
     /// Oedometric modulus (kPa).
     pub fn oedometric(&self) -> f64 {
-        crate::material::linear_elastic::LinearElastic::<f64>::oedometric(self.young, self.poisson)
+        self.law.constrained_modulus()
     }
 
     /// Fastest wave speed on an element of size `dx` (m/s): sqrt(E_oed / ρ) when dry; for a

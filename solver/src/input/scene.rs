@@ -41,6 +41,7 @@ use mpm_shared::Model;
 
 use crate::input::case::{Case, Integration, LoadCurve, MaterialSpec};
 use crate::input::case::{ConsolidationSpec, Start, UndrainedState};
+use crate::material::law::LawSpec;
 use crate::material::liquid::LiquidSpec;
 
 /// The scene file's content.
@@ -376,8 +377,12 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
                 l.viscosity,
             )
             .and_then(|liquid| {
-                let mut s =
-                    MaterialSpec::saturated(&m.physical, m.density, m.young, m.poisson, liquid)?;
+                let mut s = MaterialSpec::saturated(
+                    &m.physical,
+                    m.density,
+                    LawSpec::linear_elastic(m.young, m.poisson).map_err(|e| e.to_string())?,
+                    liquid,
+                )?;
                 s.initial_pore_pressure = l.initial_pore_pressure;
                 Ok(s)
             }),

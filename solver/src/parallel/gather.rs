@@ -14,7 +14,7 @@ use std::ops::Range;
 use crate::element::mesh::TetMesh;
 use crate::parallel::team::{balanced_ranges, Shared, Team};
 use crate::real::Real;
-use crate::state::particles::Particles;
+use crate::state::particles::{FieldVisitor, Particles};
 
 /// Widest slot (values per element corner) a pass uses.
 pub const WIDTH: usize = 12;
@@ -228,26 +228,48 @@ pub fn sort_by_element<R: Real>(
         scratch.order[scratch.next[e as usize] as usize] = i as u32;
         scratch.next[e as usize] += 1;
     }
-    let (order, done) = (&scratch.order, &mut scratch.done);
-    let mut permute = |v: &mut dyn Permutable| v.permute(order, done);
-    permute(&mut p.x);
-    permute(&mut p.u);
-    permute(&mut p.v);
-    permute(&mut p.mass);
-    permute(&mut p.volume);
-    permute(&mut p.stress);
-    permute(&mut p.element);
-    permute(&mut p.material);
-    permute(&mut p.id);
-    permute(&mut p.active);
-    if let Some(l) = &mut p.liquid {
-        permute(&mut l.w);
-        permute(&mut l.p);
-        if let Some(v0) = &mut l.volume0 {
-            permute(v0);
+    struct Permute<'a> {
+        order: &'a [u32],
+        done: &'a mut Vec<bool>,
+    }
+    impl FieldVisitor for Permute<'_> {
+        fn field<T: Copy + Default + Send + Sync>(&mut self, v: &mut Vec<T>, per_point: usize) {
+            match per_point {
+                0 => {}
+                1 => v.permute(self.order, self.done),
+                k => permute_chunks(v, k, self.order, self.done),
+            }
         }
     }
+    p.visit_fields(&mut Permute {
+        order: &scratch.order,
+        done: &mut scratch.done,
+    });
     true
+}
+
+/// `new[i] = old[order[i]]` for the `k`-value chunks of `v`, following the permutation's cycles
+/// by swapping chunks (no scratch copy).
+fn permute_chunks<T>(v: &mut [T], k: usize, order: &[u32], done: &mut Vec<bool>) {
+    done.clear();
+    done.resize(order.len(), false);
+    for start in 0..order.len() {
+        if done[start] {
+            continue;
+        }
+        // Position i takes the chunk at order[i]; swapping i with order[i] moves the carried
+        // start chunk along the cycle until it lands where order points back to start.
+        let mut i = start;
+        done[i] = true;
+        while order[i] as usize != start {
+            let j = order[i] as usize;
+            let (lo, hi) = (i.min(j), i.max(j));
+            let (a, b) = v.split_at_mut(hi * k);
+            a[lo * k..lo * k + k].swap_with_slice(&mut b[..k]);
+            done[j] = true;
+            i = j;
+        }
+    }
 }
 
 /// An array that can be permuted in place.
@@ -283,6 +305,25 @@ impl<T: Copy> Permutable for Vec<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn chunks_permute_like_their_first_values() {
+        // A permutation with a fixed point, a 2-cycle and a 4-cycle.
+        let order = [0u32, 2, 1, 6, 3, 4, 5];
+        let mut done = Vec::new();
+        let mut single: Vec<u32> = (0..7).collect();
+        single.permute(&order, &mut done);
+        let mut chunks: Vec<u32> = (0..7)
+            .flat_map(|i| [10 * i, 10 * i + 1, 10 * i + 2])
+            .collect();
+        permute_chunks(&mut chunks, 3, &order, &mut done);
+        let want: Vec<u32> = single
+            .iter()
+            .flat_map(|&i| [10 * i, 10 * i + 1, 10 * i + 2])
+            .collect();
+        assert_eq!(chunks, want);
+        assert_eq!(single, [0, 2, 1, 6, 3, 4, 5]);
+    }
 
     #[test]
     fn in_place_permutation_matches_a_gather() {

@@ -26,8 +26,20 @@ pub struct Particles<R: Real> {
     pub id: Vec<u32>,
     /// False once a point has left the mesh under `--drop-lost`.
     pub active: Vec<bool>,
+    /// The constitutive laws' state: [`Particles::state_len`] values per point (empty when no
+    /// law keeps state).
+    pub state: Vec<R>,
+    /// State values per point.
+    pub state_len: usize,
     /// Liquid state, present only when the case has a saturated material.
     pub liquid: Option<LiquidPoints<R>>,
+}
+
+/// Something done to every per-point array of [`Particles`] alike (re-sorting, first touch,
+/// counting bytes). [`Particles::visit_fields`] is the one list of those arrays.
+pub trait FieldVisitor {
+    /// One array, `per_point` values per point.
+    fn field<T: Copy + Default + Send + Sync>(&mut self, values: &mut Vec<T>, per_point: usize);
 }
 
 /// Liquid state of the material points (one entry per point; zero at points of dry materials).
@@ -54,15 +66,66 @@ impl<R: Real> Particles<R> {
         self.x.is_empty()
     }
 
-    /// Bytes of state per point (more when the liquid is modelled).
+    /// Hands every per-point array to `v`. The fields are taken apart exhaustively, so a field
+    /// added to [`Particles`] (or [`LiquidPoints`]) does not compile until it is listed here, and
+    /// sort, first touch and byte counts follow it.
+    pub fn visit_fields(&mut self, v: &mut impl FieldVisitor) {
+        let Particles {
+            x,
+            u,
+            v: velocity,
+            mass,
+            volume,
+            stress,
+            element,
+            material,
+            id,
+            active,
+            state,
+            state_len,
+            liquid,
+        } = self;
+        v.field(x, 1);
+        v.field(u, 1);
+        v.field(velocity, 1);
+        v.field(mass, 1);
+        v.field(volume, 1);
+        v.field(stress, 1);
+        v.field(element, 1);
+        v.field(material, 1);
+        v.field(id, 1);
+        v.field(active, 1);
+        v.field(state, *state_len);
+        if let Some(LiquidPoints { w, p, volume0 }) = liquid {
+            v.field(w, 1);
+            v.field(p, 1);
+            if let Some(v0) = volume0 {
+                v.field(v0, 1);
+            }
+        }
+    }
+
+    /// Bytes of state per point (more when the liquid is modelled or a law keeps state).
     pub fn bytes_per_point(&self) -> usize {
-        let r = std::mem::size_of::<R>();
-        let liquid = match &self.liquid {
-            None => 0,
-            Some(l) if l.volume0.is_some() => 5 * r,
-            Some(_) => 4 * r,
+        struct Count(usize);
+        impl FieldVisitor for Count {
+            fn field<T: Copy + Default + Send + Sync>(&mut self, _: &mut Vec<T>, per_point: usize) {
+                self.0 += std::mem::size_of::<T>() * per_point;
+            }
+        }
+        let mut c = Count(0);
+        // Visiting needs `&mut`; counting touches no value, so a cheap empty copy will do.
+        let mut shape = Particles::<R> {
+            state_len: self.state_len,
+            liquid: self.liquid.as_ref().map(|l| LiquidPoints {
+                w: Vec::new(),
+                p: Vec::new(),
+                volume0: l.volume0.as_ref().map(|_| Vec::new()),
+            }),
+            ..Default::default()
         };
-        (3 + 3 + 3 + 1 + 1 + 6) * r + 4 + 4 + 4 + 1 + liquid
+        shape.visit_fields(&mut c);
+        c.0
     }
 
     /// Adds the liquid state, every point starting at rest with pore pressure `p0(material)`;

@@ -2,7 +2,7 @@
 //! update of every particle.
 
 use crate::element::mesh::TetMesh;
-use crate::material::linear_elastic::LinearElastic;
+use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::gather::{Layout, Slots};
 use crate::parallel::team::{Shared, Team};
@@ -22,7 +22,7 @@ pub fn update_stress_and_move<R: Real>(
     mesh: &TetMesh<R>,
     p: &mut Particles<R>,
     g: &Grid<R>,
-    laws: &[LinearElastic<R>],
+    laws: &[Law<R>],
     objective: bool,
     smoothing: Option<&StrainSmoothing<R>>,
     dt: R,
@@ -33,6 +33,8 @@ pub fn update_stress_and_move<R: Real>(
     let us = Shared::new(&mut p.u);
     let stresses = Shared::new(&mut p.stress);
     let volumes = Shared::new(&mut p.volume);
+    let k = p.state_len;
+    let states = Shared::new(&mut p.state);
     let (active, element, material) = (&p.active, &p.element, &p.material);
     team.run(|t| {
         let r = layout.particle_range(t);
@@ -45,6 +47,8 @@ pub fn update_stress_and_move<R: Real>(
                 volumes.range(r.clone()),
             )
         };
+        // SAFETY: as above; each point's state is its own `k` values.
+        let state = unsafe { states.range(k * r.start..k * r.end) };
         for (j, i) in r.enumerate() {
             if !active[i] {
                 continue;
@@ -92,7 +96,7 @@ pub fn update_stress_and_move<R: Real>(
                     *s -= ev * v;
                 }
             }
-            laws[material[i] as usize].update(&mut stress[j], &de);
+            laws[material[i] as usize].update(&mut stress[j], &de, &mut state[k * j..k * j + k]);
             volume[j] *= R::ONE + de[0] + de[1] + de[2];
             for a in 0..3 {
                 x[j][a] += dt * dx[a];
