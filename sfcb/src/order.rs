@@ -141,15 +141,24 @@ fn prefetch<T>(x: &T) {
 /// Raw pointer that may be shared by the scatter tasks of one radix pass (they write disjoint
 /// positions).
 #[derive(Clone, Copy)]
-struct Dst(*mut (u64, u32));
+struct Dst {
+    ptr: *mut (u64, u32),
+    len: usize,
+}
+// SAFETY: `Dst` only hands out writes through `write`, whose callers guarantee that no two
+// threads write the same slot.
 unsafe impl Send for Dst {}
 unsafe impl Sync for Dst {}
 
 impl Dst {
-    /// Pointer to slot `i` (taking `&self` makes closures capture the whole wrapper).
-    fn at(&self, i: usize) -> *mut (u64, u32) {
-        // SAFETY: callers stay inside the allocation.
-        unsafe { self.0.add(i) }
+    /// Writes `v` into slot `i` (taking `&self` makes closures capture the whole wrapper).
+    ///
+    /// # Safety
+    /// No other thread may write slot `i` at the same time; `i` is checked against the length.
+    unsafe fn write(&self, i: usize, v: (u64, u32)) {
+        assert!(i < self.len, "slot {i} outside 0..{}", self.len);
+        // SAFETY: `i` is inside the allocation (checked above); exclusivity is the caller's.
+        unsafe { self.ptr.add(i).write(v) }
     }
 }
 
@@ -194,7 +203,10 @@ pub fn sort_pairs(pairs: &mut Vec<(u64, u32)>) {
     }
     starts[BUCKETS] = n;
     let mut out = vec![(0u64, 0u32); n];
-    let dst = Dst(out.as_mut_ptr());
+    let dst = Dst {
+        ptr: out.as_mut_ptr(),
+        len: n,
+    };
     pairs
         .par_chunks(chunk)
         .zip(offsets.into_par_iter())
@@ -203,7 +215,7 @@ pub fn sort_pairs(pairs: &mut Vec<(u64, u32)>) {
                 let b = digit(p);
                 // SAFETY: the offsets partition 0..n among chunks and buckets, so each position
                 // is written exactly once.
-                unsafe { *dst.at(off[b]) = *p };
+                unsafe { dst.write(off[b], *p) };
                 off[b] += 1;
             }
         });

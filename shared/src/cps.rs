@@ -121,6 +121,10 @@ pub struct Settings {
 }
 
 /// Keys Anura3D's CPS files are known to carry (the 2024 template and the benchmark suite).
+/// CPS key marking `$$OUTPUT_MATERIAL_POINTS` as file ids of the ordered GOM whose element count
+/// and input-number checksum follow on one line (see [`crate::points`]).
+pub const CPS_FILE_ORDER: &str = "OUTPUT_MATERIAL_POINTS_GOM_ORDER";
+
 const KNOWN: &[&str] = &[
     "NUMBER_OF_LOADSTEPS",
     "TIME_PER_LOADSTEP",
@@ -206,7 +210,7 @@ const KNOWN: &[&str] = &[
     "VISUALIZATION_OPTION",
     "OUTPUT_NUMBER_OF_MATERIAL_POINTS",
     "OUTPUT_MATERIAL_POINTS",
-    crate::points::CPS_FILE_ORDER,
+    CPS_FILE_ORDER,
     "INITIAL_WATER_PRESSURE",
     "APPLY_POROSITY_UPDATE",
     "INITIAL_VELOCITY",

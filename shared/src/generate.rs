@@ -3,8 +3,8 @@
 //! subdivision (every tetrahedron spans the cell's main diagonal), which is conforming across
 //! cells. Mid-edge nodes of 10-node meshes are shared between neighbours.
 
+use crate::geometry::tet_det;
 use crate::model::{Body, Dimension, ElementType, Model, Section, Table, Token};
-use crate::msh::tet_det;
 
 /// Builds a box `[0, size[0]] × [0, size[1]] × [0, size[2]]` with `n[0] × n[1] × n[2]` cells
 /// (6 tetrahedra each), 4- or 10-node, one material, empty fixity sections, and 4 material points

@@ -184,7 +184,7 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
                 }
                 // Point ids are derived from the input numbers: a bad map is refused here,
                 // where the file and line are known.
-                if s.keyword == crate::points::INPUT_ELEMENTS {
+                if s.keyword == crate::model::INPUT_ELEMENTS {
                     crate::points::parse_input_elements(&rows).map_err(|(row, m)| {
                         Error::invalid(at(s.line, sec), format!("element {row}: {m}"))
                     })?;

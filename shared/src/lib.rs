@@ -7,6 +7,7 @@
 //! - [`msh`]: Gmsh `.msh` reader (2.2 and 4.1, ASCII and binary) and conversion to the model;
 //! - [`vtu`]: ParaView VTU and PVD writers;
 //! - [`points`]: material-point ids and input element numbers that survive reordering;
+//! - [`geometry`]: signed tetrahedron volumes;
 //! - [`suite`]: where tests find Anura3D's benchmark suite and binary;
 //! - [`coincident`]: coincident duplicate nodes, found and described for a warning;
 //! - [`io`]: standard input/output and atomic file writes; [`text`]: scanning and formatting.
@@ -18,6 +19,7 @@ pub mod coincident;
 pub mod cps;
 pub mod error;
 pub mod generate;
+pub mod geometry;
 pub mod gom;
 pub mod io;
 pub mod model;

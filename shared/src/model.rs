@@ -385,6 +385,10 @@ pub enum Kind {
     Opaque,
 }
 
+/// Per-element GOM section holding each element's 1-based number in the original input (see
+/// [`crate::points`]).
+pub const INPUT_ELEMENTS: &str = "START_INPUT_ELEMENT_NUMBERS";
+
 /// How the section `keyword` is read for a mesh of `et` elements.
 pub fn classify(keyword: &str, et: ElementType) -> Kind {
     let face = Refs::Nodes(et.face_nodes());
@@ -395,10 +399,9 @@ pub fn classify(keyword: &str, et: ElementType) -> Kind {
         "STARTCOUNTERS" => Kind::Counters,
         "STARTNODES" => Kind::Nodes,
         "STARTELEMCON" => Kind::Connectivity,
-        "STARTELMMAT"
-        | "STARTDAMPING"
-        | "START_NUMBER_OF_MATERIAL_POINTS"
-        | crate::points::INPUT_ELEMENTS => Kind::PerElement,
+        "STARTELMMAT" | "STARTDAMPING" | "START_NUMBER_OF_MATERIAL_POINTS" | INPUT_ELEMENTS => {
+            Kind::PerElement
+        }
         k if k.starts_with("START_FIXITY_") || k.starts_with("START_REMOVE_FIXITY_") => {
             Kind::Counted(one)
         }
@@ -678,7 +681,7 @@ impl Model {
     /// remapped. Refuses to run when a section that may hold ids is not understood.
     ///
     /// Each element's number in the original input is kept in
-    /// [`crate::points::INPUT_ELEMENTS`]: added (from `order`) when the model has none, permuted
+    /// [`INPUT_ELEMENTS`]: added (from `order`) when the model has none, permuted
     /// with the other per-element sections when it has one, so that chained reorders keep the
     /// first input's numbers and material-point ids survive (see [`crate::points`]).
     ///
@@ -772,7 +775,7 @@ impl Model {
             connectivity,
             sections,
         };
-        if self.per_element(crate::points::INPUT_ELEMENTS).is_none() {
+        if self.per_element(INPUT_ELEMENTS).is_none() {
             model.set_input_elements(order);
         }
         Ok(model)
@@ -891,7 +894,7 @@ impl Model {
                     let (a, b, c) = (x(0), x(1), x(2));
                     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
                 }
-                _ => crate::msh::tet_det(x(0), x(2), x(3), x(1)),
+                _ => crate::geometry::tet_det(x(0), x(2), x(3), x(1)),
             };
             if signed <= 0.0 {
                 return Err(format!(

@@ -16,12 +16,8 @@
 use crate::error::{Error, Location, Result};
 use crate::model::{Body, Model, Table, Token};
 
-/// Per-element GOM section holding each element's 1-based number in the original input.
-pub const INPUT_ELEMENTS: &str = "START_INPUT_ELEMENT_NUMBERS";
-
-/// CPS key marking `$$OUTPUT_MATERIAL_POINTS` as file ids of the ordered GOM whose element count
-/// and input-number checksum follow on one line.
-pub const CPS_FILE_ORDER: &str = "OUTPUT_MATERIAL_POINTS_GOM_ORDER";
+pub use crate::cps::CPS_FILE_ORDER;
+pub use crate::model::INPUT_ELEMENTS;
 
 /// Checks that `rows` (one row per element) give every element one distinct input number in
 /// `1..=rows.len()`; returns the 0-based input element of each element, or the first problem

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use mpm_shared::{gom, msh};
+use mpm_shared::{geometry, gom, msh};
 
 fn path(name: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -61,7 +61,7 @@ fn converted_tets_are_positive_with_midpoint_edges() {
         for e in 0..model.element_count() {
             let el = model.element(e);
             let x = |k: usize| model.node(el[k] as usize);
-            vol += msh::tet_det(x(0), x(2), x(3), x(1)) / 6.0;
+            vol += geometry::tet_det(x(0), x(2), x(3), x(1)) / 6.0;
         }
         let want = if m.starts_with("cube") { 1.0 } else { 0.01 };
         assert!((vol - want).abs() < 1e-9 * want, "{m}: volume {vol}");

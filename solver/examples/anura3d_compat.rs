@@ -4,12 +4,12 @@
 //!
 //! Walks every case folder under `ROOT/Benchmarks` and `ROOT/Workshop` that holds a GOM
 //! (`*.GOM`, `*.GOM_stage0`) and a `*.CPS_001`. Each case is loaded with
-//! `mpm_solve::anura3d::load`: a refusal is recorded with the loader's message. An accepted case
+//! `mpm_solve::input::anura3d::load`: a refusal is recorded with the loader's message. An accepted case
 //! is run and, when an `*_expected.BMS` lists material points, compared with it point by point
-//! (`mpm_solve::anura3d_compare`): reproduced when the worst deviation is at most 1 %, else
+//! (`mpm_solve::jobs::anura3d_compare`): reproduced when the worst deviation is at most 1 %, else
 //! differs. Panics are caught per case. OUT.md gets a summary, a table per case, the refusals
 //! grouped by reason, and every GOM section, GOM material key and CPS key of the suite with the
-//! number of cases using it and what the loader does with it (`mpm_solve::anura3d_keys`).
+//! number of cases using it and what the loader does with it (`mpm_solve::input::anura3d_keys`).
 //!
 //! With `--check PREVIOUS.md`, exits with status 1, listing them, when a case that is
 //! reproduced in PREVIOUS.md is not reproduced now (OUT.md is written either way).
@@ -23,9 +23,9 @@ use std::time::Instant;
 
 use mpm_shared::cps::{Cps, Method};
 use mpm_shared::model::is_material_key;
-use mpm_solve::anura3d::CaseError;
-use mpm_solve::anura3d_compare::{compare, Comparison};
-use mpm_solve::anura3d_keys::{self, KeyKind};
+use mpm_solve::input::anura3d::CaseError;
+use mpm_solve::input::anura3d_keys::{self, KeyKind};
+use mpm_solve::jobs::anura3d_compare::{compare, Comparison};
 
 /// Largest deviation for "reproduced" (1 %).
 const TOLERANCE: f64 = 0.01;
@@ -402,7 +402,7 @@ fn evaluate(
     };
     // The loader.
     let loaded = catch_unwind(AssertUnwindSafe(|| {
-        mpm_solve::anura3d::load(&input.gom, &input.cps)
+        mpm_solve::input::anura3d::load(&input.gom, &input.cps)
     }));
     let case = match loaded {
         Err(p) => {
@@ -436,7 +436,7 @@ fn evaluate(
         }
     };
     let ran = catch_unwind(AssertUnwindSafe(|| {
-        mpm_solve::run::run::<f64>(&case, tmp.path(), &Default::default())
+        mpm_solve::driver::run::run::<f64>(&case, tmp.path(), &Default::default())
     }));
     let engine = match ran {
         Err(p) => {
@@ -562,7 +562,7 @@ fn document(
     let _ = writeln!(
         d,
         "Every case folder of the Anura3D benchmark suite (`Benchmarks/`, `Workshop/`) with a GOM \
-and a `.CPS_001` is loaded with `mpm_solve::anura3d::load`. A case it refuses is listed with \
+and a `.CPS_001` is loaded with `mpm_solve::input::anura3d::load`. A case it refuses is listed with \
 the loader's message, which names the feature. An accepted case is run; where its \
 `*_expected.BMS` lists material points, every reported point is compared at the reported time \
 (position, displacement, the six stresses, pore pressure; each difference relative to the \
@@ -637,7 +637,7 @@ files could not be read; **failed**: the run stopped with an error or a panic.\n
         d,
         "Every GOM section, GOM material key and CPS key the suite uses, with the number of \
 cases whose files hold it (whatever its value) and what the loader does with it, from \
-`mpm_solve::anura3d_keys` (`*` stands for any text). **NOT CHECKED** marks keys the loader \
+`mpm_solve::input::anura3d_keys` (`*` stands for any text). **NOT CHECKED** marks keys the loader \
 neither models nor refuses although they can change results.\n"
     );
     let _ = writeln!(d, "| Kind | Key | Cases | Support |");

@@ -13,10 +13,10 @@
 use std::time::Instant;
 
 use mpm_shared::{generate, ElementType};
-use mpm_solve::case::{Case, MaterialSpec, Reorder};
-use mpm_solve::engine::{Engine, Options, PHASES};
-use mpm_solve::liquid::LiquidSpec;
-use mpm_solve::team::Pin;
+use mpm_solve::driver::engine::{Engine, Options, PHASES};
+use mpm_solve::input::case::{Case, MaterialSpec, Reorder};
+use mpm_solve::material::liquid::LiquidSpec;
+use mpm_solve::parallel::team::Pin;
 
 fn arg<'a>(a: &'a [String], key: &str) -> Option<&'a str> {
     a.iter()
@@ -66,10 +66,16 @@ fn main() {
         let n_perm = shuffle(model.node_count(), 0xd1b5_4a32_d192_ed03);
         model = model.reordered(&e_order, &n_perm).unwrap();
     }
-    let fixed = mpm_solve::case::confined_box(&model);
+    let fixed = mpm_solve::input::case::confined_box(&model);
     let soil = if saturated {
         let liquid = LiquidSpec::new(0.4, 1000.0, 2.15e4, 1.0214e-9, 1e-6).unwrap();
-        MaterialSpec::saturated("soil", 2650.0, 1000.0, 0.3, liquid).unwrap()
+        MaterialSpec::saturated(
+            "soil",
+            2650.0,
+            mpm_solve::material::law::LawSpec::linear_elastic(1000.0, 0.3).unwrap(),
+            liquid,
+        )
+        .unwrap()
     } else {
         MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap()
     };
@@ -109,7 +115,7 @@ fn main() {
         let np = engine.particles.len();
         let t = Instant::now();
         for _ in 0..steps {
-            engine.step(&case, engine.dt, None).unwrap();
+            engine.step(engine.dt, None).unwrap();
         }
         let secs = t.elapsed().as_secs_f64();
         rates.push(np as f64 * steps as f64 / secs);

@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use mpm_solve::team::{balanced_ranges, Pin, Shared, Team};
+use mpm_solve::parallel::team::{balanced_ranges, Pin, Shared, Team};
 
 fn main() {
     let a: Vec<usize> = std::env::args()

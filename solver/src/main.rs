@@ -8,10 +8,10 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::bail;
+use anyhow::{bail, Context};
 use clap::Parser;
-use mpm_solve::run::Progress;
-use mpm_solve::units;
+use mpm_solve::driver::run::Progress;
+use mpm_solve::driver::units;
 
 /// Run an explicit MPM simulation.
 ///
@@ -206,6 +206,16 @@ fn input_kind(path: &std::path::Path) -> anyhow::Result<Input> {
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
+    if args.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    // Reading, ordering and set-up run on rayon's pool: size it as the run's team.
+    if let Some(n) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("sizing the thread pool")?;
+    }
     let kind = input_kind(&args.input)?;
     let is_scene = kind == Input::Scene;
     if let Some(dir) = &args.export_anura3d {
@@ -215,7 +225,7 @@ fn run(args: Args) -> anyhow::Result<()> {
                 args.input.display()
             );
         }
-        let done = mpm_solve::export_anura3d::export_scene(&args.input, dir)?;
+        let done = mpm_solve::input::export_anura3d::export_scene(&args.input, dir)?;
         for n in &done.notes {
             eprintln!("mpm-solve: warning: {n}");
         }
@@ -223,7 +233,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         return Ok(());
     }
     let case = if is_scene {
-        let case = mpm_solve::scene::load(&args.input)?;
+        let case = mpm_solve::input::scene::load(&args.input)?;
         println!(
             "{}: {} elements, {} nodes; {} simulated in {} output(s)",
             args.input.display(),
@@ -249,7 +259,7 @@ fn run(args: Args) -> anyhow::Result<()> {
                 p
             }
         };
-        let (case, settings) = mpm_solve::anura3d::load(&args.input, &cps_path)?;
+        let (case, settings) = mpm_solve::input::anura3d::load(&args.input, &cps_path)?;
         println!(
             "{}: {} {} elements, {} nodes, {} materials; {} load step(s) of {} s, Courant {}",
             mpm_shared::display_name(&args.input),
@@ -267,7 +277,7 @@ fn run(args: Args) -> anyhow::Result<()> {
 }
 
 /// Runs `case` with the command line's probes, output folder and options.
-fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
+fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<()> {
     let out = match (&args.out, args.check) {
         (_, true) => None,
         (Some(out), false) => {
@@ -285,8 +295,8 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
         ),
     };
     case.drag = match args.drag {
-        DragArg::Implicit => mpm_solve::case::Drag::Implicit,
-        DragArg::Explicit => mpm_solve::case::Drag::Explicit,
+        DragArg::Implicit => mpm_solve::input::case::Drag::Implicit,
+        DragArg::Explicit => mpm_solve::input::case::Drag::Explicit,
     };
     case.probes.extend(&args.probe);
     case.probes.sort_unstable();
@@ -294,27 +304,27 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
     if args.threads == Some(0) {
         bail!("--threads must be at least 1");
     }
-    case.engine = mpm_solve::engine::Options {
+    case.engine = mpm_solve::driver::engine::Options {
         threads: args.threads.unwrap_or(0),
         pin: match args.pin {
-            PinArg::None => mpm_solve::team::Pin::None,
-            PinArg::Cores => mpm_solve::team::Pin::Cores,
+            PinArg::None => mpm_solve::parallel::team::Pin::None,
+            PinArg::Cores => mpm_solve::parallel::team::Pin::Cores,
         },
         first_touch: matches!(args.first_touch, OnOff::On),
     };
     let how = match args.reorder {
-        ReorderArg::None => mpm_solve::case::Reorder::None,
-        ReorderArg::Morton => mpm_solve::case::Reorder::Morton,
-        ReorderArg::Hilbert => mpm_solve::case::Reorder::Hilbert,
+        ReorderArg::None => mpm_solve::input::case::Reorder::None,
+        ReorderArg::Morton => mpm_solve::input::case::Reorder::Morton,
+        ReorderArg::Hilbert => mpm_solve::input::case::Reorder::Hilbert,
     };
     // A GOM with sections this tool does not understand cannot be renumbered: compute it in
     // its own order rather than refuse it.
     let how = match case.model.first_unremappable() {
-        Some(k) if how != mpm_solve::case::Reorder::None => {
+        Some(k) if how != mpm_solve::input::case::Reorder::None => {
             eprintln!(
                 "mpm-solve: warning: section $${k} cannot follow a renumbering; computing in the input's order"
             );
-            mpm_solve::case::Reorder::None
+            mpm_solve::input::case::Reorder::None
         }
         _ => how,
     };
@@ -322,8 +332,8 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let plan = mpm_solve::preflight::plan(&case, threads).map_err(anyhow::Error::msg)?;
-    let limits = mpm_solve::preflight::Limits {
+    let plan = mpm_solve::input::preflight::plan(&case, threads).map_err(anyhow::Error::msg)?;
+    let limits = mpm_solve::input::preflight::Limits {
         max_output_bytes: args.max_output,
         max_steps: args.max_steps,
     };
@@ -331,21 +341,21 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
         println!("{plan}");
         plan.check(&limits, None)?;
         // Probes are checked against the points the run would place.
-        mpm_solve::engine::Engine::<f64>::with_options(
+        mpm_solve::driver::engine::Engine::<f64>::with_options(
             &case,
             false,
-            mpm_solve::engine::Options {
+            mpm_solve::driver::engine::Options {
                 threads: 1,
-                pin: mpm_solve::team::Pin::None,
+                pin: mpm_solve::parallel::team::Pin::None,
                 first_touch: false,
             },
         )
         .map_err(anyhow::Error::msg)
-        .and_then(|e| Ok(mpm_solve::run::check_probes(&case, &e)?))?;
+        .and_then(|e| Ok(mpm_solve::driver::run::check_probes(&case, &e)?))?;
         return Ok(());
     };
     plan.check(&limits, Some(out))?;
-    let options = mpm_solve::run::RunOptions {
+    let options = mpm_solve::driver::run::RunOptions {
         drop_lost: args.drop_lost,
         max_lost: args.max_lost,
         progress: if args.quiet {
@@ -359,7 +369,7 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
         },
     };
     if case.consolidation.is_some() {
-        let (engine, t, w) = mpm_solve::consolidation::run_job::<f64>(&case, out, &options)?;
+        let (engine, t, w) = mpm_solve::jobs::consolidation::run_job::<f64>(&case, out, &options)?;
         done(&engine, out);
         for (name, tr) in
             std::iter::once(("default", &t)).chain(w.as_ref().map(|w| ("workshop", w)))
@@ -376,13 +386,13 @@ fn solve(mut case: mpm_solve::case::Case, args: &Args) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    let engine = mpm_solve::run::run::<f64>(&case, out, &options)?;
+    let engine = mpm_solve::driver::run::run::<f64>(&case, out, &options)?;
     done(&engine, out);
     Ok(())
 }
 
 /// The closing line of a run.
-fn done(engine: &mpm_solve::engine::Engine<f64>, out: &std::path::Path) {
+fn done(engine: &mpm_solve::driver::engine::Engine<f64>, out: &std::path::Path) {
     let lost = if engine.lost > 0 {
         format!(", {} left the mesh", units::count(engine.lost as f64))
     } else {

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mpm_solve::anura3d_compare::compare;
+use mpm_solve::jobs::anura3d_compare::compare;
 
 /// The dry 3D cases with expected results: material-point (1005, 1006) and mixed (1007-1012)
 /// integration, normal and objective stress, tolerances and damping factors.
@@ -163,9 +163,10 @@ fn benchmarks_reproduce_the_expected_material_points() {
         let (gom, cps) = inputs(name, edits.path(), drop, set);
         let expected = read_bms(&find(&dir, "_expected.BMS"));
         assert!(!expected.material_points.is_empty(), "{name}: no rows read");
-        let (case, _) = mpm_solve::anura3d::load(&gom, &cps).unwrap();
+        let (case, _) = mpm_solve::input::anura3d::load(&gom, &cps).unwrap();
         let out = tempfile::tempdir().unwrap();
-        let engine = mpm_solve::run::run::<f64>(&case, out.path(), &Default::default()).unwrap();
+        let engine =
+            mpm_solve::driver::run::run::<f64>(&case, out.path(), &Default::default()).unwrap();
         let c = compare(&engine, &expected);
         assert!(
             c.time_matches(),

@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use assert_cmd::Command;
 use mpm_shared::model::{Body, Token};
 use mpm_shared::{ElementType, Model};
-use mpm_solve::case::Case;
-use mpm_solve::engine::Engine;
+use mpm_solve::driver::engine::Engine;
+use mpm_solve::input::case::Case;
 use predicates::prelude::*;
 
 fn testdata(name: &str) -> PathBuf {
@@ -168,8 +168,10 @@ fn check_runs(a: &Case, b: &Case, tol: f64) {
     let (ids, x0) = start(a);
     assert_eq!((ids.clone(), x0), start(b));
     let dir = tempfile::tempdir().unwrap();
-    let ra = mpm_solve::run::run::<f64>(a, &dir.path().join("a"), &Default::default()).unwrap();
-    let rb = mpm_solve::run::run::<f64>(b, &dir.path().join("b"), &Default::default()).unwrap();
+    let ra =
+        mpm_solve::driver::run::run::<f64>(a, &dir.path().join("a"), &Default::default()).unwrap();
+    let rb =
+        mpm_solve::driver::run::run::<f64>(b, &dir.path().join("b"), &Default::default()).unwrap();
     let (pa, pb) = (&ra.particles, &rb.particles);
     assert_eq!(pa.id, pb.id);
     let big_u = pa.u.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -206,7 +208,7 @@ fn dry_column_exports_and_runs_the_same() {
     let dir = tempfile::tempdir().unwrap();
     let s = scene(dir.path(), "column_gravity.toml", "column", &short_column);
     let (gom_path, cps_path) = export(&s, &dir.path().join("a3d"));
-    let sc = mpm_solve::scene::load(&s).unwrap();
+    let sc = mpm_solve::input::scene::load(&s).unwrap();
     let gom = mpm_shared::read_gom_file(&gom_path).unwrap();
     check_mesh(&sc, &gom);
     assert!(gom.table("START_LOAD_ON_NODES_SOLID").is_none());
@@ -252,7 +254,7 @@ fn dry_column_exports_and_runs_the_same() {
         [1, n_points / 2, n_points]
     );
     // The GOM route builds the same case and computes the same.
-    let (gc, _) = mpm_solve::anura3d::load(&gom_path, &cps_path).unwrap();
+    let (gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
     assert_eq!(gc.materials, sc.materials);
     assert_eq!(gc.gravity, sc.gravity);
     assert_eq!((gc.courant, gc.damping), (sc.courant, sc.damping));
@@ -278,7 +280,7 @@ fn saturated_oedometer_exports_loads_and_runs_alike() {
         .success()
         .stderr(predicate::str::contains("damps the liquid"));
     let gom = mpm_shared::read_gom_file(&out.join("oedometer.GOM")).unwrap();
-    let sc = mpm_solve::scene::load(&s).unwrap();
+    let sc = mpm_solve::input::scene::load(&s).unwrap();
     check_mesh(&sc, &gom);
     let mats = gom.materials();
     let m = &mats[0];
@@ -351,8 +353,8 @@ fn saturated_oedometer_exports_loads_and_runs_alike() {
         short_oedometer(t, 0.01)
     });
     let (gom_path, cps_path) = export(&s, &dir.path().join("short"));
-    let sc = mpm_solve::scene::load(&s).unwrap();
-    let (mut gc, _) = mpm_solve::anura3d::load(&gom_path, &cps_path).unwrap();
+    let sc = mpm_solve::input::scene::load(&s).unwrap();
+    let (mut gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
     assert_eq!(gc.materials, sc.materials);
     assert_eq!(gc.fixed[..sc.fixed.len()], sc.fixed[..]);
     assert_eq!(gc.liquid_fixed[..sc.fixed.len()], sc.liquid_fixed[..]);
@@ -469,10 +471,10 @@ fn what_anura3d_cannot_reproduce_is_refused_by_item() {
         "{cps}"
     );
     let (gc, _) =
-        mpm_solve::anura3d::load(&gom, &dir.path().join("ramped/ramped.CPS_001")).unwrap();
+        mpm_solve::input::anura3d::load(&gom, &dir.path().join("ramped/ramped.CPS_001")).unwrap();
     assert_eq!(
         gc.traction_curve,
-        mpm_solve::scene::load(&s).unwrap().traction_curve
+        mpm_solve::input::scene::load(&s).unwrap().traction_curve
     );
     // Only scenes export.
     Command::cargo_bin("mpm-solve")
@@ -571,9 +573,10 @@ fn anura3d_runs_the_exports() {
         assert!(ok, "Anura3D did not finish {}:\n{tail}", gom.display());
         let theirs = anura3d_displacements(&work, &stem);
         assert!(!theirs.is_empty());
-        let (case, _) = mpm_solve::anura3d::load(&gom, &cps).unwrap();
-        let ours = mpm_solve::run::run::<f64>(&case, &dir.path().join(&stem), &Default::default())
-            .unwrap();
+        let (case, _) = mpm_solve::input::anura3d::load(&gom, &cps).unwrap();
+        let ours =
+            mpm_solve::driver::run::run::<f64>(&case, &dir.path().join(&stem), &Default::default())
+                .unwrap();
         let p = &ours.particles;
         let u = |id: u32| p.u[p.id.iter().position(|&i| i == id).unwrap()];
         let big = theirs

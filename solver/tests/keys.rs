@@ -1,4 +1,4 @@
-//! The key table (`mpm_solve::anura3d_keys::KEYS`) against the loader: every key refused (unless
+//! The key table (`mpm_solve::input::anura3d_keys::KEYS`) against the loader: every key refused (unless
 //! inert) stops a generated case that is otherwise accepted, naming the key, its value and where
 //! it is; and `docs/anura3d-keys.md` is the table's own rendering.
 
@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
 use mpm_shared::{generate, ElementType};
-use mpm_solve::anura3d_keys::{self, KeyKind, KeyStatus, KEYS};
+use mpm_solve::input::anura3d_keys::{self, KeyKind, KeyStatus, KEYS};
 
 /// Elements of the generated box (1 × 2 × 1 cells of 6 tetrahedra).
 const ELEMENTS: usize = 12;
@@ -128,7 +128,7 @@ fn solve(gom: &Path, out: &Path) -> std::process::Output {
 fn base_case_is_accepted_and_runs() {
     let dir = tempfile::tempdir().unwrap();
     let g = write_case(dir.path(), &base_gom(), BASE_CPS);
-    mpm_solve::anura3d::load(&g, &dir.path().join("box.CPS_001")).unwrap();
+    mpm_solve::input::anura3d::load(&g, &dir.path().join("box.CPS_001")).unwrap();
     let out = dir.path().join("out");
     let run = solve(&g, &out);
     assert!(
@@ -188,11 +188,11 @@ fn every_refused_key_stops_a_case_naming_key_value_and_place() {
         let g = write_case(dir.path(), &gom, &cps);
         let what = format!("{} $${key} = {value:?}", kind.label());
         // The library refuses it with the typed error...
-        let err = mpm_solve::anura3d::load(&g, &dir.path().join("box.CPS_001"))
+        let err = mpm_solve::input::anura3d::load(&g, &dir.path().join("box.CPS_001"))
             .err()
             .unwrap_or_else(|| panic!("{what} was accepted"));
         assert!(
-            matches!(err, mpm_solve::anura3d::CaseError::Key(_)),
+            matches!(err, mpm_solve::input::anura3d::CaseError::Key(_)),
             "{what}: {err}"
         );
         // ...and the command stops before the first step, writing nothing.

@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use mpm_shared::anura3d_vtk::{read_step, MaterialPointState};
-use mpm_solve::case::Drag;
-use mpm_solve::consolidation::{ConsolidationSpec, Layer, Start};
-use mpm_solve::terzaghi;
+use mpm_solve::input::case::Drag;
+use mpm_solve::jobs::consolidation::{ConsolidationSpec, Layer, Start};
+use mpm_solve::jobs::terzaghi;
 
 fn testdata(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -67,11 +67,11 @@ fn from_anura3d(points: &[MaterialPointState]) -> Step {
 
 /// Runs `mpm-solve` on the exported files with `drag`; one [`Step`] per load step.
 fn run_ours(gom: &Path, cps: &Path, drag: Drag) -> Vec<Step> {
-    let (mut case, _) = mpm_solve::anura3d::load(gom, cps).unwrap();
+    let (mut case, _) = mpm_solve::input::anura3d::load(gom, cps).unwrap();
     case.drag = drag;
     let out = tempfile::tempdir().unwrap();
     let mut steps = Vec::new();
-    mpm_solve::run::run_observed::<f64>(&case, out.path(), &Default::default(), &mut |e| {
+    mpm_solve::driver::run::run_observed::<f64>(&case, out.path(), &Default::default(), &mut |e| {
         let p = &e.particles;
         let mut order: Vec<usize> = (0..p.len()).collect();
         order.sort_by_key(|&i| p.id[i]);
@@ -164,10 +164,10 @@ fn consolidation_column_matches_anura3d_point_by_point() {
     let Some(bin) = oracle() else { return };
     let scene = testdata("oracle_column.toml");
     let dir = tempfile::tempdir().unwrap();
-    let files = mpm_solve::export_anura3d::export_scene(&scene, dir.path()).unwrap();
+    let files = mpm_solve::input::export_anura3d::export_scene(&scene, dir.path()).unwrap();
     let name = files.gom.file_stem().unwrap().to_string_lossy().to_string();
     run_oracle(&bin, dir.path(), &name);
-    let case = mpm_solve::scene::load(&scene).unwrap();
+    let case = mpm_solve::input::scene::load(&scene).unwrap();
     let anura: Vec<Step> = (1..=case.output_times.len() as u32)
         .map(|k| from_anura3d(&read_step(dir.path(), &name, k).unwrap()))
         .collect();
@@ -246,19 +246,20 @@ fn workshop_set_up_no_worse_than_anura3d_against_terzaghi() {
         );
     let scene = dir.path().join("workshop.toml");
     std::fs::write(&scene, text).unwrap();
-    let files = mpm_solve::export_anura3d::export_scene(&scene, dir.path()).unwrap();
+    let files = mpm_solve::input::export_anura3d::export_scene(&scene, dir.path()).unwrap();
     run_oracle(&bin, dir.path(), "workshop");
-    let case = mpm_solve::scene::load(&scene).unwrap();
+    let case = mpm_solve::input::scene::load(&scene).unwrap();
     let anura: Vec<Step> = (1..=case.output_times.len() as u32)
         .map(|k| from_anura3d(&read_step(dir.path(), "workshop", k).unwrap()))
         .collect();
     let layer = Layer::of(&case, &case.consolidation.unwrap()).unwrap();
     let theirs = terzaghi_rms(&layer, &anura, &case.output_times);
     // Ours: the default job's workshop column (the scene route, its own damping rule).
-    let job = mpm_solve::scene::load(&testdata("oedometer.toml")).unwrap();
+    let job = mpm_solve::input::scene::load(&testdata("oedometer.toml")).unwrap();
     let out = tempfile::tempdir().unwrap();
     let (_, _, workshop) =
-        mpm_solve::consolidation::run_job::<f64>(&job, out.path(), &Default::default()).unwrap();
+        mpm_solve::jobs::consolidation::run_job::<f64>(&job, out.path(), &Default::default())
+            .unwrap();
     let ours = workshop.expect("the default job runs the workshop set-up too");
     eprintln!("| T_v | Anura3D RMS / u0 | mpm-solve workshop column RMS / u0 |\n|---:|---:|---:|");
     assert_eq!(ours.records.len(), theirs.len());

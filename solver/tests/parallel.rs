@@ -113,7 +113,7 @@ fn anura3d_two_phase_outputs_do_not_depend_on_threads_or_pinning() {
         .replace("end_tv = 0.5", "end_tv = 0.05");
     let scene = dir.path().join("column.toml");
     std::fs::write(&scene, text).unwrap();
-    let files = mpm_solve::export_anura3d::export_scene(&scene, dir.path()).unwrap();
+    let files = mpm_solve::input::export_anura3d::export_scene(&scene, dir.path()).unwrap();
     let cps = std::fs::read_to_string(&files.cps)
         .unwrap()
         .replace("MPM-MP\n", "MPM-MIXED\n");

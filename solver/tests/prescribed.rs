@@ -2,9 +2,9 @@
 //! modelled), and a column whose top elements are pushed down at constant speed.
 
 use mpm_shared::{generate, ElementType, Model};
-use mpm_solve::case::{Case, LoadCurve, MaterialSpec, Reorder};
-use mpm_solve::engine::Engine;
-use mpm_solve::prescribed::{PrescribedElement, PrescribedVelocity};
+use mpm_solve::driver::engine::Engine;
+use mpm_solve::input::case::{Case, LoadCurve, MaterialSpec, Reorder};
+use mpm_solve::step::prescribed::{PrescribedElement, PrescribedVelocity};
 
 /// A GOM of a 1 × 4 × 1 column of 24 dry linear elastic elements (4 points each) with the
 /// sections `extra` inserted before the materials.
@@ -44,7 +44,7 @@ fn load(gom: &str, cps: &str) -> Result<Case, String> {
     let (g, c) = (dir.path().join("c.GOM"), dir.path().join("c.CPS_001"));
     std::fs::write(&g, gom).unwrap();
     std::fs::write(&c, cps).unwrap();
-    mpm_solve::anura3d::load(&g, &c)
+    mpm_solve::input::anura3d::load(&g, &c)
         .map(|(case, _)| case)
         .map_err(|e| e.to_string())
 }
@@ -141,7 +141,7 @@ fn gom_rows_are_read_and_what_is_not_modelled_is_refused() {
 /// row of cells is pushed down at `speed`.
 fn pushed_column(speed: f64) -> Case {
     let model = generate::box_mesh([2, 8, 2], [1.0, 4.0, 1.0], ElementType::Tet4);
-    let fixed = mpm_solve::case::confined_box(&model);
+    let fixed = mpm_solve::input::case::confined_box(&model);
     let material = MaterialSpec::new("soil", 1000.0, 1000.0, 0.0).unwrap();
     let mut case = Case::single_material("pushed", model, material, 4, fixed);
     let rows = (0..case.model.element_count())
@@ -172,16 +172,20 @@ fn run(
 ) {
     let dir = tempfile::tempdir().unwrap();
     let mut frames = Vec::new();
-    let engine =
-        mpm_solve::run::run_observed::<f64>(case, dir.path(), &Default::default(), &mut |e| {
+    let engine = mpm_solve::driver::run::run_observed::<f64>(
+        case,
+        dir.path(),
+        &Default::default(),
+        &mut |e| {
             let p = &e.particles;
             let mut pts: Vec<_> = (0..p.len())
                 .map(|i| (p.id[i], p.x[i], p.u[i], p.v[i], p.stress[i]))
                 .collect();
             pts.sort_by_key(|q| q.0);
             frames.push((e.time, pts));
-        })
-        .unwrap();
+        },
+    )
+    .unwrap();
     (engine, frames)
 }
 

@@ -2,7 +2,7 @@
 //! input files and the axis, instead of ordering every element onto one curve key.
 
 use mpm_shared::{generate, ElementType};
-use mpm_solve::case::Reorder;
+use mpm_solve::input::case::Reorder;
 
 #[test]
 fn reorder_refuses_an_extent_that_is_not_finite() {
@@ -25,7 +25,7 @@ fn reorder_refuses_an_extent_that_is_not_finite() {
         "### Anura3D_2021 ###\n$$TIME_PER_LOADSTEP\n1e-4\n$$COMPUTATION_METHOD\nMPM-MP\n$$END\n",
     )
     .unwrap();
-    let (case, _) = mpm_solve::anura3d::load(&gom, &cps).unwrap();
+    let (case, _) = mpm_solve::input::anura3d::load(&gom, &cps).unwrap();
     assert!(case.clone().reordered(Reorder::None).is_ok());
     for how in [Reorder::Morton, Reorder::Hilbert] {
         let e = case.clone().reordered(how).unwrap_err();

@@ -3,9 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use mpm_solve::consolidation::{self, Start};
-use mpm_solve::engine::Engine;
-use mpm_solve::scene;
+use mpm_solve::driver::engine::Engine;
+use mpm_solve::input::scene;
+use mpm_solve::jobs::consolidation::{self, Start};
 
 fn testdata(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -69,7 +69,7 @@ fn default_job_beats_anura3d_and_matches_terzaghi() {
 }
 
 /// The oedometer scene with another permeability, from the undrained state, for `end` seconds.
-fn sweep_case(kappa: f64, end: f64) -> mpm_solve::case::Case {
+fn sweep_case(kappa: f64, end: f64) -> mpm_solve::input::case::Case {
     let text = std::fs::read_to_string(testdata("oedometer.toml"))
         .unwrap()
         .replace("1.0214e-9", &format!("{kappa:e}"))
@@ -99,9 +99,12 @@ fn permeability_sweep_is_stable_at_the_courant_step_and_undrained_at_the_low_end
     for kappa in [1e-6, 1e-8, 1e-10, 1e-12, 1e-14, 1e-16] {
         let case = sweep_case(kappa, 0.03);
         let dir = tempfile::tempdir().unwrap();
-        let (engine, tracker) =
-            mpm_solve::run::run_tracked::<f64>(&case, dir.path(), &Default::default()).unwrap();
-        let tracker = tracker.unwrap();
+        let (engine, tracker) = mpm_solve::jobs::consolidation::run_tracked::<f64>(
+            &case,
+            dir.path(),
+            &Default::default(),
+        )
+        .unwrap();
         let u0 = tracker.layer.u0;
         steps.push(engine.dt);
         let p = engine.particles.liquid.as_ref().unwrap();
@@ -168,7 +171,8 @@ fn a_load_on_the_liquid_raises_the_pore_pressure_and_not_the_effective_stress() 
     case.end_time = 0.75;
     case.output_times = vec![0.75];
     let dir = tempfile::tempdir().unwrap();
-    let engine = mpm_solve::run::run::<f64>(&case, dir.path(), &Default::default()).unwrap();
+    let engine =
+        mpm_solve::driver::run::run::<f64>(&case, dir.path(), &Default::default()).unwrap();
     let p = &engine.particles;
     let l = p.liquid.as_ref().unwrap();
     let n = p.len() as f64;

@@ -2,8 +2,8 @@
 
 use std::path::{Path, PathBuf};
 
-use mpm_solve::engine::Engine;
-use mpm_solve::scene;
+use mpm_solve::driver::engine::Engine;
+use mpm_solve::input::scene;
 
 fn testdata(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -16,7 +16,8 @@ fn column_under_self_weight_matches_rho_g_depth() {
     let dir = tempfile::tempdir().unwrap();
     let case = scene::load(&testdata("column_gravity.toml")).unwrap();
     assert!(case.model.element_count() >= 1000);
-    let engine = mpm_solve::run::run::<f64>(&case, dir.path(), &Default::default()).unwrap();
+    let engine =
+        mpm_solve::driver::run::run::<f64>(&case, dir.path(), &Default::default()).unwrap();
     let p = &engine.particles;
     let rho_g = 2.0 * 9.81;
     let (mut num, mut den, mut count) = (0.0, 0.0, 0);
@@ -38,13 +39,13 @@ fn column_under_self_weight_matches_rho_g_depth() {
 
 /// A laterally confined column 0.1 x 1.0 x 0.1 m of structured tetrahedra with `ny` cells over
 /// the height, bottom fixed, and a sudden 10 kPa load on the top.
-fn loaded_column(ny: usize) -> mpm_solve::case::Case {
+fn loaded_column(ny: usize) -> mpm_solve::input::case::Case {
     use mpm_shared::{generate, ElementType};
-    use mpm_solve::case::{Case, MaterialSpec};
+    use mpm_solve::input::case::{Case, MaterialSpec};
     let model = generate::box_mesh([ny / 10, ny, ny / 10], [0.1, 1.0, 0.1], ElementType::Tet4);
     let n = model.node_count();
     let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
-    let fixed = mpm_solve::case::confined_box(&model);
+    let fixed = mpm_solve::input::case::confined_box(&model);
     let mut top = Vec::new();
     for e in 0..model.element_count() {
         let el = model.element(e);
@@ -81,7 +82,7 @@ fn compression_wave_arrives_at_mid_height_on_time() {
     let mut arrival = None;
     let mut prev = (0.0, 0.0);
     while engine.time < 2.0 * expected {
-        engine.step(&case, engine.dt, None).unwrap();
+        engine.step(engine.dt, None).unwrap();
         let s: f64 = slab
             .iter()
             .map(|&i| engine.particles.stress[i][1])
@@ -112,7 +113,7 @@ fn write_oedometer_case(dir: &Path, q: f64, method: &str) -> PathBuf {
     let mut model = generate::box_mesh([2, 20, 2], [0.1, 1.0, 0.1], ElementType::Tet4);
     let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
     let mut fix = Table::new();
-    for (i, f) in mpm_solve::case::confined_box(&model)
+    for (i, f) in mpm_solve::input::case::confined_box(&model)
         .into_iter()
         .enumerate()
     {
@@ -202,10 +203,12 @@ fn anura3d_oedometer_settles_by_q_h_over_e_oed() {
     // MPM-MP stresses uneven near the top (that is what MPM-MIXED integration is for).
     let q = 5.0;
     let gom = write_oedometer_case(dir.path(), q, "MPM-MP");
-    let (case, _) = mpm_solve::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
+    let (case, _) =
+        mpm_solve::input::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
     let engine =
-        mpm_solve::run::run::<f64>(&case, &dir.path().join("out"), &Default::default()).unwrap();
-    let eoed = mpm_solve::linear_elastic::LinearElastic::<f64>::oedometric(1000.0, 0.3);
+        mpm_solve::driver::run::run::<f64>(&case, &dir.path().join("out"), &Default::default())
+            .unwrap();
+    let eoed = mpm_solve::material::linear_elastic::LinearElastic::<f64>::oedometric(1000.0, 0.3);
     let p = &engine.particles;
     // Uniform strain -q/E_oed: every point's vertical displacement is -q y0 / E_oed.
     let mut worst: f64 = 0.0;
@@ -238,7 +241,7 @@ fn anura3d_oedometer_settles_by_q_h_over_e_oed() {
 fn unsupported_anura3d_features_are_named() {
     let dir = tempfile::tempdir().unwrap();
     let gom = write_oedometer_case(dir.path(), 10.0, "UL-FEM");
-    let err = mpm_solve::anura3d::load(&gom, &dir.path().join("oedo.CPS_001"))
+    let err = mpm_solve::input::anura3d::load(&gom, &dir.path().join("oedo.CPS_001"))
         .unwrap_err()
         .to_string();
     assert!(
@@ -253,8 +256,8 @@ fn single_precision_runs_the_same_code_and_agrees() {
     let mut a = Engine::<f64>::new(&case, false).unwrap();
     let mut b = Engine::<f32>::new(&case, false).unwrap();
     for _ in 0..200 {
-        a.step(&case, a.dt, None).unwrap();
-        b.step(&case, a.dt, None).unwrap();
+        a.step(a.dt, None).unwrap();
+        b.step(a.dt, None).unwrap();
     }
     let (mut num, mut den) = (0.0f64, 0.0f64);
     for i in 0..a.particles.len() {
@@ -272,9 +275,11 @@ fn mixed_integration_settles_like_material_points_with_one_stress_per_element() 
     let dir = tempfile::tempdir().unwrap();
     let q = 5.0;
     let gom = write_oedometer_case(dir.path(), q, "MPM-MIXED");
-    let (case, _) = mpm_solve::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
+    let (case, _) =
+        mpm_solve::input::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
     let engine =
-        mpm_solve::run::run::<f64>(&case, &dir.path().join("out"), &Default::default()).unwrap();
+        mpm_solve::driver::run::run::<f64>(&case, &dir.path().join("out"), &Default::default())
+            .unwrap();
     let p = &engine.particles;
     let mut by_element: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
     for i in 0..p.len() {

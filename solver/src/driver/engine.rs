@@ -1,0 +1,670 @@
+//! The explicit MPM engine: state, critical time step and one MUSL step through the phases.
+
+use std::time::Instant;
+
+use crate::element::locate::{walk, Found};
+use crate::element::mesh::TetMesh;
+use crate::input::case::{Case, Integration};
+use crate::material::law::Law;
+use crate::material::liquid::Fluid;
+use crate::parallel::gather::{sort_by_element, Layout, Slots, SortScratch};
+pub use crate::parallel::team::Options;
+use crate::parallel::team::{Shared, Team};
+use crate::real::{Real, V3};
+use crate::state::grid::{Grid, LiquidNodes};
+use crate::state::particles::{self, FieldVisitor, Particles};
+use crate::step::grid_update::{DampingRule, Drag};
+use crate::step::load_curve::LoadCurve;
+use crate::step::{grid_to_particle, grid_update, particle_to_grid, stress};
+
+/// Phases timed in `run.json`.
+pub const PHASES: [&str; 6] = [
+    "particle_to_grid",
+    "grid_update",
+    "grid_to_particle",
+    "stress",
+    "locate",
+    "output",
+];
+
+/// A material point that left the mesh.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("material point {id} left the mesh at step {step} (t = {time} s) at ({x}, {y}, {z}) from element {element}; use --drop-lost to deactivate such points instead")]
+pub struct Lost {
+    /// Point id (1-based, input numbering).
+    pub id: u32,
+    /// Time step number (1-based).
+    pub step: u64,
+    /// Simulated time.
+    pub time: f64,
+    /// Position.
+    pub x: f64,
+    /// Position.
+    pub y: f64,
+    /// Position.
+    pub z: f64,
+    /// Last element (1-based, input numbering).
+    pub element: u32,
+}
+
+/// What a step reads of the case besides the state: loads and their curves, damping, drag and
+/// the stress-update switches, resolved once when the engine is built.
+#[derive(Debug, Clone)]
+pub struct StepConfig {
+    /// Gravity acceleration vector (m/s²) at multiplier 1.
+    pub gravity: [f64; 3],
+    /// Gravity multiplier.
+    pub gravity_curve: LoadCurve,
+    /// Traction multiplier (face loads on nodes and on material points).
+    pub traction_curve: LoadCurve,
+    /// Liquid load multiplier.
+    pub liquid_curve: LoadCurve,
+    /// Local damping factor α.
+    pub damping: f64,
+    /// How local damping is applied.
+    pub damping_rule: DampingRule,
+    /// How the Darcy drag is integrated in time.
+    pub drag: Drag,
+    /// Whether a load on the liquid also loads the mixture.
+    pub liquid_load_on_mixture: bool,
+    /// Smooth pore-pressure rates through the nodes.
+    pub smooth_pressure: bool,
+    /// Jaumann (objective) stress rate.
+    pub objective_stress: bool,
+}
+
+impl StepConfig {
+    /// The step configuration of `case`.
+    pub fn of(case: &Case) -> Self {
+        StepConfig {
+            gravity: case.gravity,
+            gravity_curve: case.gravity_curve,
+            traction_curve: case.traction_curve,
+            liquid_curve: case.liquid_curve,
+            damping: case.damping,
+            damping_rule: case.damping_rule,
+            drag: case.drag,
+            liquid_load_on_mixture: case.liquid_load_on_mixture,
+            smooth_pressure: case.smooth_pressure,
+            objective_stress: case.objective_stress,
+        }
+    }
+}
+
+/// Solver state and preallocated buffers.
+pub struct Engine<R: Real> {
+    /// What each step reads of the case.
+    pub config: StepConfig,
+    /// Computational mesh.
+    pub mesh: TetMesh<R>,
+    /// Material points.
+    pub particles: Particles<R>,
+    /// Nodal arrays.
+    pub grid: Grid<R>,
+    /// Fixed components per computational node.
+    pub fixed: Vec<[bool; 3]>,
+    /// Face-load forces per computational node at multiplier 1.
+    pub traction: Vec<V3<R>>,
+    /// Liquid face-load forces per computational node at multiplier 1.
+    pub liquid_traction: Vec<V3<R>>,
+    /// Constitutive law per material index.
+    pub laws: Vec<Law<R>>,
+    /// Critical time step × Courant number.
+    pub dt: f64,
+    /// Simulated time.
+    pub time: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// External work done so far (kJ).
+    pub external_work: f64,
+    /// Seconds spent per phase (see [`PHASES`]).
+    pub phase_seconds: [f64; 6],
+    /// Points deactivated under `--drop-lost`.
+    pub lost: u64,
+    /// Deactivate points that leave the mesh instead of stopping.
+    pub drop_lost: bool,
+    /// Face loads carried by points: (point index, force at multiplier 1).
+    pub point_loads: Vec<(u32, V3<R>)>,
+    /// Per-element sums for mixed integration (empty under material-point integration).
+    pub mixed: Option<crate::step::mixed::Mixed<R>>,
+    /// |free out-of-balance force| / |free external force| of the last step (0 when there
+    /// is no external force).
+    pub force_error: f64,
+    /// The same ratio for the liquid of two-phase cases (0 in dry ones).
+    pub liquid_force_error: f64,
+    /// The thread team.
+    pub team: Team,
+    /// Per-thread ranges and the node-to-corner map of the parallel sums.
+    pub layout: Layout<R>,
+    /// Per-corner partial sums (scratch of the particle-to-grid passes).
+    pub slots: Slots<R>,
+    /// Scratch of the re-sort by element.
+    sort_scratch: SortScratch,
+    /// Per thread, from the last locate: first point found outside (index, element), count.
+    locate_outcome: Vec<((usize, u32), u64)>,
+    /// Liquid constants per material index (`None` for dry materials; all `None` in a dry case).
+    pub fluids: Vec<Option<Fluid<R>>>,
+    /// Fixed liquid components per computational node.
+    pub liquid_fixed: Vec<[bool; 3]>,
+    /// Anura3D's strain smoothing, when the case asks for it.
+    pub smoothing: Option<crate::step::smoothing::StrainSmoothing<R>>,
+    /// Per material index: weight density / mass density (1 but for Anura3D's drained soil).
+    weight_ratio: Vec<f64>,
+    /// Per material index: the gravity acceleration of this step times its weight ratio.
+    gravity_by_material: Vec<V3<R>>,
+    /// Velocities prescribed on material points (only when the case has them).
+    pub prescribed: Option<crate::step::prescribed::Prescribed<R>>,
+    /// Input element (0-based) of each element, so that messages name elements as the input.
+    input_element: Vec<u32>,
+}
+
+impl<R: Real> Engine<R> {
+    /// Sets up the mesh, places the material points and computes the time step, with the
+    /// case's engine options.
+    pub fn new(case: &Case, drop_lost: bool) -> Result<Self, String> {
+        Self::with_options(case, drop_lost, case.engine)
+    }
+
+    /// [`Engine::new`] with the given thread options.
+    pub fn with_options(case: &Case, drop_lost: bool, options: Options) -> Result<Self, String> {
+        let team = Team::new(options.threads, options.pin)?;
+        let mesh = case.tet_mesh::<R>().map_err(|e| e.to_string())?;
+        let density = |m: u32| {
+            case.materials[m as usize]
+                .as_ref()
+                .map_or(0.0, |s| s.density)
+        };
+        let ids = case.point_ids();
+        let first_id: Vec<u32> = (0..mesh.elements())
+            .map(|e| ids.input_first(e) as u32)
+            .collect();
+        let mut particles = particles::place(
+            &mesh,
+            &case.points_per_element,
+            &case.element_material,
+            Some(&first_id),
+            &|e| case.element_number(e),
+            density,
+        )?;
+        if particles.is_empty() {
+            return Err("the case has no material points (every element is empty)".into());
+        }
+        // The laws' state slab: as many values per point as the most demanding law keeps.
+        particles.state_len = case
+            .materials
+            .iter()
+            .flatten()
+            .map(|m| m.law.state_len())
+            .max()
+            .unwrap_or(0);
+        particles.state = vec![R::ZERO; particles.state_len * particles.len()];
+        let two_phase = case.has_liquid();
+        if two_phase {
+            particles.add_liquid(
+                |m| {
+                    case.materials[m as usize]
+                        .as_ref()
+                        .map_or(0.0, |s| s.initial_pore_pressure)
+                },
+                case.fixed_liquid_mass,
+            );
+        }
+        if let (Some(s), Some(lp)) = (&case.initial_state, particles.liquid.as_mut()) {
+            // Saturated points start in the given undrained state.
+            for i in 0..particles.x.len() {
+                let m = particles.material[i] as usize;
+                let Some(spec) = case.materials[m].as_ref().filter(|s| s.liquid.is_some()) else {
+                    continue;
+                };
+                let law = spec.law.build::<R>();
+                let mut stress = [R::ZERO; 6];
+                let eps = R::of(s.vertical_strain);
+                let de = [R::ZERO, eps, R::ZERO, R::ZERO, R::ZERO, R::ZERO];
+                law.update(&mut stress, &de, &mut []);
+                particles.stress[i] = stress;
+                lp.p[i] = R::of(s.pore_pressure);
+            }
+        }
+        let fluids: Vec<Option<Fluid<R>>> = case
+            .materials
+            .iter()
+            .map(|m| m.as_ref().and_then(|s| s.liquid.as_ref()).map(Fluid::new))
+            .collect();
+        let mut fixed = vec![[false; 3]; mesh.nodes()];
+        let mut liquid_fixed = vec![[false; 3]; mesh.nodes()];
+        let mut traction = vec![[R::ZERO; 3]; mesh.nodes()];
+        let mut liquid_traction = vec![[R::ZERO; 3]; mesh.nodes()];
+        for (c, &m) in mesh.model_node.iter().enumerate() {
+            fixed[c] = case.fixed[m as usize];
+            liquid_fixed[c] = case.liquid_fixed[m as usize];
+            traction[c] = case.traction[m as usize].map(R::of);
+            liquid_traction[c] = case.liquid_traction[m as usize].map(R::of);
+        }
+        let laws = case
+            .materials
+            .iter()
+            .map(|m| m.as_ref().map_or(Law::Void, |s| s.law.build()))
+            .collect();
+        let dt = crate::input::time_step::critical(case, mesh.elements(), |e| {
+            mesh.min_altitude[e].f64()
+        })?;
+        let mut grid = Grid::new(mesh.nodes());
+        if two_phase {
+            grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
+        }
+        let point_loads = resolve_point_loads(&mesh, &particles, case)?;
+        let prescribed = case
+            .prescribed
+            .as_ref()
+            .map(|pv| crate::step::prescribed::Prescribed::new(pv, &mesh, &particles));
+        let layout = Layout::new(&mesh, &particles, team.threads);
+        if options.first_touch {
+            particles = first_touch(&team, &layout, particles);
+        }
+        let slots = layout.new_slots();
+        let mixed = match case.integration {
+            Integration::MaterialPoints => None,
+            Integration::Mixed { filling } => {
+                Some(crate::step::mixed::Mixed::new(mesh.elements(), filling))
+            }
+        };
+        let weight_ratio: Vec<f64> = case
+            .materials
+            .iter()
+            .map(|m| m.as_ref().map_or(1.0, |s| s.weight_density / s.density))
+            .collect();
+        let smoothing = case.strain_smoothing.then(|| {
+            crate::step::smoothing::StrainSmoothing::new(mesh.nodes(), &case.element_material)
+        });
+        Ok(Engine {
+            config: StepConfig::of(case),
+            input_element: case.input_element.clone(),
+            smoothing,
+            gravity_by_material: vec![[R::ZERO; 3]; weight_ratio.len()],
+            weight_ratio,
+            mesh,
+            particles,
+            grid,
+            fixed,
+            traction,
+            liquid_traction,
+            laws,
+            dt,
+            time: 0.0,
+            steps: 0,
+            external_work: 0.0,
+            phase_seconds: [0.0; 6],
+            lost: 0,
+            drop_lost,
+            point_loads,
+            mixed,
+            force_error: 0.0,
+            liquid_force_error: 0.0,
+            fluids,
+            liquid_fixed,
+            prescribed,
+            locate_outcome: vec![((usize::MAX, 0), 0); team.threads],
+            team,
+            layout,
+            slots,
+            sort_scratch: SortScratch::default(),
+        })
+    }
+
+    /// One explicit MUSL step of length `dt`; `snap_to` sets the clock exactly when the step
+    /// ends on an output time (so times print as given, not as sums of steps).
+    pub fn step(&mut self, dt: f64, snap_to: Option<f64>) -> Result<(), Lost> {
+        let t0 = Instant::now();
+        let case = &self.config;
+        let gm = case.gravity_curve.at(self.time + dt);
+        let gravity = case.gravity.map(|g| R::of(g * gm));
+        for (gv, &ratio) in self.gravity_by_material.iter_mut().zip(&self.weight_ratio) {
+            *gv = case.gravity.map(|g| R::of(g * gm * ratio));
+        }
+        let tm = R::of(case.traction_curve.at(self.time + dt));
+        particle_to_grid::particle_to_grid(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
+            &self.mesh,
+            &self.particles,
+            &self.gravity_by_material,
+            self.mixed.as_mut(),
+            &mut self.grid,
+        );
+        particle_to_grid::liquid_to_grid(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
+            &self.mesh,
+            &self.particles,
+            &self.fluids,
+            gravity,
+            self.mixed.as_ref(),
+            &mut self.grid,
+        );
+        particle_to_grid::add_point_loads(
+            &self.mesh,
+            &self.particles,
+            &self.point_loads,
+            tm,
+            &mut self.grid,
+        );
+        let t1 = Instant::now();
+        (self.force_error, self.liquid_force_error) = if self.grid.liquid.is_some() {
+            grid_update::grid_update_two_phase(
+                &mut self.grid,
+                &self.traction,
+                tm,
+                &self.liquid_traction,
+                R::of(case.liquid_curve.at(self.time + dt)),
+                &self.fixed,
+                &self.liquid_fixed,
+                R::of(case.damping),
+                case.damping_rule,
+                case.drag,
+                case.liquid_load_on_mixture,
+                gravity,
+                R::of(dt),
+            )
+        } else {
+            let f = grid_update::grid_update(
+                &mut self.grid,
+                &self.traction,
+                tm,
+                &self.fixed,
+                R::of(case.damping),
+                case.damping_rule,
+            );
+            (f, 0.0)
+        };
+        let t2 = Instant::now();
+        let pm = self
+            .prescribed
+            .as_ref()
+            .map_or(R::ZERO, |pr| R::of(pr.multiplier(self.time + dt)));
+        if let Some(pr) = &self.prescribed {
+            pr.after_grid_update(&mut self.grid, &mut self.particles, pm);
+        }
+        grid_to_particle::grid_to_particle(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
+            &self.mesh,
+            &mut self.particles,
+            &mut self.grid,
+            &self.fixed,
+            R::of(dt),
+        );
+        grid_to_particle::liquid_to_particles(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
+            &self.mesh,
+            &mut self.particles,
+            &mut self.grid,
+            &self.fluids,
+            &self.liquid_fixed,
+            R::of(dt),
+        );
+        if let Some(pr) = &mut self.prescribed {
+            pr.after_remap(&self.mesh, &mut self.grid, &mut self.particles, pm);
+        }
+        let t3 = Instant::now();
+        if let Some(sm) = &mut self.smoothing {
+            sm.compute(
+                &self.team,
+                &self.layout,
+                &mut self.slots,
+                &self.mesh,
+                &self.particles,
+                &self.grid,
+                R::of(dt),
+            );
+        }
+        stress::update_pore_pressure(
+            &self.team,
+            &self.layout,
+            &mut self.slots,
+            &self.mesh,
+            &mut self.particles,
+            &mut self.grid,
+            &self.fluids,
+            case.smooth_pressure,
+            self.smoothing.as_ref(),
+            R::of(dt),
+        );
+        stress::update_stress_and_move(
+            &self.team,
+            &self.layout,
+            &self.mesh,
+            &mut self.particles,
+            &self.grid,
+            &self.laws,
+            case.objective_stress,
+            self.smoothing.as_ref(),
+            R::of(dt),
+        );
+        if let Some(m) = &self.mixed {
+            m.smooth_stresses(&self.team, &self.layout, &mut self.particles);
+        }
+        // External work of gravity and face loads over the step, with the new nodal velocities.
+        let mut w = 0.0;
+        for n in 0..self.grid.mass.len() {
+            for a in 0..3 {
+                let f = self.grid.f_ext[n][a] + tm * self.traction[n][a];
+                w += (f * self.grid.vel[n][a]).f64();
+            }
+        }
+        self.external_work += w * dt;
+        self.steps += 1;
+        self.time += dt;
+        if let Some(t) = snap_to {
+            self.time = t;
+        }
+        let t4 = Instant::now();
+        self.locate()?;
+        let t5 = Instant::now();
+        for (k, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5)]
+            .into_iter()
+            .enumerate()
+        {
+            self.phase_seconds[k] += (b - a).as_secs_f64();
+        }
+        Ok(())
+    }
+
+    /// Anura3D's quasi-static convergence test: out-of-balance forces of the mixture and of the
+    /// liquid and the kinetic energy (per unit of external work) within the tolerances.
+    pub fn converged(&self, qs: &crate::input::case::QuasiStatic) -> bool {
+        let (force_tolerance, energy_tolerance) = (qs.force_tolerance, qs.energy_tolerance);
+        let kinetic = if self.external_work != 0.0 {
+            (self.kinetic_energy() / self.external_work).abs()
+        } else {
+            0.0
+        };
+        self.force_error <= force_tolerance
+            && self.liquid_force_error <= qs.liquid_force_tolerance
+            && kinetic <= energy_tolerance
+    }
+
+    /// Finds every point's element (each thread walks its own points), stops at the first
+    /// point (by index) that left the mesh unless such points are dropped, and keeps the points
+    /// sorted by element.
+    fn locate(&mut self) -> Result<(), Lost> {
+        let mesh = &self.mesh;
+        let layout = &self.layout;
+        let p = &mut self.particles;
+        let elements = Shared::new(&mut p.element);
+        let actives = Shared::new(&mut p.active);
+        let x = &p.x;
+        // Per thread: the first point it found outside (index, element) and how many.
+        let outcome = Shared::new(&mut self.locate_outcome);
+        let drop_lost = self.drop_lost;
+        self.team.run(|t| {
+            let r = layout.particle_range(t);
+            // SAFETY: the particle ranges of the threads are disjoint.
+            let (el, active) = unsafe { (elements.range(r.clone()), actives.range(r.clone())) };
+            let (mut first, mut count) = ((usize::MAX, 0u32), 0u64);
+            for (j, i) in r.enumerate() {
+                if !active[j] {
+                    continue;
+                }
+                match walk(mesh, el[j], &x[i]) {
+                    Found::In(e) => el[j] = e,
+                    Found::Outside(e) => {
+                        el[j] = e;
+                        if count == 0 {
+                            first = (i, e);
+                        }
+                        count += 1;
+                        if !drop_lost {
+                            break;
+                        }
+                        active[j] = false;
+                    }
+                }
+            }
+            // SAFETY: slot t is this thread's only.
+            unsafe { outcome.write(t, (first, count)) };
+        });
+        if !drop_lost {
+            if let Some(&((i, e), _)) = self.locate_outcome.iter().filter(|o| o.1 > 0).min() {
+                return Err(Lost {
+                    id: p.id[i],
+                    step: self.steps,
+                    time: self.time,
+                    x: p.x[i][0].f64(),
+                    y: p.x[i][1].f64(),
+                    z: p.x[i][2].f64(),
+                    element: self.input_element[e as usize] + 1,
+                });
+            }
+        }
+        self.lost += self.locate_outcome.iter().map(|o| o.1).sum::<u64>();
+        if sort_by_element(p, mesh.elements(), &mut self.sort_scratch) {
+            self.layout.set_particle_elements(&p.element);
+            // Point loads and prescribed points follow their points: old index → new index.
+            if !self.point_loads.is_empty() || self.prescribed.is_some() {
+                let sc = &mut self.sort_scratch;
+                sc.inverse.resize(sc.order.len(), 0);
+                for (new, &old) in sc.order.iter().enumerate() {
+                    sc.inverse[old as usize] = new as u32;
+                }
+                for load in &mut self.point_loads {
+                    load.0 = sc.inverse[load.0 as usize];
+                }
+                if let Some(pr) = &mut self.prescribed {
+                    pr.follow(&sc.inverse);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Kinetic energy of the active points (kJ), summed in fixed blocks of points.
+    pub fn kinetic_energy(&self) -> f64 {
+        let p = &self.particles;
+        self.team.sum_blocks(p.len(), |r| {
+            r.filter(|&i| p.active[i])
+                .map(|i| {
+                    0.5 * p.mass[i].f64() * p.v[i].iter().map(|v| v.f64() * v.f64()).sum::<f64>()
+                })
+                .sum()
+        })
+    }
+}
+
+/// Finds the points that carry each face load: in every element with points that has the face,
+/// the points nearest its three corners (the one point of a 1-point element). The face's force
+/// is shared equally among all of them (Anura3D gives each adjacent element the full share, which
+/// doubles loads on faces between two filled elements; such faces are rare and we keep the total).
+fn resolve_point_loads<R: Real>(
+    mesh: &TetMesh<R>,
+    p: &Particles<R>,
+    case: &Case,
+) -> Result<Vec<(u32, V3<R>)>, String> {
+    if case.point_loads.is_empty() {
+        return Ok(Vec::new());
+    }
+    // Points are placed in element order: the first point of each element.
+    let mut first = vec![0u32; mesh.elements() + 1];
+    for &e in &p.element {
+        first[e as usize + 1] += 1;
+    }
+    for e in 0..mesh.elements() {
+        first[e + 1] += first[e];
+    }
+    let mut out = Vec::new();
+    for load in &case.point_loads {
+        let c = load.corners.map(|m| mesh.node_of_model[m]);
+        let mut carriers = Vec::new();
+        for e in 0..mesh.elements() {
+            let corners = mesh.corners[e];
+            if !c.iter().all(|n| corners.contains(n)) {
+                continue;
+            }
+            let (a, b) = (first[e] as usize, first[e + 1] as usize);
+            match b - a {
+                0 => {}
+                1 => carriers.push(a),
+                4 => {
+                    let opposite = (0..4).find(|&k| !c.contains(&corners[k])).unwrap_or(0);
+                    carriers.extend((0..4).filter(|&k| k != opposite).map(|k| a + k));
+                }
+                _ => carriers.extend(a..b),
+            }
+        }
+        if carriers.is_empty() {
+            let ids = load.corners.map(|m| case.node_number(m));
+            return Err(format!(
+                "the load on material points of the face with corner nodes {} {} {} has no filled element next to it",
+                ids[0], ids[1], ids[2]
+            ));
+        }
+        let share = load.force.map(|f| R::of(f / carriers.len() as f64));
+        out.extend(carriers.into_iter().map(|i| (i as u32, share)));
+    }
+    Ok(out)
+}
+
+/// The particle arrays copied range by range on the threads that own the ranges, so that each
+/// range's pages are first touched (and placed) by its thread.
+fn first_touch<R: Real>(team: &Team, layout: &Layout<R>, mut p: Particles<R>) -> Particles<R> {
+    struct Copy<'a, R: Real> {
+        team: &'a Team,
+        layout: &'a Layout<R>,
+    }
+    impl<R: Real> FieldVisitor for Copy<'_, R> {
+        fn field<T: std::marker::Copy + Default + Send + Sync>(
+            &mut self,
+            v: &mut Vec<T>,
+            k: usize,
+        ) {
+            let mut out: Vec<T> = Vec::with_capacity(v.len());
+            let spare = out.spare_capacity_mut();
+            let dst = Shared::new(spare);
+            let src = &v[..];
+            let layout = self.layout;
+            self.team.run(|t| {
+                let r = layout.particle_range(t);
+                let r = k * r.start..k * r.end;
+                // SAFETY: the particle ranges are disjoint and cover 0..len, so their k-value
+                // chunks are disjoint and cover 0..k len.
+                let d = unsafe { dst.range(r.clone()) };
+                for (slot, &x) in d.iter_mut().zip(&src[r]) {
+                    slot.write(x);
+                }
+            });
+            debug_assert_eq!(
+                v.len(),
+                k * layout.particle_range(self.team.threads - 1).end
+            );
+            // SAFETY: every element was written above (the ranges cover all particles).
+            unsafe { out.set_len(v.len()) };
+            *v = out;
+        }
+    }
+    p.visit_fields(&mut Copy { team, layout });
+    p
+}

@@ -1,0 +1,336 @@
+//! The driver: time steps between output times, writing outputs, progress and the summary.
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::driver::engine::Engine;
+use crate::driver::output::{self, Output};
+use crate::driver::units;
+use crate::input::case::Case;
+use crate::real::Real;
+
+/// Why a run stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// Set-up failed (mesh, material points, time step).
+    #[error("{0}")]
+    Setup(String),
+    /// A material point left the mesh.
+    #[error(transparent)]
+    Lost(#[from] crate::driver::engine::Lost),
+    /// Writing an output failed.
+    #[error(transparent)]
+    Output(#[from] mpm_shared::Error),
+    /// The step limit was reached before the end time.
+    #[error("stopped after the maximum of {0} time steps at t = {1} s")]
+    MaxSteps(u64, f64),
+    /// Under `--drop-lost`, more points left the mesh than allowed.
+    #[error("{lost} of {points} material points ({percent:.1} %) have left the mesh by t = {}, more than --max-lost allows ({allowed:.1} %); the body is leaving the mesh (missing supports or fixities, a mesh too small for the run-out, or an unstable run): the outputs so far are in the output folder", units::duration(*.time))]
+    TooManyLost {
+        /// Points deactivated so far.
+        lost: u64,
+        /// Points placed.
+        points: usize,
+        /// Their share, percent.
+        percent: f64,
+        /// The limit, percent.
+        allowed: f64,
+        /// Simulated time (s).
+        time: f64,
+    },
+    /// Probe ids that name no material point.
+    #[error("no material point has id {} (probes; ids run from 1 to {last}, those of empty elements excepted); remove them or check the numbering", list(.unknown))]
+    UnknownProbes {
+        /// The ids not found.
+        unknown: Vec<u32>,
+        /// The largest id of the case.
+        last: u32,
+    },
+}
+
+fn list(ids: &[u32]) -> String {
+    let mut s: Vec<String> = ids.iter().take(20).map(|i| i.to_string()).collect();
+    if ids.len() > 20 {
+        s.push(format!("and {} more", ids.len() - 20));
+    }
+    s.join(", ")
+}
+
+/// How a run reports its progress on standard error.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Progress {
+    /// Silent.
+    #[default]
+    Off,
+    /// A progress bar (for a terminal).
+    Bar,
+    /// One line every so many seconds (for logs of batch jobs): step, simulated time, rate, ETA.
+    Lines {
+        /// Seconds between lines.
+        every: f64,
+    },
+}
+
+/// How a run treats lost points and reports progress.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunOptions {
+    /// Deactivate material points that leave the mesh instead of stopping.
+    pub drop_lost: bool,
+    /// With `drop_lost`, the share of the points (0–1) that may leave before the run stops with
+    /// an error; the run stops anyway when every point has left.
+    pub max_lost: f64,
+    /// Progress reporting.
+    pub progress: Progress,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            drop_lost: false,
+            max_lost: 0.1,
+            progress: Progress::Off,
+        }
+    }
+}
+
+/// What watches a run from outside the engine (a job such as the consolidation comparison,
+/// or a test comparing with another code): told when the engine is set up and after each
+/// output is written.
+pub trait Observer<R: Real> {
+    /// The engine is set up, no step taken yet.
+    fn on_start(&mut self, _engine: &Engine<R>) -> Result<(), RunError> {
+        Ok(())
+    }
+
+    /// An output was written at the engine's current time.
+    fn on_output(&mut self, _engine: &Engine<R>) {}
+}
+
+/// An observer that only looks at outputs.
+struct OnOutput<F>(F);
+
+impl<R: Real, F: FnMut(&Engine<R>)> Observer<R> for OnOutput<F> {
+    fn on_output(&mut self, engine: &Engine<R>) {
+        (self.0)(engine)
+    }
+}
+
+/// No observer.
+struct Unobserved;
+
+impl<R: Real> Observer<R> for Unobserved {}
+
+/// Runs `case` to its end time, writing into `dir`. Returns the engine's final state.
+pub fn run<R: Real>(case: &Case, dir: &Path, options: &RunOptions) -> Result<Engine<R>, RunError> {
+    drive(case, dir, options, &mut Unobserved)
+}
+
+/// [`run`], handing the engine to `observe` after each output is written (e.g. to compare the
+/// material points with another code's at every load step).
+pub fn run_observed<R: Real>(
+    case: &Case,
+    dir: &Path,
+    options: &RunOptions,
+    observe: &mut dyn FnMut(&Engine<R>),
+) -> Result<Engine<R>, RunError> {
+    drive(case, dir, options, &mut OnOutput(observe))
+}
+
+/// [`run`] with an [`Observer`].
+pub fn run_with<R: Real>(
+    case: &Case,
+    dir: &Path,
+    options: &RunOptions,
+    observer: &mut dyn Observer<R>,
+) -> Result<Engine<R>, RunError> {
+    drive(case, dir, options, observer)
+}
+
+fn drive<R: Real>(
+    case: &Case,
+    dir: &Path,
+    options: &RunOptions,
+    observer: &mut dyn Observer<R>,
+) -> Result<Engine<R>, RunError> {
+    let wall = Instant::now();
+    let mut engine = Engine::<R>::new(case, options.drop_lost).map_err(RunError::Setup)?;
+    check_probes(case, &engine)?;
+    observer.on_start(&engine)?;
+    let mut out = Output::new(dir, case, &engine)?;
+    let total_steps = (case.end_time / engine.dt).ceil() as u64;
+    let mut report = Reporter::new(options.progress, total_steps, case.end_time);
+    let mut stepping = 0.0;
+    let mut load_step_start = 0.0;
+    for &t_out in &case.output_times {
+        let t0 = Instant::now();
+        let mut taken = 0u64;
+        let begun = engine.time;
+        loop {
+            if let Some(qs) = &case.quasi_static {
+                // Anura3D ends a quasi-static load step once converged or when its step counter,
+                // which starts at 1, exceeds the limit: after `limit + 1` steps, the first of
+                // the calculation being its tiny initial step. Without a limit, at the load
+                // step's duration.
+                let done = if taken == 0 {
+                    false
+                } else if engine.converged(qs) {
+                    true
+                } else if let Some(m) = qs.max_steps {
+                    taken > m
+                } else {
+                    engine.time - begun >= (t_out - load_step_start) * (1.0 - 1e-12)
+                };
+                if done {
+                    break;
+                }
+            } else if engine.time >= t_out * (1.0 - 1e-12) {
+                break;
+            }
+            if case.max_steps.is_some_and(|m| engine.steps >= m) {
+                return Err(RunError::MaxSteps(engine.steps, engine.time));
+            }
+            let left = t_out - engine.time;
+            let step = match case.initial_step {
+                Some(h) if engine.steps == 0 => h.min(engine.dt),
+                _ => engine.dt,
+            };
+            let (dt, snap) = if case.quasi_static.is_some() || step < left {
+                (step, None)
+            } else {
+                (left, Some(t_out))
+            };
+            engine.step(dt, snap)?;
+            taken += 1;
+            if options.drop_lost && engine.lost > 0 {
+                check_lost(&engine, options.max_lost)?;
+            }
+            report.step(&engine, engine.particles.len());
+        }
+        load_step_start = t_out;
+        stepping += t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        out.write(&engine)?;
+        observer.on_output(&engine);
+        engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
+    }
+    report.finish();
+    output::write_summary(dir, case, &engine, wall.elapsed().as_secs_f64(), stepping)?;
+    Ok(engine)
+}
+
+/// Refuses probe ids that name no material point of the case (before any step is taken).
+pub fn check_probes<R: Real>(case: &Case, engine: &Engine<R>) -> Result<(), RunError> {
+    if case.probes.is_empty() {
+        return Ok(());
+    }
+    let mut ids = engine.particles.id.clone();
+    ids.sort_unstable();
+    let unknown: Vec<u32> = case
+        .probes
+        .iter()
+        .copied()
+        .filter(|p| ids.binary_search(p).is_err())
+        .collect();
+    if unknown.is_empty() {
+        Ok(())
+    } else {
+        Err(RunError::UnknownProbes {
+            unknown,
+            last: ids.last().copied().unwrap_or(0),
+        })
+    }
+}
+
+/// Stops a `--drop-lost` run once more than `max_lost` of its points (or all) have left.
+fn check_lost<R: Real>(engine: &Engine<R>, max_lost: f64) -> Result<(), RunError> {
+    let points = engine.particles.len();
+    let share = engine.lost as f64 / points.max(1) as f64;
+    if engine.lost as usize >= points || share > max_lost {
+        return Err(RunError::TooManyLost {
+            lost: engine.lost,
+            points,
+            percent: 100.0 * share,
+            allowed: 100.0 * max_lost,
+            time: engine.time,
+        });
+    }
+    Ok(())
+}
+
+/// Progress on standard error: a bar, or a line every few seconds.
+struct Reporter {
+    mode: Progress,
+    bar: Option<indicatif::ProgressBar>,
+    total_steps: u64,
+    end_time: f64,
+    start: Instant,
+    last: Instant,
+    steps: u64,
+}
+
+impl Reporter {
+    fn new(mode: Progress, total_steps: u64, end_time: f64) -> Self {
+        let bar = (mode == Progress::Bar).then(|| {
+            let b = indicatif::ProgressBar::new(total_steps);
+            b.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{bar:40} {pos}/{len} steps, {per_sec}, ETA {eta}",
+                )
+                .expect("valid template"),
+            );
+            b
+        });
+        let now = Instant::now();
+        Reporter {
+            mode,
+            bar,
+            total_steps,
+            end_time,
+            start: now,
+            last: now,
+            steps: 0,
+        }
+    }
+
+    fn step<R: Real>(&mut self, engine: &Engine<R>, points: usize) {
+        self.steps += 1;
+        match self.mode {
+            Progress::Off => {}
+            Progress::Bar => {
+                if let Some(b) = &self.bar {
+                    b.inc(1);
+                }
+            }
+            Progress::Lines { every } => {
+                if self.last.elapsed().as_secs_f64() < every {
+                    return;
+                }
+                self.last = Instant::now();
+                let wall = self.start.elapsed().as_secs_f64();
+                let per_step = wall / self.steps as f64;
+                // The ETA follows simulated time (quasi-static load steps may end early).
+                let left = if engine.time > 0.0 {
+                    wall * (self.end_time - engine.time).max(0.0) / engine.time
+                } else {
+                    per_step * self.total_steps.saturating_sub(self.steps) as f64
+                };
+                eprintln!(
+                    "mpm-solve: step {} of about {}, t = {} of {}, {} ({}), ETA {}",
+                    units::count(self.steps as f64),
+                    units::count(self.total_steps as f64),
+                    units::duration(engine.time),
+                    units::duration(self.end_time),
+                    units::rate_of(1.0 / per_step, "steps"),
+                    units::rate_of(points as f64 / per_step, "point-steps"),
+                    units::duration(left)
+                );
+            }
+        }
+    }
+
+    fn finish(self) {
+        if let Some(b) = self.bar {
+            b.finish_and_clear();
+        }
+    }
+}

@@ -1,0 +1,611 @@
+//! Anura3D cases (GOM + CPS) turned into a [`Case`]: dry and saturated
+//! (`saturated_material_coupled`) linear elastic materials, fixities of both phases, face loads
+//! on nodes and on material points, gravity, local damping, load steps, quasi-static
+//! convergence, objective stress, MPM-MP and MPM-MIXED integration, with Anura3D's two-phase
+//! time step, liquid damping and (per `STRAIN_SMOOTHING`) pressure smoothing. Features this
+//! solver does not model yet are refused with the item named, never silently ignored.
+
+use std::path::Path;
+
+use mpm_shared::cps::{Cps, Method, Multiplier, Settings};
+use mpm_shared::model::{Body, Token};
+use mpm_shared::{ElementType, Model};
+
+use crate::input::case::{Case, FaceLoad, Integration, LoadCurve, MaterialSpec, QuasiStatic};
+use crate::material::law::{LawError, LawSpec};
+use crate::material::liquid::LiquidSpec;
+
+/// Anura3D's first time step (s): its time increment starts at this value and becomes the
+/// critical step only after the first step.
+pub const ANURA3D_FIRST_STEP: f64 = 1e-15;
+
+/// Why a case cannot run here.
+#[derive(Debug, thiserror::Error)]
+pub enum CaseError {
+    /// Reading the files failed.
+    #[error(transparent)]
+    Read(#[from] mpm_shared::Error),
+    /// A key that can change results holds a value this solver does not model.
+    #[error(transparent)]
+    Key(#[from] crate::input::anura3d_keys::Refusal),
+    /// The case asks for something this solver does not model (yet).
+    #[error("{file}: {item}: {message}")]
+    Unsupported {
+        /// The file holding the item.
+        file: String,
+        /// The section or key.
+        item: String,
+        /// What is not supported and what is.
+        message: String,
+    },
+}
+
+fn unsupported(file: &str, item: &str, message: impl Into<String>) -> CaseError {
+    CaseError::Unsupported {
+        file: file.into(),
+        item: item.into(),
+        message: message.into(),
+    }
+}
+
+/// A multiplier as a load curve over the calculation's total time `total`.
+fn curve(m: Multiplier, total: f64, file: &str, key: &str) -> Result<(f64, LoadCurve), CaseError> {
+    Ok(match m {
+        Multiplier::Off => (0.0, LoadCurve::Step),
+        Multiplier::Step { value } => (value, LoadCurve::Step),
+        // A "linear" multiplier that does not change is a constant one.
+        Multiplier::Linear { start, end } if start == end => (end, LoadCurve::Step),
+        Multiplier::Linear { start, end } => {
+            if start != 0.0 {
+                return Err(unsupported(
+                    file,
+                    key,
+                    format!("linear multipliers must start at 0 here (got {start})"),
+                ));
+            }
+            (end, LoadCurve::ramp(total))
+        }
+        Multiplier::File { .. } => {
+            return Err(unsupported(
+                file,
+                key,
+                "load multipliers from files are not supported",
+            ))
+        }
+    })
+}
+
+/// Reads `gom` and `cps` into a case. Returns the case and the CPS settings.
+pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> {
+    let gfile = mpm_shared::display_name(gom);
+    let cfile = cps_path.display().to_string();
+    let model = mpm_shared::read_model(gom)?;
+    if let Some(w) = mpm_shared::coincident::warning(&gfile, &mpm_shared::coincident::pairs(&model))
+    {
+        eprintln!("mpm-solve: warning: {w}");
+    }
+    let data = mpm_shared::io::read_input(cps_path)?;
+    let (cps, warnings) = Cps::read(&data, &cfile)?;
+    for w in warnings {
+        eprintln!("mpm-solve: warning: {w}");
+    }
+    let s = cps.settings()?;
+    if model.element_type == ElementType::Tri3 {
+        return Err(unsupported(
+            &gfile,
+            "$$ELEMENTTYPE",
+            "2D cases are not supported; the solver computes 3D tetrahedra",
+        ));
+    }
+    let integration = match &s.method {
+        Method::MpmMp => Integration::MaterialPoints,
+        Method::MpmMixed => {
+            if !(s.degree_of_filling > 0.0 && s.degree_of_filling <= 1.0) {
+                return Err(unsupported(
+                    &cfile,
+                    "$$DEGREE_OF_FILLING",
+                    format!("must be in (0, 1], got {}", s.degree_of_filling),
+                ));
+            }
+            Integration::Mixed {
+                filling: s.degree_of_filling,
+            }
+        }
+        Method::Other(m) => {
+            return Err(unsupported(
+                &cfile,
+                "$$COMPUTATION_METHOD",
+                format!("{m} is not an MPM method"),
+            ))
+        }
+    };
+    if !(s.courant > 0.0 && s.courant <= 1.0) {
+        return Err(unsupported(
+            &cfile,
+            "$$COURANT_NUMBER",
+            format!("must be in (0, 1], got {}", s.courant),
+        ));
+    }
+    if !(s.time_per_load_step > 0.0) {
+        return Err(unsupported(
+            &cfile,
+            "$$TIME_PER_LOADSTEP",
+            format!("must be positive, got {}", s.time_per_load_step),
+        ));
+    }
+    // Every other key: modelled, irrelevant, or refused unless inert.
+    check_keys(&model, &cps, gom, &gfile, &cfile)?;
+    // Materials.
+    let mats = model.materials();
+    let max_index = mats.iter().map(|m| m.index).max().unwrap_or(0).max(0) as usize;
+    let mut materials: Vec<Option<MaterialSpec>> = vec![None; max_index + 1];
+    let (mut drained, mut coupled) = (false, false);
+    for m in &mats {
+        let item = format!("material {} \"{}\"", m.index, m.name);
+        #[derive(PartialEq)]
+        enum Kind {
+            Dry,
+            Coupled,
+            Drained,
+            UndrainedTotal,
+        }
+        let kind = match m.kind.as_str() {
+            "dry_material" => Kind::Dry,
+            "saturated_material_coupled" => Kind::Coupled,
+            "saturated_material_drained" => Kind::Drained,
+            "saturated_material_undrained_total" => Kind::UndrainedTotal,
+            other => {
+                return Err(unsupported(
+                    &gfile,
+                    &item,
+                    format!(
+                        "MATERIAL_TYPE {other} is not supported yet (dry_material, saturated_material_coupled, saturated_material_drained and saturated_material_undrained_total are)"
+                    ),
+                ))
+            }
+        };
+        // The law by its name, from the block's own keys (the factory).
+        let model_name = m.get("MATERIAL_MODEL_SOLID").unwrap_or("");
+        let law = LawSpec::by_name(model_name, &|k| m.get_f64(k)).map_err(|e| match e {
+            LawError::Unknown(_) => unsupported(
+                &gfile,
+                &item,
+                format!(
+                    "MATERIAL_MODEL_SOLID {model_name} is not supported yet ({} is)",
+                    crate::material::law::KNOWN.join(", ")
+                ),
+            ),
+            LawError::Parameter(p) => unsupported(&gfile, &item, p),
+        })?;
+        let get = |k: &str| {
+            m.get_f64(k)
+                .ok_or_else(|| unsupported(&gfile, &item, format!("missing or non-numeric $${k}")))
+        };
+        let n = get("POROSITY_SOLID").unwrap_or(0.0);
+        match kind {
+            Kind::Drained => drained = true,
+            Kind::Coupled => coupled = true,
+            _ => {}
+        }
+        let spec = match kind {
+            Kind::Coupled => {
+                let liquid = LiquidSpec::new(
+                    n,
+                    get("DENSITY_LIQUID")?,
+                    get("BULK_MODULUS_LIQUID")?,
+                    get("INTRINSIC_PERMEABILITY_LIQUID")?,
+                    get("DYNAMIC_VISCOSITY_LIQUID")?,
+                )
+                .map_err(|e| unsupported(&gfile, &item, e))?;
+                MaterialSpec::saturated(&m.name, get("DENSITY_SOLID")?, law, liquid)
+            }
+            // A dry material's mass is that of its solid grains: (1 - n) ρs.
+            Kind::Dry => MaterialSpec::with_law(&m.name, (1.0 - n) * get("DENSITY_SOLID")?, law),
+            Kind::Drained => MaterialSpec::drained(
+                &m.name,
+                n,
+                get("DENSITY_SOLID")?,
+                get("DENSITY_LIQUID")?,
+                law,
+            ),
+            Kind::UndrainedTotal => MaterialSpec::undrained_total(
+                &m.name,
+                n,
+                get("DENSITY_SOLID")?,
+                get("DENSITY_LIQUID")?,
+                law,
+            ),
+        }
+        .map_err(|e| unsupported(&gfile, &item, e))?;
+        materials[m.index.max(0) as usize] = Some(spec);
+    }
+    if drained && coupled {
+        // Anura3D turns on its submerged calculation for the whole run when it reads a drained
+        // material, which changes how coupled materials weigh and build pore pressure.
+        return Err(unsupported(
+            &gfile,
+            "MATERIAL_TYPE",
+            "saturated_material_drained together with saturated_material_coupled is not supported (Anura3D then runs a submerged calculation)",
+        ));
+    }
+    let element_material: Vec<u32> = model
+        .element_materials()
+        .ok_or_else(|| unsupported(&gfile, "$$STARTELMMAT", "missing"))?
+        .iter()
+        .map(|&m| m.max(0) as u32)
+        .collect();
+    let input_element: Vec<u32> = match model.input_elements() {
+        Ok(m) => m.unwrap_or_else(|| (0..model.element_count() as u32).collect()),
+        Err(e) => {
+            return Err(unsupported(
+                &gfile,
+                &format!("$${}", mpm_shared::points::INPUT_ELEMENTS),
+                e.to_string(),
+            ))
+        }
+    };
+    for (e, &m) in element_material.iter().enumerate() {
+        if m as usize >= materials.len() || (m != 0 && materials[m as usize].is_none()) {
+            return Err(unsupported(
+                &gfile,
+                "$$STARTELMMAT",
+                format!(
+                    "element {} refers to material {m}, which is not defined",
+                    input_element[e] + 1
+                ),
+            ));
+        }
+    }
+    let points_per_element = model
+        .material_points_per_element()
+        .ok_or_else(|| unsupported(&gfile, "$$START_NUMBER_OF_MATERIAL_POINTS", "missing"))?;
+    // Point ids and messages follow the original input's element numbers (a GOM sfcb ordered
+    // carries them); the CPS's ids are input ids unless sfcb --cps marked them as file ids.
+    let probes = mpm_shared::points::cps_input_ids(&cps, &model)?;
+    // Fixities and loads.
+    let n = model.node_count();
+    let mut fixed = vec![[false; 3]; n];
+    let mut liquid_fixed = vec![[false; 3]; n];
+    let mut traction = vec![[0.0; 3]; n];
+    let mut liquid_traction = vec![[0.0; 3]; n];
+    let mut point_loads = Vec::new();
+    for sec in &model.sections {
+        let k = sec.keyword.as_str();
+        let Body::Table { rows, .. } = &sec.body else {
+            continue;
+        };
+        if rows.is_empty() {
+            continue;
+        }
+        let phase = if k.ends_with("_SOLID") {
+            Some(&mut fixed)
+        } else if k.ends_with("_LIQUID") {
+            Some(&mut liquid_fixed)
+        } else {
+            None
+        };
+        if let (true, Some(target)) = (k.starts_with("START_FIXITY_"), phase) {
+            for r in rows.rows() {
+                let node = r[0].as_int().unwrap_or(0) as usize - 1;
+                for a in 0..3 {
+                    target[node][a] |= r.get(1 + a).and_then(Token::as_int) == Some(1);
+                }
+            }
+        } else if k == "START_LOAD_ON_NODES_SOLID" {
+            add_nodal_face_loads(&model, rows, false, &mut traction)
+                .map_err(|e| unsupported(&gfile, &format!("$${k}"), e))?;
+        } else if k == "START_LOAD_ON_NODES_LIQUID" {
+            add_nodal_face_loads(&model, rows, true, &mut liquid_traction)
+                .map_err(|e| unsupported(&gfile, &format!("$${k}"), e))?;
+        } else if k == "START_LOAD_ON_MATERIAL_POINTS_SOLID" {
+            point_loads.extend(face_loads_on_points(&model, rows));
+        } else if k.starts_with("START_REMOVE_FIXITY_")
+            || k.starts_with("START_LOAD_ON_")
+            || (k.starts_with("PRESCRIBED_") && !crate::step::prescribed::SECTIONS.contains(&k))
+            || k.starts_with("ABSORBING_")
+            || k.starts_with("START_FIXITY_")
+            || k == "START_EXCAVATION_SOLID"
+        {
+            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (supported: fixities of either phase, $$START_LOAD_ON_NODES_SOLID, $$START_LOAD_ON_NODES_LIQUID, $$START_LOAD_ON_MATERIAL_POINTS_SOLID and $$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME or _SURFACE)"));
+        }
+    }
+    let total = s.load_steps as f64 * s.time_per_load_step;
+    let (tm, traction_curve) = curve(s.solid_traction, total, &cfile, "$$SOLID_TRACTION")?;
+    for t in traction.iter_mut() {
+        for v in t.iter_mut() {
+            *v *= tm;
+        }
+    }
+    let (lm, liquid_curve) = curve(s.liquid_pressure, total, &cfile, "$$LIQUID_PRESSURE")?;
+    for t in liquid_traction.iter_mut() {
+        for v in t.iter_mut() {
+            *v *= lm;
+        }
+    }
+    let has_liquid_load = liquid_traction.iter().flatten().any(|&v| v != 0.0);
+    if has_liquid_load && !materials.iter().flatten().any(|m| m.liquid.is_some()) {
+        return Err(unsupported(
+            &gfile,
+            "$$START_LOAD_ON_NODES_LIQUID",
+            "loads the liquid, but no material is saturated",
+        ));
+    }
+    let prescribed = prescribed_velocity(&model, &s, &materials, total, &gfile, &cfile)?;
+    let (gm, gravity_curve) = curve(s.gravity_load, total, &cfile, "$$GRAVITY_LOAD")?;
+    let g = s.gravity_vector.map(|v| v * s.gravity_acceleration * gm);
+    let output_times = (1..=s.load_steps)
+        .map(|k| k as f64 * s.time_per_load_step)
+        .collect();
+    let case = Case {
+        name: gom
+            .file_stem()
+            .map(|x| x.to_string_lossy().to_string())
+            .unwrap_or_default(),
+        inputs: vec![gfile, cfile],
+        model,
+        materials,
+        element_material,
+        points_per_element,
+        input_element,
+        input_node: (0..n as u32).collect(),
+        fixed,
+        liquid_fixed,
+        traction,
+        point_loads,
+        traction_curve,
+        liquid_traction,
+        liquid_curve,
+        liquid_load_on_mixture: false,
+        gravity: g,
+        gravity_curve,
+        courant: s.courant,
+        damping: s.local_damping.unwrap_or(0.0),
+        end_time: total,
+        output_times,
+        max_steps: None,
+        quasi_static: s.quasi_static.then_some(QuasiStatic {
+            max_steps: s.max_time_steps,
+            force_tolerance: s.tolerated_error_solid[0],
+            energy_tolerance: s.tolerated_error_solid[1],
+            liquid_force_tolerance: s.tolerated_error_liquid[0],
+        }),
+        objective_stress: s.objective_stress,
+        integration,
+        anura3d_time_step: true,
+        damping_rule: crate::input::case::DampingRule::Anura3d,
+        drag: crate::input::case::Drag::Implicit,
+        initial_step: Some(ANURA3D_FIRST_STEP),
+        smooth_pressure: false,
+        fixed_liquid_mass: true,
+        strain_smoothing: cps.get("STRAIN_SMOOTHING").is_some_and(|e| {
+            e.lines
+                .first()
+                .and_then(|l| l.split_whitespace().next())
+                .is_some_and(|w| w != "0")
+        }),
+        consolidation: None,
+        initial_state: None,
+        probes,
+        prescribed,
+        engine: Default::default(),
+    };
+    Ok((case, s))
+}
+
+/// Checks every GOM section (outside material blocks) and every CPS key against the key table
+/// ([`crate::input::anura3d_keys`]): keys that would change results and are not modelled stop the case
+/// unless they hold their inert value. GOM sections the table does not know are named in a
+/// warning (unknown CPS keys are, when the CPS is read).
+fn check_keys(
+    model: &Model,
+    cps: &Cps,
+    gom: &Path,
+    gfile: &str,
+    cfile: &str,
+) -> Result<(), CaseError> {
+    use crate::input::anura3d_keys::{check, status, KeyKind, KeyStatus};
+    for sec in &model.sections {
+        let key = sec.keyword.as_str();
+        if mpm_shared::model::is_material_key(key) {
+            continue;
+        }
+        let lines: Vec<String> = match &sec.body {
+            Body::Table { rows, .. } if rows.is_empty() => Vec::new(),
+            Body::Table { rows, .. } => vec![format!("{} rows", rows.len())],
+            Body::PerElement(t) => {
+                let nonzero = t
+                    .rows()
+                    .flatten()
+                    .filter(|v| v.as_f64().is_some_and(|x| x != 0.0))
+                    .count();
+                if nonzero == 0 {
+                    Vec::new()
+                } else {
+                    vec![format!("{nonzero} non-zero values")]
+                }
+            }
+            Body::Text(l) => l.clone(),
+            Body::Opaque(l) if mpm_shared::model::opaque_is_empty(l) => Vec::new(),
+            Body::Opaque(l) => l.clone(),
+            _ => continue,
+        };
+        if status(KeyKind::GomSection, key) == KeyStatus::Unknown {
+            eprintln!("mpm-solve: warning: {gfile}: section $${key} is not known to this solver and is ignored");
+        }
+        // The model does not keep line numbers; a refusal looks its section up in the file.
+        check(KeyKind::GomSection, key, &lines, gfile, 0)
+            .map_err(|r| r.at_line(section_line(gom, key)))?;
+    }
+    for e in &cps.entries {
+        check(KeyKind::CpsKey, &e.keyword, &e.lines, cfile, e.line)?;
+    }
+    Ok(())
+}
+
+/// The 1-based line of the section `$$key` in the GOM file `path` (0 when it cannot be read
+/// again, as from standard input).
+fn section_line(path: &Path, key: &str) -> usize {
+    if mpm_shared::io::is_stdio(path) {
+        return 0;
+    }
+    let Ok(data) = std::fs::read(path) else {
+        return 0;
+    };
+    let head = format!("$${key}");
+    data.split(|&b| b == b'\n')
+        .position(|l| String::from_utf8_lossy(l).trim() == head)
+        .map_or(0, |i| i + 1)
+}
+
+/// The prescribed material-point velocities of the GOM with the CPS `$$PRESCRIBED_VELOCITY`
+/// multiplier; `None` when there are none or the multiplier is `off` (Anura3D then ignores the
+/// rows).
+fn prescribed_velocity(
+    model: &Model,
+    s: &Settings,
+    materials: &[Option<MaterialSpec>],
+    total: f64,
+    gfile: &str,
+    cfile: &str,
+) -> Result<Option<crate::step::prescribed::PrescribedVelocity>, CaseError> {
+    let rows = crate::step::prescribed::read_rows(model)
+        .map_err(|(item, message)| unsupported(gfile, &item, message))?;
+    if rows.is_empty() {
+        return Ok(None);
+    }
+    if s.prescribed_velocity == Multiplier::Off {
+        eprintln!("mpm-solve: warning: {gfile}: the prescribed material-point velocities are not applied: $$PRESCRIBED_VELOCITY is off in {cfile}");
+        return Ok(None);
+    }
+    if materials.iter().flatten().any(|m| m.liquid.is_some()) {
+        return Err(unsupported(
+            gfile,
+            "$$PRESCRIBED_MATERIAL_POINT_VELOCITY",
+            "prescribed velocities are not supported yet in cases with a saturated material",
+        ));
+    }
+    let (scale, curve) = curve(s.prescribed_velocity, total, cfile, "$$PRESCRIBED_VELOCITY")?;
+    Ok(Some(crate::step::prescribed::PrescribedVelocity {
+        rows,
+        scale,
+        curve,
+    }))
+}
+
+/// The loads of `$$START_LOAD_ON_MATERIAL_POINTS_SOLID` rows (3 corners first, then a traction
+/// vector per node): Anura3D takes the traction at the face centroid, the mean of the corner
+/// values, times the face area as the face's total force.
+fn face_loads_on_points(model: &Model, rows: &mpm_shared::model::Table) -> Vec<FaceLoad> {
+    let k = model.element_type.face_nodes();
+    rows.rows()
+        .map(|r| {
+            let corners = [0, 1, 2].map(|i| r[i].as_int().unwrap_or(1) as usize - 1);
+            let area = crate::input::scene::triangle_area(model, corners);
+            let mut force = [0.0; 3];
+            for c in 0..3 {
+                for (d, f) in force.iter_mut().enumerate() {
+                    *f += area / 3.0 * r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0);
+                }
+            }
+            FaceLoad { corners, force }
+        })
+        .collect()
+}
+
+/// Adds the nodal forces of `$$START_LOAD_ON_NODES_SOLID` (or `_LIQUID`) rows: per loaded face
+/// the node ids (3 corners first) and a traction vector per node; the corner tractions are
+/// interpolated linearly over the face and integrated exactly: F_a = A/12 (2 t_a + t_b + t_c).
+/// For the liquid (`normal`), Anura3D applies the load normal to the face: each component is
+/// multiplied by that of the face's outward unit normal, so negative values push into the body.
+fn add_nodal_face_loads(
+    model: &Model,
+    rows: &mpm_shared::model::Table,
+    normal: bool,
+    out: &mut [[f64; 3]],
+) -> Result<(), String> {
+    let k = model.element_type.face_nodes();
+    let faces: Vec<[usize; 3]> = rows
+        .rows()
+        .map(|r| [0, 1, 2].map(|i| r[i].as_int().unwrap_or(1) as usize - 1))
+        .collect();
+    let normals = if normal {
+        outward_normals(model, &faces)?
+    } else {
+        vec![[1.0; 3]; faces.len()]
+    };
+    for ((r, ids), n) in rows.rows().zip(&faces).zip(&normals) {
+        let t: Vec<[f64; 3]> = (0..3)
+            .map(|c| {
+                [0, 1, 2]
+                    .map(|d| n[d] * r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0))
+            })
+            .collect();
+        let area = crate::input::scene::triangle_area(model, *ids);
+        for i in 0..3 {
+            let (j, l) = ((i + 1) % 3, (i + 2) % 3);
+            for d in 0..3 {
+                out[ids[i]][d] += area / 12.0 * (2.0 * t[i][d] + t[j][d] + t[l][d]);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Outward unit normals of boundary faces given by their corner nodes: each face is found in
+/// the element that has it, and oriented away from that element's fourth corner.
+fn outward_normals(model: &Model, faces: &[[usize; 3]]) -> Result<Vec<[f64; 3]>, String> {
+    let key = |f: [usize; 3]| {
+        let mut k = f;
+        k.sort_unstable();
+        k
+    };
+    let mut opposite: std::collections::HashMap<[usize; 3], Option<usize>> =
+        faces.iter().map(|&f| (key(f), None)).collect();
+    for e in 0..model.element_count() {
+        let c = &model.element(e)[..4];
+        for skip in 0..4 {
+            let mut f = [0usize; 3];
+            let mut j = 0;
+            for (i, &n) in c.iter().enumerate() {
+                if i != skip {
+                    f[j] = n as usize;
+                    j += 1;
+                }
+            }
+            if let Some(slot) = opposite.get_mut(&key(f)) {
+                *slot = Some(c[skip] as usize);
+            }
+        }
+    }
+    faces
+        .iter()
+        .map(|&f| {
+            let inner = opposite[&key(f)].ok_or_else(|| {
+                format!(
+                    "the loaded face with corner nodes {} {} {} is not a face of any element",
+                    f[0] + 1,
+                    f[1] + 1,
+                    f[2] + 1
+                )
+            })?;
+            let p = f.map(|n| model.node(n));
+            let q = model.node(inner);
+            let (a, b) = (
+                [0, 1, 2].map(|d| p[1][d] - p[0][d]),
+                [0, 1, 2].map(|d| p[2][d] - p[0][d]),
+            );
+            let mut n = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            let len = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let towards_inner: f64 = (0..3).map(|d| n[d] * (q[d] - p[0][d])).sum();
+            let sign = if towards_inner > 0.0 { -1.0 } else { 1.0 };
+            for v in n.iter_mut() {
+                *v *= sign / len;
+            }
+            Ok(n)
+        })
+        .collect()
+}

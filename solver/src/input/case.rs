@@ -1,0 +1,515 @@
+//! A case ready to run: mesh, materials, boundary conditions, loads and time controls, whether
+//! it came from a TOML scene or (later) an Anura3D GOM + CPS.
+
+use mpm_shared::Model;
+
+use crate::material::law::LawSpec;
+
+pub use crate::step::grid_update::{DampingRule, Drag};
+pub use crate::step::load_curve::LoadCurve;
+
+/// A solid material (its constitutive law and densities), dry or saturated with a pore liquid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialSpec {
+    /// Name.
+    pub name: String,
+    /// Mass of solid per unit volume in t/m³ (kg/m³ ÷ 1000): (1 - n) ρs.
+    pub density: f64,
+    /// Weight per unit volume over g (t/m³): the mass density, except for Anura3D's single-phase
+    /// saturated types (a drained soil weighs its buoyant (1 - n)(ρs - ρw)).
+    pub weight_density: f64,
+    /// Density of the critical wave speed sqrt(E_oed / ρ) (t/m³): the mass density, except for
+    /// Anura3D's undrained-total soil, whose step Anura3D takes with the dry (1 - n) ρs.
+    pub wave_density: f64,
+    /// The constitutive law of the solid skeleton.
+    pub law: LawSpec,
+    /// The pore liquid of a saturated (two-phase) material; `None` for a dry one.
+    pub liquid: Option<crate::material::liquid::LiquidSpec>,
+    /// Pore pressure at t = 0 (kPa, compression negative), for saturated materials.
+    pub initial_pore_pressure: f64,
+}
+
+impl MaterialSpec {
+    /// A linear elastic material, checked and converted: `density_kg_m3` in kg/m³, `young` in
+    /// kPa.
+    pub fn new(name: &str, density_kg_m3: f64, young: f64, poisson: f64) -> Result<Self, String> {
+        let law = LawSpec::linear_elastic(young, poisson).map_err(|e| e.to_string())?;
+        Self::with_law(name, density_kg_m3, law)
+    }
+
+    /// A dry material of density `density_kg_m3` (kg/m³) following `law`.
+    pub fn with_law(name: &str, density_kg_m3: f64, law: LawSpec) -> Result<Self, String> {
+        if !(density_kg_m3 > 0.0) {
+            return Err(format!("density must be positive, got {density_kg_m3}"));
+        }
+        Ok(MaterialSpec {
+            name: name.to_string(),
+            density: density_kg_m3 / 1000.0,
+            weight_density: density_kg_m3 / 1000.0,
+            wave_density: density_kg_m3 / 1000.0,
+            law,
+            liquid: None,
+            initial_pore_pressure: 0.0,
+        })
+    }
+
+    /// A saturated material: grains of density `grain_density_kg_m3` (kg/m³) filling 1 - n of
+    /// the volume, and the pore liquid `liquid`.
+    pub fn saturated(
+        name: &str,
+        grain_density_kg_m3: f64,
+        law: LawSpec,
+        liquid: crate::material::liquid::LiquidSpec,
+    ) -> Result<Self, String> {
+        let mut m =
+            MaterialSpec::with_law(name, (1.0 - liquid.porosity) * grain_density_kg_m3, law)?;
+        m.liquid = Some(liquid);
+        Ok(m)
+    }
+
+    /// Anura3D's `saturated_material_drained`: a single-phase soil of solid mass (1 - n) ρs
+    /// whose weight is the buoyant (1 - n) (ρs - ρw) (densities in kg/m³): effective stresses
+    /// under a water table at rest, no pore pressure computed.
+    pub fn drained(
+        name: &str,
+        porosity: f64,
+        grain_density_kg_m3: f64,
+        liquid_density_kg_m3: f64,
+        law: LawSpec,
+    ) -> Result<Self, String> {
+        check_porosity(porosity)?;
+        let mut m = MaterialSpec::with_law(name, (1.0 - porosity) * grain_density_kg_m3, law)?;
+        m.weight_density = (1.0 - porosity) * (grain_density_kg_m3 - liquid_density_kg_m3) / 1000.0;
+        Ok(m)
+    }
+
+    /// Anura3D's `saturated_material_undrained_total`: a single-phase soil of the saturated mass
+    /// and weight (1 - n) ρs + n ρw (kg/m³), stresses total, no pore pressure computed (its
+    /// near-incompressibility comes from the user's Poisson's ratio); the critical step uses
+    /// the dry density (1 - n) ρs, as Anura3D.
+    pub fn undrained_total(
+        name: &str,
+        porosity: f64,
+        grain_density_kg_m3: f64,
+        liquid_density_kg_m3: f64,
+        law: LawSpec,
+    ) -> Result<Self, String> {
+        check_porosity(porosity)?;
+        let saturated = (1.0 - porosity) * grain_density_kg_m3 + porosity * liquid_density_kg_m3;
+        let mut m = MaterialSpec::with_law(name, saturated, law)?;
+        m.wave_density = (1.0 - porosity) * grain_density_kg_m3 / 1000.0;
+        Ok(m)
+    }
+
+    /// Oedometric modulus (kPa).
+    pub fn oedometric(&self) -> f64 {
+        self.law.constrained_modulus()
+    }
+
+    /// Fastest wave speed on an element of size `dx` (m/s): sqrt(E_oed / ρ) when dry; for a
+    /// saturated material the two-phase speed, with the drag treated implicitly
+    /// ([`crate::material::liquid::LiquidSpec::wave_speed_implicit_drag`]) or, for `anura3d_step`,
+    /// Anura3D's formula with its explicit-drag and consolidation terms (smaller, so as safe).
+    pub fn wave_speed_at(&self, dx: f64, anura3d_step: bool) -> f64 {
+        match &self.liquid {
+            None => self.wave_speed(),
+            Some(l) => {
+                let grains = self.density / (1.0 - l.porosity);
+                if anura3d_step {
+                    l.wave_speed(grains, self.oedometric(), dx)
+                } else {
+                    l.wave_speed_implicit_drag(grains, self.oedometric(), dx)
+                }
+            }
+        }
+    }
+
+    /// P-wave speed of the dry skeleton, sqrt(E_oed / ρ) (m/s).
+    pub fn wave_speed(&self) -> f64 {
+        (self.oedometric() / self.wave_density).sqrt()
+    }
+}
+
+fn check_porosity(n: f64) -> Result<(), String> {
+    if (0.0..1.0).contains(&n) {
+        Ok(())
+    } else {
+        Err(format!("porosity must be in [0, 1), got {n}"))
+    }
+}
+
+/// A distributed load on a face, carried by the material points next to it (Anura3D's
+/// `$$START_LOAD_ON_MATERIAL_POINTS_SOLID`): the face's total force is shared equally by the
+/// points of the adjacent filled element(s) that lie nearest the face, and moves with them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FaceLoad {
+    /// Corner nodes of the face (0-based model node ids).
+    pub corners: [usize; 3],
+    /// Total force on the face (kN) at multiplier 1.
+    pub force: [f64; 3],
+}
+
+/// Quasi-static load steps (Anura3D's `QUASISTATIC_CONVERGENCE`): a load step ends when the
+/// out-of-balance force and the kinetic energy are small, or after a number of steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuasiStatic {
+    /// A load step ends once it has taken more than this many steps (Anura3D's
+    /// `MAXIMUM_TIME_STEPS`; `None`: at the load step's end time).
+    pub max_steps: Option<u64>,
+    /// Tolerated ratio |free out-of-balance force| / |free external force|.
+    pub force_tolerance: f64,
+    /// Tolerated ratio kinetic energy / external work.
+    pub energy_tolerance: f64,
+    /// Tolerated ratio |free out-of-balance force| / |free external force| of the liquid
+    /// (Anura3D's `TOLERATED_ERROR_LIQUID`; two-phase cases).
+    pub liquid_force_tolerance: f64,
+}
+
+/// How stresses are integrated (Anura3D's `COMPUTATION_METHOD`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Integration {
+    /// At the material points everywhere (`MPM-MP`).
+    MaterialPoints,
+    /// At the element's Gauss point in elements whose points fill at least this fraction of
+    /// the element volume, at material points elsewhere (`MPM-MIXED`).
+    Mixed {
+        /// Degree of filling from which an element counts as full.
+        filling: f64,
+    },
+}
+
+/// Everything a run needs.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// Case name (file stem).
+    pub name: String,
+    /// Input files, for `run.json`.
+    pub inputs: Vec<String>,
+    /// The mesh model.
+    pub model: Model,
+    /// Materials by 1-based index (entry 0 unused; `None` for materials no element uses).
+    pub materials: Vec<Option<MaterialSpec>>,
+    /// Material of each element (0 = empty).
+    pub element_material: Vec<u32>,
+    /// Material points per element.
+    pub points_per_element: Vec<u32>,
+    /// The original input element (0-based) of each element: the GOM's
+    /// `$$START_INPUT_ELEMENT_NUMBERS` when it has one (a mesh sfcb ordered), else its own
+    /// order, followed through the solver's reordering. Material-point ids count the points in
+    /// this original order, and messages name elements by it (plus 1).
+    pub input_element: Vec<u32>,
+    /// The node (0-based) of the file read for each model node, followed through the solver's
+    /// reordering: messages name nodes by it (plus 1).
+    pub input_node: Vec<u32>,
+    /// Fixed velocity components per model node.
+    pub fixed: Vec<[bool; 3]>,
+    /// Fixed liquid velocity components per model node (impermeable faces); used only where a
+    /// saturated material is.
+    pub liquid_fixed: Vec<[bool; 3]>,
+    /// Nodal face-load forces per model node (kN) at multiplier 1.
+    pub traction: Vec<[f64; 3]>,
+    /// Loads carried by material points.
+    pub point_loads: Vec<FaceLoad>,
+    /// Traction multiplier (face loads on nodes and on material points).
+    pub traction_curve: LoadCurve,
+    /// Face loads on the liquid per model node (kN) at multiplier 1: they act on the liquid and,
+    /// as part of the total traction, on the mixture.
+    pub liquid_traction: Vec<[f64; 3]>,
+    /// Liquid load multiplier.
+    pub liquid_curve: LoadCurve,
+    /// Whether a load on the liquid also loads the mixture (a water pressure on a drained face
+    /// is part of the total traction). Anura3D applies it to the liquid's equation alone, so
+    /// GOM input runs without; scenes with.
+    pub liquid_load_on_mixture: bool,
+    /// Gravity acceleration vector (m/s²) at multiplier 1.
+    pub gravity: [f64; 3],
+    /// Gravity multiplier.
+    pub gravity_curve: LoadCurve,
+    /// Courant number.
+    pub courant: f64,
+    /// Local damping factor α.
+    pub damping: f64,
+    /// End time (s).
+    pub end_time: f64,
+    /// Output times (s), increasing, the last equal to `end_time`.
+    pub output_times: Vec<f64>,
+    /// Optional cap on time steps.
+    pub max_steps: Option<u64>,
+    /// Quasi-static load steps: each output time ends a load step, which may end earlier.
+    pub quasi_static: Option<QuasiStatic>,
+    /// Jaumann (objective) stress rate instead of the plain small-strain update.
+    pub objective_stress: bool,
+    /// Stress integration.
+    pub integration: Integration,
+    /// Take Anura3D's two-phase critical time step (explicit drag and consolidation terms)
+    /// rather than the implicit-drag one, so that Anura3D inputs step as Anura3D does.
+    pub anura3d_time_step: bool,
+    /// How local damping is applied (Anura3D's rule for GOM input, the mixture rule in scenes).
+    pub damping_rule: DampingRule,
+    /// How the Darcy drag between the phases is integrated in time.
+    pub drag: Drag,
+    /// Length of the calculation's very first step (s), when it differs from the critical step:
+    /// Anura3D starts with a step of 1e-15 s, so that its first full step is damped against a
+    /// velocity that is no longer zero.
+    pub initial_step: Option<f64>,
+    /// Smooth pore-pressure rates through the nodes (V N-weighted averages, interpolated back
+    /// with N; scenes).
+    pub smooth_pressure: bool,
+    /// Keep each point's liquid mass (and its weight and drag) at that of its initial volume,
+    /// as Anura3D does; otherwise it follows the point's volume (n ρw V at constant porosity).
+    pub fixed_liquid_mass: bool,
+    /// Anura3D's strain smoothing (`$$STRAIN_SMOOTHING 1`): the volumetric strain increments of
+    /// both phases averaged element → node → element, material by material
+    /// ([`crate::step::smoothing`]); it replaces `smooth_pressure` when on.
+    pub strain_smoothing: bool,
+    /// A consolidation run compared with Terzaghi (scenes with `[consolidation]`).
+    pub consolidation: Option<ConsolidationSpec>,
+    /// A uniform initial state of the saturated points (the undrained start of a consolidation
+    /// run); `None`: at rest.
+    pub initial_state: Option<UndrainedState>,
+    /// Material-point ids written to `history.csv`.
+    pub probes: Vec<u32>,
+    /// Velocities prescribed on the material points of some elements (Anura3D's
+    /// `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_*`); `None`: none, or the multiplier is off.
+    pub prescribed: Option<crate::step::prescribed::PrescribedVelocity>,
+    /// Threads, pinning and first touch of the run (not physics: results do not depend on it).
+    pub engine: crate::parallel::team::Options,
+}
+
+/// Fixities of a laterally confined box (an oedometer): nodes on the x and z faces of the
+/// bounding box may not move normal to them, nodes on the bottom (lowest y) not at all.
+pub fn confined_box(model: &Model) -> Vec<[bool; 3]> {
+    let d = model.dimension.coords();
+    let mut lo = [f64::MAX; 3];
+    let mut hi = [f64::MIN; 3];
+    for p in model.coords.chunks_exact(d) {
+        for a in 0..d {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let tol = 1e-9 * (0..d).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+    let on = |v: f64, w: f64| (v - w).abs() <= tol;
+    (0..model.node_count())
+        .map(|i| {
+            let p = model.node(i);
+            let bottom = on(p[1], lo[1]);
+            [
+                bottom || on(p[0], lo[0]) || on(p[0], hi[0]),
+                bottom,
+                bottom || on(p[2], lo[2]) || on(p[2], hi[2]),
+            ]
+        })
+        .collect()
+}
+
+/// How the solver orders the mesh before computing (`--reorder`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reorder {
+    /// Keep the input's order (e.g. a mesh sfcb already ordered).
+    None,
+    /// Elements along the Morton curve of their centroids, nodes by first use.
+    Morton,
+    /// The same along the Hilbert curve.
+    Hilbert,
+}
+
+impl Case {
+    /// The case with its elements ordered along a space-filling curve and its nodes renumbered
+    /// by first use (sfcb's ordering), every per-element and per-node datum following, and the
+    /// material-point ids and the numbers messages give kept those of the input
+    /// ([`Case::input_element`], [`Case::input_node`]). `Reorder::None` returns it unchanged.
+    pub fn reordered(mut self, how: Reorder) -> Result<Case, String> {
+        let curve = match how {
+            Reorder::None => return Ok(self),
+            Reorder::Morton => sfcb::order::Curve::Morton,
+            Reorder::Hilbert => sfcb::order::Curve::Hilbert,
+        };
+        let o = sfcb::order::order(
+            &self.model,
+            sfcb::order::Options {
+                curve,
+                levels: 21,
+                cubic: true,
+            },
+        )
+        .map_err(|e| {
+            // Built-in cases have no input files to name.
+            let from = if self.inputs.is_empty() {
+                "the case".to_string()
+            } else {
+                self.inputs.join(", ")
+            };
+            format!("{from}: --reorder cannot order the mesh: {e}")
+        })?;
+        let model = self
+            .model
+            .reordered(&o.order, &o.node_new)
+            .map_err(|e| e.to_string())?;
+        let by_element = |v: &[u32]| o.order.iter().map(|&e| v[e as usize]).collect::<Vec<u32>>();
+        self.input_element = by_element(&self.input_element);
+        self.element_material = by_element(&self.element_material);
+        self.points_per_element = by_element(&self.points_per_element);
+        fn by_node<T: Copy>(v: &[T], node_new: &[u32]) -> Vec<T> {
+            let mut out = v.to_vec();
+            for (old, &new) in node_new.iter().enumerate() {
+                out[new as usize] = v[old];
+            }
+            out
+        }
+        self.input_node = by_node(&self.input_node, &o.node_new);
+        self.fixed = by_node(&self.fixed, &o.node_new);
+        self.liquid_fixed = by_node(&self.liquid_fixed, &o.node_new);
+        self.traction = by_node(&self.traction, &o.node_new);
+        self.liquid_traction = by_node(&self.liquid_traction, &o.node_new);
+        for load in &mut self.point_loads {
+            load.corners = load.corners.map(|n| o.node_new[n] as usize);
+        }
+        if let Some(pv) = self.prescribed.take() {
+            let mut new_of_old = vec![0u32; o.order.len()];
+            for (new, &old) in o.order.iter().enumerate() {
+                new_of_old[old as usize] = new as u32;
+            }
+            self.prescribed = Some(pv.renumbered(&new_of_old));
+        }
+        self.model = model;
+        Ok(self)
+    }
+
+    /// The computational mesh of the model, an inverted or flat element named by its number
+    /// in the input (not in the solver's order).
+    pub fn tet_mesh<R: crate::real::Real>(
+        &self,
+    ) -> Result<crate::element::mesh::TetMesh<R>, crate::element::mesh::MeshError> {
+        crate::element::mesh::TetMesh::<R>::new(&self.model).map_err(|e| match e {
+            crate::element::mesh::MeshError::BadElement { element, volume } => {
+                crate::element::mesh::MeshError::BadElement {
+                    element: self.element_number(element - 1) as usize,
+                    volume,
+                }
+            }
+            e => e,
+        })
+    }
+
+    /// The 1-based input number of element `e` (0-based, the case's order), for messages.
+    pub fn element_number(&self, e: usize) -> u32 {
+        self.input_element.get(e).map_or(e as u32, |&k| k) + 1
+    }
+
+    /// The 1-based input number of model node `n` (0-based, the case's order), for messages.
+    pub fn node_number(&self, n: usize) -> u32 {
+        self.input_node.get(n).map_or(n as u32, |&k| k) + 1
+    }
+
+    /// How the case's material points are numbered: by input element (see
+    /// [`Case::input_element`]).
+    pub fn point_ids(&self) -> mpm_shared::points::PointIds {
+        mpm_shared::points::PointIds::new(&self.points_per_element, Some(&self.input_element))
+    }
+
+    /// True when some material is saturated: the run then allocates and computes the liquid.
+    pub fn has_liquid(&self) -> bool {
+        self.materials.iter().flatten().any(|m| m.liquid.is_some())
+    }
+
+    /// A case of one material filling every element with `points` material points each, the
+    /// given fixities, no loads, Courant number 0.9, no damping, one output at t = 1 s; callers
+    /// set what differs (used by benchmarks and tests that build meshes in memory).
+    pub fn single_material(
+        name: &str,
+        model: Model,
+        material: MaterialSpec,
+        points: u32,
+        fixed: Vec<[bool; 3]>,
+    ) -> Case {
+        let (n, n_el) = (model.node_count(), model.element_count());
+        Case {
+            name: name.to_string(),
+            inputs: Vec::new(),
+            model,
+            materials: vec![None, Some(material)],
+            element_material: vec![1; n_el],
+            points_per_element: vec![points; n_el],
+            input_element: (0..n_el as u32).collect(),
+            input_node: (0..n as u32).collect(),
+            liquid_fixed: fixed.clone(),
+            fixed,
+            traction: vec![[0.0; 3]; n],
+            point_loads: Vec::new(),
+            traction_curve: LoadCurve::Step,
+            liquid_traction: vec![[0.0; 3]; n],
+            liquid_curve: LoadCurve::Step,
+            liquid_load_on_mixture: true,
+            gravity: [0.0; 3],
+            gravity_curve: LoadCurve::Step,
+            courant: 0.9,
+            damping: 0.0,
+            end_time: 1.0,
+            output_times: vec![1.0],
+            max_steps: None,
+            quasi_static: None,
+            objective_stress: false,
+            integration: Integration::MaterialPoints,
+            anura3d_time_step: false,
+            damping_rule: DampingRule::Phases,
+            drag: Drag::Implicit,
+            initial_step: None,
+            smooth_pressure: true,
+            strain_smoothing: false,
+            fixed_liquid_mass: false,
+            consolidation: None,
+            initial_state: None,
+            probes: Vec::new(),
+            prescribed: None,
+            engine: Default::default(),
+        }
+    }
+}
+
+/// How the run starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Start {
+    /// At rest, the load applied suddenly (Anura3D's workshop set-up): the column first responds
+    /// dynamically.
+    Rest,
+    /// In the undrained state Terzaghi assumes at t = 0+: the load shared between pore pressure
+    /// and skeleton as an undrained 1D compression, so there is no dynamic transient.
+    Undrained,
+}
+
+/// A consolidation run's settings (`[consolidation]` of a scene).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConsolidationSpec {
+    /// Top load q (kPa, compression positive).
+    pub load: f64,
+    /// Initial state.
+    pub start: Start,
+    /// Also run the workshop-style configuration (at rest, sudden load) and report both.
+    pub compare_rest: bool,
+}
+
+/// The undrained state of a 1D compression under a top load, which Terzaghi assumes at t = 0+:
+/// every saturated point starts with vertical strain ε = -q / (E_oed + K_w/n), the effective
+/// stress of that strain and pore pressure (K_w/n) ε.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UndrainedState {
+    /// Vertical (y) strain ε.
+    pub vertical_strain: f64,
+    /// Pore pressure (kPa, compression negative).
+    pub pore_pressure: f64,
+}
+
+impl UndrainedState {
+    /// The undrained state of `material` (saturated) under the top load `load` (kPa,
+    /// compression positive).
+    pub fn under(material: &MaterialSpec, load: f64) -> Option<Self> {
+        let l = material.liquid.as_ref()?;
+        let kw_over_n = l.bulk_modulus / l.porosity;
+        let eps = -load / (material.oedometric() + kw_over_n);
+        Some(UndrainedState {
+            vertical_strain: eps,
+            pore_pressure: kw_over_n * eps,
+        })
+    }
+}

@@ -1,0 +1,9 @@
+//! From input files to a resolved [`case::Case`]: TOML scenes, Anura3D GOM + CPS (with the key table), the critical time step, the pre-flight plan, and scenes written back as Anura3D cases.
+
+pub mod anura3d;
+pub mod anura3d_keys;
+pub mod case;
+pub mod export_anura3d;
+pub mod preflight;
+pub mod scene;
+pub mod time_step;

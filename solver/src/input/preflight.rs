@@ -1,0 +1,304 @@
+//! What a run will cost, predicted before any work: material points, time steps, output volume,
+//! memory and a rough wall time, checked against the user's limits. A mistyped output interval or
+//! stiffness is refused here with the numbers that show the mistake, instead of filling the disk
+//! or promising an ETA of centuries.
+
+use std::fmt;
+use std::path::Path;
+
+use crate::driver::units;
+use crate::input::case::Case;
+
+/// Bytes one material point takes in a `particles_NNNNN.vtu` file: position, displacement and
+/// velocity (3 × f64 each), stress (6 × f64), material, element and id (i32), and the vertex
+/// cell (connectivity and offset as i64, type as u8).
+const VTU_POINT_BYTES: f64 = (3.0 + 3.0 + 3.0 + 6.0) * 8.0 + 3.0 * 4.0 + 8.0 + 8.0 + 1.0;
+/// Extra bytes per point of a two-phase run: pore pressure and liquid velocity.
+const VTU_LIQUID_BYTES: f64 = 4.0 * 8.0;
+/// XML of one particle file, its `run.pvd` line and its `energy.csv` row.
+const VTU_FILE_BYTES: f64 = 2600.0;
+/// One `history.csv` row: 14 or 15 numbers of up to 24 characters.
+const HISTORY_ROW_BYTES: f64 = 15.0 * 24.0;
+
+/// Rough speed of the time step per thread, in point-steps per second, on the machines the
+/// benchmarks ran on (docs/performance.md: 10–16 M/s on 2 cores for a 1M-point two-phase run).
+/// Used only for the wall-time estimate.
+const DRY_RATE_PER_THREAD: f64 = 6e6;
+/// The same for two-phase runs.
+const TWO_PHASE_RATE_PER_THREAD: f64 = 4e6;
+/// Fixed cost of a step (thread barriers, bookkeeping), seconds.
+const STEP_OVERHEAD: f64 = 20e-6;
+
+/// Most output times a scene may ask for (each writes a particle file).
+pub const MAX_OUTPUTS: f64 = 1e7;
+
+/// Limits a run must stay within (`--max-output`, `--max-steps`, `--max-lost`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Largest predicted output volume, bytes.
+    pub max_output_bytes: f64,
+    /// Largest predicted number of time steps.
+    pub max_steps: f64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_output_bytes: 4e9,
+            max_steps: 1e8,
+        }
+    }
+}
+
+/// The predictions for one case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// Material points the run will place.
+    pub points: u64,
+    /// Elements and nodes of the model.
+    pub elements: usize,
+    /// Nodes of the model.
+    pub nodes: usize,
+    /// Whether the liquid phase is computed.
+    pub two_phase: bool,
+    /// Critical time step (s).
+    pub dt: f64,
+    /// Simulated time (s).
+    pub end_time: f64,
+    /// Time steps to the end (an upper bound for quasi-static load steps, which may converge
+    /// earlier).
+    pub steps: f64,
+    /// Output times.
+    pub outputs: usize,
+    /// Probes written to `history.csv`.
+    pub probes: usize,
+    /// Bytes the outputs will take on disk.
+    pub output_bytes: f64,
+    /// Bytes of memory the run will hold (points, grid and mesh; excluding the model as read).
+    pub memory_bytes: f64,
+    /// Threads the estimate assumes.
+    pub threads: usize,
+    /// Wall time the time steps will take, roughly (s).
+    pub wall_seconds: f64,
+}
+
+/// A limit the run would exceed, with the numbers that show why.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PreflightError {
+    /// The outputs would not fit in `--max-output` or on the disk.
+    #[error(
+        "the run would write about {} ({} outputs, one every {} of simulated time, {} each), more than {what} ({}); write fewer outputs (a longer output interval) or raise --max-output",
+        units::bytes(*.volume),
+        units::count(*.outputs as f64),
+        units::duration(*.interval),
+        units::bytes(*.per_output),
+        units::bytes(*.limit)
+    )]
+    OutputVolume {
+        /// Predicted volume, bytes.
+        volume: f64,
+        /// Number of outputs.
+        outputs: usize,
+        /// Mean simulated time between outputs (s).
+        interval: f64,
+        /// Volume of one output, bytes.
+        per_output: f64,
+        /// Which limit: `--max-output` or the free space of the output folder.
+        what: String,
+        /// Its value, bytes.
+        limit: f64,
+    },
+    /// The run would take too many steps.
+    #[error(
+        "the run would take about {} time steps of {} to reach {}, about {} at a rough {} on {threads} thread(s); --max-steps is {}. The critical step is set by the stiffest, lightest material and the smallest element: check Young's modulus, density and the mesh, or raise --max-steps",
+        units::count(*.steps),
+        units::duration(*.dt),
+        units::duration(*.end),
+        units::duration(*.wall),
+        units::rate_of(*.rate, "point-steps"),
+        units::count(*.limit)
+    )]
+    Steps {
+        /// Predicted steps.
+        steps: f64,
+        /// Critical time step (s).
+        dt: f64,
+        /// Simulated time (s).
+        end: f64,
+        /// Estimated wall time (s).
+        wall: f64,
+        /// Assumed speed, point-steps per second.
+        rate: f64,
+        /// Threads assumed.
+        threads: usize,
+        /// The limit.
+        limit: f64,
+    },
+}
+
+/// Predicts what running `case` on `threads` threads will cost. Errors where the mesh or time
+/// step is unusable (inverted elements, no stiffness).
+pub fn plan(case: &Case, threads: usize) -> Result<Plan, String> {
+    let mesh = case.tet_mesh::<f64>().map_err(|e| e.to_string())?;
+    let dt = crate::input::time_step::critical(case, mesh.elements(), |e| mesh.min_altitude[e])?;
+    let points: u64 = case
+        .points_per_element
+        .iter()
+        .zip(&case.element_material)
+        .filter(|(_, &m)| m != 0)
+        .map(|(&n, _)| n as u64)
+        .sum();
+    let two_phase = case.has_liquid();
+    // Steps: every output interval (load step) rounds up to whole steps; a quasi-static load
+    // step ends after at most its step limit + 1.
+    let mut steps = if case.initial_step.is_some() {
+        1.0
+    } else {
+        0.0
+    };
+    let mut t0 = 0.0;
+    for &t in &case.output_times {
+        let n = ((t - t0) / dt).ceil().max(1.0);
+        steps += match case.quasi_static.and_then(|q| q.max_steps) {
+            Some(m) => n.min(m as f64 + 1.0),
+            None => n,
+        };
+        t0 = t;
+    }
+    let per_point = VTU_POINT_BYTES + if two_phase { VTU_LIQUID_BYTES } else { 0.0 };
+    let outputs = case.output_times.len();
+    let per_output =
+        points as f64 * per_point + VTU_FILE_BYTES + case.probes.len() as f64 * HISTORY_ROW_BYTES;
+    let corners = case.model.element_type.nodes() as f64;
+    let mesh_file = mesh.nodes() as f64 * 24.0
+        + case.model.element_count() as f64 * (corners * 8.0 + 9.0)
+        + VTU_FILE_BYTES;
+    let output_bytes = outputs as f64 * per_output + mesh_file;
+    let real = 8.0;
+    let point_bytes = if two_phase { 24.0 } else { 17.0 } * real + 13.0;
+    let node_bytes = if two_phase { 32.0 } else { 16.0 } * real + 24.0 + 6.0;
+    let element_bytes = (3.0 * 3.0 + 4.0 * 3.0 + 2.0) * real + 4.0 * 4.0 * 2.0;
+    let memory_bytes = points as f64 * point_bytes
+        + mesh.nodes() as f64 * node_bytes
+        + mesh.elements() as f64 * element_bytes;
+    let threads = threads.max(1);
+    let rate = threads as f64
+        * if two_phase {
+            TWO_PHASE_RATE_PER_THREAD
+        } else {
+            DRY_RATE_PER_THREAD
+        };
+    let wall_seconds = steps * (points as f64 / rate + STEP_OVERHEAD);
+    Ok(Plan {
+        points,
+        elements: case.model.element_count(),
+        nodes: case.model.node_count(),
+        two_phase,
+        dt,
+        end_time: case.end_time,
+        steps,
+        outputs,
+        probes: case.probes.len(),
+        output_bytes,
+        memory_bytes,
+        threads,
+        wall_seconds,
+    })
+}
+
+impl Plan {
+    /// The assumed speed, point-steps per second.
+    fn rate(&self) -> f64 {
+        self.threads as f64
+            * if self.two_phase {
+                TWO_PHASE_RATE_PER_THREAD
+            } else {
+                DRY_RATE_PER_THREAD
+            }
+    }
+
+    /// Checks the plan against `limits` and, when `out` is given, the free space where the
+    /// outputs go (its nearest existing ancestor).
+    pub fn check(&self, limits: &Limits, out: Option<&Path>) -> Result<(), PreflightError> {
+        let volume_error = |what: String, limit: f64| PreflightError::OutputVolume {
+            volume: self.output_bytes,
+            outputs: self.outputs,
+            interval: self.end_time / self.outputs.max(1) as f64,
+            per_output: self.output_bytes / self.outputs.max(1) as f64,
+            what,
+            limit,
+        };
+        if self.output_bytes > limits.max_output_bytes {
+            return Err(volume_error("--max-output".into(), limits.max_output_bytes));
+        }
+        if let Some(dir) = out {
+            if let Some((at, free)) = free_space(dir) {
+                if self.output_bytes > free as f64 {
+                    return Err(volume_error(
+                        format!("the free space on {}", at.display()),
+                        free as f64,
+                    ));
+                }
+            }
+        }
+        if self.steps > limits.max_steps {
+            return Err(PreflightError::Steps {
+                steps: self.steps,
+                dt: self.dt,
+                end: self.end_time,
+                wall: self.wall_seconds,
+                rate: self.rate(),
+                threads: self.threads,
+                limit: limits.max_steps,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Free bytes on the file system holding `dir` (or its nearest existing ancestor), with that
+/// folder; `None` where it cannot be told.
+fn free_space(dir: &Path) -> Option<(std::path::PathBuf, u64)> {
+    let mut at = if dir.is_absolute() {
+        dir.to_path_buf()
+    } else {
+        std::env::current_dir().ok()?.join(dir)
+    };
+    while !at.exists() {
+        at = at.parent()?.to_path_buf();
+    }
+    fs4::available_space(&at).ok().map(|b| (at, b))
+}
+
+impl fmt::Display for Plan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "  material points: {}{}",
+            units::count(self.points as f64),
+            if self.two_phase { " (two-phase)" } else { "" }
+        )?;
+        writeln!(
+            f,
+            "  time step: {} (critical); about {} steps to {}",
+            units::duration(self.dt),
+            units::count(self.steps),
+            units::duration(self.end_time)
+        )?;
+        writeln!(
+            f,
+            "  outputs: {} ({} probes), about {} on disk",
+            units::count(self.outputs as f64),
+            self.probes,
+            units::bytes(self.output_bytes)
+        )?;
+        writeln!(f, "  memory: about {}", units::bytes(self.memory_bytes))?;
+        write!(
+            f,
+            "  wall time: roughly {} on {} thread(s) (at about {})",
+            units::duration(self.wall_seconds),
+            self.threads,
+            units::rate_of(self.rate(), "point-steps")
+        )
+    }
+}

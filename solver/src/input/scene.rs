@@ -1,0 +1,704 @@
+//! TOML scenes for Gmsh meshes: materials per physical volume, fixities per physical surface or
+//! plane selector, tractions, gravity, time, Courant number, damping and output interval.
+//!
+//! Units are Anura3D's: kN, m, s, t; densities are given in kg/m³ (divided by 1000 here), moduli
+//! and tractions in kPa. Example (`testdata/column_gravity.toml`):
+//!
+//! ```toml
+//! mesh = "column_tet4.msh"        # relative to the scene file
+//! [time]
+//! end = 0.5                       # s
+//! courant = 0.5
+//! output_interval = 0.05
+//! [gravity]
+//! vector = [0.0, -9.81, 0.0]      # m/s²
+//! [damping]
+//! local = 0.75
+//! [[material]]
+//! physical = "soil"
+//! density = 2000.0                # kg/m³
+//! young = 10000.0                 # kPa
+//! poisson = 0.3
+//! points_per_element = 4
+//! [[fixity]]
+//! physical = "bottom"
+//! fixed = [true, true, true]      # x y z
+//! [[fixity]]
+//! plane = "x = 0"
+//! fixed = [true, false, false]
+//! [[traction]]
+//! physical = "top"
+//! traction = [0.0, -10.0, 0.0]    # kPa
+//! ramp = 0.0                      # s to reach full load (0: sudden)
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use mpm_shared::msh::{self, MshMesh};
+use mpm_shared::Model;
+
+use crate::input::case::{Case, Integration, LoadCurve, MaterialSpec};
+use crate::input::case::{ConsolidationSpec, Start, UndrainedState};
+use crate::material::law::LawSpec;
+use crate::material::liquid::LiquidSpec;
+
+/// The scene file's content.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Scene {
+    mesh: PathBuf,
+    time: Time,
+    #[serde(default)]
+    gravity: Option<Gravity>,
+    #[serde(default)]
+    damping: Option<Damping>,
+    material: Vec<Material>,
+    #[serde(default)]
+    fixity: Vec<Fixity>,
+    #[serde(default)]
+    traction: Vec<Traction>,
+    #[serde(default)]
+    probes: Vec<u32>,
+    #[serde(default)]
+    consolidation: Option<Consolidation>,
+}
+
+/// `[consolidation]`: compare with Terzaghi (one saturated material, load on the drained top).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Consolidation {
+    /// Top load (kPa, compression positive), as applied by the scene's traction.
+    load: f64,
+    /// "undrained" (default) or "rest".
+    #[serde(default = "default_start")]
+    start: String,
+    /// Also run the workshop-style configuration (at rest, sudden load) and report both.
+    #[serde(default)]
+    compare_rest: bool,
+    /// Time factor between outputs (sets time.output_interval).
+    #[serde(default)]
+    output_tv: Option<f64>,
+    /// Final time factor (sets time.end).
+    #[serde(default)]
+    end_tv: Option<f64>,
+}
+
+fn default_start() -> String {
+    "undrained".into()
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Time {
+    #[serde(default)]
+    end: Option<f64>,
+    #[serde(default = "default_courant")]
+    courant: f64,
+    #[serde(default)]
+    output_interval: Option<f64>,
+    #[serde(default)]
+    max_steps: Option<u64>,
+}
+
+fn default_courant() -> f64 {
+    0.9
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Gravity {
+    vector: [f64; 3],
+    #[serde(default)]
+    ramp: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Damping {
+    local: f64,
+    /// "phases" (default) or "anura3d" (see `case::DampingRule`).
+    #[serde(default)]
+    rule: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Material {
+    physical: String,
+    density: f64,
+    young: f64,
+    poisson: f64,
+    #[serde(default = "default_points")]
+    points_per_element: u32,
+    #[serde(default)]
+    liquid: Option<Liquid>,
+}
+
+/// The pore liquid of a saturated material (`[material.liquid]`); `density` of the material is
+/// then the grains' density ρs.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Liquid {
+    porosity: f64,
+    density: f64,
+    bulk_modulus: f64,
+    intrinsic_permeability: f64,
+    viscosity: f64,
+    #[serde(default)]
+    initial_pore_pressure: f64,
+}
+
+fn default_points() -> u32 {
+    4
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Fixity {
+    #[serde(default)]
+    physical: Option<String>,
+    #[serde(default)]
+    plane: Option<String>,
+    fixed: [bool; 3],
+    /// Liquid fixities (impermeable directions); default: those of the solid.
+    #[serde(default)]
+    liquid: Option<[bool; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Traction {
+    physical: String,
+    traction: [f64; 3],
+    #[serde(default)]
+    ramp: f64,
+}
+
+/// Errors in a scene, naming the file and the item.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// TOML syntax or an unknown/missing key (the message carries line and column).
+    #[error("{file}: {message}")]
+    Parse {
+        /// Scene file.
+        file: String,
+        /// What the TOML reader said.
+        message: String,
+    },
+    /// A value or reference that cannot be used.
+    #[error("{file}: {item}: {message}")]
+    Invalid {
+        /// Scene file.
+        file: String,
+        /// The offending item, e.g. `material "soil"`.
+        item: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The mesh could not be read.
+    #[error(transparent)]
+    Mesh(#[from] mpm_shared::Error),
+}
+
+/// The node lists (`.msh` node indices, corners first) of the surface elements in the physical
+/// surface group `name`, or `None` if the mesh has no such group.
+fn physical_surface<'m>(mesh: &'m MshMesh, name: &str) -> Option<Vec<&'m [u32]>> {
+    let tag = mesh
+        .physical_names
+        .iter()
+        .find(|p| p.dim == 2 && p.name == name)?
+        .tag;
+    let mut out = Vec::new();
+    for set in mesh.sets.iter().filter(|s| s.dim() == 2) {
+        for (e, &phys) in set.physical.iter().enumerate() {
+            if phys == tag {
+                out.push(&set.nodes[e * set.nodes_per..(e + 1) * set.nodes_per]);
+            }
+        }
+    }
+    Some(out)
+}
+
+/// The triangles (model node ids of their corners) of the physical surface group `name`.
+fn physical_faces(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<[u32; 3]>> {
+    let faces = physical_surface(mesh, name)?;
+    Some(
+        faces
+            .iter()
+            .map(|f| [0, 1, 2].map(|k| node_map[f[k] as usize]))
+            .collect(),
+    )
+}
+
+/// All nodes (model numbering, corner and mid-edge) of the physical surface group `name`.
+fn physical_nodes(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<u32>> {
+    let mut out: Vec<u32> = physical_surface(mesh, name)?
+        .iter()
+        .flat_map(|f| f.iter().map(|&n| node_map[n as usize]))
+        .filter(|&n| n != u32::MAX)
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    Some(out)
+}
+
+/// Parses `x = 0.5` style selectors: (axis, value).
+fn parse_plane(s: &str) -> Option<(usize, f64)> {
+    let (a, v) = s.split_once('=')?;
+    let axis = match a.trim() {
+        "x" => 0,
+        "y" => 1,
+        "z" => 2,
+        _ => return None,
+    };
+    Some((axis, v.trim().parse().ok()?))
+}
+
+/// A `[[material]]` entry as the scene gives it (densities in kg/m³, as written).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialInput {
+    /// The physical volume it fills (also the material's name).
+    pub physical: String,
+    /// Density (kg/m³): of the material when dry, of its grains when saturated.
+    pub density: f64,
+    /// Young's modulus (kPa).
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// Material points per element.
+    pub points_per_element: u32,
+    /// The pore liquid of a saturated material.
+    pub liquid: Option<LiquidInput>,
+}
+
+/// A `[material.liquid]` entry as the scene gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiquidInput {
+    /// Porosity n.
+    pub porosity: f64,
+    /// Liquid density (kg/m³).
+    pub density: f64,
+    /// Bulk modulus of the liquid (kPa).
+    pub bulk_modulus: f64,
+    /// Intrinsic permeability (m²).
+    pub intrinsic_permeability: f64,
+    /// Dynamic viscosity (kPa·s).
+    pub viscosity: f64,
+    /// Pore pressure at t = 0 (kPa).
+    pub initial_pore_pressure: f64,
+}
+
+/// A `[[traction]]` entry with the faces its physical surface resolved to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TractionInput {
+    /// The physical surface.
+    pub physical: String,
+    /// Its triangles: model node ids (0-based) of their corners, in the mesh file's order.
+    pub faces: Vec<[u32; 3]>,
+    /// Traction vector (kPa).
+    pub traction: [f64; 3],
+    /// Seconds to full load (0: sudden).
+    pub ramp: f64,
+}
+
+/// A scene resolved against its mesh: the case it runs, plus the scene's own values that the
+/// case no longer holds as written (for exporting it to another program).
+#[derive(Debug, Clone)]
+pub struct Resolved {
+    /// The case the scene runs.
+    pub case: Case,
+    /// The scene's material entries by model material index (entry 0 unused).
+    pub materials: Vec<Option<MaterialInput>>,
+    /// The scene's tractions in file order.
+    pub tractions: Vec<TractionInput>,
+}
+
+/// Reads a scene file and builds the case it describes.
+pub fn load(path: &Path) -> Result<Case, SceneError> {
+    resolve(path).map(|r| r.case)
+}
+
+/// Reads a scene file into the case it describes and the scene values behind it.
+pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Parse {
+        file: file.clone(),
+        message: e.to_string(),
+    })?;
+    let scene: Scene = toml::from_str(&text).map_err(|e| SceneError::Parse {
+        file: file.clone(),
+        message: e.to_string(),
+    })?;
+    let invalid = |item: String, message: String| SceneError::Invalid {
+        file: file.clone(),
+        item,
+        message,
+    };
+    let mesh_path = path.parent().unwrap_or(Path::new(".")).join(&scene.mesh);
+    let data = mpm_shared::io::read_input(&mesh_path)?;
+    let mesh_name = mesh_path.display().to_string();
+    let msh_mesh = msh::read(&data, &mesh_name)?;
+    let (model, node_map) = msh::to_model_with_map(&msh_mesh, &mesh_name)?;
+    if model.dimension.coords() != 3 {
+        return Err(invalid(
+            "mesh".into(),
+            "scenes need a 3D tetrahedral mesh".into(),
+        ));
+    }
+    let t = &scene.time;
+    if !(t.courant > 0.0 && t.courant <= 1.0) {
+        return Err(invalid(
+            "time.courant".into(),
+            format!("must be in (0, 1], got {}", t.courant),
+        ));
+    }
+    // Materials: model material k is the k-th physical volume group by tag (see msh::to_model).
+    let names: Vec<String> = model.materials().iter().map(|m| m.name.clone()).collect();
+    let mut materials = vec![None; names.len() + 1];
+    let mut inputs: Vec<Option<MaterialInput>> = vec![None; names.len() + 1];
+    let mut points = vec![0u32; names.len() + 1];
+    for m in &scene.material {
+        let item = format!("material \"{}\"", m.physical);
+        let k = names.iter().position(|n| *n == m.physical).ok_or_else(|| {
+            invalid(
+                item.clone(),
+                format!("no physical volume of that name in {mesh_name} (it has {names:?})"),
+            )
+        })? + 1;
+        let spec = match &m.liquid {
+            None => MaterialSpec::new(&m.physical, m.density, m.young, m.poisson),
+            Some(l) => LiquidSpec::new(
+                l.porosity,
+                l.density,
+                l.bulk_modulus,
+                l.intrinsic_permeability,
+                l.viscosity,
+            )
+            .and_then(|liquid| {
+                let mut s = MaterialSpec::saturated(
+                    &m.physical,
+                    m.density,
+                    LawSpec::linear_elastic(m.young, m.poisson).map_err(|e| e.to_string())?,
+                    liquid,
+                )?;
+                s.initial_pore_pressure = l.initial_pore_pressure;
+                Ok(s)
+            }),
+        }
+        .map_err(|e| invalid(item.clone(), e))?;
+        materials[k] = Some(spec);
+        points[k] = m.points_per_element;
+        inputs[k] = Some(MaterialInput {
+            physical: m.physical.clone(),
+            density: m.density,
+            young: m.young,
+            poisson: m.poisson,
+            points_per_element: m.points_per_element,
+            liquid: m.liquid.as_ref().map(|l| LiquidInput {
+                porosity: l.porosity,
+                density: l.density,
+                bulk_modulus: l.bulk_modulus,
+                intrinsic_permeability: l.intrinsic_permeability,
+                viscosity: l.viscosity,
+                initial_pore_pressure: l.initial_pore_pressure,
+            }),
+        });
+    }
+    let element_material: Vec<u32> = model
+        .element_materials()
+        .unwrap_or_default()
+        .iter()
+        .map(|&m| m as u32)
+        .collect();
+    for (k, m) in materials.iter().enumerate().skip(1) {
+        if m.is_none() && element_material.contains(&(k as u32)) {
+            return Err(invalid(
+                format!("physical volume \"{}\"", names[k - 1]),
+                "has elements but no [[material]] entry".into(),
+            ));
+        }
+    }
+    let points_per_element: Vec<u32> = element_material
+        .iter()
+        .map(|&m| points[m as usize])
+        .collect();
+    let mut fixed = vec![[false; 3]; model.node_count()];
+    let mut liquid_fixed = vec![[false; 3]; model.node_count()];
+    let size = (0..3)
+        .map(|a| {
+            let (lo, hi) = model
+                .coords
+                .chunks_exact(3)
+                .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p[a]), h.max(p[a])));
+            hi - lo
+        })
+        .fold(0.0, f64::max);
+    for f in &scene.fixity {
+        let nodes: Vec<u32> = match (&f.physical, &f.plane) {
+            (Some(name), None) => physical_nodes(&msh_mesh, &node_map, name).ok_or_else(|| {
+                invalid(
+                    format!("fixity \"{name}\""),
+                    format!("no physical surface of that name in {mesh_name}"),
+                )
+            })?,
+            (None, Some(plane)) => {
+                let (axis, value) = parse_plane(plane).ok_or_else(|| {
+                    invalid(
+                        format!("fixity plane \"{plane}\""),
+                        "expected 'x = value', 'y = value' or 'z = value'".into(),
+                    )
+                })?;
+                let tol = 1e-9 * size.max(1e-300);
+                let found: Vec<u32> = (0..model.node_count() as u32)
+                    .filter(|&n| (model.node(n as usize)[axis] - value).abs() <= tol)
+                    .collect();
+                if found.is_empty() {
+                    return Err(invalid(
+                        format!("fixity plane \"{plane}\""),
+                        "selects no node".into(),
+                    ));
+                }
+                found
+            }
+            _ => {
+                return Err(invalid(
+                    "fixity".into(),
+                    "give exactly one of physical = \"name\" or plane = \"x = value\"".into(),
+                ))
+            }
+        };
+        let liquid = f.liquid.unwrap_or(f.fixed);
+        for n in nodes {
+            for a in 0..3 {
+                fixed[n as usize][a] |= f.fixed[a];
+                liquid_fixed[n as usize][a] |= liquid[a];
+            }
+        }
+    }
+    let nodes = model.node_count();
+    let mut traction = vec![[0.0; 3]; nodes];
+    let mut traction_ramp = 0.0f64;
+    let mut tractions = Vec::with_capacity(scene.traction.len());
+    for tr in &scene.traction {
+        let faces = physical_faces(&msh_mesh, &node_map, &tr.physical).ok_or_else(|| {
+            invalid(
+                format!("traction \"{}\"", tr.physical),
+                format!("no physical surface of that name in {mesh_name}"),
+            )
+        })?;
+        add_face_loads(&model, &faces, tr.traction, &mut traction);
+        traction_ramp = traction_ramp.max(tr.ramp);
+        tractions.push(TractionInput {
+            physical: tr.physical.clone(),
+            faces,
+            traction: tr.traction,
+            ramp: tr.ramp,
+        });
+    }
+    let gravity = scene.gravity.as_ref().map_or([0.0; 3], |g| g.vector);
+    let gravity_ramp = scene.gravity.as_ref().map_or(0.0, |g| g.ramp);
+    let damping = scene.damping.as_ref().map_or(0.0, |d| d.local);
+    if !(0.0..1.0).contains(&damping) {
+        return Err(invalid(
+            "damping.local".into(),
+            format!("must be in [0, 1), got {damping}"),
+        ));
+    }
+    let damping_rule = match scene.damping.as_ref().and_then(|d| d.rule.as_deref()) {
+        None | Some("phases") => crate::input::case::DampingRule::Phases,
+        Some("anura3d") => crate::input::case::DampingRule::Anura3d,
+        Some(other) => {
+            return Err(invalid(
+                "damping.rule".into(),
+                format!("expected \"phases\" or \"anura3d\", got \"{other}\""),
+            ))
+        }
+    };
+    // Consolidation runs may set their times by time factor (c_v of the saturated material).
+    let consolidation = match &scene.consolidation {
+        None => None,
+        Some(c) => {
+            let start = match c.start.as_str() {
+                "undrained" => Start::Undrained,
+                "rest" => Start::Rest,
+                other => {
+                    return Err(invalid(
+                        "consolidation.start".into(),
+                        format!("expected \"undrained\" or \"rest\", got \"{other}\""),
+                    ))
+                }
+            };
+            if !(c.load > 0.0) {
+                return Err(invalid(
+                    "consolidation.load".into(),
+                    format!("must be positive, got {}", c.load),
+                ));
+            }
+            Some(ConsolidationSpec {
+                load: c.load,
+                start,
+                compare_rest: c.compare_rest,
+            })
+        }
+    };
+    let by_tv = |tv: Option<f64>| -> Result<Option<f64>, SceneError> {
+        let Some(tv) = tv else { return Ok(None) };
+        let sat: Vec<&MaterialSpec> = materials
+            .iter()
+            .flatten()
+            .filter(|m| m.liquid.is_some())
+            .collect();
+        let [m] = sat.as_slice() else {
+            return Err(invalid(
+                "consolidation".into(),
+                "times by time factor need exactly one saturated material".into(),
+            ));
+        };
+        let cv = m
+            .liquid
+            .as_ref()
+            .expect("saturated")
+            .consolidation_coefficient(m.oedometric());
+        let (lo, hi) = model
+            .coords
+            .chunks_exact(3)
+            .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p[1]), h.max(p[1])));
+        Ok(Some(tv * (hi - lo) * (hi - lo) / cv))
+    };
+    let (c_end, c_out) = match &scene.consolidation {
+        Some(c) => (by_tv(c.end_tv)?, by_tv(c.output_tv)?),
+        None => (None, None),
+    };
+    let end = c_end.or(t.end).unwrap_or(0.0);
+    let interval = c_out.or(t.output_interval).unwrap_or(0.0);
+    if !(end > 0.0) {
+        return Err(invalid(
+            "time.end".into(),
+            format!("must be given and positive, got {end}"),
+        ));
+    }
+    if !(interval > 0.0) {
+        return Err(invalid(
+            "time.output_interval".into(),
+            format!("must be given and positive, got {interval}"),
+        ));
+    }
+    let n_out = (end / interval).round().max(1.0);
+    if n_out > crate::input::preflight::MAX_OUTPUTS {
+        return Err(invalid(
+            "time.output_interval".into(),
+            format!(
+                "{} asks for {} outputs over {}; at most {} are allowed (each writes a particle file): give a longer interval",
+                crate::driver::units::duration(interval),
+                crate::driver::units::count(n_out),
+                crate::driver::units::duration(end),
+                crate::driver::units::count(crate::input::preflight::MAX_OUTPUTS)
+            ),
+        ));
+    }
+    let n_out = n_out as usize;
+    let output_times = (1..=n_out)
+        .map(|k| {
+            if k == n_out {
+                end
+            } else {
+                (k as f64 * interval).min(end)
+            }
+        })
+        .collect();
+    let element_count = model.element_count();
+    // The undrained start is an initial state of the saturated points, resolved here.
+    let initial_state = match &consolidation {
+        Some(c) if c.start == Start::Undrained => {
+            let sat: Vec<&MaterialSpec> = materials
+                .iter()
+                .flatten()
+                .filter(|m| m.liquid.is_some())
+                .collect();
+            let [m] = sat.as_slice() else {
+                return Err(invalid(
+                    "consolidation".into(),
+                    "a consolidation run needs exactly one saturated material".into(),
+                ));
+            };
+            UndrainedState::under(m, c.load)
+        }
+        _ => None,
+    };
+    let case = Case {
+        name: path
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or_default(),
+        inputs: vec![file.clone(), mesh_name],
+        model,
+        materials,
+        element_material,
+        points_per_element,
+        input_element: (0..element_count as u32).collect(),
+        input_node: (0..nodes as u32).collect(),
+        fixed,
+        liquid_fixed,
+        traction,
+        point_loads: Vec::new(),
+        traction_curve: LoadCurve::ramp(traction_ramp),
+        liquid_traction: vec![[0.0; 3]; nodes],
+        liquid_curve: LoadCurve::Step,
+        liquid_load_on_mixture: true,
+        gravity,
+        gravity_curve: LoadCurve::ramp(gravity_ramp),
+        courant: t.courant,
+        damping,
+        end_time: end,
+        output_times,
+        max_steps: t.max_steps,
+        quasi_static: None,
+        objective_stress: false,
+        integration: Integration::MaterialPoints,
+        anura3d_time_step: false,
+        damping_rule,
+        drag: crate::input::case::Drag::Implicit,
+        initial_step: None,
+        smooth_pressure: true,
+        strain_smoothing: false,
+        fixed_liquid_mass: false,
+        consolidation,
+        initial_state,
+        probes: scene.probes.clone(),
+        prescribed: None,
+        engine: Default::default(),
+    };
+    Ok(Resolved {
+        case,
+        materials: inputs,
+        tractions,
+    })
+}
+
+/// Adds the nodal forces of a uniform traction `t` (kPa) on triangles `faces` (model node ids of
+/// their corners): each corner takes a third of the face's area times `t`.
+pub fn add_face_loads(model: &Model, faces: &[[u32; 3]], t: [f64; 3], out: &mut [[f64; 3]]) {
+    for f in faces {
+        let area = triangle_area(model, [f[0] as usize, f[1] as usize, f[2] as usize]);
+        for &n in f {
+            for d in 0..3 {
+                out[n as usize][d] += area / 3.0 * t[d];
+            }
+        }
+    }
+}
+
+/// Area of the triangle with corners at model nodes `n` (0-based).
+pub fn triangle_area(model: &Model, n: [usize; 3]) -> f64 {
+    let p = n.map(|i| model.node(i));
+    let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+    let b = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+    let c = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+}

@@ -1,0 +1,38 @@
+//! The critical time step of a case: the Courant number times the shortest time a wave takes
+//! to cross an element. The engine steps with it and the pre-flight check predicts the step
+//! count from it, so both read it from here.
+
+use crate::input::case::{Case, Drag};
+
+/// Courant number × min over elements of (smallest altitude / fastest wave speed), in s;
+/// `min_altitude(e)` is element `e`'s smallest altitude (m). An error when it is not positive
+/// and finite (a degenerate element, or a material without stiffness or mass).
+pub fn critical(
+    case: &Case,
+    elements: usize,
+    min_altitude: impl Fn(usize) -> f64,
+) -> Result<f64, String> {
+    // Empty elements may fill: they take the fastest material's speed. An explicit drag must
+    // be resolved by the step too: Mieremet's speed has its term.
+    let anura3d_step = case.anura3d_time_step || case.drag == Drag::Explicit;
+    let mut dt = f64::INFINITY;
+    for e in 0..elements {
+        let dx = min_altitude(e);
+        let m = case.element_material[e] as usize;
+        let c = match case.materials.get(m).and_then(|s| s.as_ref()) {
+            Some(s) => s.wave_speed_at(dx, anura3d_step),
+            None => case
+                .materials
+                .iter()
+                .flatten()
+                .map(|s| s.wave_speed_at(dx, anura3d_step))
+                .fold(0.0, f64::max),
+        };
+        dt = dt.min(dx / c);
+    }
+    let dt = case.courant * dt;
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(format!("critical time step is not positive ({dt})"));
+    }
+    Ok(dt)
+}

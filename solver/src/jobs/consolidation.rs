@@ -1,0 +1,499 @@
+//! One-dimensional consolidation runs (an oedometer of saturated soil under a top load, drained
+//! at the top) compared with Terzaghi: the undrained start, the per-output record (time factor,
+//! settlement, pore-pressure errors) and the `consolidation.csv` / `consolidation.png` report.
+
+use std::path::Path;
+
+use crate::driver::engine::Engine;
+use crate::driver::run::{run_with, RunError, RunOptions};
+use crate::input::case::Case;
+use crate::jobs::terzaghi;
+use crate::material::liquid::LiquidSpec;
+use crate::real::Real;
+
+pub use crate::input::case::{ConsolidationSpec, Start};
+
+/// The layer and material constants the comparison needs.
+#[derive(Debug, Clone, Copy)]
+pub struct Layer {
+    /// Drained top (y) and bottom of the layer.
+    pub top: f64,
+    /// Height H.
+    pub height: f64,
+    /// Plan area (m²).
+    pub area: f64,
+    /// Oedometric modulus.
+    pub e_oed: f64,
+    /// K_w / n.
+    pub kw_over_n: f64,
+    /// Consolidation coefficient c_v.
+    pub cv: f64,
+    /// Initial excess pore pressure u0 = q (K_w/n) / (E_oed + K_w/n).
+    pub u0: f64,
+    /// Load.
+    pub load: f64,
+}
+
+impl Layer {
+    /// The layer of `case` (its one saturated material) under `spec`.
+    pub fn of(case: &Case, spec: &ConsolidationSpec) -> Result<Self, String> {
+        let sat: Vec<_> = case
+            .materials
+            .iter()
+            .flatten()
+            .filter(|m| m.liquid.is_some())
+            .collect();
+        let [m] = sat.as_slice() else {
+            return Err("a consolidation run needs exactly one saturated material".into());
+        };
+        let l: &LiquidSpec = m.liquid.as_ref().expect("saturated");
+        let (mut lo, mut hi) = (f64::MAX, f64::MIN);
+        for p in case.model.coords.chunks_exact(3) {
+            lo = lo.min(p[1]);
+            hi = hi.max(p[1]);
+        }
+        let height = hi - lo;
+        let volume: f64 = (0..case.model.element_count())
+            .filter(|&e| case.element_material[e] != 0)
+            .map(|e| tet_volume(&case.model, e))
+            .sum();
+        let e_oed = m.oedometric();
+        let kw_over_n = l.bulk_modulus / l.porosity;
+        Ok(Layer {
+            top: hi,
+            height,
+            area: volume / height,
+            e_oed,
+            kw_over_n,
+            cv: l.consolidation_coefficient(e_oed),
+            u0: spec.load * kw_over_n / (e_oed + kw_over_n),
+            load: spec.load,
+        })
+    }
+
+    /// Time factor at time `t`.
+    pub fn tv(&self, t: f64) -> f64 {
+        self.cv * t / (self.height * self.height)
+    }
+
+    /// Time at time factor `tv`.
+    pub fn time(&self, tv: f64) -> f64 {
+        tv * self.height * self.height / self.cv
+    }
+
+    /// Vertical strain of the undrained 1D compression under the load.
+    pub fn undrained_strain(&self) -> f64 {
+        -self.load / (self.e_oed + self.kw_over_n)
+    }
+
+    /// Terzaghi's settlement: the undrained part at once, the rest by the degree of
+    /// consolidation.
+    pub fn settlement(&self, tv: f64) -> f64 {
+        let immediate = self.load * self.height / (self.e_oed + self.kw_over_n);
+        let last = self.load * self.height / self.e_oed;
+        immediate + (last - immediate) * terzaghi::degree(tv)
+    }
+}
+
+fn tet_volume(model: &mpm_shared::Model, e: usize) -> f64 {
+    let c = model.element(e);
+    let p: Vec<&[f64]> = c[..4].iter().map(|&n| model.node(n as usize)).collect();
+    let d = |a: usize| [p[a][0] - p[0][0], p[a][1] - p[0][1], p[a][2] - p[0][2]];
+    let (a, b, c) = (d(1), d(2), d(3));
+    (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+        + a[2] * (b[0] * c[1] - b[1] * c[0]))
+        .abs()
+        / 6.0
+}
+
+/// One output time of a consolidation run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Record {
+    /// Time (s).
+    pub time: f64,
+    /// Time factor.
+    pub tv: f64,
+    /// Settlement of the top (m): the skeleton's volume loss over the plan area, plus the
+    /// undrained start's strain when the run began there.
+    pub settlement: f64,
+    /// Terzaghi's settlement.
+    pub terzaghi: f64,
+    /// RMS over saturated points of (excess pore pressure - Terzaghi) / u0.
+    pub rms: f64,
+    /// Largest |excess pore pressure - Terzaghi| / u0.
+    pub max: f64,
+}
+
+/// Collects a run's records.
+#[derive(Debug, Clone)]
+pub struct Tracker {
+    /// The layer.
+    pub layer: Layer,
+    /// Settlement already present at the start (undrained start).
+    pub offset: f64,
+    /// Initial total volume of the saturated points.
+    pub volume0: f64,
+    /// Records, one per output.
+    pub records: Vec<Record>,
+    /// Pore-pressure profiles (relative depth, excess pressure / u0 per point) at the
+    /// isochrone time factors [`ISOCHRONES`].
+    pub profiles: Vec<(f64, Vec<(f64, f64)>)>,
+}
+
+/// Time factors of the plotted isochrones.
+pub const ISOCHRONES: [f64; 5] = [0.05, 0.1, 0.2, 0.5, 1.0];
+
+impl Tracker {
+    /// Starts tracking `engine` (call after any initial state is applied).
+    pub fn new<R: Real>(engine: &Engine<R>, layer: Layer, start: Start) -> Self {
+        let p = &engine.particles;
+        let volume0 = (0..p.len())
+            .filter(|&i| engine.fluids[p.material[i] as usize].is_some())
+            .map(|i| p.volume[i].f64())
+            .sum();
+        let offset = match start {
+            Start::Rest => 0.0,
+            Start::Undrained => -layer.undrained_strain() * layer.height,
+        };
+        Tracker {
+            layer,
+            offset,
+            volume0,
+            records: Vec::new(),
+            profiles: Vec::new(),
+        }
+    }
+
+    /// Records the state at the engine's current time.
+    pub fn record<R: Real>(&mut self, engine: &Engine<R>) {
+        let l = &self.layer;
+        let p = &engine.particles;
+        let tv = l.tv(engine.time);
+        let (mut volume, mut sum2, mut max, mut count) = (0.0, 0.0, 0.0f64, 0usize);
+        let keep = ISOCHRONES.iter().any(|&x| (x - tv).abs() < 1e-6);
+        let mut profile = Vec::new();
+        if let Some(lp) = &p.liquid {
+            for i in 0..p.len() {
+                if engine.fluids[p.material[i] as usize].is_none() || !p.active[i] {
+                    continue;
+                }
+                volume += p.volume[i].f64();
+                let zeta = ((l.top - p.x[i][1].f64()) / l.height).clamp(0.0, 1.0);
+                let want = l.u0 * terzaghi::excess_pressure(zeta, tv);
+                let err = (-lp.p[i].f64() - want) / l.u0;
+                if keep {
+                    profile.push((zeta, -lp.p[i].f64() / l.u0));
+                }
+                sum2 += err * err;
+                max = max.max(err.abs());
+                count += 1;
+            }
+        }
+        if keep {
+            self.profiles.push((tv, profile));
+        }
+        self.records.push(Record {
+            time: engine.time,
+            tv,
+            settlement: self.offset + (self.volume0 - volume) / l.area,
+            terzaghi: l.settlement(tv),
+            rms: (sum2 / count.max(1) as f64).sqrt(),
+            max,
+        });
+    }
+}
+
+/// The text of `consolidation.csv`: one row per output time of the default run, with the
+/// workshop-style run's figures beside them when it was made.
+pub fn csv(default: &Tracker, workshop: Option<&Tracker>) -> String {
+    use mpm_shared::text::real_to_string as r;
+    let mut s = String::from("tv,time,settlement,terzaghi_settlement,rms_error,max_error");
+    if workshop.is_some() {
+        s.push_str(",workshop_settlement,workshop_rms_error,workshop_max_error");
+    }
+    s.push('\n');
+    for (k, d) in default.records.iter().enumerate() {
+        let mut cols = vec![
+            r(d.tv),
+            r(d.time),
+            r(d.settlement),
+            r(d.terzaghi),
+            r(d.rms),
+            r(d.max),
+        ];
+        if let Some(w) = workshop {
+            match w.records.get(k) {
+                Some(x) => cols.extend([r(x.settlement), r(x.rms), r(x.max)]),
+                None => cols.extend(["".into(), "".into(), "".into()]),
+            }
+        }
+        s.push_str(&cols.join(","));
+        s.push('\n');
+    }
+    s
+}
+
+/// Writes `consolidation.csv` into `dir` (atomically).
+pub fn write_csv(
+    dir: &Path,
+    default: &Tracker,
+    workshop: Option<&Tracker>,
+) -> mpm_shared::Result<()> {
+    mpm_shared::io::write_output(
+        &dir.join("consolidation.csv"),
+        csv(default, workshop).as_bytes(),
+    )
+}
+
+/// The consolidation comparison as an observer of the run: it takes the start state and
+/// records every output time against Terzaghi.
+struct Observer {
+    layer: Layer,
+    start: Start,
+    tracker: Option<Tracker>,
+}
+
+impl<R: Real> crate::driver::run::Observer<R> for Observer {
+    fn on_start(&mut self, engine: &Engine<R>) -> Result<(), RunError> {
+        self.tracker = Some(Tracker::new(engine, self.layer, self.start));
+        Ok(())
+    }
+
+    fn on_output(&mut self, engine: &Engine<R>) {
+        if let Some(t) = &mut self.tracker {
+            t.record(engine);
+        }
+    }
+}
+
+/// Runs the consolidation case `case` into `dir`: its final engine and the record of every
+/// output time against Terzaghi.
+pub fn run_tracked<R: Real>(
+    case: &Case,
+    dir: &Path,
+    options: &RunOptions,
+) -> Result<(Engine<R>, Tracker), RunError> {
+    let spec = case
+        .consolidation
+        .ok_or_else(|| RunError::Setup("the case has no [consolidation] table".into()))?;
+    let mut observer = Observer {
+        layer: Layer::of(case, &spec).map_err(RunError::Setup)?,
+        start: spec.start,
+        tracker: None,
+    };
+    let engine = run_with(case, dir, options, &mut observer)?;
+    let tracker = observer.tracker.expect("on_start ran");
+    Ok((engine, tracker))
+}
+
+/// Runs a consolidation case into `dir` (and, with `compare_rest`, its workshop-style twin
+/// into `dir/workshop`), then writes `consolidation.csv` and `consolidation.png` into `dir`.
+/// Returns the default run's engine and both records.
+pub fn run_job<R: Real>(
+    case: &Case,
+    dir: &Path,
+    options: &RunOptions,
+) -> Result<(Engine<R>, Tracker, Option<Tracker>), RunError> {
+    let spec = case
+        .consolidation
+        .ok_or_else(|| RunError::Setup("the case has no [consolidation] table".into()))?;
+    let (engine, tracker) = run_tracked::<R>(case, dir, options)?;
+    let workshop = if spec.compare_rest && spec.start != Start::Rest {
+        let mut twin = case.clone();
+        twin.consolidation = Some(ConsolidationSpec {
+            start: Start::Rest,
+            compare_rest: false,
+            ..spec
+        });
+        twin.initial_state = None;
+        let (_, t) = run_tracked::<R>(&twin, &dir.join("workshop"), options)?;
+        Some(t)
+    } else {
+        None
+    };
+    write_csv(dir, &tracker, workshop.as_ref())?;
+    write_png(dir, &case.name, &tracker, workshop.as_ref())?;
+    Ok((engine, tracker, workshop))
+}
+
+/// A TrueType font for the plot's text, from the usual system places (DejaVu Sans or
+/// Liberation Sans); `None` when there is none, and the plot is then drawn without text.
+fn font() -> Option<&'static [u8]> {
+    use std::sync::OnceLock;
+    static FONT: OnceLock<Option<&'static [u8]>> = OnceLock::new();
+    *FONT.get_or_init(|| {
+        [
+            "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+            "/usr/share/fonts/TTF/DejaVuSans.ttf",
+            "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+            "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+            "/Library/Fonts/Arial.ttf",
+        ]
+        .iter()
+        .find_map(|p| std::fs::read(p).ok())
+        .map(|bytes| {
+            let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+            let _ = plotters::style::register_font(
+                "sans-serif",
+                plotters::style::FontStyle::Normal,
+                bytes,
+            );
+            bytes
+        })
+    })
+}
+
+/// Writes `consolidation.png` into `dir` (atomically): pore-pressure isochrones against
+/// Terzaghi on the left (points of the default run as dots, Terzaghi as lines), settlement
+/// against time on the right; `name` (the case) heads both.
+pub fn write_png(
+    dir: &Path,
+    name: &str,
+    default: &Tracker,
+    workshop: Option<&Tracker>,
+) -> mpm_shared::Result<()> {
+    let path = dir.join("consolidation.png");
+    let tmp = dir.join(".consolidation.tmp.png");
+    draw(&tmp, name, default, workshop).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        mpm_shared::Error::io(&path, std::io::Error::other(e.to_string()))
+    })?;
+    std::fs::rename(&tmp, &path).map_err(|e| mpm_shared::Error::io(&path, e))
+}
+
+fn draw(
+    path: &Path,
+    name: &str,
+    default: &Tracker,
+    workshop: Option<&Tracker>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    let text = font().is_some();
+    let root = BitMapBackend::new(path, (1400, 650)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (left, right) = root.split_horizontally(700);
+    let colours = [RED, BLUE, GREEN, MAGENTA, BLACK];
+    let l = &default.layer;
+
+    // Isochrones: excess pressure / u0 (x) against depth / H (y, 0 at the drained top).
+    let mut chart = ChartBuilder::on(&left);
+    chart.margin(20);
+    if text {
+        chart
+            .caption(
+                format!("{name}: excess pore pressure against depth"),
+                ("sans-serif", 22),
+            )
+            .x_label_area_size(40)
+            .y_label_area_size(50);
+    }
+    let mut chart = chart.build_cartesian_2d(0.0..1.1f64, 1.0..0.0f64)?;
+    if text {
+        chart
+            .configure_mesh()
+            .x_desc("excess pore pressure u / u0 (u0: initial excess pressure)")
+            .y_desc("depth below the drained top z / H")
+            .draw()?;
+    } else {
+        chart.configure_mesh().disable_mesh().draw()?;
+    }
+    for (k, &tv) in ISOCHRONES.iter().enumerate() {
+        let colour = colours[k % colours.len()];
+        if let Some((_, pts)) = default.profiles.iter().find(|(t, _)| (t - tv).abs() < 1e-6) {
+            chart.draw_series(
+                pts.iter()
+                    .map(|&(z, u)| Circle::new((u, z), 1, colour.mix(0.5).filled())),
+            )?;
+        }
+        let line = chart.draw_series(LineSeries::new(
+            (0..=200).map(|i| {
+                let z = i as f64 / 200.0;
+                (terzaghi::excess_pressure(z, tv), z)
+            }),
+            colour.stroke_width(2),
+        ))?;
+        if text {
+            line.label(format!(
+                "T_v = {tv}: Terzaghi (line), material points (dots)"
+            ))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+        }
+    }
+    if text {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerLeft)
+            .draw()?;
+    }
+
+    // Settlement against time.
+    let t_end = default.records.last().map_or(1.0, |r| r.time);
+    let s_max = l.load * l.height / l.e_oed * 1.1;
+    let mut chart = ChartBuilder::on(&right);
+    chart.margin(20);
+    if text {
+        chart
+            .caption(
+                format!("{name}: settlement of the top against time"),
+                ("sans-serif", 22),
+            )
+            .x_label_area_size(40)
+            .y_label_area_size(50);
+    }
+    let mut chart = chart.build_cartesian_2d(0.0..t_end, 0.0..s_max * 1e3)?;
+    if text {
+        chart
+            .configure_mesh()
+            .x_desc("time t (s)")
+            .y_desc("settlement of the top (mm)")
+            .draw()?;
+    } else {
+        chart.configure_mesh().disable_mesh().draw()?;
+    }
+    let terzaghi_line = chart.draw_series(LineSeries::new(
+        (0..=200).map(|i| {
+            let t = t_end * i as f64 / 200.0;
+            (t, l.settlement(l.tv(t)) * 1e3)
+        }),
+        BLACK.stroke_width(2),
+    ))?;
+    if text {
+        terzaghi_line
+            .label("Terzaghi")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    }
+    let ours = chart.draw_series(
+        default
+            .records
+            .iter()
+            .map(|r| Circle::new((r.time, r.settlement * 1e3), 4, RED.filled())),
+    )?;
+    if text {
+        ours.label("default (undrained start)")
+            .legend(|(x, y)| Circle::new((x + 10, y), 4, RED.filled()));
+    }
+    if let Some(w) = workshop {
+        let series = chart.draw_series(
+            w.records
+                .iter()
+                .map(|r| TriangleMarker::new((r.time, r.settlement * 1e3), 5, BLUE)),
+        )?;
+        if text {
+            series
+                .label("workshop set-up (at rest, sudden load)")
+                .legend(|(x, y)| TriangleMarker::new((x + 10, y), 5, BLUE));
+        }
+    }
+    if text {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerRight)
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
+}

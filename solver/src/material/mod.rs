@@ -1,0 +1,5 @@
+//! Constitutive laws of the solid and the pore liquid's constants.
+
+pub mod law;
+pub mod linear_elastic;
+pub mod liquid;

@@ -1,0 +1,337 @@
+//! The data layout of the parallel step: particles kept sorted by element, fixed per-thread
+//! ranges of elements, particles and nodes, and the race-free, deterministic particle-to-grid
+//! sum (DESIGN §5).
+//!
+//! A sum over particles onto nodes is done in two passes. Each thread goes over its elements
+//! and, for each, over that element's particles in storage order, adding into the element's
+//! four corner slots (`slots[4 e + k]`); then each thread forms the nodes of its range by adding
+//! the slots of the node's elements in element order. Every node's sum is thus taken in an
+//! order fixed by the mesh and the particle order, whatever the thread count, with no locks or
+//! atomics.
+
+use std::ops::Range;
+
+use crate::element::mesh::TetMesh;
+use crate::parallel::team::{balanced_ranges, Shared, Team};
+use crate::real::Real;
+use crate::state::particles::{FieldVisitor, Particles};
+
+/// Widest slot (values per element corner) a pass uses.
+pub const WIDTH: usize = 12;
+
+/// Layout and scratch of the parallel step.
+#[derive(Debug)]
+///
+/// The fields are private: the parallel passes write through raw pointers into the ranges they
+/// describe, so only this module may change them, keeping the element ranges disjoint and
+/// covering `0..elements` and `elem_start` non-decreasing (checked in debug builds).
+pub struct Layout<R: Real> {
+    /// First particle of each element (particles are sorted by element), `elements + 1` long.
+    elem_start: Vec<u32>,
+    /// Elements of each thread (contiguous along the mesh order, balanced by particles).
+    element_ranges: Vec<Range<usize>>,
+    /// Nodes of each thread (balanced by their number of element corners).
+    node_ranges: Vec<Range<usize>>,
+    /// For each node, where its slots start in `node_slot` (`nodes + 1` long).
+    node_start: Vec<u32>,
+    /// Slots (4 e + k) of every node, in element order.
+    node_slot: Vec<u32>,
+    _real: std::marker::PhantomData<R>,
+}
+
+/// Per-corner partial sums, `4 × elements` slots of [`WIDTH`] values.
+pub type Slots<R> = Vec<[R; WIDTH]>;
+
+impl<R: Real> Layout<R> {
+    /// The layout of `mesh` for `threads` threads, with particles `p` (sorted by element).
+    pub fn new(mesh: &TetMesh<R>, p: &Particles<R>, threads: usize) -> Self {
+        let (ne, nn) = (mesh.elements(), mesh.nodes());
+        let elem_start = element_starts(&p.element, ne);
+        let element_ranges = balanced_ranges(
+            (0..ne).map(|e| 4 * u64::from(elem_start[e + 1] - elem_start[e])),
+            threads,
+        );
+        let mut node_start = vec![0u32; nn + 1];
+        for c in &mesh.corners {
+            for &n in c {
+                node_start[n as usize + 1] += 1;
+            }
+        }
+        for n in 0..nn {
+            node_start[n + 1] += node_start[n];
+        }
+        let mut fill = node_start.clone();
+        let mut node_slot = vec![0u32; 4 * ne];
+        for (e, c) in mesh.corners.iter().enumerate() {
+            for (k, &n) in c.iter().enumerate() {
+                node_slot[fill[n as usize] as usize] = (4 * e + k) as u32;
+                fill[n as usize] += 1;
+            }
+        }
+        let node_ranges = balanced_ranges(
+            (0..nn).map(|n| u64::from(node_start[n + 1] - node_start[n])),
+            threads,
+        );
+        let layout = Layout {
+            elem_start,
+            element_ranges,
+            node_ranges,
+            node_start,
+            node_slot,
+            _real: std::marker::PhantomData,
+        };
+        layout.debug_check();
+        layout
+    }
+
+    /// The invariants the unsafe passes rely on: contiguous element ranges covering all
+    /// elements in order (so disjoint), and particle starts that never decrease.
+    fn debug_check(&self) {
+        if cfg!(debug_assertions) {
+            let ne = self.elem_start.len() - 1;
+            let mut next = 0;
+            for r in &self.element_ranges {
+                assert!(
+                    r.start == next && r.end >= r.start,
+                    "element ranges not contiguous"
+                );
+                next = r.end;
+            }
+            assert_eq!(next, ne, "element ranges do not cover the mesh");
+            assert!(
+                self.elem_start.windows(2).all(|w| w[0] <= w[1]),
+                "particle starts decrease"
+            );
+        }
+    }
+
+    /// Re-reads where each element's particles start after the particles were re-sorted by
+    /// element (`element`: each particle's element, non-decreasing).
+    pub fn set_particle_elements(&mut self, element: &[u32]) {
+        self.elem_start = element_starts(element, self.elem_start.len() - 1);
+        self.debug_check();
+    }
+
+    /// Elements of thread `k`.
+    pub fn element_range(&self, k: usize) -> Range<usize> {
+        self.element_ranges[k].clone()
+    }
+
+    /// Zeroed slots for this layout (allocated zeroed, so pages are placed by the threads that
+    /// first write them).
+    pub fn new_slots(&self) -> Slots<R> {
+        vec![[R::ZERO; WIDTH]; 4 * (self.elem_start.len() - 1)]
+    }
+
+    /// Particles of thread `k`.
+    pub fn particle_range(&self, k: usize) -> Range<usize> {
+        let r = &self.element_ranges[k];
+        self.elem_start[r.start] as usize..self.elem_start[r.end] as usize
+    }
+
+    /// Particles of element `e`.
+    #[inline]
+    pub fn particles_of(&self, e: usize) -> Range<usize> {
+        self.elem_start[e] as usize..self.elem_start[e + 1] as usize
+    }
+
+    /// Pass 1: on every thread, for each of its elements, zeroes the element's four slots (the
+    /// first `W` values) and calls `element(e, slots)`.
+    pub fn scatter<const W: usize, F>(&self, team: &Team, slots: &mut Slots<R>, element: F)
+    where
+        F: Fn(usize, &mut [[R; WIDTH]]) + Sync,
+    {
+        let slots = Shared::new(slots);
+        let ranges = &self.element_ranges;
+        team.run(|k| {
+            let r = ranges[k].clone();
+            // SAFETY: the element ranges are disjoint, so are their slots.
+            let mine = unsafe { slots.range(4 * r.start..4 * r.end) };
+            for (j, e) in r.enumerate() {
+                let four = &mut mine[4 * j..4 * j + 4];
+                for s in four.iter_mut() {
+                    s[..W].fill(R::ZERO);
+                }
+                element(e, four);
+            }
+        });
+    }
+
+    /// Pass 2: on every thread, for each node of its range, the sum of the first `W` values of
+    /// the node's slots, in element order, handed to `node(n, sum)`.
+    pub fn gather<const W: usize, F>(&self, team: &Team, slots: &Slots<R>, node: F)
+    where
+        F: Fn(usize, [R; W]) + Sync,
+    {
+        team.run(|k| {
+            for n in self.node_ranges[k].clone() {
+                let mut sum = [R::ZERO; W];
+                for &s in
+                    &self.node_slot[self.node_start[n] as usize..self.node_start[n + 1] as usize]
+                {
+                    let v = &slots[s as usize];
+                    for c in 0..W {
+                        sum[c] += v[c];
+                    }
+                }
+                node(n, sum);
+            }
+        });
+    }
+}
+
+/// First particle of each element for particles sorted by `element`.
+pub fn element_starts(element: &[u32], elements: usize) -> Vec<u32> {
+    let mut start = vec![0u32; elements + 1];
+    for &e in element {
+        start[e as usize + 1] += 1;
+    }
+    for e in 0..elements {
+        start[e + 1] += start[e];
+    }
+    start
+}
+
+/// Scratch of [`sort_by_element`], kept between steps so that re-sorting allocates nothing.
+#[derive(Debug, Default)]
+pub struct SortScratch {
+    /// New index → old index.
+    pub order: Vec<u32>,
+    /// Old index → new index, for callers that need it.
+    pub inverse: Vec<u32>,
+    next: Vec<u32>,
+    done: Vec<bool>,
+}
+
+/// Stable counting sort of the particles by element when some are out of order, permuting
+/// every array in place (cycle by cycle). Returns true when it permuted; `scratch.order` then
+/// holds the permutation (new index → old index).
+pub fn sort_by_element<R: Real>(
+    p: &mut Particles<R>,
+    elements: usize,
+    scratch: &mut SortScratch,
+) -> bool {
+    if p.element.windows(2).all(|w| w[0] <= w[1]) {
+        return false;
+    }
+    let n = p.len();
+    scratch.next.clear();
+    scratch.next.resize(elements + 1, 0);
+    for &e in &p.element {
+        scratch.next[e as usize + 1] += 1;
+    }
+    for e in 0..elements {
+        scratch.next[e + 1] += scratch.next[e];
+    }
+    scratch.order.resize(n, 0);
+    for (i, &e) in p.element.iter().enumerate() {
+        scratch.order[scratch.next[e as usize] as usize] = i as u32;
+        scratch.next[e as usize] += 1;
+    }
+    struct Permute<'a> {
+        order: &'a [u32],
+        done: &'a mut Vec<bool>,
+    }
+    impl FieldVisitor for Permute<'_> {
+        fn field<T: Copy + Default + Send + Sync>(&mut self, v: &mut Vec<T>, per_point: usize) {
+            match per_point {
+                0 => {}
+                1 => v.permute(self.order, self.done),
+                k => permute_chunks(v, k, self.order, self.done),
+            }
+        }
+    }
+    p.visit_fields(&mut Permute {
+        order: &scratch.order,
+        done: &mut scratch.done,
+    });
+    true
+}
+
+/// `new[i] = old[order[i]]` for the `k`-value chunks of `v`, following the permutation's cycles
+/// by swapping chunks (no scratch copy).
+fn permute_chunks<T>(v: &mut [T], k: usize, order: &[u32], done: &mut Vec<bool>) {
+    done.clear();
+    done.resize(order.len(), false);
+    for start in 0..order.len() {
+        if done[start] {
+            continue;
+        }
+        // Position i takes the chunk at order[i]; swapping i with order[i] moves the carried
+        // start chunk along the cycle until it lands where order points back to start.
+        let mut i = start;
+        done[i] = true;
+        while order[i] as usize != start {
+            let j = order[i] as usize;
+            let (lo, hi) = (i.min(j), i.max(j));
+            let (a, b) = v.split_at_mut(hi * k);
+            a[lo * k..lo * k + k].swap_with_slice(&mut b[..k]);
+            done[j] = true;
+            i = j;
+        }
+    }
+}
+
+/// An array that can be permuted in place.
+trait Permutable {
+    /// `new[i] = old[order[i]]`, following the permutation's cycles; `done` is scratch.
+    fn permute(&mut self, order: &[u32], done: &mut Vec<bool>);
+}
+
+impl<T: Copy> Permutable for Vec<T> {
+    fn permute(&mut self, order: &[u32], done: &mut Vec<bool>) {
+        done.clear();
+        done.resize(order.len(), false);
+        for start in 0..order.len() {
+            if done[start] {
+                continue;
+            }
+            let first = self[start];
+            let mut i = start;
+            loop {
+                done[i] = true;
+                let j = order[i] as usize;
+                if j == start {
+                    self[i] = first;
+                    break;
+                }
+                self[i] = self[j];
+                i = j;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chunks_permute_like_their_first_values() {
+        // A permutation with a fixed point, a 2-cycle and a 4-cycle.
+        let order = [0u32, 2, 1, 6, 3, 4, 5];
+        let mut done = Vec::new();
+        let mut single: Vec<u32> = (0..7).collect();
+        single.permute(&order, &mut done);
+        let mut chunks: Vec<u32> = (0..7)
+            .flat_map(|i| [10 * i, 10 * i + 1, 10 * i + 2])
+            .collect();
+        permute_chunks(&mut chunks, 3, &order, &mut done);
+        let want: Vec<u32> = single
+            .iter()
+            .flat_map(|&i| [10 * i, 10 * i + 1, 10 * i + 2])
+            .collect();
+        assert_eq!(chunks, want);
+        assert_eq!(single, [0, 2, 1, 6, 3, 4, 5]);
+    }
+
+    #[test]
+    fn in_place_permutation_matches_a_gather() {
+        let order: Vec<u32> = vec![3, 0, 4, 1, 2, 6, 5, 7];
+        let old: Vec<u32> = (10..18).collect();
+        let mut v = old.clone();
+        v.permute(&order, &mut Vec::new());
+        let want: Vec<u32> = order.iter().map(|&i| old[i as usize]).collect();
+        assert_eq!(v, want);
+    }
+}

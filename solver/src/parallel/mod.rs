@@ -1,0 +1,4 @@
+//! The thread team and the deterministic parallel sums: who computes what.
+
+pub mod gather;
+pub mod team;

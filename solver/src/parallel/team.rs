@@ -1,0 +1,232 @@
+//! The thread team (DESIGN §5): one pool of worker threads for the whole run, optionally pinned
+//! one per core, each thread always given the same contiguous range of the work (elements,
+//! nodes, particles), so that what a thread first touches it later computes on.
+//!
+//! Results never depend on the thread count: kernels only split work whose parts are written
+//! to disjoint places, and every sum is formed in an order fixed by the data (see
+//! [`crate::parallel::gather`] and [`Team::sum_blocks`]).
+
+use std::ops::Range;
+
+/// How threads are placed on cores.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pin {
+    /// Let the OS place them.
+    None,
+    /// Thread k on the k-th core available to the process.
+    Cores,
+}
+
+/// A pool of `threads` workers.
+pub struct Team {
+    pool: rayon::ThreadPool,
+    /// Number of threads.
+    pub threads: usize,
+    /// The core each thread was pinned to (`None` where pinning was not asked for or refused).
+    pub pinned: Vec<Option<usize>>,
+}
+
+impl std::fmt::Debug for Team {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Team")
+            .field("threads", &self.threads)
+            .field("pinned", &self.pinned)
+            .finish()
+    }
+}
+
+impl Team {
+    /// Starts `threads` workers (0: one per core available to the process), pinned as `pin`
+    /// asks.
+    pub fn new(threads: usize, pin: Pin) -> Result<Team, String> {
+        let cores = core_affinity::get_core_ids().unwrap_or_default();
+        let available = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let threads = if threads == 0 { available } else { threads };
+        let granted: Vec<std::sync::Mutex<Option<usize>>> =
+            (0..threads).map(|_| std::sync::Mutex::new(None)).collect();
+        let granted = std::sync::Arc::new(granted);
+        let g = granted.clone();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|k| format!("mpm-worker-{k}"))
+            .start_handler(move |k| {
+                if pin == Pin::Cores && !cores.is_empty() {
+                    let core = cores[k % cores.len()];
+                    if core_affinity::set_for_current(core) {
+                        *g[k].lock().expect("not poisoned") = Some(core.id);
+                    }
+                }
+            })
+            .build()
+            .map_err(|e| format!("cannot start {threads} worker threads: {e}"))?;
+        // Let every worker run its start handler before the pinning is read.
+        pool.broadcast(|_| ());
+        let pinned = granted
+            .iter()
+            .map(|m| *m.lock().expect("not poisoned"))
+            .collect();
+        Ok(Team {
+            pool,
+            threads,
+            pinned,
+        })
+    }
+
+    /// Runs `f(k)` on every thread k = 0..threads, each on its own worker, and waits.
+    pub fn run<F: Fn(usize) + Sync>(&self, f: F) {
+        self.pool.broadcast(|ctx| f(ctx.index()));
+    }
+
+    /// Sum of `f(block)` over fixed blocks `0..n` in blocks of `BLOCK` items, added in block
+    /// order: the same bits for any thread count.
+    pub fn sum_blocks<F: Fn(Range<usize>) -> f64 + Sync>(&self, n: usize, f: F) -> f64 {
+        const BLOCK: usize = 4096;
+        let blocks = n.div_ceil(BLOCK);
+        let mut partial = vec![0.0; blocks];
+        let out = Shared::new(&mut partial);
+        let per = blocks.div_ceil(self.threads.max(1));
+        self.run(|k| {
+            for b in k * per..((k + 1) * per).min(blocks) {
+                let v = f(b * BLOCK..((b + 1) * BLOCK).min(n));
+                // SAFETY: block b belongs to thread k only.
+                unsafe { out.write(b, v) };
+            }
+        });
+        partial.iter().sum()
+    }
+}
+
+/// Splits `0..weights.len()` into `parts` contiguous ranges of about equal total weight (every
+/// item at least weight 1, so empty items still spread).
+pub fn balanced_ranges(
+    weights: impl Iterator<Item = u64> + Clone,
+    parts: usize,
+) -> Vec<Range<usize>> {
+    let parts = parts.max(1);
+    let total: u64 = weights.clone().map(|w| w + 1).sum();
+    let n = weights.clone().count();
+    let mut ranges = Vec::with_capacity(parts);
+    let (mut start, mut acc, mut k) = (0usize, 0u64, 1u64);
+    for (i, w) in weights.enumerate() {
+        acc += w + 1;
+        while (k as usize) < parts && acc * parts as u64 >= k * total {
+            ranges.push(start..i + 1);
+            start = i + 1;
+            k += 1;
+        }
+    }
+    ranges.push(start..n);
+    while ranges.len() < parts {
+        ranges.push(n..n);
+    }
+    ranges
+}
+
+/// Shared mutable access to a slice from many threads, each writing places no other thread
+/// touches. The kernels guarantee disjointness by construction (fixed, disjoint ranges).
+pub struct Shared<'a, T> {
+    ptr: *mut T,
+    len: usize,
+    _life: std::marker::PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: only disjoint elements are accessed concurrently (the callers' contract).
+unsafe impl<T: Send> Sync for Shared<'_, T> {}
+unsafe impl<T: Send> Send for Shared<'_, T> {}
+
+impl<'a, T> Shared<'a, T> {
+    /// Wraps `s`.
+    pub fn new(s: &'a mut [T]) -> Self {
+        Shared {
+            ptr: s.as_mut_ptr(),
+            len: s.len(),
+            _life: std::marker::PhantomData,
+        }
+    }
+
+    /// Writes element `i`.
+    ///
+    /// # Safety
+    /// No other thread may access element `i` at the same time.
+    #[inline]
+    pub unsafe fn write(&self, i: usize, v: T) {
+        assert!(i < self.len);
+        unsafe { self.ptr.add(i).write(v) }
+    }
+
+    /// The sub-slice `r`, mutably.
+    ///
+    /// # Safety
+    /// No other thread may access any element of `r` while the slice lives.
+    #[inline]
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn range(&self, r: Range<usize>) -> &mut [T] {
+        assert!(r.start <= r.end && r.end <= self.len);
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(r.start), r.end - r.start) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_cover_everything_in_order_and_balance() {
+        let w = [5u64, 0, 0, 7, 1, 1, 1, 9, 0, 2];
+        for parts in 1..6 {
+            let r = balanced_ranges(w.iter().copied(), parts);
+            assert_eq!(r.len(), parts);
+            assert_eq!(r[0].start, 0);
+            assert_eq!(r.last().unwrap().end, w.len());
+            for pair in r.windows(2) {
+                assert_eq!(pair[0].end, pair[1].start);
+            }
+        }
+        let r = balanced_ranges(std::iter::repeat(1u64).take(1000), 4);
+        for x in &r {
+            assert_eq!(x.len(), 250);
+        }
+    }
+
+    #[test]
+    fn block_sums_do_not_depend_on_the_thread_count() {
+        let data: Vec<f64> = (0..100_000)
+            .map(|i| ((i * 7919) % 1000) as f64 * 1e-3 + 1e-9)
+            .collect();
+        let sums: Vec<f64> = [1, 2, 3, 4]
+            .iter()
+            .map(|&t| {
+                let team = Team::new(t, Pin::None).unwrap();
+                team.sum_blocks(data.len(), |r| data[r].iter().sum())
+            })
+            .collect();
+        assert!(
+            sums.iter().all(|s| s.to_bits() == sums[0].to_bits()),
+            "{sums:?}"
+        );
+    }
+}
+
+/// How a run uses the machine: threads, their placement, first touch (not physics: results do
+/// not depend on it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Options {
+    /// Worker threads (0: one per core available).
+    pub threads: usize,
+    /// Thread placement.
+    pub pin: Pin,
+    /// Let each thread initialise (first touch) the particle arrays of its range, so that their
+    /// pages are placed near it; off: the main thread's placement, for measurement.
+    pub first_touch: bool,
+}
+
+impl Default for Options {
+    /// One thread per core, placed by the OS, first touch on.
+    fn default() -> Self {
+        Options {
+            threads: 0,
+            pin: Pin::None,
+            first_touch: true,
+        }
+    }
+}

@@ -1,0 +1,4 @@
+//! The state of a run: material points and nodal arrays.
+
+pub mod grid;
+pub mod particles;

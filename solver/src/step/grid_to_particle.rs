@@ -1,0 +1,153 @@
+//! Grid to particle, MUSL: FLIP velocity update, then momentum re-mapped to the nodes for the
+//! velocities that drive strain, stress, volume and position (DESIGN §4, step 3), on the team.
+
+use crate::element::mesh::TetMesh;
+use crate::material::liquid::Fluid;
+use crate::parallel::gather::{Layout, Slots};
+use crate::parallel::team::{Shared, Team};
+use crate::real::{Real, V3};
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
+
+/// Updates particle velocities from nodal accelerations (FLIP), then re-maps momentum to get
+/// the nodal velocities (fixed components and empty nodes zero) that drive strain, stress,
+/// volume and position (see [`crate::step::stress`]).
+#[allow(clippy::too_many_arguments)]
+pub fn grid_to_particle<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
+    mesh: &TetMesh<R>,
+    p: &mut Particles<R>,
+    g: &mut Grid<R>,
+    fixed: &[[bool; 3]],
+    dt: R,
+) {
+    let vel = Shared::new(&mut p.v);
+    let (x, mass, active) = (&p.x, &p.mass, &p.active);
+    let acc = &g.acc;
+    layout.scatter::<3, _>(team, slots, |e, four| {
+        for i in layout.particles_of(e) {
+            if !active[i] {
+                continue;
+            }
+            let n = mesh.shape(e, &x[i]);
+            let dv = interpolate(mesh, e, &n, acc);
+            // SAFETY: particle i (of element e) belongs to this thread only.
+            let v = unsafe { &mut vel.range(i..i + 1)[0] };
+            for c in 0..3 {
+                v[c] += dt * dv[c];
+            }
+            for (k, slot) in four.iter_mut().enumerate() {
+                let w = mass[i] * n[k];
+                for c in 0..3 {
+                    slot[c] += w * v[c];
+                }
+            }
+        }
+    });
+    nodal_velocity(
+        team,
+        layout,
+        slots,
+        &g.mass,
+        g.empty_below,
+        fixed,
+        &mut g.vel,
+    );
+}
+
+/// Σ N_k a_k over the corners of element `e`.
+#[inline]
+fn interpolate<R: Real>(mesh: &TetMesh<R>, e: usize, n: &[R; 4], nodal: &[V3<R>]) -> V3<R> {
+    let mut out = [R::ZERO; 3];
+    for k in 0..4 {
+        let a = nodal[mesh.corners[e][k] as usize];
+        for c in 0..3 {
+            out[c] += n[k] * a[c];
+        }
+    }
+    out
+}
+
+/// Nodal velocities from the re-mapped momentum in `slots`: zero at empty nodes and in fixed
+/// components.
+fn nodal_velocity<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &Slots<R>,
+    mass: &[R],
+    empty_below: R,
+    fixed: &[[bool; 3]],
+    vel: &mut [V3<R>],
+) {
+    let out = Shared::new(vel);
+    layout.gather::<3, _>(team, slots, |n, momentum| {
+        let mut v = [R::ZERO; 3];
+        if mass[n] > empty_below {
+            for c in 0..3 {
+                if !fixed[n][c] {
+                    v[c] = momentum[c] / mass[n];
+                }
+            }
+        }
+        // SAFETY: node n is this thread's only.
+        unsafe { out.write(n, v) };
+    });
+}
+
+/// The liquid's share of grid to particle: liquid velocities of the points updated from the
+/// nodal liquid accelerations (FLIP), then the liquid momentum re-mapped to nodal liquid
+/// velocities (zero in fixed components and at nodes without liquid).
+#[allow(clippy::too_many_arguments)]
+pub fn liquid_to_particles<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
+    mesh: &TetMesh<R>,
+    p: &mut Particles<R>,
+    g: &mut Grid<R>,
+    fluids: &[Option<Fluid<R>>],
+    liquid_fixed: &[[bool; 3]],
+    dt: R,
+) {
+    let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
+        return;
+    };
+    let w_out = Shared::new(&mut lp.w);
+    let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
+    let acc = &gl.acc;
+    layout.scatter::<3, _>(team, slots, |e, four| {
+        for i in layout.particles_of(e) {
+            let Some(f) = fluids[material[i] as usize] else {
+                continue;
+            };
+            if !active[i] {
+                continue;
+            }
+            let n = mesh.shape(e, &x[i]);
+            let dw = interpolate(mesh, e, &n, acc);
+            // SAFETY: particle i (of element e) belongs to this thread only.
+            let w = unsafe { &mut w_out.range(i..i + 1)[0] };
+            for c in 0..3 {
+                w[c] += dt * dw[c];
+            }
+            // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
+            let mw = f.rho_w * lp.volume0.as_ref().map_or(volume[i], |v0| v0[i]);
+            for (k, slot) in four.iter_mut().enumerate() {
+                for c in 0..3 {
+                    slot[c] += mw * n[k] * w[c];
+                }
+            }
+        }
+    });
+    nodal_velocity(
+        team,
+        layout,
+        slots,
+        &gl.mass,
+        g.empty_below,
+        liquid_fixed,
+        &mut gl.vel,
+    );
+}

@@ -1,0 +1,10 @@
+//! The phases of one explicit MUSL step, in the order they run, and what they read from the configuration (load curves, damping rule, drag, prescribed velocities).
+
+pub mod grid_to_particle;
+pub mod grid_update;
+pub mod load_curve;
+pub mod mixed;
+pub mod particle_to_grid;
+pub mod prescribed;
+pub mod smoothing;
+pub mod stress;

@@ -1,0 +1,245 @@
+//! Particle to grid: lumped masses, momentum, internal and gravity forces (DESIGN §4, step 1),
+//! summed element by element and then node by node on the team (see [`crate::parallel::gather`]).
+
+use crate::element::mesh::TetMesh;
+use crate::material::liquid::Fluid;
+use crate::parallel::gather::{Layout, Slots};
+use crate::parallel::team::{Shared, Team};
+use crate::real::{Real, V3};
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
+use crate::step::mixed::Mixed;
+
+/// f = σ ∇N for symmetric σ (xx yy zz xy yz zx).
+#[inline]
+fn traction<R: Real>(s: &[R; 6], dn: &V3<R>) -> V3<R> {
+    [
+        s[0] * dn[0] + s[3] * dn[1] + s[5] * dn[2],
+        s[3] * dn[0] + s[1] * dn[1] + s[4] * dn[2],
+        s[5] * dn[0] + s[4] * dn[1] + s[2] * dn[2],
+    ]
+}
+
+/// Maps every active particle to the nodes of its element: mass, momentum, internal force
+/// -Σ V (σ' + p I) ∇N and gravity. `gravity[m]` is the acceleration (multiplier applied) that
+/// gives the weight of material m's points from their mass.
+/// Under mixed integration the effective-stress force of full elements comes from their Gauss
+/// point instead of their points (the element sums are formed here too).
+#[allow(clippy::too_many_arguments)]
+pub fn particle_to_grid<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
+    mesh: &TetMesh<R>,
+    p: &Particles<R>,
+    gravity: &[V3<R>],
+    mixed: Option<&mut Mixed<R>>,
+    g: &mut Grid<R>,
+) {
+    let mixed_sums = mixed.map(|m| {
+        let filling = R::of(m.filling);
+        (
+            Shared::new(&mut m.stress),
+            Shared::new(&mut m.full),
+            filling,
+            Shared::new(&mut m.pressure),
+        )
+    });
+    layout.scatter::<10, _>(team, slots, |e, four| {
+        let grad = &mesh.grad[e];
+        let range = layout.particles_of(e);
+        // Mixed integration: is the element full, and its mean stress.
+        let mut full = false;
+        if let Some((stress, flags, filling, pressure)) = &mixed_sums {
+            let (mut v, mut s, mut pm) = (R::ZERO, [R::ZERO; 6], R::ZERO);
+            for i in range.clone() {
+                if p.active[i] {
+                    v += p.volume[i];
+                    for c in 0..6 {
+                        s[c] += p.volume[i] * p.stress[i][c];
+                    }
+                    if let Some(l) = &p.liquid {
+                        pm += p.volume[i] * l.p[i];
+                    }
+                }
+            }
+            full = v > R::ZERO && v >= *filling * mesh.volume[e];
+            if full {
+                for c in s.iter_mut() {
+                    *c /= v;
+                }
+                pm /= v;
+            }
+            // SAFETY: element e is this thread's only.
+            unsafe {
+                stress.write(e, s);
+                flags.write(e, full);
+                pressure.write(e, pm);
+            }
+            if full {
+                let ve = mesh.volume[e];
+                // The Gauss point's total stress: effective plus pore pressure.
+                let mut s = s;
+                if p.liquid.is_some() {
+                    for c in s.iter_mut().take(3) {
+                        *c += pm;
+                    }
+                }
+                for (k, slot) in four.iter_mut().enumerate() {
+                    let f = traction(&s, &grad[k]);
+                    for a in 0..3 {
+                        slot[4 + a] -= ve * f[a];
+                    }
+                }
+            }
+        }
+        for i in range {
+            if !p.active[i] {
+                continue;
+            }
+            let n = mesh.shape(e, &p.x[i]);
+            let (m, v) = (p.mass[i], p.v[i]);
+            let gravity = &gravity[p.material[i] as usize];
+            let vol = if full { R::ZERO } else { p.volume[i] };
+            let mut s = p.stress[i].map(|c| vol * c);
+            if let Some(l) = &p.liquid {
+                let vp = vol * l.p[i];
+                s[0] += vp;
+                s[1] += vp;
+                s[2] += vp;
+            }
+            for (k, slot) in four.iter_mut().enumerate() {
+                let w = m * n[k];
+                let f = traction(&s, &grad[k]);
+                slot[0] += w;
+                for a in 0..3 {
+                    slot[1 + a] += w * v[a];
+                    slot[4 + a] -= f[a];
+                    slot[7 + a] += w * gravity[a];
+                }
+            }
+        }
+    });
+    let mass = Shared::new(&mut g.mass);
+    let momentum = Shared::new(&mut g.momentum);
+    let f_int = Shared::new(&mut g.f_int);
+    let f_ext = Shared::new(&mut g.f_ext);
+    layout.gather::<10, _>(team, slots, |n, s| {
+        // SAFETY: node n is this thread's only.
+        unsafe {
+            mass.write(n, s[0]);
+            momentum.write(n, [s[1], s[2], s[3]]);
+            f_int.write(n, [s[4], s[5], s[6]]);
+            f_ext.write(n, [s[7], s[8], s[9]]);
+        }
+    });
+}
+
+/// Adds the face loads carried by points, `scale` times their force, at the points' positions
+/// (a short list, in its fixed order).
+pub fn add_point_loads<R: Real>(
+    mesh: &TetMesh<R>,
+    p: &Particles<R>,
+    loads: &[(u32, V3<R>)],
+    scale: R,
+    g: &mut Grid<R>,
+) {
+    for &(i, f) in loads {
+        let i = i as usize;
+        if !p.active[i] {
+            continue;
+        }
+        let e = p.element[i] as usize;
+        let n = mesh.shape(e, &p.x[i]);
+        for k in 0..4 {
+            let node = mesh.corners[e][k] as usize;
+            for a in 0..3 {
+                g.f_ext[node][a] += n[k] * scale * f[a];
+            }
+        }
+    }
+}
+
+/// The liquid's share of particle to grid (two-phase, DESIGN §4): liquid masses M_w and M̄_w,
+/// drag Q, liquid momentum, the liquid force -Σ V p ∇N + M_w g, and the liquid's weight added to
+/// the mixture's external force. Points of dry materials (`fluids[m]` is `None`) add nothing.
+/// Under `mixed` integration, full elements (as the solid pass found them) integrate the
+/// pore-pressure force at their Gauss point.
+#[allow(clippy::too_many_arguments)]
+pub fn liquid_to_grid<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
+    mesh: &TetMesh<R>,
+    p: &Particles<R>,
+    fluids: &[Option<Fluid<R>>],
+    gravity: V3<R>,
+    mixed: Option<&Mixed<R>>,
+    g: &mut Grid<R>,
+) {
+    let (Some(lp), Some(gl)) = (&p.liquid, &mut g.liquid) else {
+        return;
+    };
+    layout.scatter::<12, _>(team, slots, |e, four| {
+        let grad = &mesh.grad[e];
+        // A full element under mixed integration takes its pore-pressure force at the Gauss
+        // point (its volume times the mean pore pressure), as the solid pass does.
+        let full = mixed.is_some_and(|m| m.full[e]);
+        if let (true, Some(m)) = (full, mixed) {
+            let vp = mesh.volume[e] * m.pressure[e];
+            for (k, slot) in four.iter_mut().enumerate() {
+                for a in 0..3 {
+                    slot[6 + a] -= vp * grad[k][a];
+                }
+            }
+        }
+        for i in layout.particles_of(e) {
+            let Some(f) = fluids[p.material[i] as usize] else {
+                continue;
+            };
+            if !p.active[i] {
+                continue;
+            }
+            let n = mesh.shape(e, &p.x[i]);
+            let vol = p.volume[i];
+            // The liquid's mass, weight and drag are taken on the initial volume where the
+            // case holds the liquid mass fixed.
+            let vw = lp.volume0.as_ref().map_or(vol, |v0| v0[i]);
+            let mw = f.rho_w * vw;
+            let pw = if full { R::ZERO } else { lp.p[i] * vol };
+            let w = lp.w[i];
+            for (k, slot) in four.iter_mut().enumerate() {
+                let nk = n[k];
+                slot[0] += mw * nk;
+                slot[1] += f.n * mw * nk;
+                slot[2] += f.drag * vw * nk;
+                for a in 0..3 {
+                    slot[3 + a] += mw * nk * w[a];
+                    slot[6 + a] += mw * nk * gravity[a] - pw * grad[k][a];
+                    slot[9 + a] += f.n * mw * nk * gravity[a];
+                }
+            }
+        }
+    });
+    let mass = Shared::new(&mut gl.mass);
+    let mass_n = Shared::new(&mut gl.mass_n);
+    let drag = Shared::new(&mut gl.drag);
+    let momentum = Shared::new(&mut gl.momentum);
+    let force = Shared::new(&mut gl.force);
+    let f_ext = Shared::new(&mut g.f_ext);
+    layout.gather::<12, _>(team, slots, |n, s| {
+        // SAFETY: node n is this thread's only; f_ext[n] was written by this thread's range in
+        // the solid pass (same node ranges).
+        unsafe {
+            mass.write(n, s[0]);
+            mass_n.write(n, s[1]);
+            drag.write(n, s[2]);
+            momentum.write(n, [s[3], s[4], s[5]]);
+            force.write(n, [s[6], s[7], s[8]]);
+            let fe = &mut f_ext.range(n..n + 1)[0];
+            for a in 0..3 {
+                fe[a] += s[9 + a];
+            }
+        }
+    });
+}

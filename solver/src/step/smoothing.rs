@@ -1,0 +1,140 @@
+//! Anura3D's strain smoothing (`$$STRAIN_SMOOTHING 1`): the volumetric strain increments of the
+//! solid and of the liquid are averaged from the elements to the nodes and back, material by
+//! material, which removes the element-to-element (checkerboard) modes of linear tetrahedra.
+//!
+//! Per material m and step: each element e holding points of m has one volumetric strain
+//! increment per phase, ε_e = Δt div v (linear tetrahedra); node i takes the volume-weighted
+//! mean ε̄_i = Σ_e V_e ε_e / Σ_e V_e over those elements; every point of m in e then takes the
+//! plain mean of its element's four nodal values as its volumetric strain increment. The solid
+//! keeps its deviatoric and shear increments (the three normal increments are shifted equally);
+//! the pore pressure takes Δp = (K_w / n) (n ε̄_w + (1 - n) ε̄_s).
+
+use crate::element::mesh::TetMesh;
+use crate::parallel::gather::{Layout, Slots, WIDTH};
+use crate::parallel::team::{Shared, Team};
+use crate::real::Real;
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
+
+/// Materials summed in one pass over the slots: three values each (V ε_s, V ε_w, V).
+const PER_PASS: usize = WIDTH / 3;
+
+/// Nodal smoothed strains and the buffers of the smoothing, allocated once.
+#[derive(Debug, Clone)]
+pub struct StrainSmoothing<R: Real> {
+    /// Column of each material index (`usize::MAX` for indices no element uses).
+    column: Vec<usize>,
+    /// Number of columns: materials smoothed separately.
+    columns: usize,
+    /// Per node and column (index `node * columns + column`): the smoothed volumetric strain
+    /// increments of the solid and of the liquid.
+    nodal: Vec<[R; 2]>,
+}
+
+impl<R: Real> StrainSmoothing<R> {
+    /// Buffers for `nodes` nodes and the materials of `element_material` (0: empty element).
+    pub fn new(nodes: usize, element_material: &[u32]) -> Self {
+        let top = element_material.iter().copied().max().unwrap_or(0) as usize;
+        let mut used = vec![false; top + 1];
+        for &m in element_material {
+            used[m as usize] = true;
+        }
+        // Columns in material order, so that they do not depend on the element order.
+        let mut column = vec![usize::MAX; top + 1];
+        let mut columns = 0;
+        for m in 1..=top {
+            if used[m] {
+                column[m] = columns;
+                columns += 1;
+            }
+        }
+        StrainSmoothing {
+            column,
+            columns,
+            nodal: vec![[R::ZERO; 2]; nodes * columns],
+        }
+    }
+
+    /// Computes the nodal smoothed strain increments of this step from the nodal velocities of
+    /// both phases (`g.vel`, and the liquid's when the case has one).
+    #[allow(clippy::too_many_arguments)]
+    pub fn compute(
+        &mut self,
+        team: &Team,
+        layout: &Layout<R>,
+        slots: &mut Slots<R>,
+        mesh: &TetMesh<R>,
+        p: &Particles<R>,
+        g: &Grid<R>,
+        dt: R,
+    ) {
+        let (column, columns) = (&self.column, self.columns);
+        let wvel = g.liquid.as_ref().map(|l| &l.vel);
+        for lo in (0..columns).step_by(PER_PASS) {
+            let hi = (lo + PER_PASS).min(columns);
+            layout.scatter::<WIDTH, _>(team, slots, |e, four| {
+                let mut present = [false; PER_PASS];
+                for i in layout.particles_of(e) {
+                    let c = column[p.material[i] as usize];
+                    if p.active[i] && (lo..hi).contains(&c) {
+                        present[c - lo] = true;
+                    }
+                }
+                if !present.contains(&true) {
+                    return;
+                }
+                let grad = &mesh.grad[e];
+                let (mut es, mut ew) = (R::ZERO, R::ZERO);
+                for k in 0..4 {
+                    let node = mesh.corners[e][k] as usize;
+                    let v = g.vel[node];
+                    for a in 0..3 {
+                        es += v[a] * grad[k][a];
+                    }
+                    if let Some(w) = wvel {
+                        for a in 0..3 {
+                            ew += w[node][a] * grad[k][a];
+                        }
+                    }
+                }
+                let ve = mesh.volume[e];
+                let (es, ew) = (es * dt * ve, ew * dt * ve);
+                for (j, _) in present.iter().enumerate().filter(|(_, &on)| on) {
+                    for slot in four.iter_mut() {
+                        slot[3 * j] += es;
+                        slot[3 * j + 1] += ew;
+                        slot[3 * j + 2] += ve;
+                    }
+                }
+            });
+            let nodal = Shared::new(&mut self.nodal);
+            layout.gather::<WIDTH, _>(team, slots, |n, s| {
+                // SAFETY: node n is this thread's only, and with it its columns.
+                let out = unsafe { nodal.range(n * columns + lo..n * columns + hi) };
+                for (j, o) in out.iter_mut().enumerate() {
+                    let w = s[3 * j + 2];
+                    *o = if w > R::ZERO {
+                        [s[3 * j] / w, s[3 * j + 1] / w]
+                    } else {
+                        [R::ZERO; 2]
+                    };
+                }
+            });
+        }
+    }
+
+    /// The smoothed volumetric strain increments (solid, liquid) of material `m`'s points in
+    /// element `e`: the plain mean of the element's four nodal values.
+    #[inline]
+    pub fn element_mean(&self, mesh: &TetMesh<R>, e: usize, m: u32) -> [R; 2] {
+        let c = self.column[m as usize];
+        let quarter = R::of(0.25);
+        let mut out = [R::ZERO; 2];
+        for &node in &mesh.corners[e] {
+            let v = self.nodal[node as usize * self.columns + c];
+            out[0] += v[0] * quarter;
+            out[1] += v[1] * quarter;
+        }
+        out
+    }
+}

@@ -1,0 +1,267 @@
+//! Strain increments from nodal velocities, the constitutive update, and the volume and position
+//! update of every particle.
+
+use crate::element::mesh::TetMesh;
+use crate::material::law::Law;
+use crate::material::liquid::Fluid;
+use crate::parallel::gather::{Layout, Slots};
+use crate::parallel::team::{Shared, Team};
+use crate::real::Real;
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
+use crate::step::smoothing::StrainSmoothing;
+
+/// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
+/// the rotation Δω σ - σ Δω with Δω = skew(L) Δt and -tr(Δε) σ); V *= 1 + tr Δε; x += Δt Σ N_n v_n. With `smoothing`, the
+/// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
+/// increment ([`crate::step::smoothing`]). Each thread updates the particles of its elements.
+#[allow(clippy::too_many_arguments)]
+pub fn update_stress_and_move<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    mesh: &TetMesh<R>,
+    p: &mut Particles<R>,
+    g: &Grid<R>,
+    laws: &[Law<R>],
+    objective: bool,
+    smoothing: Option<&StrainSmoothing<R>>,
+    dt: R,
+) {
+    let half = R::of(0.5);
+    let third = R::ONE / R::of(3.0);
+    let xs = Shared::new(&mut p.x);
+    let us = Shared::new(&mut p.u);
+    let stresses = Shared::new(&mut p.stress);
+    let volumes = Shared::new(&mut p.volume);
+    let k = p.state_len;
+    let states = Shared::new(&mut p.state);
+    let (active, element, material) = (&p.active, &p.element, &p.material);
+    team.run(|t| {
+        let r = layout.particle_range(t);
+        // SAFETY: the particle ranges of the threads are disjoint.
+        let (x, u, stress, volume) = unsafe {
+            (
+                xs.range(r.clone()),
+                us.range(r.clone()),
+                stresses.range(r.clone()),
+                volumes.range(r.clone()),
+            )
+        };
+        // SAFETY: as above; each point's state is its own `k` values.
+        let state = unsafe { states.range(k * r.start..k * r.end) };
+        for (j, i) in r.enumerate() {
+            if !active[i] {
+                continue;
+            }
+            let e = element[i] as usize;
+            let n = mesh.shape(e, &x[j]);
+            let grad = &mesh.grad[e];
+            let mut l = [[R::ZERO; 3]; 3]; // velocity gradient L[a][b] = ∂v_a/∂x_b
+            let mut dx = [R::ZERO; 3];
+            for k in 0..4 {
+                let v = g.vel[mesh.corners[e][k] as usize];
+                for a in 0..3 {
+                    dx[a] += n[k] * v[a];
+                    for b in 0..3 {
+                        l[a][b] += v[a] * grad[k][b];
+                    }
+                }
+            }
+            let mut de = [
+                l[0][0] * dt,
+                l[1][1] * dt,
+                l[2][2] * dt,
+                half * (l[0][1] + l[1][0]) * dt,
+                half * (l[1][2] + l[2][1]) * dt,
+                half * (l[2][0] + l[0][2]) * dt,
+            ];
+            if let Some(sm) = smoothing {
+                let [es, _] = sm.element_mean(mesh, e, material[i]);
+                let c = (de[0] + de[1] + de[2] - es) * third;
+                for d in de.iter_mut().take(3) {
+                    *d -= c;
+                }
+            }
+            if objective {
+                let w = [
+                    half * (l[0][1] - l[1][0]) * dt, // ω_xy
+                    half * (l[1][2] - l[2][1]) * dt, // ω_yz
+                    half * (l[2][0] - l[0][2]) * dt, // ω_zx
+                ];
+                // Anura3D's objective update (its "Hill" rate): the co-rotation and the
+                // change of volume, -tr(Δε) σ, both of the start-of-step stress.
+                let (s0, ev) = (stress[j], de[0] + de[1] + de[2]);
+                rotate(&mut stress[j], &w);
+                for (s, v) in stress[j].iter_mut().zip(s0) {
+                    *s -= ev * v;
+                }
+            }
+            laws[material[i] as usize].update(&mut stress[j], &de, &mut state[k * j..k * j + k]);
+            volume[j] *= R::ONE + de[0] + de[1] + de[2];
+            for a in 0..3 {
+                x[j][a] += dt * dx[a];
+                u[j][a] += dt * dx[a];
+            }
+        }
+    });
+}
+
+/// Pore-pressure update of saturated points (DESIGN §4): Δp = (K_w / n) (n Δε_vol,w +
+/// (1 - n) Δε_vol,s), the volumetric strain increments from the nodal liquid and solid velocities
+/// (compression negative, so compression lowers p). Call before the points move.
+///
+/// Linear tetrahedra give one volumetric strain per element, and with a stiff liquid
+/// (K_w / n ≫ E_oed) the pressure then shows spurious element-to-element (checkerboard) modes
+/// that grow near drained faces. The rate is therefore smoothed through the nodes: each point's
+/// rate is averaged to its element's nodes (weight V N) and interpolated back with N, as
+/// Anura3D's strain smoothing does for the volumetric strain (`smooth`; without it each point
+/// takes its element's rate, as Anura3D without `STRAIN_SMOOTHING`). With Anura3D's strain
+/// `smoothing` both increments are its smoothed ones instead.
+#[allow(clippy::too_many_arguments)]
+pub fn update_pore_pressure<R: Real>(
+    team: &Team,
+    layout: &Layout<R>,
+    slots: &mut Slots<R>,
+    mesh: &TetMesh<R>,
+    p: &mut Particles<R>,
+    g: &mut Grid<R>,
+    fluids: &[Option<Fluid<R>>],
+    smooth: bool,
+    smoothing: Option<&StrainSmoothing<R>>,
+    dt: R,
+) {
+    let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
+        return;
+    };
+    if let Some(sm) = smoothing {
+        let pressure = Shared::new(&mut lp.p);
+        let (active, material, element) = (&p.active, &p.material, &p.element);
+        team.run(|t| {
+            for i in layout.particle_range(t) {
+                if let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) {
+                    let [es, ew] = sm.element_mean(mesh, element[i] as usize, material[i]);
+                    // SAFETY: particle i belongs to this thread only.
+                    unsafe {
+                        pressure.range(i..i + 1)[0] +=
+                            f.kw_over_n * (f.n * ew + (R::ONE - f.n) * es)
+                    };
+                }
+            }
+        });
+        return;
+    }
+    let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
+    let (vel, wvel) = (&g.vel, &gl.vel);
+    // The rate of element e's points (one per element: linear tets).
+    let rate_in = |e: usize, f: &Fluid<R>| {
+        let grad = &mesh.grad[e];
+        let (mut div_v, mut div_w) = (R::ZERO, R::ZERO);
+        for k in 0..4 {
+            let node = mesh.corners[e][k] as usize;
+            let (v, w) = (vel[node], wvel[node]);
+            for a in 0..3 {
+                div_v += v[a] * grad[k][a];
+                div_w += w[a] * grad[k][a];
+            }
+        }
+        f.kw_over_n * (f.n * div_w + (R::ONE - f.n) * div_v)
+    };
+    let pressure = Shared::new(&mut lp.p);
+    if !smooth {
+        team.run(|t| {
+            for i in layout.particle_range(t) {
+                if let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) {
+                    let rate = rate_in(p.element[i] as usize, f);
+                    // SAFETY: particle i belongs to this thread only.
+                    unsafe { pressure.range(i..i + 1)[0] += rate * dt };
+                }
+            }
+        });
+        return;
+    }
+    layout.scatter::<2, _>(team, slots, |e, four| {
+        for i in layout.particles_of(e) {
+            let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) else {
+                continue;
+            };
+            let rate = rate_in(e, f);
+            let n = mesh.shape(e, &x[i]);
+            for (k, slot) in four.iter_mut().enumerate() {
+                slot[0] += volume[i] * n[k] * rate;
+                slot[1] += volume[i] * n[k];
+            }
+        }
+    });
+    let nodal = Shared::new(&mut gl.rate);
+    layout.gather::<2, _>(team, slots, |n, s| {
+        let r = if s[1] > R::ZERO { s[0] / s[1] } else { R::ZERO };
+        // SAFETY: node n is this thread's only.
+        unsafe { nodal.write(n, r) };
+    });
+    let nodal = &gl.rate;
+    team.run(|t| {
+        for i in layout.particle_range(t) {
+            if !active[i] || fluids[material[i] as usize].is_none() {
+                continue;
+            }
+            let e = p.element[i] as usize;
+            let n = mesh.shape(e, &x[i]);
+            let mut rate = R::ZERO;
+            for k in 0..4 {
+                rate += n[k] * nodal[mesh.corners[e][k] as usize];
+            }
+            // SAFETY: particle i belongs to this thread only.
+            unsafe { pressure.range(i..i + 1)[0] += rate * dt };
+        }
+    });
+}
+
+/// Adds Ω σ - σ Ω to `s` for the skew increment Ω with Ω_xy = `w[0]`, Ω_yz = `w[1]`, Ω_zx = `w[2]`
+/// (Ω_yx = `-w[0]` etc.): the Jaumann co-rotation of the stress over one step.
+#[inline]
+pub fn rotate<R: Real>(s: &mut [R; 6], w: &[R; 3]) {
+    let [xx, yy, zz, xy, yz, zx] = *s;
+    let (wxy, wyz, wzx) = (w[0], w[1], w[2]);
+    let two = R::of(2.0);
+    // (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj, written out for the symmetric result.
+    s[0] += two * (wxy * xy - wzx * zx);
+    s[1] += two * (wyz * yz - wxy * xy);
+    s[2] += two * (wzx * zx - wyz * yz);
+    s[3] += wxy * (yy - xx) + wyz * zx - wzx * yz;
+    s[4] += wyz * (zz - yy) + wzx * xy - wxy * zx;
+    s[5] += wzx * (xx - zz) + wxy * yz - wyz * xy;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ω σ - σ Ω by full 3×3 products.
+    fn reference(s: &[f64; 6], w: &[f64; 3]) -> [f64; 6] {
+        let m = [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]];
+        let o = [[0.0, w[0], -w[2]], [-w[0], 0.0, w[1]], [w[2], -w[1], 0.0]];
+        let mut r = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                for k in 0..3 {
+                    r[i][j] += o[i][k] * m[k][j] - m[i][k] * o[k][j];
+                }
+            }
+        }
+        [r[0][0], r[1][1], r[2][2], r[0][1], r[1][2], r[2][0]]
+    }
+
+    #[test]
+    fn jaumann_rotation_matches_matrix_products() {
+        let s0 = [1.0, -2.0, 3.5, 0.25, -0.75, 1.5];
+        let w = [0.01, -0.02, 0.03];
+        let mut s = s0;
+        rotate(&mut s, &w);
+        let r = reference(&s0, &w);
+        for c in 0..6 {
+            assert!((s[c] - s0[c] - r[c]).abs() < 1e-15, "component {c}");
+        }
+        // A rotation leaves the trace unchanged.
+        assert!(((s[0] + s[1] + s[2]) - (s0[0] + s0[1] + s0[2])).abs() < 1e-15);
+    }
+}
