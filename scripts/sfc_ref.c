@@ -1,4 +1,4 @@
-/* Plain single-threaded C reference of sfcb's Morton ordering (DESIGN §3): centroids of the
+/* Plain single-threaded C reference of sfcb's Morton ordering (docs/design.md §3): centroids of the
  * corner nodes, one bounding cube over all nodes, 21-level (3D) keys with x in the lowest bit,
  * a stable LSD radix sort of (key, index) pairs, vertex renumbering by first use over each
  * element's full node list. Reads the binary dump written by sfcb's bench example:

@@ -19,7 +19,7 @@ const REPORT_SCHEMA_VERSION: u32 = 1;
 /// Which curve orders the elements.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Curve {
-    /// Z-order: bit interleaving of the quantised centroid (DESIGN §3).
+    /// Z-order: bit interleaving of the quantised centroid (docs/design.md §3).
     Morton,
     /// Hilbert curve on the same grid.
     Hilbert,

@@ -1,4 +1,4 @@
-//! Locality and partition metrics for the report (DESIGN §3, step 8).
+//! Locality and partition metrics for the report (docs/design.md §3, step 8).
 
 use mpm_shared::Model;
 use rayon::prelude::*;

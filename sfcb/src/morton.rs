@@ -1,4 +1,4 @@
-//! Morton (Z-order) keys on a 2^N grid over the mesh's bounding cube (DESIGN §3).
+//! Morton (Z-order) keys on a 2^N grid over the mesh's bounding cube (docs/design.md §3).
 
 /// Spreads the low 21 bits of `v` so that bit i moves to bit 3i.
 #[inline]

@@ -1,5 +1,5 @@
 //! Element ordering along the curve, vertex renumbering by first use, and partitions
-//! (DESIGN §3, steps 1-7).
+//! (docs/design.md §3, steps 1-7).
 
 use mpm_shared::{Error, Model};
 use rayon::prelude::*;

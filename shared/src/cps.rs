@@ -2,7 +2,7 @@
 //!
 //! Same layout as the GOM: a version line, `$$KEYWORD` lines each followed by value lines, in any
 //! order, ending with `$$END`. Every entry is kept in file order so the file can be written back
-//! with only the remapped material-point list changed. The keys of DESIGN §2.2 are typed by
+//! with only the remapped material-point list changed. The keys of docs/design.md §2.2 are typed by
 //! [`Cps::settings`]; unknown keys produce one warning each and never fail.
 
 use crate::error::{Error, Location, Result};
@@ -70,7 +70,7 @@ pub enum Method {
     Other(String),
 }
 
-/// The typed keys of DESIGN §2.2. Missing keys take Anura3D's defaults.
+/// The typed keys of docs/design.md §2.2. Missing keys take Anura3D's defaults.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Settings {
     /// `NUMBER_OF_LOADSTEPS`.
@@ -484,7 +484,7 @@ impl Cps {
         }
     }
 
-    /// The typed settings of DESIGN §2.2, with Anura3D's defaults for missing keys.
+    /// The typed settings of docs/design.md §2.2, with Anura3D's defaults for missing keys.
     pub fn settings(&self) -> Result<Settings> {
         let load_steps = self.real("NUMBER_OF_LOADSTEPS", 1.0)?;
         if load_steps < 1.0 || load_steps.fract() != 0.0 {

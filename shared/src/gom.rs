@@ -2,7 +2,7 @@
 //!
 //! Layout: a version line `### Anura3D_20XX ###`, then `$$KEYWORD` lines each followed by their
 //! data lines (free format), then `$$FINISH`. Node `i` is the i-th line after `$$STARTNODES`,
-//! element `e` the e-th after `$$STARTELEMCON` (both 1-based). See DESIGN §2.1.
+//! element `e` the e-th after `$$STARTELEMCON` (both 1-based). See docs/design.md §2.1.
 //!
 //! The reader validates counts and id ranges and reports the file, line and section of the
 //! first problem. The writer keeps the section order of the model, writes one blank between

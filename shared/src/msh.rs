@@ -4,7 +4,7 @@
 //! 7:(0,3) 8:(2,3) 9:(1,3). Conversion flips G1 and G2 of a negatively oriented element, then maps
 //! corners to Anura3D's order A1 = G0, A2 = G3, A3 = G1, A4 = G2 (so that
 //! det[A3-A1, A4-A1, A2-A1] = det[G1-G0, G2-G0, G3-G0] > 0) and picks each mid-edge node by its
-//! corner pair (DESIGN §2.3).
+//! corner pair (docs/design.md §2.3).
 
 use std::collections::BTreeMap;
 

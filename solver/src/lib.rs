@@ -2,8 +2,8 @@
 //! lumped masses, local damping) on linear tetrahedra, generic over the precision.
 //!
 //! The folders, from the bottom up (each uses only those above it in this list, see
-//! docs/design.md §7): [`parallel`] (thread team, deterministic sums), [`element`] (mesh,
-//! locating points), [`material`] (laws), [`state`] (points, nodes), [`step`] (the phases of a
+//! docs/design.md §7.4): [`element`] (mesh, locating points), [`material`] (laws), [`state`]
+//! (points, nodes), [`parallel`] (thread team, deterministic sums), [`step`] (the phases of a
 //! step), [`input`] (scenes and Anura3D cases resolved into a [`input::case::Case`]),
 //! [`driver`] (the engine, the loop over output times, output files) and [`jobs`]
 //! (consolidation against Terzaghi, comparisons with Anura3D).
@@ -14,11 +14,11 @@
 
 pub mod real;
 
-pub mod parallel;
-
 pub mod element;
 pub mod material;
 pub mod state;
+
+pub mod parallel;
 
 pub mod step;
 

@@ -1,4 +1,4 @@
-//! Validation against analytical solutions (DESIGN §6). Run in release mode: each takes seconds.
+//! Validation against analytical solutions (docs/design.md §6). Run in release mode: each takes seconds.
 
 use std::path::{Path, PathBuf};
 

@@ -1,4 +1,4 @@
-//! Run outputs (DESIGN §2.4): `mesh.vtu`, `particles_NNNNN.vtu`, `run.pvd`, `history.csv`,
+//! Run outputs (docs/design.md §2.4): `mesh.vtu`, `particles_NNNNN.vtu`, `run.pvd`, `history.csv`,
 //! `energy.csv`, `run.json`. Every file is written whole and atomically; the CSV and PVD files are
 //! rewritten after each output time so that a run stopped by an error leaves what it completed.
 

@@ -627,7 +627,7 @@ pub fn markdown() -> String {
     let cell = |s: &str| s.replace('|', "\\|");
     let mut out = String::from(
         "# Anura3D keys\n\n\
-         <!-- Generated from solver/src/anura3d_keys.rs (KEYS) by anura3d_keys::markdown(); do not \
+         <!-- Generated from solver/src/input/anura3d_keys.rs (KEYS) by anura3d_keys::markdown(); do not \
          edit. Regenerate: UPDATE_DOCS=1 cargo test -p mpm-solve --test keys -->\n\n\
          What `mpm-solve` does with each key of an Anura3D case: **modelled** (computed as \
          Anura3D does), **ignored** (cannot change the results of a case the loader accepts), \

@@ -1,4 +1,4 @@
-//! Terzaghi's 1D consolidation (DESIGN §6): single drainage at the top of a layer of height H,
+//! Terzaghi's 1D consolidation (docs/design.md §6): single drainage at the top of a layer of height H,
 //! z measured down from the drained top, T_v = c_v t / H².
 
 use std::f64::consts::PI;

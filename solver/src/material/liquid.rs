@@ -1,5 +1,5 @@
 //! The pore liquid of saturated (two-phase, single-point) materials: its parameters, the
-//! two-phase critical wave speed (Mieremet et al., DESIGN §4) and the per-material constants the
+//! two-phase critical wave speed (Mieremet et al., docs/design.md §4) and the per-material constants the
 //! kernels use.
 
 use crate::real::Real;
@@ -148,7 +148,7 @@ mod tests {
         assert!((c - 193.2).abs() < 0.05, "c = {c}");
         let dt = dx / c;
         assert!((dt - 3.660e-4).abs() < 5e-8, "dt = {dt}");
-        // c_v of DESIGN §6 (k E_oed / γw ≈ 1.37 m²/s) with the liquid's compressibility.
+        // c_v of docs/design.md §6 (k E_oed / γw ≈ 1.37 m²/s) with the liquid's compressibility.
         let cv = l.conductivity() * e_oed / (G * 1.0) / (1.0 + 0.4 * e_oed / 2.15e4);
         assert!((l.consolidation_coefficient(e_oed) - cv).abs() < 1e-12);
         assert!((cv - 1.34).abs() < 0.01);

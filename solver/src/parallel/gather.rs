@@ -1,6 +1,6 @@
 //! The data layout of the parallel step: particles kept sorted by element, fixed per-thread
 //! ranges of elements, particles and nodes, and the race-free, deterministic particle-to-grid
-//! sum (DESIGN §5).
+//! sum (docs/design.md §5).
 //!
 //! A sum over particles onto nodes is done in two passes. Each thread goes over its elements
 //! and, for each, over that element's particles in storage order, adding into the element's

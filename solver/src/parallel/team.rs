@@ -1,4 +1,4 @@
-//! The thread team (DESIGN §5): one pool of worker threads for the whole run, optionally pinned
+//! The thread team (docs/design.md §5): one pool of worker threads for the whole run, optionally pinned
 //! one per core, each thread always given the same contiguous range of the work (elements,
 //! nodes, particles), so that what a thread first touches it later computes on.
 //!

@@ -23,7 +23,7 @@ pub struct Grid<R: Real> {
     pub liquid: Option<LiquidNodes<R>>,
 }
 
-/// Nodal arrays of the liquid (DESIGN §4, two-phase).
+/// Nodal arrays of the liquid (docs/design.md §4, two-phase).
 #[derive(Debug, Clone)]
 pub struct LiquidNodes<R: Real> {
     /// M_w = Σ ρw V N.

@@ -1,5 +1,5 @@
 //! Grid to particle, MUSL: FLIP velocity update, then momentum re-mapped to the nodes for the
-//! velocities that drive strain, stress, volume and position (DESIGN §4, step 3), on the team.
+//! velocities that drive strain, stress, volume and position (docs/design.md §4, step 3), on the team.
 
 use crate::element::mesh::TetMesh;
 use crate::material::liquid::Fluid;

@@ -1,4 +1,4 @@
-//! Grid update: nodal accelerations with local damping and fixities (DESIGN §4, step 2).
+//! Grid update: nodal accelerations with local damping and fixities (docs/design.md §4, step 2).
 
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
@@ -98,7 +98,7 @@ pub fn grid_update<R: Real>(
     }
 }
 
-/// Two-phase grid update (DESIGN §4). With the mixture force F (total-stress internal force,
+/// Two-phase grid update (docs/design.md §4). With the mixture force F (total-stress internal force,
 /// mixture weight, loads), the liquid force F_w (pore-pressure gradient, liquid weight, loads on
 /// the liquid), the lumped masses M_s, M_w, M̄_w and drag Q, per node and component:
 ///

@@ -1,4 +1,4 @@
-//! Particle to grid: lumped masses, momentum, internal and gravity forces (DESIGN §4, step 1),
+//! Particle to grid: lumped masses, momentum, internal and gravity forces (docs/design.md §4, step 1),
 //! summed element by element and then node by node on the team (see [`crate::parallel::gather`]).
 
 use crate::element::mesh::TetMesh;
@@ -160,7 +160,7 @@ pub fn add_point_loads<R: Real>(
     }
 }
 
-/// The liquid's share of particle to grid (two-phase, DESIGN §4): liquid masses M_w and M̄_w,
+/// The liquid's share of particle to grid (two-phase, docs/design.md §4): liquid masses M_w and M̄_w,
 /// drag Q, liquid momentum, the liquid force -Σ V p ∇N + M_w g, and the liquid's weight added to
 /// the mixture's external force. Points of dry materials (`fluids[m]` is `None`) add nothing.
 /// Under `mixed` integration, full elements (as the solid pass found them) integrate the

@@ -106,7 +106,7 @@ pub fn update_stress_and_move<R: Real>(
     });
 }
 
-/// Pore-pressure update of saturated points (DESIGN §4): Δp = (K_w / n) (n Δε_vol,w +
+/// Pore-pressure update of saturated points (docs/design.md §4): Δp = (K_w / n) (n Δε_vol,w +
 /// (1 - n) Δε_vol,s), the volumetric strain increments from the nodal liquid and solid velocities
 /// (compression negative, so compression lowers p). Call before the points move.
 ///
