@@ -315,7 +315,10 @@ impl Cps {
         // almost always an edit that missed the first one. Say so instead of guessing (unknown
         // keys are only warned about, once).
         let mut first_line = std::collections::HashMap::new();
-        for e in entries.iter().filter(|e| KNOWN.contains(&e.keyword.as_str())) {
+        for e in entries
+            .iter()
+            .filter(|e| KNOWN.contains(&e.keyword.as_str()))
+        {
             if let Some(first) = first_line.insert(e.keyword.as_str(), e.line) {
                 return Err(Error::format(
                     at(e.line, None),

@@ -4,7 +4,7 @@
 //! One module per stage: [`particle_to_grid`], [`grid_update`], [`grid_to_particle`],
 //! [`stress`], [`locate`]; the law in [`linear_elastic`]; set-up in [`mesh`], [`particles`],
 //! [`case`] and [`scene`]; files in [`output`]; the driver in [`run`]; scenes written as
-//! Anura3D cases in [`export_anura3d`].
+//! Anura3D cases in [`export_anura3d`]; two runs' outputs compared field by field in [`compare`].
 #![warn(missing_docs)]
 // Kernels index several arrays (shape values, gradients, components) in lockstep, which reads
 // better as index loops; and `!(x > 0.0)` is deliberate where NaN must be rejected too.
@@ -14,6 +14,7 @@ pub mod anura3d;
 pub mod anura3d_compare;
 pub mod anura3d_keys;
 pub mod case;
+pub mod compare;
 pub mod consolidation;
 pub mod engine;
 pub mod export_anura3d;
