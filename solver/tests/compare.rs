@@ -221,7 +221,12 @@ fn perturbed_field_exits_1_naming_field_output_and_point() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("compare.toml: unknown field 'strain'"));
 }
 
-/// f32 against f64 on the same case: the tolerance stated in the README, measured here.
+/// f32 against f64 on the same case: the tolerances stated in the README, measured here
+/// (largest relative differences at 0.1 s: position 1e-5, displacement 3.4e-4, stress 2.8e-3,
+/// velocity 0.15 of a column nearly at rest, histories and energies below 1e-3).
+/// What an f32 run is held to against an f64 run (README, "Golden files in CI").
+const F32_TOLERANCES: [&str; 4] = ["--rtol", "1e-2", "--rtol", "velocity=0.3"];
+
 #[test]
 fn f32_run_matches_f64_run_within_stated_tolerances() {
     let dir = tempfile::tempdir().unwrap();
@@ -230,6 +235,22 @@ fn f32_run_matches_f64_run_within_stated_tolerances() {
     column::<f32>(&b);
     let exact = compare::compare(&a, &b, &Tolerances::default()).unwrap();
     assert!(!exact.within, "f32 and f64 should not agree bit for bit");
+    let worst = |name: &str| {
+        exact
+            .worst_per_field()
+            .into_iter()
+            .find(|(_, f)| f.field == name)
+            .unwrap()
+            .1
+            .max_rel
+    };
+    // Round-off of f32, not a different answer: small, but far from 0.
+    assert!(
+        worst("stress") > 1e-5 && worst("stress") < 1e-2,
+        "{}",
+        worst("stress")
+    );
+    assert!(worst("displacement") < 1e-3 && worst("position") < 1e-4);
     for (o, f) in exact.worst_per_field() {
         eprintln!(
             "f32 vs f64 {:<22} max rel {:.2e} RMS rel {:.2e} (at {:?})",
@@ -239,15 +260,8 @@ fn f32_run_matches_f64_run_within_stated_tolerances() {
     let out = compare_bin()
         .arg(&a)
         .arg(&b)
-        .args([
-            "--rtol",
-            "1e-4",
-            "--rtol",
-            "velocity=1e-2",
-            "--rtol",
-            "energy.kinetic=1e-2",
-            "--summary",
-        ])
+        .args(F32_TOLERANCES)
+        .arg("--summary")
         .output()
         .unwrap();
     assert_eq!(
@@ -261,16 +275,8 @@ fn f32_run_matches_f64_run_within_stated_tolerances() {
     compare_bin()
         .arg(&a)
         .arg(&b)
-        .args([
-            "--rtol",
-            "1e-4",
-            "--rtol",
-            "velocity=1e-2",
-            "--rtol",
-            "energy.kinetic=1e-2",
-            "--summary",
-            "--plot",
-        ])
+        .args(F32_TOLERANCES)
+        .arg("--plot")
         .arg(&png)
         .assert()
         .code(0);
