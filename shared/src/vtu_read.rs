@@ -527,6 +527,6 @@ mod tests {
         assert!(e.contains("run.pvd") && e.contains("truncated"), "{e}");
         let bad = String::from_utf8(out).unwrap().replace("0.25", "x");
         let e = read_pvd(bad.as_bytes(), "run.pvd").unwrap_err().to_string();
-        assert!(e.starts_with("run.pvd:4") && e.contains("timestep"), "{e}");
+        assert!(e.starts_with("run.pvd:5") && e.contains("timestep"), "{e}");
     }
 }

@@ -27,6 +27,10 @@ fn groups(file: &str) -> &'static [(&'static str, &'static [&'static str])] {
     }
 }
 
+/// A field being compared: its name, its columns (name, index in the golden and the candidate
+/// file) and its statistics so far.
+type Group = (&'static str, Vec<(&'static str, usize, usize)>, Accumulator);
+
 fn open(path: &Path) -> Result<csv::Reader<std::fs::File>, CompareError> {
     csv::ReaderBuilder::new()
         .from_path(path)
@@ -87,7 +91,7 @@ pub fn compare_csv(
     };
     let ids = (col(&ha, "id"), col(&hb, "id"));
     // Fields present on both sides, as column indices per side.
-    let mut fields: Vec<(&str, Vec<(&str, usize, usize)>, Accumulator)> = Vec::new();
+    let mut fields: Vec<Group> = Vec::new();
     for &(field, cols) in groups(name) {
         let found: Vec<_> = cols
             .iter()
