@@ -424,3 +424,120 @@ fn our_run_against_an_anura3d_run_folder() {
         .assert()
         .code(2);
 }
+
+/// Writes a folder with one output of `n` points (ids in the order given) for the large test.
+fn synthetic(dir: &Path, ids: &[i32], shift: f64) {
+    use mpm_shared::vtu::{write_pvd, write_vtu, Cells, DataArray, Encoding, Piece, Values};
+    std::fs::create_dir_all(dir).unwrap();
+    let n = ids.len();
+    let pts: Vec<f64> = ids
+        .iter()
+        .flat_map(|&i| [0.0, i as f64 / n as f64, 0.0])
+        .collect();
+    let v3: Vec<f64> = ids.iter().flat_map(|&i| [i as f64, 0.0, 1.0]).collect();
+    let s6: Vec<f64> = ids
+        .iter()
+        .flat_map(|&i| [-(i as f64) - shift, 0.0, 0.0, 0.0, 0.0, 1.0])
+        .collect();
+    let one: Vec<i32> = vec![1; n];
+    let cells = Cells::vertices(n);
+    let piece = Piece {
+        points: &pts,
+        cells: &cells,
+        point_data: vec![
+            DataArray {
+                name: "displacement",
+                components: 3,
+                values: Values::F64(&v3),
+            },
+            DataArray {
+                name: "velocity",
+                components: 3,
+                values: Values::F64(&v3),
+            },
+            DataArray {
+                name: "stress",
+                components: 6,
+                values: Values::F64(&s6),
+            },
+            DataArray {
+                name: "material",
+                components: 1,
+                values: Values::I32(&one),
+            },
+            DataArray {
+                name: "element",
+                components: 1,
+                values: Values::I32(&one),
+            },
+            DataArray {
+                name: "id",
+                components: 1,
+                values: Values::I32(ids),
+            },
+        ],
+        cell_data: vec![],
+    };
+    mpm_shared::io::write_output_with(&dir.join("particles_00000.vtu"), |w| {
+        write_vtu(w, &piece, Encoding::Appended)
+    })
+    .unwrap();
+    mpm_shared::io::write_output_with(&dir.join("run.pvd"), |w| {
+        write_pvd(w, &[(1.0, "particles_00000.vtu".into())])
+    })
+    .unwrap();
+}
+
+/// Streaming at scale: two outputs of `MPM_COMPARE_POINTS` points (default 10 million, about
+/// 1.5 GB each), the candidate's in reverse id order; prints the time and the peak memory of
+/// `mpm-compare` (with /usr/bin/time where there is one).
+/// `cargo test --release -p mpm-solve --test compare -- --ignored --nocapture`.
+#[test]
+#[ignore = "writes two files of about 1.5 GB"]
+fn large_outputs_compare_within_one_pair_of_memory() {
+    let n: usize = std::env::var("MPM_COMPARE_POINTS").map_or(10_000_000, |v| v.parse().unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    let ids: Vec<i32> = (1..=n as i32).collect();
+    synthetic(&a, &ids, 0.0);
+    let rev: Vec<i32> = ids.iter().rev().copied().collect();
+    synthetic(&b, &rev, 1e-9);
+    drop((ids, rev));
+    let bytes = std::fs::metadata(a.join("particles_00000.vtu"))
+        .unwrap()
+        .len()
+        * 2;
+    let bin = assert_cmd::cargo::cargo_bin("mpm-compare");
+    let timer = Path::new("/usr/bin/time");
+    let start = std::time::Instant::now();
+    let out = if timer.is_file() {
+        Command::new(timer)
+            .arg("-v")
+            .arg(&bin)
+            .arg(&a)
+            .arg(&b)
+            .args(["--atol", "1e-6", "--summary"])
+            .output()
+            .unwrap()
+    } else {
+        Command::new(&bin)
+            .arg(&a)
+            .arg(&b)
+            .args(["--atol", "1e-6", "--summary"])
+            .output()
+            .unwrap()
+    };
+    let secs = start.elapsed().as_secs_f64();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let rss = err
+        .lines()
+        .find(|l| l.contains("Maximum resident set size"))
+        .unwrap_or("");
+    eprintln!(
+        "{n} points, {:.2} GB read in {secs:.1} s ({:.0} MB/s); {}",
+        bytes as f64 / 1e9,
+        bytes as f64 / 1e6 / secs,
+        rss.trim()
+    );
+}
