@@ -5,7 +5,7 @@
 //! - [`bms`]: Anura3D benchmark tables (`.BMS`, `.BMR`) reader; [`anura3d_vtk`]: Anura3D's
 //!   material-point VTK output reader;
 //! - [`msh`]: Gmsh `.msh` reader (2.2 and 4.1, ASCII and binary) and conversion to the model;
-//! - [`vtu`]: ParaView VTU and PVD writers;
+//! - [`vtu`]: ParaView VTU and PVD writers; [`vtu_read`]: their reader (raw appended VTU, PVD);
 //! - [`points`]: material-point ids and input element numbers that survive reordering;
 //! - [`geometry`]: signed tetrahedron volumes;
 //! - [`suite`]: where tests find Anura3D's benchmark suite and binary;
@@ -28,6 +28,7 @@ pub mod points;
 pub mod suite;
 pub mod text;
 pub mod vtu;
+pub mod vtu_read;
 
 pub use error::{Error, Location, Result};
 pub use model::{Dimension, ElementType, Model};

@@ -6,7 +6,8 @@
 //! (points, nodes), [`parallel`] (thread team, deterministic sums), [`step`] (the phases of a
 //! step), [`input`] (scenes and Anura3D cases resolved into a [`input::case::Case`]),
 //! [`driver`] (the engine, the loop over output times, output files) and [`jobs`]
-//! (consolidation against Terzaghi, comparisons with Anura3D).
+//! (consolidation against Terzaghi, comparisons with Anura3D); beside them, [`compare`] (two
+//! runs' outputs, or a run and Anura3D's, compared field by field for golden files).
 #![warn(missing_docs)]
 // Kernels index several arrays (shape values, gradients, components) in lockstep, which reads
 // better as index loops; and `!(x > 0.0)` is deliberate where NaN must be rejected too.
@@ -27,3 +28,5 @@ pub mod input;
 pub mod driver;
 
 pub mod jobs;
+
+pub mod compare;

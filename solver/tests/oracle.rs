@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use mpm_shared::anura3d_vtk::{read_step, MaterialPointState};
+use mpm_solve::compare::tolerance::Tolerances;
 use mpm_solve::input::case::Drag;
 use mpm_solve::jobs::consolidation::{ConsolidationSpec, Layer, Start};
 use mpm_solve::jobs::terzaghi;
@@ -43,78 +44,67 @@ fn run_oracle(bin: &Path, dir: &Path, name: &str) {
     );
 }
 
-/// One load step's material points, ordered by id: displacement, effective stress, pore
-/// pressure and position.
+/// One load step's pore pressure and height of every material point, for the comparison with
+/// Terzaghi (the point-by-point comparison with Anura3D goes through `mpm_solve::compare`).
 #[derive(Debug, Clone, Default)]
 struct Step {
-    u: Vec<[f64; 3]>,
-    s: Vec<[f64; 6]>,
     p: Vec<f64>,
     y: Vec<f64>,
 }
 
 fn from_anura3d(points: &[MaterialPointState]) -> Step {
-    let mut st = Step::default();
-    for (k, m) in points.iter().enumerate() {
-        assert_eq!(m.id as usize, k + 1, "Anura3D's material points are 1..N");
-        st.u.push(m.displacement_solid);
-        st.s.push(m.eff_stress_solid);
-        st.p.push(m.pressure_liquid.unwrap_or(0.0));
-        st.y.push(m.position[1]);
+    Step {
+        p: points
+            .iter()
+            .map(|m| m.pressure_liquid.unwrap_or(0.0))
+            .collect(),
+        y: points.iter().map(|m| m.position[1]).collect(),
     }
-    st
 }
 
-/// Runs `mpm-solve` on the exported files with `drag`; one [`Step`] per load step.
-fn run_ours(gom: &Path, cps: &Path, drag: Drag) -> Vec<Step> {
+/// Runs `mpm-solve` on the exported files with `drag`, writing its outputs into `out`; one
+/// [`Step`] per load step.
+fn run_ours(gom: &Path, cps: &Path, drag: Drag, out: &Path) -> Vec<Step> {
     let (mut case, _) = mpm_solve::input::anura3d::load(gom, cps).unwrap();
     case.drag = drag;
-    let out = tempfile::tempdir().unwrap();
     let mut steps = Vec::new();
-    mpm_solve::driver::run::run_observed::<f64>(&case, out.path(), &Default::default(), &mut |e| {
+    mpm_solve::driver::run::run_observed::<f64>(&case, out, &Default::default(), &mut |e| {
         let p = &e.particles;
-        let mut order: Vec<usize> = (0..p.len()).collect();
-        order.sort_by_key(|&i| p.id[i]);
         let l = p.liquid.as_ref();
         steps.push(Step {
-            u: order.iter().map(|&i| p.u[i]).collect(),
-            s: order.iter().map(|&i| p.stress[i]).collect(),
-            p: order.iter().map(|&i| l.map_or(0.0, |l| l.p[i])).collect(),
-            y: order.iter().map(|&i| p.x[i][1]).collect(),
+            p: (0..p.len()).map(|i| l.map_or(0.0, |l| l.p[i])).collect(),
+            y: (0..p.len()).map(|i| p.x[i][1]).collect(),
         });
     })
     .unwrap();
     steps
 }
 
-/// Largest and RMS difference of one field over every point and component, relative to the
-/// field's largest Anura3D value at that step.
-fn diff<const N: usize>(a: &[[f64; N]], b: &[[f64; N]]) -> (f64, f64) {
-    assert_eq!(a.len(), b.len(), "different numbers of material points");
-    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    let scale = if scale > 0.0 { scale } else { 1.0 };
-    let (mut max, mut sum, mut n) = (0.0f64, 0.0, 0usize);
-    for (x, y) in a.iter().zip(b) {
-        for c in 0..N {
-            let d = (x[c] - y[c]).abs() / scale;
-            max = max.max(d);
-            sum += d * d;
-            n += 1;
-        }
-    }
-    (max, (sum / n as f64).sqrt())
-}
-
-/// Per load step: (max, RMS) of u, σ' and p.
-fn compare(anura: &[Step], ours: &[Step]) -> Vec<[(f64, f64); 3]> {
-    assert_eq!(anura.len(), ours.len(), "different numbers of load steps");
-    anura
+/// Per load step: (largest, RMS) difference of u, σ' and p over every point and component,
+/// relative to the field's largest Anura3D value at that step, from `mpm-compare`'s library
+/// with Anura3D's run folder as the golden side. `steps` load steps are expected.
+fn compare(anura: &Path, ours: &Path, steps: usize) -> Vec<[(f64, f64); 3]> {
+    let report = mpm_solve::compare::compare(anura, ours, &Tolerances::default())
+        .unwrap_or_else(|e| panic!("cannot compare with Anura3D: {e}"));
+    assert_eq!(
+        report.outputs.len(),
+        steps,
+        "different numbers of load steps"
+    );
+    report
+        .outputs
         .iter()
-        .zip(ours)
-        .map(|(a, b)| {
-            let pa: Vec<[f64; 1]> = a.p.iter().map(|&v| [v]).collect();
-            let pb: Vec<[f64; 1]> = b.p.iter().map(|&v| [v]).collect();
-            [diff(&a.u, &b.u), diff(&a.s, &b.s), diff(&pa, &pb)]
+        .map(|o| {
+            ["displacement", "stress", "pore_pressure"].map(|name| {
+                let f = o
+                    .fields
+                    .iter()
+                    .find(|f| f.field == name)
+                    .unwrap_or_else(|| {
+                        panic!("{name} not compared at {}: {:?}", o.golden, report.notes)
+                    });
+                (f.max_rel, f.rms_rel)
+            })
         })
         .collect()
 }
@@ -171,8 +161,12 @@ fn consolidation_column_matches_anura3d_point_by_point() {
     let anura: Vec<Step> = (1..=case.output_times.len() as u32)
         .map(|k| from_anura3d(&read_step(dir.path(), &name, k).unwrap()))
         .collect();
-    let explicit = compare(&anura, &run_ours(&files.gom, &files.cps, Drag::Explicit));
-    let implicit = compare(&anura, &run_ours(&files.gom, &files.cps, Drag::Implicit));
+    let (ex, im) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    run_ours(&files.gom, &files.cps, Drag::Explicit, ex.path());
+    let ours = run_ours(&files.gom, &files.cps, Drag::Implicit, im.path());
+    let steps = case.output_times.len();
+    let explicit = compare(dir.path(), ex.path(), steps);
+    let implicit = compare(dir.path(), im.path(), steps);
     eprintln!(
         "{}",
         table(
@@ -191,7 +185,6 @@ fn consolidation_column_matches_anura3d_point_by_point() {
         compare_rest: false,
     };
     let layer = Layer::of(&case, &spec).unwrap();
-    let ours = run_ours(&files.gom, &files.cps, Drag::Implicit);
     let (ta, to) = (
         terzaghi_rms(&layer, &anura, &case.output_times),
         terzaghi_rms(&layer, &ours, &case.output_times),
@@ -319,15 +312,14 @@ fn liquid_load_mixed_objective_smoothing_match_anura3d() {
     }
     std::fs::write(dir.path().join("c.CPS_001"), cps).unwrap();
     run_oracle(&bin, dir.path(), "c");
-    let anura: Vec<Step> = (1..=4)
-        .map(|k| from_anura3d(&read_step(dir.path(), "c", k).unwrap()))
-        .collect();
-    let ours = run_ours(
+    let out = tempfile::tempdir().unwrap();
+    run_ours(
         &dir.path().join("c.GOM"),
         &dir.path().join("c.CPS_001"),
         Drag::Explicit,
+        out.path(),
     );
-    let rows = compare(&anura, &ours);
+    let rows = compare(dir.path(), out.path(), 4);
     eprintln!(
         "{}",
         table("4005 over four load steps, --drag explicit", &rows)

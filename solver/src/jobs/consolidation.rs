@@ -318,7 +318,7 @@ pub fn run_job<R: Real>(
 
 /// A TrueType font for the plot's text, from the usual system places (DejaVu Sans or
 /// Liberation Sans); `None` when there is none, and the plot is then drawn without text.
-fn font() -> Option<&'static [u8]> {
+pub(crate) fn font() -> Option<&'static [u8]> {
     use std::sync::OnceLock;
     static FONT: OnceLock<Option<&'static [u8]>> = OnceLock::new();
     *FONT.get_or_init(|| {

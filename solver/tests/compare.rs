@@ -1,0 +1,543 @@
+//! `mpm-compare` and the compare library on real runs: identical folders, a perturbed field,
+//! an f32 run against an f64 run, folders that cannot be compared, and a run of ours against
+//! Anura3D's run folder of the same case (skipped, visibly, without `ANURA3D_ORACLE`).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use assert_cmd::prelude::*;
+use mpm_shared::vtu_read::{read_vtu_file, Section};
+use mpm_solve::compare::{self, tolerance::Tolerances};
+
+fn testdata(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../testdata")
+        .join(name)
+}
+
+/// The column under gravity for 0.1 s, outputs at 0.05 and 0.1 s, probes 1 and 40, written by
+/// the solver in precision `R` into `dir`.
+fn column<R: mpm_solve::real::Real>(dir: &Path) {
+    let mut case = mpm_solve::input::scene::load(&testdata("column_gravity.toml")).unwrap();
+    case.end_time = 0.1;
+    case.output_times = vec![0.05, 0.1];
+    case.probes = vec![1, 40];
+    mpm_solve::driver::run::run::<R>(&case, dir, &Default::default()).unwrap();
+}
+
+fn compare_bin() -> Command {
+    Command::cargo_bin("mpm-compare").unwrap()
+}
+
+/// Copies a run folder (flat).
+fn copy(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+    }
+}
+
+/// Adds `by` to component `c` of the point of id `id` in `array` of the particle file `file`
+/// (raw appended Float64 data, patched in place).
+fn perturb(file: &Path, array: &str, id: u64, c: usize, by: f64) -> f64 {
+    let (at, comps, row) = {
+        let v = read_vtu_file(file).unwrap();
+        let ids = v.point_data("id").unwrap();
+        let row = (0..ids.len())
+            .find(|&i| ids.get(i, 0) as u64 == id)
+            .unwrap();
+        let info = v
+            .arrays
+            .iter()
+            .find(|a| a.section == Section::PointData && a.name == array)
+            .unwrap()
+            .clone();
+        (info.start, info.components, row)
+    };
+    let mut bytes = std::fs::read(file).unwrap();
+    let k = at + (row * comps + c) * 8;
+    let old = f64::from_le_bytes(bytes[k..k + 8].try_into().unwrap());
+    bytes[k..k + 8].copy_from_slice(&(old + by).to_le_bytes());
+    std::fs::write(file, bytes).unwrap();
+    old
+}
+
+/// Writes `from` to `to` without its point of the largest id (every array kept as Float64,
+/// ids and elements as Int32, as the solver writes them).
+fn drop_last_point(from: &Path, to: &Path) {
+    use mpm_shared::vtu::{write_vtu, Cells, DataArray, Encoding, Piece, Values};
+    let v = read_vtu_file(from).unwrap();
+    let ids = v.point_data("id").unwrap();
+    let last = (0..ids.len())
+        .max_by_key(|&i| ids.get(i, 0) as u64)
+        .unwrap();
+    let keep: Vec<usize> = (0..ids.len()).filter(|&i| i != last).collect();
+    let take = |a: mpm_shared::vtu_read::ArrayView| -> Vec<f64> {
+        keep.iter()
+            .flat_map(|&i| (0..a.components).map(move |c| a.get(i, c)))
+            .collect()
+    };
+    let pts = take(v.coordinates().unwrap());
+    let mut reals = Vec::new();
+    let mut ints = Vec::new();
+    for info in v.arrays.iter().filter(|a| a.section == Section::PointData) {
+        let data = take(v.point_data(&info.name).unwrap());
+        if matches!(info.name.as_str(), "id" | "element" | "material") {
+            ints.push((
+                info.name.clone(),
+                info.components,
+                data.iter().map(|&x| x as i32).collect::<Vec<i32>>(),
+            ));
+        } else {
+            reals.push((info.name.clone(), info.components, data));
+        }
+    }
+    let cells = Cells::vertices(keep.len());
+    let mut point_data: Vec<DataArray> = reals
+        .iter()
+        .map(|(n, c, d)| DataArray {
+            name: n,
+            components: *c,
+            values: Values::F64(d),
+        })
+        .collect();
+    point_data.extend(ints.iter().map(|(n, c, d)| DataArray {
+        name: n,
+        components: *c,
+        values: Values::I32(d),
+    }));
+    let piece = Piece {
+        points: &pts,
+        cells: &cells,
+        point_data,
+        cell_data: vec![],
+    };
+    let mut out = Vec::new();
+    write_vtu(&mut out, &piece, Encoding::Appended).unwrap();
+    std::fs::write(to, out).unwrap();
+}
+
+#[test]
+fn identical_folders_exit_0_with_all_zero_differences() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    column::<f64>(&a);
+    copy(&a, &b);
+    let r = compare::compare(&a, &b, &Tolerances::default()).unwrap();
+    assert!(r.within);
+    assert_eq!(r.outputs.len(), 2);
+    assert_eq!(r.histories.len(), 2, "history.csv and energy.csv");
+    assert!(r.all().count() >= 2 * 4 + 3 + 2);
+    for (_, f) in r.all() {
+        assert_eq!((f.max_abs, f.rms_abs), (0.0, 0.0), "{f:?}");
+        assert!(f.worst.is_none());
+        assert!(f.values > 0);
+    }
+    let out = compare_bin()
+        .arg(&a)
+        .arg(&b)
+        .arg("--summary")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.starts_with("mpm-compare: within tolerances") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.lines().any(|l| l.starts_with("ok   stress")),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn perturbed_field_exits_1_naming_field_output_and_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    column::<f64>(&a);
+    copy(&a, &b);
+    let old = perturb(&b.join("particles_00001.vtu"), "stress", 17, 1, 0.5);
+    let out = compare_bin()
+        .arg(&a)
+        .arg(&b)
+        .args(["--json", "--rtol", "1e-3"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.starts_with("mpm-compare: FAIL: stress differs at t = 0.1 s (particles_00001.vtu)")
+            && stderr.contains("id 17")
+            && stderr.contains("yy: golden"),
+        "{stderr}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["within"], false);
+    let first = &json["outputs"][0]["fields"];
+    assert!(first
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|f| f["max_abs"] == 0.0));
+    let stress = json["outputs"][1]["fields"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["field"] == "stress")
+        .unwrap()
+        .clone();
+    assert_eq!(stress["within"], false);
+    assert!((stress["max_abs"].as_f64().unwrap() - 0.5).abs() < 1e-9);
+    assert_eq!(stress["worst"]["id"], 17);
+    assert_eq!(stress["worst"]["golden"], old);
+    assert!(stress["worst"]["element"].as_u64().unwrap() >= 1);
+    // Loose enough, the same difference passes: 0.5 kPa in a column whose largest stress is
+    // several kPa.
+    let out = compare_bin()
+        .arg(&a)
+        .arg(&b)
+        .args(["--rtol", "1e-3", "--atol", "stress=0.6"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // A tolerance file beside the golden folder's outputs is read.
+    std::fs::write(
+        a.join("compare.toml"),
+        "[default]\nrtol = 1e-3\n[field.stress]\natol = 0.6\n",
+    )
+    .unwrap();
+    compare_bin().arg(&a).arg(&b).assert().code(0);
+    std::fs::write(a.join("compare.toml"), "[field.strain]\natol = 0.6\n").unwrap();
+    let out = compare_bin().arg(&a).arg(&b).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("compare.toml: unknown field 'strain'"));
+}
+
+/// f32 against f64 on the same case: the tolerances stated in the README, measured here
+/// (largest relative differences at 0.1 s: position 1e-5, displacement 3.4e-4, stress 2.8e-3,
+/// velocity 0.15 of a column nearly at rest, histories and energies below 1e-3).
+/// What an f32 run is held to against an f64 run (README, "Golden files in CI").
+const F32_TOLERANCES: [&str; 4] = ["--rtol", "1e-2", "--rtol", "velocity=0.3"];
+
+#[test]
+fn f32_run_matches_f64_run_within_stated_tolerances() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("f64"), dir.path().join("f32"));
+    column::<f64>(&a);
+    column::<f32>(&b);
+    let exact = compare::compare(&a, &b, &Tolerances::default()).unwrap();
+    assert!(!exact.within, "f32 and f64 should not agree bit for bit");
+    let worst = |name: &str| {
+        exact
+            .worst_per_field()
+            .into_iter()
+            .find(|(_, f)| f.field == name)
+            .unwrap()
+            .1
+            .max_rel
+    };
+    // Round-off of f32, not a different answer: small, but far from 0.
+    assert!(
+        worst("stress") > 1e-5 && worst("stress") < 1e-2,
+        "{}",
+        worst("stress")
+    );
+    assert!(worst("displacement") < 1e-3 && worst("position") < 1e-4);
+    for (o, f) in exact.worst_per_field() {
+        eprintln!(
+            "f32 vs f64 {:<22} max rel {:.2e} RMS rel {:.2e} (at {:?})",
+            f.field, f.max_rel, f.rms_rel, o.time
+        );
+    }
+    let out = compare_bin()
+        .arg(&a)
+        .arg(&b)
+        .args(F32_TOLERANCES)
+        .arg("--summary")
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let png = dir.path().join("worst.png");
+    compare_bin()
+        .arg(&a)
+        .arg(&b)
+        .args(F32_TOLERANCES)
+        .arg("--plot")
+        .arg(&png)
+        .assert()
+        .code(0);
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+}
+
+#[test]
+fn folders_that_cannot_be_compared_exit_2_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    column::<f64>(&a);
+    // A missing output.
+    copy(&a, &b);
+    let pvd = std::fs::read_to_string(b.join("run.pvd")).unwrap();
+    let cut: String = pvd
+        .lines()
+        .filter(|l| !l.contains("particles_00001"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(b.join("run.pvd"), cut).unwrap();
+    let out = compare_bin().arg(&a).arg(&b).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("particles_00001.vtu at t = 0.1 s has no candidate output")
+            && e.lines().count() == 1,
+        "{e}"
+    );
+    // Different points: the candidate's last output lacks the point of the largest id.
+    std::fs::copy(a.join("run.pvd"), b.join("run.pvd")).unwrap();
+    drop_last_point(
+        &a.join("particles_00001.vtu"),
+        &b.join("particles_00001.vtu"),
+    );
+    let out = compare_bin().arg(&a).arg(&b).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("different material points") && e.contains("particles_00001.vtu has"),
+        "{e}"
+    );
+    // A truncated file names the file and the offset.
+    let f = b.join("particles_00001.vtu");
+    let bytes = std::fs::read(&f).unwrap();
+    std::fs::write(&f, &bytes[..bytes.len() - 100]).unwrap();
+    let out = compare_bin().arg(&a).arg(&b).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("particles_00001.vtu: at byte") && e.contains("truncated"),
+        "{e}"
+    );
+    // Not a run folder at all; a usage error.
+    let out = compare_bin().arg(&a).arg(dir.path()).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a run folder"));
+    compare_bin().arg(&a).assert().code(2);
+    compare_bin()
+        .arg(&a)
+        .arg(&a)
+        .args(["--rtol", "x=1"])
+        .assert()
+        .code(2);
+}
+
+/// A dry column exported for Anura3D, run by Anura3D and by us on the same files, compared with
+/// Anura3D's run folder as the golden side (about 4 s of Anura3D).
+#[test]
+fn our_run_against_an_anura3d_run_folder() {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let Some(anura3d) =
+        mpm_shared::suite::anura3d_oracle(&workspace).unwrap_or_else(|e| panic!("{e}"))
+    else {
+        eprintln!("ANURA3D_ORACLE not set: comparison with an Anura3D run folder skipped");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let scene = std::fs::read_to_string(testdata("column_gravity.toml"))
+        .unwrap()
+        .replace(
+            "mesh = \"column_fine_tet4.msh\"",
+            &format!(
+                "mesh = {:?}",
+                testdata("oracle_column_tet4.msh").display().to_string()
+            ),
+        )
+        .replace("end = 0.6", "end = 0.1")
+        .replace("output_interval = 0.1", "output_interval = 0.05");
+    let toml = dir.path().join("col.toml");
+    std::fs::write(&toml, scene).unwrap();
+    let a3d = dir.path().join("a3d");
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(&toml)
+        .arg("--export-anura3d")
+        .arg(&a3d)
+        .assert()
+        .success();
+    let log = Command::new(&anura3d)
+        .arg("col")
+        .current_dir(&a3d)
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&log.stdout).contains("Calculation finished."));
+    let ours = dir.path().join("ours");
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(a3d.join("col.GOM"))
+        .arg("--out")
+        .arg(&ours)
+        .arg("-q")
+        .assert()
+        .success();
+    // Measured: position 2e-7, displacement 3e-4, stress 2e-3 of their largest values.
+    let out = compare_bin()
+        .arg(&a3d)
+        .arg(&ours)
+        .args(["--rtol", "1e-2", "--summary"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    eprintln!("{stdout}");
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("note: pore_pressure: only in the golden output"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("note: velocity: only in the candidate output"),
+        "{stdout}"
+    );
+    let r = compare::compare(&a3d, &ours, &Tolerances::default()).unwrap();
+    assert_eq!(r.outputs.len(), 2);
+    assert!(r.golden.contains("Anura3D") && !r.within);
+    // Asked for, a field one side lacks makes the folders incomparable.
+    compare_bin()
+        .arg(&a3d)
+        .arg(&ours)
+        .args(["--rtol", "1e-2", "--require", "pore_pressure"])
+        .assert()
+        .code(2);
+}
+
+/// Writes a folder with one output of `n` points (ids in the order given) for the large test.
+fn synthetic(dir: &Path, ids: &[i32], shift: f64) {
+    use mpm_shared::vtu::{write_pvd, write_vtu, Cells, DataArray, Encoding, Piece, Values};
+    std::fs::create_dir_all(dir).unwrap();
+    let n = ids.len();
+    let pts: Vec<f64> = ids
+        .iter()
+        .flat_map(|&i| [0.0, i as f64 / n as f64, 0.0])
+        .collect();
+    let v3: Vec<f64> = ids.iter().flat_map(|&i| [i as f64, 0.0, 1.0]).collect();
+    let s6: Vec<f64> = ids
+        .iter()
+        .flat_map(|&i| [-(i as f64) - shift, 0.0, 0.0, 0.0, 0.0, 1.0])
+        .collect();
+    let one: Vec<i32> = vec![1; n];
+    let cells = Cells::vertices(n);
+    let piece = Piece {
+        points: &pts,
+        cells: &cells,
+        point_data: vec![
+            DataArray {
+                name: "displacement",
+                components: 3,
+                values: Values::F64(&v3),
+            },
+            DataArray {
+                name: "velocity",
+                components: 3,
+                values: Values::F64(&v3),
+            },
+            DataArray {
+                name: "stress",
+                components: 6,
+                values: Values::F64(&s6),
+            },
+            DataArray {
+                name: "material",
+                components: 1,
+                values: Values::I32(&one),
+            },
+            DataArray {
+                name: "element",
+                components: 1,
+                values: Values::I32(&one),
+            },
+            DataArray {
+                name: "id",
+                components: 1,
+                values: Values::I32(ids),
+            },
+        ],
+        cell_data: vec![],
+    };
+    mpm_shared::io::write_output_with(&dir.join("particles_00000.vtu"), |w| {
+        write_vtu(w, &piece, Encoding::Appended)
+    })
+    .unwrap();
+    mpm_shared::io::write_output_with(&dir.join("run.pvd"), |w| {
+        write_pvd(w, &[(1.0, "particles_00000.vtu".into())])
+    })
+    .unwrap();
+}
+
+/// Streaming at scale: two outputs of `MPM_COMPARE_POINTS` points (default 10 million, about
+/// 1.5 GB each), the candidate's in reverse id order; prints the time and the peak memory of
+/// `mpm-compare` (with /usr/bin/time where there is one).
+/// `cargo test --release -p mpm-solve --test compare -- --ignored --nocapture`.
+#[test]
+#[ignore = "writes two files of about 1.5 GB"]
+fn large_outputs_compare_within_one_pair_of_memory() {
+    let n: usize = std::env::var("MPM_COMPARE_POINTS").map_or(10_000_000, |v| v.parse().unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    let ids: Vec<i32> = (1..=n as i32).collect();
+    synthetic(&a, &ids, 0.0);
+    let rev: Vec<i32> = ids.iter().rev().copied().collect();
+    synthetic(&b, &rev, 1e-9);
+    drop((ids, rev));
+    let bytes = std::fs::metadata(a.join("particles_00000.vtu"))
+        .unwrap()
+        .len()
+        * 2;
+    let bin = assert_cmd::cargo::cargo_bin("mpm-compare");
+    let timer = Path::new("/usr/bin/time");
+    let start = std::time::Instant::now();
+    let out = if timer.is_file() {
+        Command::new(timer)
+            .arg("-v")
+            .arg(&bin)
+            .arg(&a)
+            .arg(&b)
+            .args(["--atol", "1e-6", "--summary"])
+            .output()
+            .unwrap()
+    } else {
+        Command::new(&bin)
+            .arg(&a)
+            .arg(&b)
+            .args(["--atol", "1e-6", "--summary"])
+            .output()
+            .unwrap()
+    };
+    let secs = start.elapsed().as_secs_f64();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let rss = err
+        .lines()
+        .find(|l| l.contains("Maximum resident set size"))
+        .unwrap_or("");
+    eprintln!(
+        "{n} points, {:.2} GB read in {secs:.1} s ({:.0} MB/s); {}",
+        bytes as f64 / 1e9,
+        bytes as f64 / 1e6 / secs,
+        rss.trim()
+    );
+}
