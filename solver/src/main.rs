@@ -10,8 +10,10 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context};
 use clap::Parser;
-use mpm_solve::driver::run::Progress;
+mod progress;
+
 use mpm_solve::driver::units;
+use progress::{Progress, Reporter};
 
 /// Run an explicit MPM simulation.
 ///
@@ -111,7 +113,32 @@ enum ReorderArg {
     Hilbert,
 }
 
+/// The library's messages (`log`) on standard error, as `mpm-solve: LEVEL: message`.
+struct Messages;
+
+impl log::Log for Messages {
+    fn enabled(&self, m: &log::Metadata) -> bool {
+        m.level() <= log::Level::Warn
+    }
+
+    fn log(&self, r: &log::Record) {
+        if self.enabled(r.metadata()) {
+            let level = match r.level() {
+                log::Level::Error => "error",
+                _ => "warning",
+            };
+            eprintln!("mpm-solve: {level}: {}", r.args());
+        }
+    }
+
+    fn flush(&self) {}
+}
+
+static MESSAGES: Messages = Messages;
+
 fn main() -> ExitCode {
+    // Only fails when a logger is already set, which nothing else does.
+    let _ = log::set_logger(&MESSAGES).map(|()| log::set_max_level(log::LevelFilter::Warn));
     match run(Args::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -358,18 +385,24 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
     let options = mpm_solve::driver::run::RunOptions {
         drop_lost: args.drop_lost,
         max_lost: args.max_lost,
-        progress: if args.quiet {
-            Progress::Off
-        } else if std::io::stderr().is_terminal() {
-            Progress::Bar
-        } else {
-            Progress::Lines {
-                every: args.progress_every,
-            }
-        },
     };
+    let mode = if args.quiet {
+        Progress::Off
+    } else if std::io::stderr().is_terminal() {
+        Progress::Bar
+    } else {
+        Progress::Lines {
+            every: args.progress_every,
+        }
+    };
+    let mut reporter = Reporter::new(mode, plan.steps.min(u64::MAX as f64) as u64, case.end_time);
     if case.consolidation.is_some() {
-        let (engine, t, w) = mpm_solve::jobs::consolidation::run_job::<f64>(&case, out, &options)?;
+        let (engine, t, w) = mpm_solve::jobs::consolidation::run_job_with::<f64>(
+            &case,
+            out,
+            &options,
+            &mut reporter,
+        )?;
         done(&engine, out);
         for (name, tr) in
             std::iter::once(("default", &t)).chain(w.as_ref().map(|w| ("workshop", w)))
@@ -386,7 +419,7 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         );
         return Ok(());
     }
-    let engine = mpm_solve::driver::run::run::<f64>(&case, out, &options)?;
+    let engine = mpm_solve::driver::run::run_with::<f64>(&case, out, &options, &mut reporter)?;
     done(&engine, out);
     Ok(())
 }

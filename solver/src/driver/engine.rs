@@ -27,6 +27,29 @@ pub const PHASES: [&str; 6] = [
     "output",
 ];
 
+/// Why an engine cannot be set up for a case.
+#[derive(Debug, thiserror::Error)]
+pub enum SetupError {
+    /// The worker threads could not be started.
+    #[error(transparent)]
+    Team(#[from] crate::parallel::team::TeamError),
+    /// The mesh cannot be computed on (an inverted element, not tetrahedral).
+    #[error(transparent)]
+    Mesh(#[from] crate::element::mesh::MeshError),
+    /// The material points cannot be placed (an unsupported count per element).
+    #[error("{0}")]
+    Points(String),
+    /// Every element is empty.
+    #[error("the case has no material points (every element is empty)")]
+    NoPoints,
+    /// The critical time step is not usable.
+    #[error(transparent)]
+    TimeStep(#[from] crate::input::time_step::TimeStepError),
+    /// A load on material points has no points to carry it.
+    #[error("{0}")]
+    Loads(String),
+}
+
 /// A material point that left the mesh.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("material point {id} left the mesh at step {step} (t = {time} s) at ({x}, {y}, {z}) from element {element}; use --drop-lost to deactivate such points instead")]
@@ -161,14 +184,18 @@ pub struct Engine<R: Real> {
 impl<R: Real> Engine<R> {
     /// Sets up the mesh, places the material points and computes the time step, with the
     /// case's engine options.
-    pub fn new(case: &Case, drop_lost: bool) -> Result<Self, String> {
+    pub fn new(case: &Case, drop_lost: bool) -> Result<Self, SetupError> {
         Self::with_options(case, drop_lost, case.engine)
     }
 
     /// [`Engine::new`] with the given thread options.
-    pub fn with_options(case: &Case, drop_lost: bool, options: Options) -> Result<Self, String> {
+    pub fn with_options(
+        case: &Case,
+        drop_lost: bool,
+        options: Options,
+    ) -> Result<Self, SetupError> {
         let team = Team::new(options.threads, options.pin)?;
-        let mesh = case.tet_mesh::<R>().map_err(|e| e.to_string())?;
+        let mesh = case.tet_mesh::<R>()?;
         let density = |m: u32| {
             case.materials[m as usize]
                 .as_ref()
@@ -185,9 +212,10 @@ impl<R: Real> Engine<R> {
             Some(&first_id),
             &|e| case.element_number(e),
             density,
-        )?;
+        )
+        .map_err(SetupError::Points)?;
         if particles.is_empty() {
-            return Err("the case has no material points (every element is empty)".into());
+            return Err(SetupError::NoPoints);
         }
         // The laws' state slab: as many values per point as the most demanding law keeps.
         particles.state_len = case
@@ -252,7 +280,8 @@ impl<R: Real> Engine<R> {
         if two_phase {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
         }
-        let point_loads = resolve_point_loads(&mesh, &particles, case)?;
+        let point_loads =
+            resolve_point_loads(&mesh, &particles, case).map_err(SetupError::Loads)?;
         let prescribed = case
             .prescribed
             .as_ref()

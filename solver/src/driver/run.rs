@@ -1,4 +1,5 @@
-//! The driver: time steps between output times, writing outputs, progress and the summary.
+//! The driver: time steps between output times, writing outputs and the summary, telling
+//! observers (jobs, progress reporters, tests) as it goes.
 
 use std::path::Path;
 use std::time::Instant;
@@ -13,8 +14,12 @@ use crate::real::Real;
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
     /// Set-up failed (mesh, material points, time step).
+    #[error(transparent)]
+    Setup(#[from] crate::driver::engine::SetupError),
+    /// A job could not start (e.g. a consolidation comparison on a case without one saturated
+    /// material).
     #[error("{0}")]
-    Setup(String),
+    Job(String),
     /// A material point left the mesh.
     #[error(transparent)]
     Lost(#[from] crate::driver::engine::Lost),
@@ -56,22 +61,7 @@ fn list(ids: &[u32]) -> String {
     s.join(", ")
 }
 
-/// How a run reports its progress on standard error.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub enum Progress {
-    /// Silent.
-    #[default]
-    Off,
-    /// A progress bar (for a terminal).
-    Bar,
-    /// One line every so many seconds (for logs of batch jobs): step, simulated time, rate, ETA.
-    Lines {
-        /// Seconds between lines.
-        every: f64,
-    },
-}
-
-/// How a run treats lost points and reports progress.
+/// How a run treats lost points.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RunOptions {
     /// Deactivate material points that leave the mesh instead of stopping.
@@ -79,8 +69,6 @@ pub struct RunOptions {
     /// With `drop_lost`, the share of the points (0–1) that may leave before the run stops with
     /// an error; the run stops anyway when every point has left.
     pub max_lost: f64,
-    /// Progress reporting.
-    pub progress: Progress,
 }
 
 impl Default for RunOptions {
@@ -88,7 +76,6 @@ impl Default for RunOptions {
         RunOptions {
             drop_lost: false,
             max_lost: 0.1,
-            progress: Progress::Off,
         }
     }
 }
@@ -102,8 +89,39 @@ pub trait Observer<R: Real> {
         Ok(())
     }
 
+    /// A step was taken (called every step: keep it cheap).
+    fn on_step(&mut self, _engine: &Engine<R>) {}
+
     /// An output was written at the engine's current time.
     fn on_output(&mut self, _engine: &Engine<R>) {}
+
+    /// The run reached its end time.
+    fn on_end(&mut self, _engine: &Engine<R>) {}
+}
+
+/// Two observers, told in turn.
+pub struct Both<'a, R: Real>(pub &'a mut dyn Observer<R>, pub &'a mut dyn Observer<R>);
+
+impl<R: Real> Observer<R> for Both<'_, R> {
+    fn on_start(&mut self, engine: &Engine<R>) -> Result<(), RunError> {
+        self.0.on_start(engine)?;
+        self.1.on_start(engine)
+    }
+
+    fn on_step(&mut self, engine: &Engine<R>) {
+        self.0.on_step(engine);
+        self.1.on_step(engine);
+    }
+
+    fn on_output(&mut self, engine: &Engine<R>) {
+        self.0.on_output(engine);
+        self.1.on_output(engine);
+    }
+
+    fn on_end(&mut self, engine: &Engine<R>) {
+        self.0.on_end(engine);
+        self.1.on_end(engine);
+    }
 }
 
 /// An observer that only looks at outputs.
@@ -116,7 +134,7 @@ impl<R: Real, F: FnMut(&Engine<R>)> Observer<R> for OnOutput<F> {
 }
 
 /// No observer.
-struct Unobserved;
+pub struct Unobserved;
 
 impl<R: Real> Observer<R> for Unobserved {}
 
@@ -153,12 +171,10 @@ fn drive<R: Real>(
     observer: &mut dyn Observer<R>,
 ) -> Result<Engine<R>, RunError> {
     let wall = Instant::now();
-    let mut engine = Engine::<R>::new(case, options.drop_lost).map_err(RunError::Setup)?;
+    let mut engine = Engine::<R>::new(case, options.drop_lost)?;
     check_probes(case, &engine)?;
     observer.on_start(&engine)?;
     let mut out = Output::new(dir, case, &engine)?;
-    let total_steps = (case.end_time / engine.dt).ceil() as u64;
-    let mut report = Reporter::new(options.progress, total_steps, case.end_time);
     let mut stepping = 0.0;
     let mut load_step_start = 0.0;
     for &t_out in &case.output_times {
@@ -204,7 +220,7 @@ fn drive<R: Real>(
             if options.drop_lost && engine.lost > 0 {
                 check_lost(&engine, options.max_lost)?;
             }
-            report.step(&engine, engine.particles.len());
+            observer.on_step(&engine);
         }
         load_step_start = t_out;
         stepping += t0.elapsed().as_secs_f64();
@@ -213,7 +229,7 @@ fn drive<R: Real>(
         observer.on_output(&engine);
         engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
     }
-    report.finish();
+    observer.on_end(&engine);
     output::write_summary(dir, case, &engine, wall.elapsed().as_secs_f64(), stepping)?;
     Ok(engine)
 }
@@ -255,82 +271,4 @@ fn check_lost<R: Real>(engine: &Engine<R>, max_lost: f64) -> Result<(), RunError
         });
     }
     Ok(())
-}
-
-/// Progress on standard error: a bar, or a line every few seconds.
-struct Reporter {
-    mode: Progress,
-    bar: Option<indicatif::ProgressBar>,
-    total_steps: u64,
-    end_time: f64,
-    start: Instant,
-    last: Instant,
-    steps: u64,
-}
-
-impl Reporter {
-    fn new(mode: Progress, total_steps: u64, end_time: f64) -> Self {
-        let bar = (mode == Progress::Bar).then(|| {
-            let b = indicatif::ProgressBar::new(total_steps);
-            b.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{bar:40} {pos}/{len} steps, {per_sec}, ETA {eta}",
-                )
-                .expect("valid template"),
-            );
-            b
-        });
-        let now = Instant::now();
-        Reporter {
-            mode,
-            bar,
-            total_steps,
-            end_time,
-            start: now,
-            last: now,
-            steps: 0,
-        }
-    }
-
-    fn step<R: Real>(&mut self, engine: &Engine<R>, points: usize) {
-        self.steps += 1;
-        match self.mode {
-            Progress::Off => {}
-            Progress::Bar => {
-                if let Some(b) = &self.bar {
-                    b.inc(1);
-                }
-            }
-            Progress::Lines { every } => {
-                if self.last.elapsed().as_secs_f64() < every {
-                    return;
-                }
-                self.last = Instant::now();
-                let wall = self.start.elapsed().as_secs_f64();
-                let per_step = wall / self.steps as f64;
-                // The ETA follows simulated time (quasi-static load steps may end early).
-                let left = if engine.time > 0.0 {
-                    wall * (self.end_time - engine.time).max(0.0) / engine.time
-                } else {
-                    per_step * self.total_steps.saturating_sub(self.steps) as f64
-                };
-                eprintln!(
-                    "mpm-solve: step {} of about {}, t = {} of {}, {} ({}), ETA {}",
-                    units::count(self.steps as f64),
-                    units::count(self.total_steps as f64),
-                    units::duration(engine.time),
-                    units::duration(self.end_time),
-                    units::rate_of(1.0 / per_step, "steps"),
-                    units::rate_of(points as f64 / per_step, "point-steps"),
-                    units::duration(left)
-                );
-            }
-        }
-    }
-
-    fn finish(self) {
-        if let Some(b) = self.bar {
-            b.finish_and_clear();
-        }
-    }
 }

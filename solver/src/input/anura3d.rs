@@ -82,12 +82,12 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let model = mpm_shared::read_model(gom)?;
     if let Some(w) = mpm_shared::coincident::warning(&gfile, &mpm_shared::coincident::pairs(&model))
     {
-        eprintln!("mpm-solve: warning: {w}");
+        log::warn!("{w}");
     }
     let data = mpm_shared::io::read_input(cps_path)?;
     let (cps, warnings) = Cps::read(&data, &cfile)?;
     for w in warnings {
-        eprintln!("mpm-solve: warning: {w}");
+        log::warn!("{w}");
     }
     let s = cps.settings()?;
     if model.element_type == ElementType::Tri3 {
@@ -430,7 +430,7 @@ fn check_keys(
             _ => continue,
         };
         if status(KeyKind::GomSection, key) == KeyStatus::Unknown {
-            eprintln!("mpm-solve: warning: {gfile}: section $${key} is not known to this solver and is ignored");
+            log::warn!("{gfile}: section $${key} is not known to this solver and is ignored");
         }
         // The model does not keep line numbers; a refusal looks its section up in the file.
         check(KeyKind::GomSection, key, &lines, gfile, 0)
@@ -474,7 +474,7 @@ fn prescribed_velocity(
         return Ok(None);
     }
     if s.prescribed_velocity == Multiplier::Off {
-        eprintln!("mpm-solve: warning: {gfile}: the prescribed material-point velocities are not applied: $$PRESCRIBED_VELOCITY is off in {cfile}");
+        log::warn!("{gfile}: the prescribed material-point velocities are not applied: $$PRESCRIBED_VELOCITY is off in {cfile}");
         return Ok(None);
     }
     if materials.iter().flatten().any(|m| m.liquid.is_some()) {

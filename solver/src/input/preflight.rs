@@ -136,10 +136,21 @@ pub enum PreflightError {
     },
 }
 
+/// Why a case cannot be planned: its mesh or its time step is unusable.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    /// An inverted or flat element, or a mesh that is not tetrahedral.
+    #[error(transparent)]
+    Mesh(#[from] crate::element::mesh::MeshError),
+    /// The critical time step is not a positive number.
+    #[error(transparent)]
+    TimeStep(#[from] crate::input::time_step::TimeStepError),
+}
+
 /// Predicts what running `case` on `threads` threads will cost. Errors where the mesh or time
 /// step is unusable (inverted elements, no stiffness).
-pub fn plan(case: &Case, threads: usize) -> Result<Plan, String> {
-    let mesh = case.tet_mesh::<f64>().map_err(|e| e.to_string())?;
+pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
+    let mesh = case.tet_mesh::<f64>()?;
     let dt = crate::input::time_step::critical(case, mesh.elements(), |e| mesh.min_altitude[e])?;
     let points: u64 = case
         .points_per_element

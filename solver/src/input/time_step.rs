@@ -4,6 +4,14 @@
 
 use crate::input::case::{Case, Drag};
 
+/// The critical time step is not a positive number.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("critical time step is not positive ({dt})")]
+pub struct TimeStepError {
+    /// What it came to (s).
+    pub dt: f64,
+}
+
 /// Courant number × min over elements of (smallest altitude / fastest wave speed), in s;
 /// `min_altitude(e)` is element `e`'s smallest altitude (m). An error when it is not positive
 /// and finite (a degenerate element, or a material without stiffness or mass).
@@ -11,7 +19,7 @@ pub fn critical(
     case: &Case,
     elements: usize,
     min_altitude: impl Fn(usize) -> f64,
-) -> Result<f64, String> {
+) -> Result<f64, TimeStepError> {
     // Empty elements may fill: they take the fastest material's speed. An explicit drag must
     // be resolved by the step too: Mieremet's speed has its term.
     let anura3d_step = case.anura3d_time_step || case.drag == Drag::Explicit;
@@ -32,7 +40,7 @@ pub fn critical(
     }
     let dt = case.courant * dt;
     if !(dt > 0.0 && dt.is_finite()) {
-        return Err(format!("critical time step is not positive ({dt})"));
+        return Err(TimeStepError { dt });
     }
     Ok(dt)
 }

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use crate::driver::engine::Engine;
-use crate::driver::run::{run_with, RunError, RunOptions};
+use crate::driver::run::{run_with, Both, RunError, RunOptions, Unobserved};
 use crate::input::case::Case;
 use crate::jobs::terzaghi;
 use crate::material::liquid::LiquidSpec;
@@ -273,15 +273,25 @@ pub fn run_tracked<R: Real>(
     dir: &Path,
     options: &RunOptions,
 ) -> Result<(Engine<R>, Tracker), RunError> {
+    run_tracked_with(case, dir, options, &mut Unobserved)
+}
+
+/// [`run_tracked`], telling `watch` too (e.g. a progress reporter).
+pub fn run_tracked_with<R: Real>(
+    case: &Case,
+    dir: &Path,
+    options: &RunOptions,
+    watch: &mut dyn crate::driver::run::Observer<R>,
+) -> Result<(Engine<R>, Tracker), RunError> {
     let spec = case
         .consolidation
-        .ok_or_else(|| RunError::Setup("the case has no [consolidation] table".into()))?;
+        .ok_or_else(|| RunError::Job("the case has no [consolidation] table".into()))?;
     let mut observer = Observer {
-        layer: Layer::of(case, &spec).map_err(RunError::Setup)?,
+        layer: Layer::of(case, &spec).map_err(RunError::Job)?,
         start: spec.start,
         tracker: None,
     };
-    let engine = run_with(case, dir, options, &mut observer)?;
+    let engine = run_with(case, dir, options, &mut Both(&mut observer, watch))?;
     let tracker = observer.tracker.expect("on_start ran");
     Ok((engine, tracker))
 }
@@ -294,10 +304,20 @@ pub fn run_job<R: Real>(
     dir: &Path,
     options: &RunOptions,
 ) -> Result<(Engine<R>, Tracker, Option<Tracker>), RunError> {
+    run_job_with(case, dir, options, &mut Unobserved)
+}
+
+/// [`run_job`], telling `watch` about both runs.
+pub fn run_job_with<R: Real>(
+    case: &Case,
+    dir: &Path,
+    options: &RunOptions,
+    watch: &mut dyn crate::driver::run::Observer<R>,
+) -> Result<(Engine<R>, Tracker, Option<Tracker>), RunError> {
     let spec = case
         .consolidation
-        .ok_or_else(|| RunError::Setup("the case has no [consolidation] table".into()))?;
-    let (engine, tracker) = run_tracked::<R>(case, dir, options)?;
+        .ok_or_else(|| RunError::Job("the case has no [consolidation] table".into()))?;
+    let (engine, tracker) = run_tracked_with::<R>(case, dir, options, watch)?;
     let workshop = if spec.compare_rest && spec.start != Start::Rest {
         let mut twin = case.clone();
         twin.consolidation = Some(ConsolidationSpec {
@@ -306,7 +326,7 @@ pub fn run_job<R: Real>(
             ..spec
         });
         twin.initial_state = None;
-        let (_, t) = run_tracked::<R>(&twin, &dir.join("workshop"), options)?;
+        let (_, t) = run_tracked_with::<R>(&twin, &dir.join("workshop"), options, watch)?;
         Some(t)
     } else {
         None

@@ -35,10 +35,20 @@ impl std::fmt::Debug for Team {
     }
 }
 
+/// The worker threads could not be started.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("cannot start {threads} worker threads: {reason}")]
+pub struct TeamError {
+    /// Threads asked for.
+    pub threads: usize,
+    /// What the system said.
+    pub reason: String,
+}
+
 impl Team {
     /// Starts `threads` workers (0: one per core available to the process), pinned as `pin`
     /// asks.
-    pub fn new(threads: usize, pin: Pin) -> Result<Team, String> {
+    pub fn new(threads: usize, pin: Pin) -> Result<Team, TeamError> {
         let cores = core_affinity::get_core_ids().unwrap_or_default();
         let available = std::thread::available_parallelism().map_or(1, |n| n.get());
         let threads = if threads == 0 { available } else { threads };
@@ -58,7 +68,10 @@ impl Team {
                 }
             })
             .build()
-            .map_err(|e| format!("cannot start {threads} worker threads: {e}"))?;
+            .map_err(|e| TeamError {
+                threads,
+                reason: e.to_string(),
+            })?;
         // Let every worker run its start handler before the pinning is read.
         pool.broadcast(|_| ());
         let pinned = granted
