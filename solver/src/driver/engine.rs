@@ -7,6 +7,7 @@ use crate::element::mesh::TetMesh;
 use crate::input::case::{Case, Integration};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
+use crate::parallel::comm::{Communicator, SingleProcess};
 use crate::parallel::gather::{sort_by_element, Layout, Slots, SortScratch};
 pub use crate::parallel::team::Options;
 use crate::parallel::team::{Shared, Team};
@@ -118,6 +119,8 @@ impl StepConfig {
 pub struct Engine<R: Real> {
     /// What each step reads of the case.
     pub config: StepConfig,
+    /// The global reductions (energies, work, force norms, time step, lost points).
+    comm: Box<dyn Communicator>,
     /// Computational mesh.
     pub mesh: TetMesh<R>,
     /// Material points.
@@ -193,6 +196,16 @@ impl<R: Real> Engine<R> {
         case: &Case,
         drop_lost: bool,
         options: Options,
+    ) -> Result<Self, SetupError> {
+        Self::with_communicator(case, drop_lost, options, Box::new(SingleProcess))
+    }
+
+    /// [`Engine::with_options`] with the reductions of `comm` (one process: [`SingleProcess`]).
+    pub fn with_communicator(
+        case: &Case,
+        drop_lost: bool,
+        options: Options,
+        comm: Box<dyn Communicator>,
     ) -> Result<Self, SetupError> {
         let team = Team::new(options.threads, options.pin)?;
         let mesh = case.tet_mesh::<R>()?;
@@ -273,9 +286,11 @@ impl<R: Real> Engine<R> {
             .iter()
             .map(|m| m.as_ref().map_or(Law::Void, |s| s.law.build()))
             .collect();
-        let dt = crate::input::time_step::critical(case, mesh.elements(), |e| {
-            mesh.min_altitude[e].f64()
-        })?;
+        let dt = comm.min(crate::input::time_step::critical(
+            case,
+            mesh.elements(),
+            |e| mesh.min_altitude[e].f64(),
+        )?);
         let mut grid = Grid::new(mesh.nodes());
         if two_phase {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
@@ -306,6 +321,7 @@ impl<R: Real> Engine<R> {
             crate::step::smoothing::StrainSmoothing::new(mesh.nodes(), &case.element_material)
         });
         Ok(Engine {
+            comm,
             config: StepConfig::of(case),
             input_element: case.input_element.clone(),
             smoothing,
@@ -380,7 +396,7 @@ impl<R: Real> Engine<R> {
             &mut self.grid,
         );
         let t1 = Instant::now();
-        (self.force_error, self.liquid_force_error) = if self.grid.liquid.is_some() {
+        let (forces, liquid_forces) = if self.grid.liquid.is_some() {
             grid_update::grid_update_two_phase(
                 &mut self.grid,
                 &self.traction,
@@ -405,8 +421,10 @@ impl<R: Real> Engine<R> {
                 R::of(case.damping),
                 case.damping_rule,
             );
-            (f, 0.0)
+            (f, grid_update::ForceSums::default())
         };
+        self.force_error = forces.reduced(&*self.comm).ratio();
+        self.liquid_force_error = liquid_forces.reduced(&*self.comm).ratio();
         let t2 = Instant::now();
         let pm = self
             .prescribed
@@ -485,7 +503,7 @@ impl<R: Real> Engine<R> {
                 w += (f * self.grid.vel[n][a]).f64();
             }
         }
-        self.external_work += w * dt;
+        self.external_work += self.comm.sum(w) * dt;
         self.steps += 1;
         self.time += dt;
         if let Some(t) = snap_to {
@@ -570,7 +588,9 @@ impl<R: Real> Engine<R> {
                 });
             }
         }
-        self.lost += self.locate_outcome.iter().map(|o| o.1).sum::<u64>();
+        self.lost += self
+            .comm
+            .sum_count(self.locate_outcome.iter().map(|o| o.1).sum::<u64>());
         if sort_by_element(p, mesh.elements(), &mut self.sort_scratch) {
             self.layout.set_particle_elements(&p.element);
             // Point loads and prescribed points follow their points: old index → new index.
@@ -594,13 +614,13 @@ impl<R: Real> Engine<R> {
     /// Kinetic energy of the active points (kJ), summed in fixed blocks of points.
     pub fn kinetic_energy(&self) -> f64 {
         let p = &self.particles;
-        self.team.sum_blocks(p.len(), |r| {
+        self.comm.sum(self.team.sum_blocks(p.len(), |r| {
             r.filter(|&i| p.active[i])
                 .map(|i| {
                     0.5 * p.mass[i].f64() * p.v[i].iter().map(|v| v.f64() * v.f64()).sum::<f64>()
                 })
                 .sum()
-        })
+        }))
     }
 }
 

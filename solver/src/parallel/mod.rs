@@ -1,4 +1,5 @@
 //! The thread team and the deterministic parallel sums: who computes what.
 
+pub mod comm;
 pub mod gather;
 pub mod team;

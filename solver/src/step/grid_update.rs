@@ -59,8 +59,9 @@ pub const MASS_EPS: f64 = 1e-12;
 /// and zero acceleration in fixed directions. `traction` holds nodal face loads at multiplier 1,
 /// `scale` the multiplier; `fixed[n][a]` marks fixed components.
 ///
-/// Returns the out-of-balance force ratio of Anura3D's quasi-static convergence check,
-/// |f_int + f_ext| / |f_ext| over the free components (0 without external force).
+/// Returns this process's sums for the out-of-balance force ratio of Anura3D's quasi-static
+/// convergence check, |f_int + f_ext| / |f_ext| over the free components
+/// ([`ForceSums::ratio`] once summed over every process).
 pub fn grid_update<R: Real>(
     g: &mut Grid<R>,
     traction: &[V3<R>],
@@ -68,7 +69,7 @@ pub fn grid_update<R: Real>(
     fixed: &[[bool; 3]],
     alpha: R,
     rule: DampingRule,
-) -> f64 {
+) -> ForceSums {
     let (mut unbalanced, mut external) = (0.0, 0.0);
     let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
     let eps = heaviest * R::of(MASS_EPS);
@@ -91,10 +92,37 @@ pub fn grid_update<R: Real>(
             g.acc[n][a] = damp(rule, alpha, f, g.momentum[n][a]) / m;
         }
     }
-    if external > 0.0 {
-        (unbalanced / external).sqrt()
-    } else {
-        0.0
+    ForceSums {
+        unbalanced,
+        external,
+    }
+}
+
+/// Squared norms of the out-of-balance and the external force over the free components.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ForceSums {
+    /// Σ |f_int + f_ext|².
+    pub unbalanced: f64,
+    /// Σ |f_ext|².
+    pub external: f64,
+}
+
+impl ForceSums {
+    /// The sums over every process.
+    pub fn reduced(self, comm: &dyn crate::parallel::comm::Communicator) -> Self {
+        ForceSums {
+            unbalanced: comm.sum(self.unbalanced),
+            external: comm.sum(self.external),
+        }
+    }
+
+    /// |out-of-balance| / |external| (0 without external force).
+    pub fn ratio(self) -> f64 {
+        if self.external > 0.0 {
+            (self.unbalanced / self.external).sqrt()
+        } else {
+            0.0
+        }
     }
 }
 
@@ -135,7 +163,7 @@ pub fn grid_update_two_phase<R: Real>(
     liquid_load_on_mixture: bool,
     gravity: V3<R>,
     dt: R,
-) -> (f64, f64) {
+) -> (ForceSums, ForceSums) {
     let (mut unbalanced, mut external) = (0.0, 0.0);
     let (mut unbalanced_w, mut external_w) = (0.0, 0.0);
     let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
@@ -247,6 +275,14 @@ pub fn grid_update_two_phase<R: Real>(
             gl.acc[n][a] = a_w;
         }
     }
-    let ratio = |u: f64, e: f64| if e > 0.0 { (u / e).sqrt() } else { 0.0 };
-    (ratio(unbalanced, external), ratio(unbalanced_w, external_w))
+    (
+        ForceSums {
+            unbalanced,
+            external,
+        },
+        ForceSums {
+            unbalanced: unbalanced_w,
+            external: external_w,
+        },
+    )
 }
