@@ -729,7 +729,9 @@ mod tests {
             crate::suite::anura3d_oracle(&root).unwrap_or_else(|e| panic!("{e}")),
             crate::suite::anura3d_benchmarks(&root).unwrap_or_else(|e| panic!("{e}")),
         ) else {
-            eprintln!("ANURA3D_ORACLE or ANURA3D_BENCHMARKS not set: oracle VTK test skipped");
+            crate::suite::skipped(
+                "reads_the_oracle_output_of_1005_3d (ANURA3D_ORACLE or ANURA3D_BENCHMARKS not set)",
+            );
             return;
         };
         let case = suite.join(

@@ -746,7 +746,7 @@ Number of load steps                               1                            
     #[test]
     fn reads_every_expected_file_of_the_suite() {
         let Some(root) = suite() else {
-            eprintln!("ANURA3D_BENCHMARKS not set: suite BMS/BMR test skipped");
+            crate::suite::skipped("the suite's BMS/BMR files (ANURA3D_BENCHMARKS not set)");
             return;
         };
         let mut files = Vec::new();

@@ -11,6 +11,14 @@ pub const BENCHMARKS_VAR: &str = "ANURA3D_BENCHMARKS";
 /// The variable naming the Anura3D binary.
 pub const ORACLE_VAR: &str = "ANURA3D_ORACLE";
 
+/// Says on the terminal that a test skipped its check and why. Written to the process's
+/// standard error directly, past the test harness's capture, so that a skip shows in a plain
+/// `cargo test` run instead of passing silently.
+pub fn skipped(what: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "skipped: {what}");
+}
+
 /// The value of `var` as a path, relative values joined to `workspace_root`.
 fn resolve(var: &str, workspace_root: &Path) -> Option<PathBuf> {
     resolve_value(std::env::var_os(var).as_deref(), workspace_root)

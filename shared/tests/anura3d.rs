@@ -11,7 +11,7 @@ fn benchmarks() -> Option<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let found = mpm_shared::suite::anura3d_benchmarks(&root).unwrap_or_else(|e| panic!("{e}"));
     if found.is_none() {
-        eprintln!("ANURA3D_BENCHMARKS not set: skipping the Anura3D compatibility checks");
+        mpm_shared::suite::skipped("Anura3D compatibility checks (ANURA3D_BENCHMARKS not set)");
     }
     found
 }

@@ -122,7 +122,7 @@ fn benchmarks() -> Option<PathBuf> {
     let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let found = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
     let Some(root) = found else {
-        eprintln!("ANURA3D_BENCHMARKS not set: Anura3D benchmark comparison skipped");
+        mpm_shared::suite::skipped("Anura3D benchmark comparison (ANURA3D_BENCHMARKS not set)");
         return None;
     };
     let p = root.join("Benchmarks/Pre-Commit_Tests");

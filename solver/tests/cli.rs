@@ -182,7 +182,7 @@ fn anura3d_cases_are_checked() {
     let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let found = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
     let Some(root) = found else {
-        eprintln!("ANURA3D_BENCHMARKS not set: skipped");
+        mpm_shared::suite::skipped("anura3d_cases_are_checked (ANURA3D_BENCHMARKS not set)");
         return;
     };
     let gom = root.join("Benchmarks/Pre-Commit_Tests/1005_Oedometer_QS_MPMMP_1Phase_NormalStress_3D/test-1005_3D.A3D/test-1005_3D.GOM");

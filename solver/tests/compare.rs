@@ -350,7 +350,9 @@ fn our_run_against_an_anura3d_run_folder() {
     let Some(anura3d) =
         mpm_shared::suite::anura3d_oracle(&workspace).unwrap_or_else(|e| panic!("{e}"))
     else {
-        eprintln!("ANURA3D_ORACLE not set: comparison with an Anura3D run folder skipped");
+        mpm_shared::suite::skipped(
+            "comparison with an Anura3D run folder (ANURA3D_ORACLE not set)",
+        );
         return;
     };
     let dir = tempfile::tempdir().unwrap();

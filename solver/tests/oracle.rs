@@ -24,7 +24,7 @@ fn oracle() -> Option<PathBuf> {
     let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let found = mpm_shared::suite::anura3d_oracle(&workspace).unwrap_or_else(|e| panic!("{e}"));
     if found.is_none() {
-        eprintln!("ANURA3D_ORACLE not set: comparison with Anura3D skipped");
+        mpm_shared::suite::skipped("comparison with Anura3D (ANURA3D_ORACLE not set)");
     }
     found
 }
@@ -280,7 +280,7 @@ fn liquid_load_mixed_objective_smoothing_match_anura3d() {
     let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let found = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
     let Some(root) = found else {
-        eprintln!("ANURA3D_BENCHMARKS not set: skipped");
+        mpm_shared::suite::skipped("benchmark 4005 against Anura3D (ANURA3D_BENCHMARKS not set)");
         return;
     };
     let case = root.join(
