@@ -543,3 +543,308 @@ fn large_outputs_compare_within_one_pair_of_memory() {
         rss.trim()
     );
 }
+
+/// The benchmark 1005 folder (a 3D oedometer; its CPS reports 10 material points), when
+/// `ANURA3D_BENCHMARKS` is set; the test says it is skipped otherwise.
+fn benchmark_1005() -> Option<PathBuf> {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let Some(root) =
+        mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"))
+    else {
+        eprintln!("ANURA3D_BENCHMARKS not set: comparison with a benchmark's .BMS skipped");
+        return None;
+    };
+    let d = root.join(
+        "Benchmarks/Pre-Commit_Tests/1005_Oedometer_QS_MPMMP_1Phase_NormalStress_3D/test-1005_3D.A3D",
+    );
+    assert!(d.is_dir(), "{} is not a folder", d.display());
+    Some(d)
+}
+
+/// Copies a folder's files, writable.
+fn copy_writable(from: &Path, to: &Path) {
+    copy(from, to);
+    for e in std::fs::read_dir(to).unwrap() {
+        let p = e.unwrap().path();
+        let mut perm = std::fs::metadata(&p).unwrap().permissions();
+        #[allow(clippy::permissions_set_readonly_false)]
+        perm.set_readonly(false);
+        std::fs::set_permissions(&p, perm).unwrap();
+    }
+}
+
+/// The table fields of a report: name → (largest relative difference, values compared).
+fn table_fields(r: &compare::Report) -> Vec<(String, f64, u64)> {
+    r.tables
+        .iter()
+        .flat_map(|o| o.fields.iter())
+        .map(|f| (f.field.clone(), f.max_rel, f.values))
+        .collect()
+}
+
+/// Anura3D run on a copy of benchmark 1005 writes `PROJ.BMS` / `PROJ.BMR`; they are compared
+/// with the benchmark's `*_expected.BMS` / `.BMR` (the run's own tables are chosen over the
+/// expected ones copied beside them). Measured: identical to the printed digits.
+#[test]
+fn anura3d_run_tables_against_the_benchmarks_expected_tables() {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let Some(anura3d) =
+        mpm_shared::suite::anura3d_oracle(&workspace).unwrap_or_else(|e| panic!("{e}"))
+    else {
+        eprintln!("ANURA3D_ORACLE not set: Anura3D run tables against expected ones skipped");
+        return;
+    };
+    let Some(bench) = benchmark_1005() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    copy_writable(&bench, &run);
+    let log = Command::new(&anura3d)
+        .arg("test-1005_3D")
+        .current_dir(&run)
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&log.stdout).contains("Calculation finished."));
+    assert!(run.join("test-1005_3D.BMS").is_file() && run.join("test-1005_3D.BMR").is_file());
+    let r = compare::compare(&bench, &run, &Tolerances::default()).unwrap();
+    assert!(r.outputs.is_empty() && r.histories.is_empty());
+    assert_eq!(r.tables.len(), 2, "{:?}", r.tables);
+    assert!(
+        r.tables[0].golden.ends_with("test-1005_3D_expected.BMS")
+            && r.tables[0].candidate.ends_with("test-1005_3D.BMS"),
+        "{:?}",
+        r.tables[0]
+    );
+    assert!(r.tables[1].candidate.ends_with("test-1005_3D.BMR"));
+    let fields = table_fields(&r);
+    for (name, rel, n) in &fields {
+        eprintln!("Anura3D run vs expected: {name:<22} max rel {rel:.2e} over {n} values");
+        assert!(*rel <= 1e-3, "{name}: {rel}");
+    }
+    let names: Vec<&str> = fields.iter().map(|f| f.0.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "bms.position",
+            "bms.displacement",
+            "bms.stress",
+            "bms.pore_pressure",
+            "bmr.position"
+        ]
+    );
+    // 10 points, one load step.
+    assert_eq!(fields[2].2, 60);
+    let out = compare_bin()
+        .arg(&bench)
+        .arg(&run)
+        .args(["--rtol", "1e-3", "--summary"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("2 table(s)"), "{stderr}");
+    // The load-step files of the run have no partner in the benchmark folder: noted.
+    assert!(String::from_utf8_lossy(&out.stdout)
+        .contains("note: material-point outputs: only in the candidate folder"));
+}
+
+/// One value of the expected `.BMS` changed in a copy: exit 1, naming the field, the time and
+/// the point.
+#[test]
+fn perturbed_bms_value_exits_1_naming_field_time_and_point() {
+    let Some(bench) = benchmark_1005() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join("copy");
+    copy_writable(&bench, &copy);
+    let bms = copy.join("test-1005_3D_expected.BMS");
+    let text = std::fs::read_to_string(&bms).unwrap();
+    // Point 7's SigmaYY: -0.8580 kPa becomes -0.8680 (1.2 % of the largest stress).
+    assert_eq!(text.matches("-0.8580").count(), 1);
+    std::fs::write(&bms, text.replace("-0.8580", "-0.8680")).unwrap();
+    let out = compare_bin()
+        .arg(&bench)
+        .arg(&copy)
+        .args(["--rtol", "1e-3", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.starts_with("mpm-compare: FAIL: bms.stress differs at")
+            && stderr.contains("t = 0.005911 s, id 7,")
+            && stderr.contains("yy: golden -0.858, candidate -0.868")
+            && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let stress = json["tables"][0]["fields"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["field"] == "bms.stress")
+        .unwrap()
+        .clone();
+    assert_eq!(stress["within"], false);
+    assert_eq!(stress["worst"]["id"], 7);
+    assert!((stress["max_abs"].as_f64().unwrap() - 0.01).abs() < 1e-9);
+    // The other fields are untouched.
+    for f in json["tables"][0]["fields"].as_array().unwrap() {
+        if f["field"] != "bms.stress" {
+            assert_eq!(f["max_abs"], 0.0, "{f}");
+        }
+    }
+    // A row without a partner (point 7 gone from the copy): the tables cannot be compared.
+    let kept: String = text
+        .lines()
+        .filter(|l| l.split_whitespace().nth(5) != Some("7"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&bms, kept).unwrap();
+    let out = compare_bin().arg(&bench).arg(&copy).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("test-1005_3D_expected.BMS:13: point 7 at t = 0.005911 s has no row"),
+        "{e}"
+    );
+}
+
+/// Our run of benchmark 1005's GOM (its CPS lists the reported points, so history.csv holds
+/// them) against the benchmark's expected tables. Measured: position 5.0e-5, displacement
+/// 1.9e-5, stress 3.1e-5, `.BMR` position 3.6e-11 of their largest values.
+#[test]
+fn our_run_against_the_benchmarks_expected_tables() {
+    let Some(bench) = benchmark_1005() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let ours = dir.path().join("ours");
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(bench.join("test-1005_3D.GOM"))
+        .arg("--out")
+        .arg(&ours)
+        .arg("-q")
+        .assert()
+        .success();
+    let out = compare_bin()
+        .arg(&bench)
+        .arg(&ours)
+        .args(["--rtol", "1e-2", "--summary"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    eprintln!("{stdout}");
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("note: bms.pore_pressure: only in the golden folder's values"),
+        "{stdout}"
+    );
+    let r = compare::compare(&bench, &ours, &Tolerances::default()).unwrap();
+    assert!(r.tables[0].candidate.contains("history.csv"));
+    let fields = table_fields(&r);
+    for (name, rel, n) in &fields {
+        eprintln!("ours vs expected: {name:<22} max rel {rel:.2e} over {n} values");
+        assert!(*rel < 1e-2, "{name}: {rel}");
+    }
+    // Not exact: 4 printed digits against f64.
+    assert!(!r.within);
+    assert_eq!(fields.len(), 4, "{fields:?}");
+    // Without history.csv the particle file at that time gives the same values.
+    std::fs::remove_file(ours.join("history.csv")).unwrap();
+    let r2 = compare::compare(&bench, &ours, &Tolerances::default()).unwrap();
+    assert!(r2.tables[0].candidate.contains("particles_00000.vtu"));
+    assert_eq!(table_fields(&r2), fields);
+    // Point 7 not probed and no output at the table's time: noted with the ids to probe.
+    let pvd = std::fs::read_to_string(ours.join("run.pvd")).unwrap();
+    std::fs::write(
+        ours.join("run.pvd"),
+        pvd.replace("timestep=\"0.00591", "timestep=\"0.00491"),
+    )
+    .unwrap();
+    let out = compare_bin()
+        .arg(&bench)
+        .arg(&ours)
+        .args(["--rtol", "1e-2", "--summary"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(2), "{stdout}");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("nothing to compare")
+            && String::from_utf8_lossy(&out.stderr).contains("--probe 7,52,96,140"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Without any Anura3D files: a `.BMS` written from our own column run's probes (4 significant
+/// digits, as Anura3D prints) pairs with the run's history.csv, and a point the run did not
+/// probe is noted with the ids to probe.
+#[test]
+fn a_bms_written_from_our_probes_pairs_with_our_history() {
+    let dir = tempfile::tempdir().unwrap();
+    let ours = dir.path().join("ours");
+    column::<f64>(&ours);
+    let hist = std::fs::read_to_string(ours.join("history.csv")).unwrap();
+    let mut bms = String::from(
+        " ---material point data---\n LoadStep TimeStep Time PA PGravity ID_MP X Y Z Ux Uy Uz SigmaXX SigmaYY SigmaZZ SigmaXY SigmaYZ SigmaZX WPressure IntWeight MatID\n",
+    );
+    for (k, line) in hist.lines().skip(1).enumerate() {
+        let v: Vec<f64> = line.split(',').map(|s| s.parse().unwrap()).collect();
+        let p = |x: f64| format!("{x:.3e}");
+        let row: Vec<String> = v[2..14].iter().map(|&x| p(x)).collect();
+        bms.push_str(&format!(
+            " {} 1 {} 1.0 0.0 {} {} 0.0 1e-3 1\n",
+            k / 2 + 1,
+            p(v[0]),
+            v[1],
+            row.join(" ")
+        ));
+    }
+    // A point that was not probed, at a time without an output (the particle files would
+    // have it).
+    bms.push_str(
+        " 2 1 7.000e-2 1.0 0.0 5 0 0 0 0 0 0 0 0 0 0 0 0 0.0 1e-3 1\n ---end-of-file---\n",
+    );
+    let golden = dir.path().join("golden");
+    std::fs::create_dir_all(&golden).unwrap();
+    std::fs::write(golden.join("col.BMS"), bms).unwrap();
+    let r = compare::compare(&golden, &ours, &Tolerances::default()).unwrap();
+    let fields = table_fields(&r);
+    assert_eq!(fields.len(), 3, "{fields:?}");
+    for (name, rel, n) in &fields {
+        // 4 digits: at most half a unit of the 4th digit of the field's largest value.
+        assert!(*rel <= 5e-4 && *n >= 4 * 3, "{name}: {rel} over {n}");
+    }
+    assert!(
+        r.notes.iter().any(|n| n.contains("1 of 5 rows")
+            && n.contains("mpm-solve --probe 5,")
+            && n.contains("$$OUTPUT_MATERIAL_POINTS")),
+        "{:?}",
+        r.notes
+    );
+    compare_bin()
+        .arg(&golden)
+        .arg(&ours)
+        .args(["--rtol", "1e-3"])
+        .assert()
+        .code(0);
+    // Required, the unprobed point makes the folders incomparable.
+    let out = compare_bin()
+        .arg(&golden)
+        .arg(&ours)
+        .args(["--rtol", "1e-3", "--require", "bms.stress"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("point 5 at t = 0.07 s"));
+}

@@ -11,7 +11,9 @@ use mpm_solve::compare::{self, report, tolerance::Tolerances};
 
 /// Compare a candidate run folder with a golden one, field by field.
 ///
-/// Outputs are paired by time, material points by id. Differences are absolute and relative to
+/// Outputs are paired by time, material points by id; the rows of Anura3D's
+/// benchmark tables (PROJ.BMS / PROJ.BMR, or PROJ_expected.*) with the other side's
+/// table, history.csv or outputs, by point id and time. Differences are absolute and relative to
 /// the field's largest |value| in the golden output; a field is within when its largest
 /// difference is at most atol + rtol × that value. Default: exact equality.
 ///
@@ -24,8 +26,9 @@ use mpm_solve::compare::{self, report, tolerance::Tolerances};
 #[derive(Debug, Parser)]
 #[command(version, verbatim_doc_comment)]
 struct Args {
-    /// The reference folder: an mpm-solve output folder (run.pvd) or an Anura3D run folder
-    /// (PROJ.CPS_001 with PROJ_MPScalar/MPVector/MPTensor_NNN.vtk).
+    /// The reference folder: an mpm-solve output folder (run.pvd), an Anura3D run folder
+    /// (PROJ.CPS_001 with PROJ_MPScalar/MPVector/MPTensor_NNN.vtk, PROJ.BMS, PROJ.BMR) or an
+    /// Anura3D benchmark folder (PROJ_expected.BMS / .BMR).
     golden: PathBuf,
     /// The folder compared with it (either kind).
     candidate: PathBuf,

@@ -10,6 +10,8 @@
 //! - [`read`]: the folders and their outputs; [`stats`]: streaming statistics;
 //! - [`tolerance`]: tolerances per field and the `compare.toml` format;
 //! - [`history`]: `history.csv` and `energy.csv`; [`report`]: text, summary and JSON;
+//! - [`tables`]: Anura3D's benchmark tables (`.BMS`, `.BMR`) against the other side's values
+//!   of the same points;
 //! - [`plot`]: the worst field's difference against depth.
 
 pub mod history;
@@ -17,6 +19,7 @@ pub mod plot;
 pub mod read;
 pub mod report;
 pub mod stats;
+pub mod tables;
 pub mod tolerance;
 
 use std::path::{Path, PathBuf};
@@ -60,6 +63,9 @@ pub enum CompareError {
     /// A tolerance is malformed.
     #[error("tolerances: {0}")]
     Tolerance(String),
+    /// Nothing the two folders hold could be compared.
+    #[error("nothing to compare: {0}")]
+    Nothing(String),
     /// A CSV history cannot be read or paired.
     #[error("{0}")]
     Csv(String),
@@ -94,6 +100,8 @@ pub struct Report {
     pub outputs: Vec<OutputReport>,
     /// `history.csv` and `energy.csv`, each as one "output" over all its rows.
     pub histories: Vec<OutputReport>,
+    /// Anura3D's `.BMS` / `.BMR` tables, each as one "output" over all its rows.
+    pub tables: Vec<OutputReport>,
     /// Fields or files on one side only (not compared), and other remarks.
     pub notes: Vec<String>,
     /// True when every compared field is within its tolerance.
@@ -101,11 +109,13 @@ pub struct Report {
 }
 
 impl Report {
-    /// Every field statistic, outputs first, then histories, with its output's time and file.
+    /// Every field statistic, outputs first, then histories, then tables, with its output's
+    /// time and file.
     pub fn all(&self) -> impl Iterator<Item = (&OutputReport, &FieldStats)> {
         self.outputs
             .iter()
             .chain(&self.histories)
+            .chain(&self.tables)
             .flat_map(|o| o.fields.iter().map(move |f| (o, f)))
     }
 
@@ -294,17 +304,31 @@ pub fn compare_output(
 }
 
 /// Compares the candidate folder with the golden one: every output pair, then the CSV
-/// histories. Outputs are read one pair at a time.
+/// histories, then Anura3D's tables. Outputs are read one pair at a time. A folder without
+/// outputs (Anura3D's benchmark folder: its tables only) has its outputs noted as one-sided.
 pub fn compare(golden: &Path, candidate: &Path, tol: &Tolerances) -> Result<Report, CompareError> {
     let (fa, fb) = (Folder::open(golden)?, Folder::open(candidate)?);
-    let pairs = pair_outputs(&fa, &fb)?;
     let mut report = Report {
         golden: format!("{} ({})", golden.display(), fa.kind()),
         candidate: format!("{} ({})", candidate.display(), fb.kind()),
-        outputs: Vec::with_capacity(pairs.len()),
+        outputs: Vec::new(),
         histories: Vec::new(),
+        tables: Vec::new(),
         notes: Vec::new(),
         within: true,
+    };
+    let (na, nb) = (fa.outputs().len(), fb.outputs().len());
+    let pairs = if na > 0 && nb > 0 {
+        pair_outputs(&fa, &fb)?
+    } else {
+        if na + nb > 0 {
+            report.notes.push(format!(
+                "material-point outputs: only in the {} folder ({} of them), not compared",
+                if na > 0 { "golden" } else { "candidate" },
+                na + nb
+            ));
+        }
+        Vec::new()
     };
     for (pa, pb) in &pairs {
         let (a, b) = (fa.load(pa.index)?, fb.load(pb.index)?);
@@ -315,6 +339,19 @@ pub fn compare(golden: &Path, candidate: &Path, tol: &Tolerances) -> Result<Repo
         if let Some(h) = history::compare_csv(&fa, &fb, name, tol, &mut report.notes)? {
             report.histories.push(h);
         }
+    }
+    report.tables = tables::compare_tables(&fa, &fb, tol, &mut report.notes)?;
+    if report.all().next().is_none() {
+        return Err(CompareError::Nothing(format!(
+            "no output, history or table of {} pairs with one of {}{}",
+            golden.display(),
+            candidate.display(),
+            if report.notes.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", report.notes.join("; "))
+            }
+        )));
     }
     let within = report.all().all(|(_, f)| f.within);
     report.within = within;

@@ -2,6 +2,9 @@
 //! `particles_NNNNN.vtu`) and Anura3D's (`PROJ.CPS_001` beside `PROJ_MPScalar_NNN.vtk`,
 //! `..._MPVector_...`, `..._MPTensor_...`, one set per load step).
 //!
+//! An Anura3D folder may hold no load-step files when it holds its benchmark tables
+//! (`PROJ.BMS`, `PROJ_expected.BMS`, see [`super::tables`]): a benchmark folder as shipped.
+//!
 //! An output is seen through [`Snapshot`], its points in ascending id order whatever their
 //! order in the file: our files are mapped, not copied, and only a permutation (4 bytes a point)
 //! is built when the ids are not already ascending.
@@ -132,13 +135,23 @@ impl Folder {
             })
             .collect();
         cps.sort();
+        // A benchmark folder (or a copy of Anura3D's tables alone) has tables but may have no
+        // load-step files: its tables are still compared.
+        let tables = super::tables::TableFiles::find(dir)?;
         let cps = match cps.as_slice() {
             [one] => one.clone(),
             [] => {
+                if let Some(t) = tables.bms.as_ref().or(tables.bmr.as_ref()) {
+                    return Ok(Folder::Anura3d {
+                        dir: dir.to_path_buf(),
+                        project: super::tables::project_of(t),
+                        steps: Vec::new(),
+                    });
+                }
                 return Err(not_a_run(
                     dir,
-                    "neither run.pvd (mpm-solve) nor PROJ.CPS_001 (Anura3D) is there",
-                ))
+                    "neither run.pvd (mpm-solve) nor PROJ.CPS_001 (Anura3D) nor a PROJ.BMS/BMR table is there",
+                ));
             }
             _ => return Err(not_a_run(dir, "more than one *.CPS_001 (which project?)")),
         };
@@ -163,7 +176,7 @@ impl Folder {
             .map(|k| (k, k as f64 * dt))
             .collect();
         steps.sort_by_key(|s| s.0);
-        if steps.is_empty() {
+        if steps.is_empty() && !tables.any() {
             return Err(not_a_run(
                 dir,
                 &format!(
@@ -215,6 +228,14 @@ impl Folder {
                     label: format!("{project}_MP*_{k:03}.vtk"),
                 })
                 .collect(),
+        }
+    }
+
+    /// The Anura3D load step of output `index` (none for our outputs).
+    pub fn load_step(&self, index: usize) -> Option<u32> {
+        match self {
+            Folder::Ours { .. } => None,
+            Folder::Anura3d { steps, .. } => steps.get(index).map(|s| s.0),
         }
     }
 
@@ -341,6 +362,21 @@ impl Snapshot {
             },
             Snapshot::Anura3d(p) => Whole::Ids(p),
         }
+    }
+
+    /// The rank of the point of id `id`, if this output has it (ids ascend with rank).
+    pub fn rank_of(&self, id: u64) -> Option<usize> {
+        let ids = self.ids();
+        let (mut lo, mut hi) = (0, self.len());
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            match ids.get(mid)?.cmp(&id) {
+                std::cmp::Ordering::Less => lo = mid + 1,
+                std::cmp::Ordering::Greater => hi = mid,
+                std::cmp::Ordering::Equal => return Some(mid),
+            }
+        }
+        None
     }
 
     /// The points' elements (1-based) by rank, when the file has them (ours).

@@ -111,9 +111,10 @@ pub fn summary(r: &Report) -> String {
 pub fn verdict(r: &Report) -> String {
     match r.first_failure() {
         None => format!(
-            "within tolerances: {} output(s) and {} history file(s), {} field comparisons",
+            "within tolerances: {} output(s), {} history file(s) and {} table(s), {} field comparisons",
             r.outputs.len(),
             r.histories.len(),
+            r.tables.len(),
             r.all().count()
         ),
         Some((o, f)) => format!(

@@ -23,8 +23,9 @@ use serde::{Deserialize, Serialize};
 
 use super::CompareError;
 
-/// Every field name the comparison knows: material-point fields, then CSV column groups.
-pub const FIELDS: [&str; 11] = [
+/// Every field name the comparison knows: material-point fields, CSV column groups, then
+/// Anura3D's table fields.
+pub const FIELDS: [&str; 17] = [
     "position",
     "displacement",
     "velocity",
@@ -36,6 +37,12 @@ pub const FIELDS: [&str; 11] = [
     "history.pore_pressure",
     "energy.kinetic",
     "energy.external_work",
+    "bms.position",
+    "bms.displacement",
+    "bms.stress",
+    "bms.pore_pressure",
+    "bmr.position",
+    "bmr.node_displacement",
 ];
 
 /// The tolerance applied to one field.
