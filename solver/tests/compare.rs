@@ -551,7 +551,9 @@ fn benchmark_1005() -> Option<PathBuf> {
     let Some(root) =
         mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"))
     else {
-        eprintln!("ANURA3D_BENCHMARKS not set: comparison with a benchmark's .BMS skipped");
+        mpm_shared::suite::skipped(
+            "comparison with a benchmark's .BMS (ANURA3D_BENCHMARKS not set)",
+        );
         return None;
     };
     let d = root.join(
@@ -591,7 +593,9 @@ fn anura3d_run_tables_against_the_benchmarks_expected_tables() {
     let Some(anura3d) =
         mpm_shared::suite::anura3d_oracle(&workspace).unwrap_or_else(|e| panic!("{e}"))
     else {
-        eprintln!("ANURA3D_ORACLE not set: Anura3D run tables against expected ones skipped");
+        mpm_shared::suite::skipped(
+            "Anura3D run tables against expected ones (ANURA3D_ORACLE not set)",
+        );
         return;
     };
     let Some(bench) = benchmark_1005() else {
