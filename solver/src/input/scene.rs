@@ -545,17 +545,12 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
     };
     let by_tv = |tv: Option<f64>| -> Result<Option<f64>, SceneError> {
         let Some(tv) = tv else { return Ok(None) };
-        let sat: Vec<&MaterialSpec> = materials
-            .iter()
-            .flatten()
-            .filter(|m| m.liquid.is_some())
-            .collect();
-        let [m] = sat.as_slice() else {
-            return Err(invalid(
+        let m = the_saturated(&materials).ok_or_else(|| {
+            invalid(
                 "consolidation".into(),
                 "times by time factor need exactly one saturated material".into(),
-            ));
-        };
+            )
+        })?;
         let cv = m
             .liquid
             .as_ref()
@@ -612,17 +607,12 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
     // The undrained start is an initial state of the saturated points, resolved here.
     let initial_state = match &consolidation {
         Some(c) if c.start == Start::Undrained => {
-            let sat: Vec<&MaterialSpec> = materials
-                .iter()
-                .flatten()
-                .filter(|m| m.liquid.is_some())
-                .collect();
-            let [m] = sat.as_slice() else {
-                return Err(invalid(
+            let m = the_saturated(&materials).ok_or_else(|| {
+                invalid(
                     "consolidation".into(),
                     "a consolidation run needs exactly one saturated material".into(),
-                ));
-            };
+                )
+            })?;
             UndrainedState::under(m, c.load)
         }
         _ => None,
@@ -675,6 +665,15 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         materials: inputs,
         tractions,
     })
+}
+
+/// The one saturated material of a consolidation scene, `None` when there are none or several.
+fn the_saturated(materials: &[Option<MaterialSpec>]) -> Option<&MaterialSpec> {
+    let mut sat = materials.iter().flatten().filter(|m| m.liquid.is_some());
+    match (sat.next(), sat.next()) {
+        (Some(m), None) => Some(m),
+        _ => None,
+    }
 }
 
 /// Adds the nodal forces of a uniform traction `t` (kPa) on triangles `faces` (model node ids of
