@@ -164,6 +164,8 @@ impl<'a, T> Shared<'a, T> {
     #[inline]
     pub unsafe fn write(&self, i: usize, v: T) {
         assert!(i < self.len);
+        // SAFETY: `i` is inside the borrowed slice (checked above); exclusive access to it is
+        // the caller's promise.
         unsafe { self.ptr.add(i).write(v) }
     }
 
@@ -175,6 +177,8 @@ impl<'a, T> Shared<'a, T> {
     #[allow(clippy::mut_from_ref)]
     pub unsafe fn range(&self, r: Range<usize>) -> &mut [T] {
         assert!(r.start <= r.end && r.end <= self.len);
+        // SAFETY: `r` lies inside the borrowed slice (checked above), which outlives `'a`;
+        // exclusive access to it is the caller's promise.
         unsafe { std::slice::from_raw_parts_mut(self.ptr.add(r.start), r.end - r.start) }
     }
 }
