@@ -206,6 +206,7 @@ fn perturbed_field_exits_1_naming_field_output_and_point() {
         "{stderr}"
     );
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["schema_version"], 1);
     assert_eq!(json["within"], false);
     let first = &json["outputs"][0]["fields"];
     assert!(first

@@ -132,9 +132,25 @@ pub fn verdict(r: &Report) -> String {
     }
 }
 
-/// The report as pretty JSON (a non-finite number is written as null).
+/// Version of the layout of `mpm-compare --json`: raised whenever a key is renamed or changes
+/// meaning.
+pub const JSON_SCHEMA: u32 = 1;
+
+/// The whole report as strict JSON, with `schema_version` first.
 pub fn json(r: &Report) -> String {
-    let mut s = serde_json::to_string_pretty(r).expect("plain data serialises");
+    /// The report under its layout's version (serde_json writes a non-finite number as null,
+    /// so the text stays strict JSON).
+    #[derive(serde::Serialize)]
+    struct Versioned<'a> {
+        schema_version: u32,
+        #[serde(flatten)]
+        report: &'a Report,
+    }
+    let v = Versioned {
+        schema_version: JSON_SCHEMA,
+        report: r,
+    };
+    let mut s = serde_json::to_string_pretty(&v).expect("plain data serialises");
     s.push('\n');
     s
 }
