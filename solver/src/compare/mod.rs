@@ -19,6 +19,7 @@ pub mod plot;
 pub mod read;
 pub mod report;
 pub mod stats;
+pub mod table_files;
 pub mod tables;
 pub mod tolerance;
 

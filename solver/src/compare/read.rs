@@ -137,14 +137,14 @@ impl Folder {
         cps.sort();
         // A benchmark folder (or a copy of Anura3D's tables alone) has tables but may have no
         // load-step files: its tables are still compared.
-        let tables = super::tables::TableFiles::find(dir)?;
+        let tables = super::table_files::TableFiles::find(dir)?;
         let cps = match cps.as_slice() {
             [one] => one.clone(),
             [] => {
                 if let Some(t) = tables.bms.as_ref().or(tables.bmr.as_ref()) {
                     return Ok(Folder::Anura3d {
                         dir: dir.to_path_buf(),
-                        project: super::tables::project_of(t),
+                        project: super::table_files::project_of(t),
                         steps: Vec::new(),
                     });
                 }
