@@ -1,19 +1,9 @@
 //! `sfcb --curve none` as a converter: msh → GOM, GOM → GOM, GOM/msh → VTU, pipes, bad input.
 
-use std::path::{Path, PathBuf};
-
-use assert_cmd::Command;
 use predicates::prelude::*;
 
-fn testdata(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../testdata")
-        .join(name)
-}
-
-fn sfcb() -> Command {
-    Command::cargo_bin("sfcb").unwrap()
-}
+mod common;
+use common::{sfcb, testdata};
 
 #[test]
 fn msh_converts_to_the_golden_gom_byte_for_byte() {

@@ -3,19 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
-use assert_cmd::Command;
 use mpm_shared::{gom, Model};
 use predicates::prelude::*;
 
-fn testdata(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../testdata")
-        .join(name)
-}
-
-fn sfcb() -> Command {
-    Command::cargo_bin("sfcb").unwrap()
-}
+mod common;
+use common::{sfcb, testdata};
 
 fn cube() -> Model {
     let name = "cube_tet4.GOM";

@@ -1,15 +1,12 @@
 //! `mpm-solve` from the command line: outputs, determinism, bad input.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use assert_cmd::Command;
 use predicates::prelude::*;
 
-fn testdata(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../testdata")
-        .join(name)
-}
+mod common;
+use common::scene;
 
 /// `mpm-solve INPUT --out OUT`, expected to fail.
 fn fails(input: &Path, out: &Path) -> assert_cmd::assert::Assert {
@@ -20,20 +17,6 @@ fn fails(input: &Path, out: &Path) -> assert_cmd::assert::Assert {
         .arg(out)
         .assert()
         .failure()
-}
-
-fn scene(dir: &Path, edit: &dyn Fn(String) -> String) -> PathBuf {
-    let text = std::fs::read_to_string(testdata("column_gravity.toml")).unwrap();
-    let text = text
-        .replace(
-            "column_fine_tet4.msh",
-            &testdata("column_tet4.msh").display().to_string(),
-        )
-        .replace("end = 0.6", "end = 0.02")
-        .replace("output_interval = 0.1", "output_interval = 0.01");
-    let p = dir.join("scene.toml");
-    std::fs::write(&p, edit(text)).unwrap();
-    p
 }
 
 #[test]

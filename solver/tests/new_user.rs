@@ -2,31 +2,13 @@
 //! work, naming what was wrong and what to do, with a non-zero exit and no output folder; and a
 //! batch job sees its progress.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use assert_cmd::Command;
 use predicates::prelude::*;
 
-fn testdata(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../testdata")
-        .join(name)
-}
-
-/// The gravity column scene on the coarse mesh, 20 ms in two outputs, edited by `edit`.
-fn scene(dir: &Path, edit: &dyn Fn(String) -> String) -> PathBuf {
-    let text = std::fs::read_to_string(testdata("column_gravity.toml"))
-        .unwrap()
-        .replace(
-            "column_fine_tet4.msh",
-            &testdata("column_tet4.msh").display().to_string(),
-        )
-        .replace("end = 0.6", "end = 0.02")
-        .replace("output_interval = 0.1", "output_interval = 0.01");
-    let p = dir.join("scene.toml");
-    std::fs::write(&p, edit(text)).unwrap();
-    p
-}
+mod common;
+use common::{scene, testdata};
 
 fn solve() -> Command {
     Command::cargo_bin("mpm-solve").unwrap()
