@@ -75,6 +75,15 @@ impl ElementType {
         }
     }
 
+    /// Plain-words name for messages ("3-node triangles").
+    pub fn describe(self) -> &'static str {
+        match self {
+            ElementType::Tri3 => "3-node triangles",
+            ElementType::Tet4 => "4-node tetrahedra",
+            ElementType::Tet10 => "10-node tetrahedra",
+        }
+    }
+
     /// Parses a GOM keyword value.
     pub fn from_keyword(s: &str) -> Option<Self> {
         Some(match s {

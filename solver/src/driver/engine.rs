@@ -3,12 +3,15 @@
 use std::time::Instant;
 
 use crate::element::locate::{walk, Found};
-use crate::element::mesh::TetMesh;
+use crate::element::mesh::Mesh;
+use crate::element::tet4::Tet4;
+use crate::element::Element;
 use crate::input::case::{Case, Integration};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::comm::{Communicator, SingleProcess};
 use crate::parallel::gather::{sort_by_element, Layout, Slots, SortScratch};
+use crate::parallel::partition::Partition;
 pub use crate::parallel::team::Options;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
@@ -49,6 +52,12 @@ pub enum SetupError {
     /// A load on material points has no points to carry it.
     #[error("{0}")]
     Loads(String),
+    /// More than one process: the nodal sums at shared nodes are not exchanged yet.
+    #[error("a run over {ranks} processes needs the exchange of nodal sums at shared nodes, which this build does not have; run on one process")]
+    Distributed {
+        /// Processes of the communicator.
+        ranks: usize,
+    },
 }
 
 /// A material point that left the mesh.
@@ -115,14 +124,16 @@ impl StepConfig {
     }
 }
 
-/// Solver state and preallocated buffers.
-pub struct Engine<R: Real> {
+/// Solver state and preallocated buffers, for precision `R` and element type `E`.
+pub struct Engine<R: Real, E: Element = Tet4> {
     /// What each step reads of the case.
     pub config: StepConfig,
     /// The global reductions (energies, work, force norms, time step, lost points).
     comm: Box<dyn Communicator>,
-    /// Computational mesh.
-    pub mesh: TetMesh<R>,
+    /// This process's share of the mesh (all of it on one process).
+    pub partition: Partition,
+    /// Computational mesh: the partition's elements, numbered locally.
+    pub mesh: Mesh<E, R>,
     /// Material points.
     pub particles: Particles<R>,
     /// Nodal arrays.
@@ -161,7 +172,7 @@ pub struct Engine<R: Real> {
     /// The thread team.
     pub team: Team,
     /// Per-thread ranges and the node-to-corner map of the parallel sums.
-    pub layout: Layout<R>,
+    pub layout: Layout<R, E>,
     /// Per-corner partial sums (scratch of the particle-to-grid passes).
     pub slots: Slots<R>,
     /// Scratch of the re-sort by element.
@@ -180,11 +191,12 @@ pub struct Engine<R: Real> {
     gravity_by_material: Vec<V3<R>>,
     /// Velocities prescribed on material points (only when the case has them).
     pub prescribed: Option<crate::step::prescribed::Prescribed<R>>,
-    /// Input element (0-based) of each element, so that messages name elements as the input.
+    /// Input element (0-based) of each local element, so that messages name elements as the
+    /// input.
     input_element: Vec<u32>,
 }
 
-impl<R: Real> Engine<R> {
+impl<R: Real, E: Element> Engine<R, E> {
     /// Sets up the mesh, places the material points and computes the time step, with the
     /// case's engine options.
     pub fn new(case: &Case, drop_lost: bool) -> Result<Self, SetupError> {
@@ -208,22 +220,29 @@ impl<R: Real> Engine<R> {
         comm: Box<dyn Communicator>,
     ) -> Result<Self, SetupError> {
         let team = Team::new(options.threads, options.pin)?;
-        let mesh = case.tet_mesh::<R>()?;
+        let global = case.mesh::<E, R>()?;
+        if comm.ranks() > 1 {
+            return Err(SetupError::Distributed {
+                ranks: comm.ranks(),
+            });
+        }
+        // Element-indexed input is read through the partition: `own` is the global range.
+        let partition = Partition::whole(&global);
+        let own = partition.elements();
+        let mesh = partition.local_mesh(global);
         let density = |m: u32| {
             case.materials[m as usize]
                 .as_ref()
                 .map_or(0.0, |s| s.density)
         };
         let ids = case.point_ids();
-        let first_id: Vec<u32> = (0..mesh.elements())
-            .map(|e| ids.input_first(e) as u32)
-            .collect();
+        let first_id: Vec<u32> = own.clone().map(|e| ids.input_first(e) as u32).collect();
         let mut particles = particles::place(
             &mesh,
-            &case.points_per_element,
-            &case.element_material,
+            &case.points_per_element[own.clone()],
+            &case.element_material[own.clone()],
             Some(&first_id),
-            &|e| case.element_number(e),
+            &|e| case.element_number(partition.global_element(e)),
             density,
         )
         .map_err(SetupError::Points)?;
@@ -286,21 +305,19 @@ impl<R: Real> Engine<R> {
             .iter()
             .map(|m| m.as_ref().map_or(Law::Void, |s| s.law.build()))
             .collect();
-        let dt = comm.min(crate::input::time_step::critical(
-            case,
-            mesh.elements(),
-            |e| mesh.min_altitude[e].f64(),
-        )?);
+        let dt = comm.min(crate::input::time_step::critical(case, own.clone(), |e| {
+            mesh.min_altitude[e - own.start].f64()
+        })?);
         let mut grid = Grid::new(mesh.nodes());
         if two_phase {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
         }
-        let point_loads =
-            resolve_point_loads(&mesh, &particles, case).map_err(SetupError::Loads)?;
-        let prescribed = case
-            .prescribed
-            .as_ref()
-            .map(|pv| crate::step::prescribed::Prescribed::new(pv, &mesh, &particles));
+        let point_loads = resolve_point_loads(&mesh, &particles, case, comm.as_ref())
+            .map_err(SetupError::Loads)?;
+        let prescribed = case.prescribed.as_ref().map(|pv| {
+            let pv = pv.clone().owned_by(&partition);
+            crate::step::prescribed::Prescribed::new(&pv, &mesh, &particles)
+        });
         let layout = Layout::new(&mesh, &particles, team.threads);
         if options.first_touch {
             particles = first_touch(&team, &layout, particles);
@@ -318,12 +335,16 @@ impl<R: Real> Engine<R> {
             .map(|m| m.as_ref().map_or(1.0, |s| s.weight_density / s.density))
             .collect();
         let smoothing = case.strain_smoothing.then(|| {
-            crate::step::smoothing::StrainSmoothing::new(mesh.nodes(), &case.element_material)
+            crate::step::smoothing::StrainSmoothing::new(
+                mesh.nodes(),
+                &case.element_material[own.clone()],
+            )
         });
         Ok(Engine {
             comm,
             config: StepConfig::of(case),
-            input_element: case.input_element.clone(),
+            input_element: own.clone().map(|e| case.element_number(e) - 1).collect(),
+            partition,
             smoothing,
             gravity_by_material: vec![[R::ZERO; 3]; weight_ratio.len()],
             weight_ratio,
@@ -628,10 +649,11 @@ impl<R: Real> Engine<R> {
 /// the points nearest its three corners (the one point of a 1-point element). The face's force
 /// is shared equally among all of them (Anura3D gives each adjacent element the full share, which
 /// doubles loads on faces between two filled elements; such faces are rare and we keep the total).
-fn resolve_point_loads<R: Real>(
-    mesh: &TetMesh<R>,
+fn resolve_point_loads<E: Element, R: Real>(
+    mesh: &Mesh<E, R>,
     p: &Particles<R>,
     case: &Case,
+    comm: &dyn Communicator,
 ) -> Result<Vec<(u32, V3<R>)>, String> {
     if case.point_loads.is_empty() {
         return Ok(Vec::new());
@@ -649,22 +671,18 @@ fn resolve_point_loads<R: Real>(
         let c = load.corners.map(|m| mesh.node_of_model[m]);
         let mut carriers = Vec::new();
         for e in 0..mesh.elements() {
-            let corners = mesh.corners[e];
-            if !c.iter().all(|n| corners.contains(n)) {
+            let corners = mesh.corners[e].as_ref();
+            let Some(face) = (0..E::FACES).find(|&k| {
+                let f = E::face(k);
+                f.len() == c.len() && c.iter().all(|n| f.iter().any(|&j| corners[j] == *n))
+            }) else {
                 continue;
-            }
+            };
             let (a, b) = (first[e] as usize, first[e + 1] as usize);
-            match b - a {
-                0 => {}
-                1 => carriers.push(a),
-                4 => {
-                    let opposite = (0..4).find(|&k| !c.contains(&corners[k])).unwrap_or(0);
-                    carriers.extend((0..4).filter(|&k| k != opposite).map(|k| a + k));
-                }
-                _ => carriers.extend(a..b),
-            }
+            carriers.extend(E::face_load_points(b - a, face).into_iter().map(|k| a + k));
         }
-        if carriers.is_empty() {
+        // Another process may carry the load: only no carrier anywhere is an error.
+        if comm.sum_count(carriers.len() as u64) == 0 {
             let ids = load.corners.map(|m| case.node_number(m));
             return Err(format!(
                 "the load on material points of the face with corner nodes {} {} {} has no filled element next to it",
@@ -679,12 +697,16 @@ fn resolve_point_loads<R: Real>(
 
 /// The particle arrays copied range by range on the threads that own the ranges, so that each
 /// range's pages are first touched (and placed) by its thread.
-fn first_touch<R: Real>(team: &Team, layout: &Layout<R>, mut p: Particles<R>) -> Particles<R> {
-    struct Copy<'a, R: Real> {
+fn first_touch<E: Element, R: Real>(
+    team: &Team,
+    layout: &Layout<R, E>,
+    mut p: Particles<R>,
+) -> Particles<R> {
+    struct Copy<'a, R: Real, E: Element> {
         team: &'a Team,
-        layout: &'a Layout<R>,
+        layout: &'a Layout<R, E>,
     }
-    impl<R: Real> FieldVisitor for Copy<'_, R> {
+    impl<R: Real, E: Element> FieldVisitor for Copy<'_, R, E> {
         fn field<T: std::marker::Copy + Default + Send + Sync>(
             &mut self,
             v: &mut Vec<T>,

@@ -1,7 +1,8 @@
 //! Particle relocation: from its previous element, a point walks to the face neighbour across
 //! the face with the most negative barycentric coordinate until it is inside.
 
-use crate::element::mesh::TetMesh;
+use crate::element::mesh::Mesh;
+use crate::element::Element;
 use crate::real::{Real, V3};
 
 /// Where a walk ended.
@@ -15,22 +16,15 @@ pub enum Found {
 
 /// Finds the element holding `p`, starting from `start`.
 #[inline]
-pub fn walk<R: Real>(mesh: &TetMesh<R>, start: u32, p: &V3<R>) -> Found {
+pub fn walk<E: Element, R: Real>(mesh: &Mesh<E, R>, start: u32, p: &V3<R>) -> Found {
     let tol = R::of(-1e-10);
     let mut e = start;
     // A walk is bounded by the mesh size; the cap only guards against cycling on round-off.
     for _ in 0..mesh.elements().max(16) {
-        let l = mesh.shape(e as usize, p);
-        let (mut k, mut lo) = (0, l[0]);
-        for (j, &v) in l.iter().enumerate().skip(1) {
-            if v < lo {
-                (k, lo) = (j, v);
-            }
-        }
-        if lo >= tol {
+        let Some(k) = E::exit_face(&mesh.shape(e as usize, p), tol) else {
             return Found::In(e);
-        }
-        let next = mesh.neighbour[e as usize][k];
+        };
+        let next = mesh.neighbour[e as usize].as_ref()[k];
         if next == u32::MAX {
             return Found::Outside(e);
         }
@@ -42,6 +36,7 @@ pub fn walk<R: Real>(mesh: &TetMesh<R>, start: u32, p: &V3<R>) -> Found {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::mesh::TetMesh;
     use mpm_shared::{generate, ElementType};
 
     #[test]

@@ -1,43 +1,51 @@
-//! The computational mesh: linear tetrahedra on the corner nodes of the model (10-node files are
-//! computed with their corners, as Anura3D does), with what every phase needs per element
-//! precomputed: the inverse affine map (barycentric coordinates and constant shape-function
-//! gradients), volume, smallest altitude and face neighbours.
+//! The computational mesh: elements of one type ([`Element`]) on the model's nodes (the corner
+//! nodes, for 10-node tetrahedra computed as 4-node ones, as Anura3D does), with what every phase
+//! needs per element precomputed: the map to local coordinates, constant shape-function
+//! gradients, volume, smallest altitude and face neighbours.
 
-use mpm_shared::{ElementType, Model};
+use mpm_shared::Model;
 
+use crate::element::tet4::Tet4;
+use crate::element::Element;
 use crate::real::{Real, V3};
 
-/// Linear tetrahedral mesh in Anura3D corner order (N1 = 1-ξ-η-ζ, N2 = ζ, N3 = ξ, N4 = η, i.e.
-/// barycentric coordinates of corners 1-4).
+/// A mesh of elements of type `E`.
 #[derive(Debug, Clone)]
-pub struct TetMesh<R: Real> {
-    /// Coordinates of the computational (corner) nodes.
+pub struct Mesh<E: Element, R: Real> {
+    /// Coordinates of the computational nodes.
     pub x: Vec<V3<R>>,
     /// Model node (0-based) of each computational node.
     pub model_node: Vec<u32>,
     /// Computational node of each model node (`u32::MAX` for mid-edge nodes).
     pub node_of_model: Vec<u32>,
-    /// Corner nodes of each element.
-    pub corners: Vec<[u32; 4]>,
-    /// Rows 2-4 of the barycentric map: `λ(k+2) = inv[k] · (x - x1)` for k = 0..3, and
-    /// `λ1 = 1 - λ2 - λ3 - λ4`.
-    pub inv: Vec<[V3<R>; 3]>,
-    /// Shape-function gradients of the four corners.
-    pub grad: Vec<[V3<R>; 4]>,
+    /// Nodes of each element (its corners, for the linear elements there are).
+    pub corners: Vec<E::Nodes<u32>>,
+    /// Map to local coordinates of each element (see [`Element::shape`]).
+    pub map: Vec<E::Map<R>>,
+    /// Shape-function gradients of each element's nodes.
+    pub grad: Vec<E::Nodes<V3<R>>>,
     /// Element volumes.
     pub volume: Vec<R>,
     /// Smallest altitude of each element (for the Courant time step).
     pub min_altitude: Vec<R>,
-    /// Element across the face opposite each corner (`u32::MAX` on the boundary).
-    pub neighbour: Vec<[u32; 4]>,
+    /// Element across each face (`u32::MAX` on the boundary).
+    pub neighbour: Vec<E::Faces<u32>>,
 }
+
+/// The mesh of 4-node tetrahedra, the solver's element today.
+pub type TetMesh<R> = Mesh<Tet4, R>;
 
 /// Problems that make a mesh unusable for computation.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    /// Not a tetrahedral model.
-    #[error("the solver needs a 3D tetrahedral mesh; this one has {0}")]
-    NotTetrahedral(&'static str),
+    /// The model's elements are not of the solver's element type.
+    #[error("the solver computes meshes of {wanted}; this one has {found}")]
+    WrongElement {
+        /// The solver's element.
+        wanted: &'static str,
+        /// The model's elements.
+        found: &'static str,
+    },
     /// No elements.
     #[error("the mesh has no elements")]
     Empty,
@@ -51,30 +59,17 @@ pub enum MeshError {
     },
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
+/// Faces with at most this many nodes are matched to find neighbours.
+const MAX_FACE_NODES: usize = 4;
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// Corners of the face opposite corner `k`.
-pub const FACE_OPPOSITE: [[usize; 3]; 4] = [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]];
-
-impl<R: Real> TetMesh<R> {
+impl<E: Element, R: Real> Mesh<E, R> {
     /// Builds the computational mesh of `model` (geometry in f64, stored in `R`).
     pub fn new(model: &Model) -> Result<Self, MeshError> {
-        if model.element_type == ElementType::Tri3 {
-            return Err(MeshError::NotTetrahedral("triangles"));
+        if !E::computes(model.element_type) {
+            return Err(MeshError::WrongElement {
+                wanted: E::NAME,
+                found: model.element_type.describe(),
+            });
         }
         let n_el = model.element_count();
         if n_el == 0 {
@@ -85,16 +80,14 @@ impl<R: Real> TetMesh<R> {
         let mut corners = Vec::with_capacity(n_el);
         for e in 0..n_el {
             let el = model.element(e);
-            let mut c = [0u32; 4];
-            for k in 0..4 {
+            corners.push(E::nodes(|k| {
                 let m = el[k] as usize;
                 if node_of_model[m] == u32::MAX {
                     node_of_model[m] = model_node.len() as u32;
                     model_node.push(m as u32);
                 }
-                c[k] = node_of_model[m];
-            }
-            corners.push(c);
+                node_of_model[m]
+            }));
         }
         let xf: Vec<[f64; 3]> = model_node
             .iter()
@@ -103,61 +96,52 @@ impl<R: Real> TetMesh<R> {
                 [p[0], p[1], p[2]]
             })
             .collect();
-        let mut inv = Vec::with_capacity(n_el);
+        let mut map = Vec::with_capacity(n_el);
         let mut grad = Vec::with_capacity(n_el);
         let mut volume = Vec::with_capacity(n_el);
         let mut min_altitude = Vec::with_capacity(n_el);
         for (e, c) in corners.iter().enumerate() {
-            let p = c.map(|i| xf[i as usize]);
-            // Columns of J: corners 2, 3, 4 relative to corner 1.
-            let (a, b, d) = (sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0]));
-            let det = dot(a, cross(b, d));
-            // Anura3D's orientation: det[x3-x1, x4-x1, x2-x1] = det[a, b, d] by cyclic shift.
-            if det <= 0.0 || !det.is_finite() {
-                return Err(MeshError::BadElement {
+            let c = c.as_ref();
+            let g = E::geometry::<R>(&E::nodes(|k| xf[c[k] as usize])).map_err(|volume| {
+                MeshError::BadElement {
                     element: e + 1,
-                    volume: det / 6.0,
-                });
-            }
-            // Rows of J^-1 = (b×d, d×a, a×b) / det give λ2, λ3, λ4.
-            let rows = [cross(b, d), cross(d, a), cross(a, b)].map(|r| r.map(|v| v / det));
-            inv.push(rows.map(|r| r.map(R::of)));
-            let g1 = [0, 1, 2].map(|k| -(rows[0][k] + rows[1][k] + rows[2][k]));
-            grad.push([g1, rows[0], rows[1], rows[2]].map(|g| g.map(R::of)));
-            volume.push(R::of(det / 6.0));
-            let max_area2 = FACE_OPPOSITE
-                .iter()
-                .map(|f| {
-                    let n = cross(sub(p[f[1]], p[f[0]]), sub(p[f[2]], p[f[0]]));
-                    dot(n, n).sqrt()
-                })
-                .fold(0.0, f64::max);
-            // Altitude over the largest face: 3V / A = det / |n|.
-            min_altitude.push(R::of(det / max_area2));
+                    volume,
+                }
+            })?;
+            map.push(g.map);
+            grad.push(g.grad);
+            volume.push(g.volume);
+            min_altitude.push(g.min_altitude);
         }
-        // Face neighbours by sorting face keys.
-        let mut faces: Vec<([u32; 3], u32, u8)> = Vec::with_capacity(n_el * 4);
+        // Face neighbours by sorting face keys (node lists sorted, padded with u32::MAX).
+        let mut faces: Vec<([u32; MAX_FACE_NODES], u32, u8)> = Vec::with_capacity(n_el * E::FACES);
         for (e, c) in corners.iter().enumerate() {
-            for (k, f) in FACE_OPPOSITE.iter().enumerate() {
-                let mut key = [c[f[0]], c[f[1]], c[f[2]]];
+            let c = c.as_ref();
+            for k in 0..E::FACES {
+                let f = E::face(k);
+                debug_assert!(f.len() <= MAX_FACE_NODES);
+                let mut key = [u32::MAX; MAX_FACE_NODES];
+                for (slot, &j) in key.iter_mut().zip(f) {
+                    *slot = c[j];
+                }
                 key.sort_unstable();
                 faces.push((key, e as u32, k as u8));
             }
         }
         faces.sort_unstable();
-        let mut neighbour = vec![[u32::MAX; 4]; n_el];
+        let mut neighbour = vec![E::faces(|_| u32::MAX); n_el];
         for w in faces.windows(2) {
             if w[0].0 == w[1].0 {
-                neighbour[w[0].1 as usize][w[0].2 as usize] = w[1].1;
-                neighbour[w[1].1 as usize][w[1].2 as usize] = w[0].1;
+                neighbour[w[0].1 as usize].as_mut()[w[0].2 as usize] = w[1].1;
+                neighbour[w[1].1 as usize].as_mut()[w[1].2 as usize] = w[0].1;
             }
         }
-        Ok(TetMesh {
+        Ok(Mesh {
             x: xf.iter().map(|p| p.map(R::of)).collect(),
             model_node,
             node_of_model,
             corners,
-            inv,
+            map,
             grad,
             volume,
             min_altitude,
@@ -175,23 +159,18 @@ impl<R: Real> TetMesh<R> {
         self.corners.len()
     }
 
-    /// Barycentric coordinates (shape-function values N1..N4) of `p` in element `e`.
+    /// Shape-function values of element `e`'s nodes at `p`.
     #[inline]
-    pub fn shape(&self, e: usize, p: &V3<R>) -> [R; 4] {
-        let x1 = &self.x[self.corners[e][0] as usize];
-        let d = [p[0] - x1[0], p[1] - x1[1], p[2] - x1[2]];
-        let m = &self.inv[e];
-        let l2 = m[0][0] * d[0] + m[0][1] * d[1] + m[0][2] * d[2];
-        let l3 = m[1][0] * d[0] + m[1][1] * d[1] + m[1][2] * d[2];
-        let l4 = m[2][0] * d[0] + m[2][1] * d[1] + m[2][2] * d[2];
-        [R::ONE - l2 - l3 - l4, l2, l3, l4]
+    pub fn shape(&self, e: usize, p: &V3<R>) -> E::Nodes<R> {
+        let first = &self.x[self.corners[e].as_ref()[0] as usize];
+        E::shape(&self.map[e], first, p)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mpm_shared::generate;
+    use mpm_shared::{generate, ElementType};
 
     #[test]
     fn shape_functions_are_barycentric_and_gradients_consistent() {
@@ -201,7 +180,7 @@ mod tests {
         let total: f64 = mesh.volume.iter().sum();
         assert!((total - 1.0).abs() < 1e-12);
         for e in 0..mesh.elements() {
-            for (k, &n) in mesh.corners[e].iter().enumerate() {
+            for (k, &n) in mesh.corners[e].as_ref().iter().enumerate() {
                 let s = mesh.shape(e, &mesh.x[n as usize]);
                 for (j, v) in s.iter().enumerate() {
                     assert!((v - if j == k { 1.0 } else { 0.0 }).abs() < 1e-12);

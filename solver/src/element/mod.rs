@@ -1,4 +1,82 @@
-//! The computational mesh: linear tetrahedra, their geometry and neighbours, and locating points in them.
+//! Elements: the interface every element type implements ([`Element`]), the one type there is
+//! today ([`tet4::Tet4`]), the mesh built from it ([`mesh::Mesh`]) and point location
+//! ([`locate`]).
+//!
+//! The phases of the step are generic over the element type, so a new element (Tri3 for plane
+//! strain, next) is a new file here, not a change to the kernels. Element data live in 3-vectors
+//! whatever the element's dimension: a 2D element lies in z = 0 with zero z-gradients, so the
+//! kernels' 3D strain and stress give plane strain unchanged (docs/design.md §7.7).
 
 pub mod locate;
 pub mod mesh;
+pub mod tet4;
+
+use std::fmt::Debug;
+
+use mpm_shared::ElementType;
+
+use crate::real::{Real, V3};
+
+/// Values per element node or per element face: `[T; N]` for the element's N.
+pub trait PerNode<T>: Copy + Debug + Send + Sync + AsRef<[T]> + AsMut<[T]> + 'static {}
+
+impl<T: Copy + Debug + Send + Sync + 'static, const N: usize> PerNode<T> for [T; N] {}
+
+/// What an element type precomputes per element from its node coordinates.
+#[derive(Debug, Clone, Copy)]
+pub struct Geometry<E: Element, R: Real> {
+    /// The map from global to local coordinates that [`Element::shape`] evaluates.
+    pub map: E::Map<R>,
+    /// Shape-function gradients of the nodes (constant over a linear element).
+    pub grad: E::Nodes<V3<R>>,
+    /// Volume (area for 2D elements).
+    pub volume: R,
+    /// Smallest altitude, the length in the Courant time step.
+    pub min_altitude: R,
+}
+
+/// An element type: node and face counts as associated constants, shape values and gradients,
+/// where material points are placed in it, which of them carry a face load, and how a point
+/// walks out of it.
+pub trait Element: Copy + Debug + Default + Send + Sync + 'static {
+    /// Name in messages, plural ("4-node tetrahedra").
+    const NAME: &'static str;
+    /// Spatial dimension of the element (its coordinates are stored as 3-vectors regardless).
+    const DIM: usize;
+    /// Nodes per element.
+    const NODES: usize;
+    /// Faces per element.
+    const FACES: usize;
+    /// `[T; NODES]`.
+    type Nodes<T: Copy + Debug + Send + Sync + 'static>: PerNode<T>;
+    /// `[T; FACES]`.
+    type Faces<T: Copy + Debug + Send + Sync + 'static>: PerNode<T>;
+    /// The per-element data [`Element::shape`] needs besides the first node's position.
+    type Map<R: Real>: Copy + Debug + Send + Sync + 'static;
+
+    /// Whether a model of this element type is computed with this element (its first
+    /// [`Element::NODES`] nodes being the element's nodes in this element's order).
+    fn computes(model: ElementType) -> bool;
+    /// Per-node values from a function of the local node index.
+    fn nodes<T: Copy + Debug + Send + Sync + 'static>(f: impl FnMut(usize) -> T) -> Self::Nodes<T>;
+    /// Per-face values from a function of the face index.
+    fn faces<T: Copy + Debug + Send + Sync + 'static>(f: impl FnMut(usize) -> T) -> Self::Faces<T>;
+    /// Local nodes of face `k`.
+    fn face(k: usize) -> &'static [usize];
+    /// Geometry of an element with nodes at `x`; `Err(signed volume)` if inverted, flat or not
+    /// finite.
+    fn geometry<R: Real>(x: &Self::Nodes<[f64; 3]>) -> Result<Geometry<Self, R>, f64>;
+    /// Shape-function values at `p` of the element with map `map` and first node at `first`.
+    fn shape<R: Real>(map: &Self::Map<R>, first: &V3<R>, p: &V3<R>) -> Self::Nodes<R>;
+    /// The face a point with shape values `n` lies beyond (the most negative one), or `None`
+    /// when it is inside, within `tol` (a small negative number).
+    fn exit_face<R: Real>(n: &Self::Nodes<R>, tol: R) -> Option<usize>;
+    /// Shape values (local coordinates) of `n` material points placed in one element, in
+    /// Anura3D's order, or `None` when `n` points per element are not supported.
+    fn point_placement(n: u32) -> Option<Vec<Self::Nodes<f64>>>;
+    /// Which of the `n` points placed in an element (by [`Element::point_placement`]) carry a load
+    /// on its face `face`: indices into the element's points.
+    fn face_load_points(n: usize, face: usize) -> Vec<usize>;
+    /// Point counts [`Element::point_placement`] supports, for messages ("1 or 4").
+    fn supported_point_counts() -> &'static str;
+}

@@ -378,10 +378,10 @@ impl Case {
 
     /// The computational mesh of the model, an inverted or flat element named by its number
     /// in the input (not in the solver's order).
-    pub fn tet_mesh<R: crate::real::Real>(
+    pub fn mesh<E: crate::element::Element, R: crate::real::Real>(
         &self,
-    ) -> Result<crate::element::mesh::TetMesh<R>, crate::element::mesh::MeshError> {
-        crate::element::mesh::TetMesh::<R>::new(&self.model).map_err(|e| match e {
+    ) -> Result<crate::element::mesh::Mesh<E, R>, crate::element::mesh::MeshError> {
+        crate::element::mesh::Mesh::<E, R>::new(&self.model).map_err(|e| match e {
             crate::element::mesh::MeshError::BadElement { element, volume } => {
                 crate::element::mesh::MeshError::BadElement {
                     element: self.element_number(element - 1) as usize,

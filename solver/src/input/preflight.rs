@@ -150,8 +150,8 @@ pub enum PlanError {
 /// Predicts what running `case` on `threads` threads will cost. Errors where the mesh or time
 /// step is unusable (inverted elements, no stiffness).
 pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
-    let mesh = case.tet_mesh::<f64>()?;
-    let dt = crate::input::time_step::critical(case, mesh.elements(), |e| mesh.min_altitude[e])?;
+    let mesh = case.mesh::<crate::element::tet4::Tet4, f64>()?;
+    let dt = crate::input::time_step::critical(case, 0..mesh.elements(), |e| mesh.min_altitude[e])?;
     let points: u64 = case
         .points_per_element
         .iter()

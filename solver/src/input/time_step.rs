@@ -12,19 +12,19 @@ pub struct TimeStepError {
     pub dt: f64,
 }
 
-/// Courant number × min over elements of (smallest altitude / fastest wave speed), in s;
-/// `min_altitude(e)` is element `e`'s smallest altitude (m). An error when it is not positive
-/// and finite (a degenerate element, or a material without stiffness or mass).
+/// Courant number × min over `elements` (the case's numbering) of (smallest altitude / fastest
+/// wave speed), in s; `min_altitude(e)` is element `e`'s smallest altitude (m). An error when it
+/// is not positive and finite (a degenerate element, or a material without stiffness or mass).
 pub fn critical(
     case: &Case,
-    elements: usize,
+    elements: std::ops::Range<usize>,
     min_altitude: impl Fn(usize) -> f64,
 ) -> Result<f64, TimeStepError> {
     // Empty elements may fill: they take the fastest material's speed. An explicit drag must
     // be resolved by the step too: Mieremet's speed has its term.
     let anura3d_step = case.anura3d_time_step || case.drag == Drag::Explicit;
     let mut dt = f64::INFINITY;
-    for e in 0..elements {
+    for e in elements {
         let dx = min_altitude(e);
         let m = case.element_material[e] as usize;
         let c = match case.materials.get(m).and_then(|s| s.as_ref()) {

@@ -3,20 +3,22 @@
 //! sum (docs/design.md §5).
 //!
 //! A sum over particles onto nodes is done in two passes. Each thread goes over its elements
-//! and, for each, over that element's particles in storage order, adding into the element's
-//! four corner slots (`slots[4 e + k]`); then each thread forms the nodes of its range by adding
+//! and, for each, over that element's particles in storage order, adding into the slots of the
+//! element's nodes (`slots[NODES e + k]`); then each thread forms the nodes of its range by adding
 //! the slots of the node's elements in element order. Every node's sum is thus taken in an
 //! order fixed by the mesh and the particle order, whatever the thread count, with no locks or
 //! atomics.
 
 use std::ops::Range;
 
-use crate::element::mesh::TetMesh;
+use crate::element::mesh::Mesh;
+use crate::element::tet4::Tet4;
+use crate::element::Element;
 use crate::parallel::team::{balanced_ranges, Shared, Team};
 use crate::real::Real;
 use crate::state::particles::{FieldVisitor, Particles};
 
-/// Widest slot (values per element corner) a pass uses.
+/// Widest slot (values per element node) a pass uses.
 pub const WIDTH: usize = 12;
 
 /// Layout and scratch of the parallel step.
@@ -25,7 +27,7 @@ pub const WIDTH: usize = 12;
 /// The fields are private: the parallel passes write through raw pointers into the ranges they
 /// describe, so only this module may change them, keeping the element ranges disjoint and
 /// covering `0..elements` and `elem_start` non-decreasing (checked in debug builds).
-pub struct Layout<R: Real> {
+pub struct Layout<R: Real, E: Element = Tet4> {
     /// First particle of each element (particles are sorted by element), `elements + 1` long.
     elem_start: Vec<u32>,
     /// Elements of each thread (contiguous along the mesh order, balanced by particles).
@@ -34,26 +36,26 @@ pub struct Layout<R: Real> {
     node_ranges: Vec<Range<usize>>,
     /// For each node, where its slots start in `node_slot` (`nodes + 1` long).
     node_start: Vec<u32>,
-    /// Slots (4 e + k) of every node, in element order.
+    /// Slots (NODES e + k) of every node, in element order.
     node_slot: Vec<u32>,
-    _real: std::marker::PhantomData<R>,
+    _types: std::marker::PhantomData<(R, E)>,
 }
 
-/// Per-corner partial sums, `4 × elements` slots of [`WIDTH`] values.
+/// Per-node partial sums, `NODES × elements` slots of [`WIDTH`] values.
 pub type Slots<R> = Vec<[R; WIDTH]>;
 
-impl<R: Real> Layout<R> {
+impl<R: Real, E: Element> Layout<R, E> {
     /// The layout of `mesh` for `threads` threads, with particles `p` (sorted by element).
-    pub fn new(mesh: &TetMesh<R>, p: &Particles<R>, threads: usize) -> Self {
+    pub fn new(mesh: &Mesh<E, R>, p: &Particles<R>, threads: usize) -> Self {
         let (ne, nn) = (mesh.elements(), mesh.nodes());
         let elem_start = element_starts(&p.element, ne);
         let element_ranges = balanced_ranges(
-            (0..ne).map(|e| 4 * u64::from(elem_start[e + 1] - elem_start[e])),
+            (0..ne).map(|e| E::NODES as u64 * u64::from(elem_start[e + 1] - elem_start[e])),
             threads,
         );
         let mut node_start = vec![0u32; nn + 1];
         for c in &mesh.corners {
-            for &n in c {
+            for &n in c.as_ref() {
                 node_start[n as usize + 1] += 1;
             }
         }
@@ -61,10 +63,10 @@ impl<R: Real> Layout<R> {
             node_start[n + 1] += node_start[n];
         }
         let mut fill = node_start.clone();
-        let mut node_slot = vec![0u32; 4 * ne];
+        let mut node_slot = vec![0u32; E::NODES * ne];
         for (e, c) in mesh.corners.iter().enumerate() {
-            for (k, &n) in c.iter().enumerate() {
-                node_slot[fill[n as usize] as usize] = (4 * e + k) as u32;
+            for (k, &n) in c.as_ref().iter().enumerate() {
+                node_slot[fill[n as usize] as usize] = (E::NODES * e + k) as u32;
                 fill[n as usize] += 1;
             }
         }
@@ -78,7 +80,7 @@ impl<R: Real> Layout<R> {
             node_ranges,
             node_start,
             node_slot,
-            _real: std::marker::PhantomData,
+            _types: std::marker::PhantomData,
         };
         layout.debug_check();
         layout
@@ -120,7 +122,7 @@ impl<R: Real> Layout<R> {
     /// Zeroed slots for this layout (allocated zeroed, so pages are placed by the threads that
     /// first write them).
     pub fn new_slots(&self) -> Slots<R> {
-        vec![[R::ZERO; WIDTH]; 4 * (self.elem_start.len() - 1)]
+        vec![[R::ZERO; WIDTH]; E::NODES * (self.elem_start.len() - 1)]
     }
 
     /// Particles of thread `k`.
@@ -135,8 +137,8 @@ impl<R: Real> Layout<R> {
         self.elem_start[e] as usize..self.elem_start[e + 1] as usize
     }
 
-    /// Pass 1: on every thread, for each of its elements, zeroes the element's four slots (the
-    /// first `W` values) and calls `element(e, slots)`.
+    /// Pass 1: on every thread, for each of its elements, zeroes the slots of the element's
+    /// nodes (the first `W` values, [`Element::NODES`] slots) and calls `element(e, slots)`.
     pub fn scatter<const W: usize, F>(&self, team: &Team, slots: &mut Slots<R>, element: F)
     where
         F: Fn(usize, &mut [[R; WIDTH]]) + Sync,
@@ -146,13 +148,13 @@ impl<R: Real> Layout<R> {
         team.run(|k| {
             let r = ranges[k].clone();
             // SAFETY: the element ranges are disjoint, so are their slots.
-            let mine = unsafe { slots.range(4 * r.start..4 * r.end) };
+            let mine = unsafe { slots.range(E::NODES * r.start..E::NODES * r.end) };
             for (j, e) in r.enumerate() {
-                let four = &mut mine[4 * j..4 * j + 4];
-                for s in four.iter_mut() {
+                let own = &mut mine[E::NODES * j..E::NODES * (j + 1)];
+                for s in own.iter_mut() {
                     s[..W].fill(R::ZERO);
                 }
-                element(e, four);
+                element(e, own);
             }
         });
     }

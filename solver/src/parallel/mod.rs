@@ -2,4 +2,5 @@
 
 pub mod comm;
 pub mod gather;
+pub mod partition;
 pub mod team;

@@ -1,6 +1,7 @@
 //! Material points, stored as structure of arrays, and their initial placement by Anura3D's rule.
 
-use crate::element::mesh::TetMesh;
+use crate::element::mesh::Mesh;
+use crate::element::Element;
 use crate::real::{Real, V3};
 
 /// Material-point state (one entry per point in every array).
@@ -139,29 +140,6 @@ impl<R: Real> Particles<R> {
     }
 }
 
-/// Barycentric positions of Anura3D's material points in a tetrahedron for the supported counts:
-/// 1 (centroid) and 4 (the 4-point Gauss rule, a = (5 - √5)/20 ≈ 0.1381966,
-/// b = (5 + 3√5)/20 ≈ 0.5854102, exactly as Anura3D places them).
-pub fn tet_points(n: u32) -> Option<Vec<[f64; 4]>> {
-    // (5 - √5)/20 and (5 + 3√5)/20, written out (sqrt is not const).
-    const A: f64 = 0.138_196_601_125_010_5;
-    const B: f64 = 0.585_410_196_624_968_5;
-    match n {
-        0 => Some(Vec::new()),
-        1 => Some(vec![[0.25; 4]]),
-        4 => Some(
-            (0..4)
-                .map(|k| {
-                    let mut l = [A; 4];
-                    l[k] = B;
-                    l
-                })
-                .collect(),
-        ),
-        _ => None,
-    }
-}
-
 /// Places `points[e]` material points in every element `e` of material `material[e]` (0 = empty),
 /// each with an equal share of the element's volume and mass `density[material] · V / n`.
 /// Ids follow element order, `points[e]` per element, as Anura3D numbers them.
@@ -169,8 +147,8 @@ pub fn tet_points(n: u32) -> Option<Vec<[f64; 4]>> {
 /// `first_id[e]`, when given, is the number of points before element e in the input's element
 /// order (the solver may have reordered the elements): ids then stay those of the input.
 /// `number(e)` is element e's 1-based input number, for messages.
-pub fn place<R: Real>(
-    mesh: &TetMesh<R>,
+pub fn place<E: Element, R: Real>(
+    mesh: &Mesh<E, R>,
     points: &[u32],
     material: &[u32],
     first_id: Option<&[u32]>,
@@ -184,10 +162,12 @@ pub fn place<R: Real>(
             id = f[e];
         }
         let n = points[e];
-        let Some(local) = tet_points(n) else {
+        let Some(local) = E::point_placement(n) else {
             return Err(format!(
-                "element {}: {n} material points per element is not supported (use 1 or 4)",
-                number(e)
+                "element {}: {n} material points per element is not supported for {} (use {})",
+                number(e),
+                E::NAME,
+                E::supported_point_counts()
             ));
         };
         for l in local {
@@ -195,11 +175,12 @@ pub fn place<R: Real>(
             if material[e] == 0 {
                 continue;
             }
-            let c = mesh.corners[e].map(|i| mesh.x[i as usize]);
+            let c = mesh.corners[e].as_ref();
             let mut x = [R::ZERO; 3];
-            for k in 0..4 {
+            for (k, &l) in l.as_ref().iter().enumerate() {
+                let xk = mesh.x[c[k] as usize];
                 for a in 0..3 {
-                    x[a] += R::of(l[k]) * c[k][a];
+                    x[a] += R::of(l) * xk[a];
                 }
             }
             let vol = mesh.volume[e].f64() / n as f64;

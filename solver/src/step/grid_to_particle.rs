@@ -1,7 +1,8 @@
 //! Grid to particle, MUSL: FLIP velocity update, then momentum re-mapped to the nodes for the
 //! velocities that drive strain, stress, volume and position (docs/design.md §4, step 3), on the team.
 
-use crate::element::mesh::TetMesh;
+use crate::element::mesh::Mesh;
+use crate::element::Element;
 use crate::material::liquid::Fluid;
 use crate::parallel::gather::{Layout, Slots};
 use crate::parallel::team::{Shared, Team};
@@ -13,11 +14,11 @@ use crate::state::particles::Particles;
 /// the nodal velocities (fixed components and empty nodes zero) that drive strain, stress,
 /// volume and position (see [`crate::step::stress`]).
 #[allow(clippy::too_many_arguments)]
-pub fn grid_to_particle<R: Real>(
+pub fn grid_to_particle<E: Element, R: Real>(
     team: &Team,
-    layout: &Layout<R>,
+    layout: &Layout<R, E>,
     slots: &mut Slots<R>,
-    mesh: &TetMesh<R>,
+    mesh: &Mesh<E, R>,
     p: &mut Particles<R>,
     g: &mut Grid<R>,
     fixed: &[[bool; 3]],
@@ -32,7 +33,8 @@ pub fn grid_to_particle<R: Real>(
                 continue;
             }
             let n = mesh.shape(e, &x[i]);
-            let dv = interpolate(mesh, e, &n, acc);
+            let n = n.as_ref();
+            let dv = interpolate(mesh, e, n, acc);
             // SAFETY: particle i (of element e) belongs to this thread only.
             let v = unsafe { &mut vel.range(i..i + 1)[0] };
             for c in 0..3 {
@@ -57,12 +59,17 @@ pub fn grid_to_particle<R: Real>(
     );
 }
 
-/// Σ N_k a_k over the corners of element `e`.
+/// Σ N_k a_k over the nodes of element `e`.
 #[inline]
-fn interpolate<R: Real>(mesh: &TetMesh<R>, e: usize, n: &[R; 4], nodal: &[V3<R>]) -> V3<R> {
+fn interpolate<E: Element, R: Real>(
+    mesh: &Mesh<E, R>,
+    e: usize,
+    n: &[R],
+    nodal: &[V3<R>],
+) -> V3<R> {
     let mut out = [R::ZERO; 3];
-    for k in 0..4 {
-        let a = nodal[mesh.corners[e][k] as usize];
+    for k in 0..E::NODES {
+        let a = nodal[mesh.corners[e].as_ref()[k] as usize];
         for c in 0..3 {
             out[c] += n[k] * a[c];
         }
@@ -72,9 +79,9 @@ fn interpolate<R: Real>(mesh: &TetMesh<R>, e: usize, n: &[R; 4], nodal: &[V3<R>]
 
 /// Nodal velocities from the re-mapped momentum in `slots`: zero at empty nodes and in fixed
 /// components.
-fn nodal_velocity<R: Real>(
+fn nodal_velocity<E: Element, R: Real>(
     team: &Team,
-    layout: &Layout<R>,
+    layout: &Layout<R, E>,
     slots: &Slots<R>,
     mass: &[R],
     empty_below: R,
@@ -100,11 +107,11 @@ fn nodal_velocity<R: Real>(
 /// nodal liquid accelerations (FLIP), then the liquid momentum re-mapped to nodal liquid
 /// velocities (zero in fixed components and at nodes without liquid).
 #[allow(clippy::too_many_arguments)]
-pub fn liquid_to_particles<R: Real>(
+pub fn liquid_to_particles<E: Element, R: Real>(
     team: &Team,
-    layout: &Layout<R>,
+    layout: &Layout<R, E>,
     slots: &mut Slots<R>,
-    mesh: &TetMesh<R>,
+    mesh: &Mesh<E, R>,
     p: &mut Particles<R>,
     g: &mut Grid<R>,
     fluids: &[Option<Fluid<R>>],
@@ -126,7 +133,8 @@ pub fn liquid_to_particles<R: Real>(
                 continue;
             }
             let n = mesh.shape(e, &x[i]);
-            let dw = interpolate(mesh, e, &n, acc);
+            let n = n.as_ref();
+            let dw = interpolate(mesh, e, n, acc);
             // SAFETY: particle i (of element e) belongs to this thread only.
             let w = unsafe { &mut w_out.range(i..i + 1)[0] };
             for c in 0..3 {

@@ -10,6 +10,7 @@
 //! elements as they fill and empty. The element sums are formed in
 //! [`crate::step::particle_to_grid::particle_to_grid`].
 
+use crate::element::Element;
 use crate::parallel::gather::Layout;
 use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
@@ -43,7 +44,12 @@ impl<R: Real> Mixed<R> {
     /// step takes the element's volume-weighted mean stress (the Gauss-point stress), and its
     /// mean pore pressure in two-phase cases (Anura3D keeps one pore pressure per Gauss point
     /// too).
-    pub fn smooth_stresses(&self, team: &Team, layout: &Layout<R>, p: &mut Particles<R>) {
+    pub fn smooth_stresses<E: Element>(
+        &self,
+        team: &Team,
+        layout: &Layout<R, E>,
+        p: &mut Particles<R>,
+    ) {
         let (active, volume) = (&p.active, &p.volume);
         if let Some(l) = &mut p.liquid {
             let (add, div) = (
@@ -69,10 +75,10 @@ impl<R: Real> Mixed<R> {
     /// mean; `add(sum, weight, value)` accumulates one point, `div(sum, total)` divides by the
     /// total volume. Each thread treats its own elements.
     #[allow(clippy::too_many_arguments)]
-    fn average<T: Copy + Default + Send + Sync>(
+    fn average<E: Element, T: Copy + Default + Send + Sync>(
         &self,
         team: &Team,
-        layout: &Layout<R>,
+        layout: &Layout<R, E>,
         active: &[bool],
         volume: &[R],
         values: &mut [T],

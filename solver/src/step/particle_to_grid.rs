@@ -1,7 +1,8 @@
 //! Particle to grid: lumped masses, momentum, internal and gravity forces (docs/design.md §4, step 1),
 //! summed element by element and then node by node on the team (see [`crate::parallel::gather`]).
 
-use crate::element::mesh::TetMesh;
+use crate::element::mesh::Mesh;
+use crate::element::Element;
 use crate::material::liquid::Fluid;
 use crate::parallel::gather::{Layout, Slots};
 use crate::parallel::team::{Shared, Team};
@@ -26,11 +27,11 @@ fn traction<R: Real>(s: &[R; 6], dn: &V3<R>) -> V3<R> {
 /// Under mixed integration the effective-stress force of full elements comes from their Gauss
 /// point instead of their points (the element sums are formed here too).
 #[allow(clippy::too_many_arguments)]
-pub fn particle_to_grid<R: Real>(
+pub fn particle_to_grid<E: Element, R: Real>(
     team: &Team,
-    layout: &Layout<R>,
+    layout: &Layout<R, E>,
     slots: &mut Slots<R>,
-    mesh: &TetMesh<R>,
+    mesh: &Mesh<E, R>,
     p: &Particles<R>,
     gravity: &[V3<R>],
     mixed: Option<&mut Mixed<R>>,
@@ -46,7 +47,7 @@ pub fn particle_to_grid<R: Real>(
         )
     });
     layout.scatter::<10, _>(team, slots, |e, four| {
-        let grad = &mesh.grad[e];
+        let grad = mesh.grad[e].as_ref();
         let range = layout.particles_of(e);
         // Mixed integration: is the element full, and its mean stress.
         let mut full = false;
@@ -98,6 +99,7 @@ pub fn particle_to_grid<R: Real>(
                 continue;
             }
             let n = mesh.shape(e, &p.x[i]);
+            let n = n.as_ref();
             let (m, v) = (p.mass[i], p.v[i]);
             let gravity = &gravity[p.material[i] as usize];
             let vol = if full { R::ZERO } else { p.volume[i] };
@@ -137,8 +139,8 @@ pub fn particle_to_grid<R: Real>(
 
 /// Adds the face loads carried by points, `scale` times their force, at the points' positions
 /// (a short list, in its fixed order).
-pub fn add_point_loads<R: Real>(
-    mesh: &TetMesh<R>,
+pub fn add_point_loads<E: Element, R: Real>(
+    mesh: &Mesh<E, R>,
     p: &Particles<R>,
     loads: &[(u32, V3<R>)],
     scale: R,
@@ -151,8 +153,9 @@ pub fn add_point_loads<R: Real>(
         }
         let e = p.element[i] as usize;
         let n = mesh.shape(e, &p.x[i]);
-        for k in 0..4 {
-            let node = mesh.corners[e][k] as usize;
+        let n = n.as_ref();
+        for k in 0..E::NODES {
+            let node = mesh.corners[e].as_ref()[k] as usize;
             for a in 0..3 {
                 g.f_ext[node][a] += n[k] * scale * f[a];
             }
@@ -166,11 +169,11 @@ pub fn add_point_loads<R: Real>(
 /// Under `mixed` integration, full elements (as the solid pass found them) integrate the
 /// pore-pressure force at their Gauss point.
 #[allow(clippy::too_many_arguments)]
-pub fn liquid_to_grid<R: Real>(
+pub fn liquid_to_grid<E: Element, R: Real>(
     team: &Team,
-    layout: &Layout<R>,
+    layout: &Layout<R, E>,
     slots: &mut Slots<R>,
-    mesh: &TetMesh<R>,
+    mesh: &Mesh<E, R>,
     p: &Particles<R>,
     fluids: &[Option<Fluid<R>>],
     gravity: V3<R>,
@@ -181,7 +184,7 @@ pub fn liquid_to_grid<R: Real>(
         return;
     };
     layout.scatter::<12, _>(team, slots, |e, four| {
-        let grad = &mesh.grad[e];
+        let grad = mesh.grad[e].as_ref();
         // A full element under mixed integration takes its pore-pressure force at the Gauss
         // point (its volume times the mean pore pressure), as the solid pass does.
         let full = mixed.is_some_and(|m| m.full[e]);
@@ -201,6 +204,7 @@ pub fn liquid_to_grid<R: Real>(
                 continue;
             }
             let n = mesh.shape(e, &p.x[i]);
+            let n = n.as_ref();
             let vol = p.volume[i];
             // The liquid's mass, weight and drag are taken on the initial volume where the
             // case holds the liquid mass fixed.

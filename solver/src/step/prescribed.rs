@@ -23,7 +23,9 @@
 use mpm_shared::model::Body;
 use mpm_shared::Model;
 
-use crate::element::mesh::TetMesh;
+use crate::element::mesh::Mesh;
+use crate::element::Element;
+use crate::parallel::partition::Partition;
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
@@ -61,6 +63,20 @@ impl PrescribedVelocity {
     /// [`read_rows`]).
     pub fn directions(&self) -> [bool; 3] {
         self.rows.first().map_or([false; 3], |r| r.directions)
+    }
+
+    /// The rows of the elements `partition` owns, numbered locally (all of them, unchanged, on
+    /// one process).
+    pub fn owned_by(mut self, partition: &Partition) -> Self {
+        if !partition.is_whole() {
+            self.rows.retain_mut(|r| {
+                partition
+                    .local_element(r.element as usize)
+                    .map(|l| r.element = l as u32)
+                    .is_some()
+            });
+        }
+        self
     }
 
     /// The rows with their elements renumbered: `new_of_old[e]` is element e's new index.
@@ -186,7 +202,7 @@ pub struct Prescribed<R: Real> {
 
 impl<R: Real> Prescribed<R> {
     /// Marks the points of the listed elements (`p` as placed, before any step).
-    pub fn new(spec: &PrescribedVelocity, mesh: &TetMesh<R>, p: &Particles<R>) -> Self {
+    pub fn new<E: Element>(spec: &PrescribedVelocity, mesh: &Mesh<E, R>, p: &Particles<R>) -> Self {
         // By element; a later row for the same element wins, as in Anura3D.
         let mut velocity_of: Vec<(u32, [f64; 3])> =
             spec.rows.iter().map(|r| (r.element, r.velocity)).collect();
@@ -204,7 +220,7 @@ impl<R: Real> Prescribed<R> {
         let elements: Vec<u32> = velocity_of.iter().map(|&(e, _)| e).collect();
         let mut nodes: Vec<u32> = elements
             .iter()
-            .flat_map(|&e| mesh.corners[e as usize])
+            .flat_map(|&e| mesh.corners[e as usize].as_ref().iter().copied())
             .collect();
         nodes.sort_unstable();
         nodes.dedup();
@@ -276,9 +292,9 @@ impl<R: Real> Prescribed<R> {
     /// masked nodal velocities become the mass-weighted mean of the marked points in the listed
     /// elements (zero where none contributes). The mean is taken relative to the first
     /// contributing point's velocity, so that a uniform prescribed velocity is reproduced exactly.
-    pub fn after_remap(
+    pub fn after_remap<E: Element>(
         &mut self,
-        mesh: &TetMesh<R>,
+        mesh: &Mesh<E, R>,
         g: &mut Grid<R>,
         p: &mut Particles<R>,
         scale: R,
@@ -294,9 +310,10 @@ impl<R: Real> Prescribed<R> {
             }
             let e = e as usize;
             let n = mesh.shape(e, &p.x[i]);
+            let n = n.as_ref();
             let v = p.v[i];
-            for k in 0..4 {
-                let Ok(s) = self.nodes.binary_search(&mesh.corners[e][k]) else {
+            for k in 0..E::NODES {
+                let Ok(s) = self.nodes.binary_search(&mesh.corners[e].as_ref()[k]) else {
                     continue;
                 };
                 let w = p.mass[i] * n[k];

@@ -5,11 +5,12 @@
 //! Per material m and step: each element e holding points of m has one volumetric strain
 //! increment per phase, ε_e = Δt div v (linear tetrahedra); node i takes the volume-weighted
 //! mean ε̄_i = Σ_e V_e ε_e / Σ_e V_e over those elements; every point of m in e then takes the
-//! plain mean of its element's four nodal values as its volumetric strain increment. The solid
+//! plain mean of its element's nodal values as its volumetric strain increment. The solid
 //! keeps its deviatoric and shear increments (the three normal increments are shifted equally);
 //! the pore pressure takes Δp = (K_w / n) (n ε̄_w + (1 - n) ε̄_s).
 
-use crate::element::mesh::TetMesh;
+use crate::element::mesh::Mesh;
+use crate::element::Element;
 use crate::parallel::gather::{Layout, Slots, WIDTH};
 use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
@@ -58,12 +59,12 @@ impl<R: Real> StrainSmoothing<R> {
     /// Computes the nodal smoothed strain increments of this step from the nodal velocities of
     /// both phases (`g.vel`, and the liquid's when the case has one).
     #[allow(clippy::too_many_arguments)]
-    pub fn compute(
+    pub fn compute<E: Element>(
         &mut self,
         team: &Team,
-        layout: &Layout<R>,
+        layout: &Layout<R, E>,
         slots: &mut Slots<R>,
-        mesh: &TetMesh<R>,
+        mesh: &Mesh<E, R>,
         p: &Particles<R>,
         g: &Grid<R>,
         dt: R,
@@ -83,10 +84,10 @@ impl<R: Real> StrainSmoothing<R> {
                 if !present.contains(&true) {
                     return;
                 }
-                let grad = &mesh.grad[e];
+                let grad = mesh.grad[e].as_ref();
                 let (mut es, mut ew) = (R::ZERO, R::ZERO);
-                for k in 0..4 {
-                    let node = mesh.corners[e][k] as usize;
+                for k in 0..E::NODES {
+                    let node = mesh.corners[e].as_ref()[k] as usize;
                     let v = g.vel[node];
                     for a in 0..3 {
                         es += v[a] * grad[k][a];
@@ -124,16 +125,17 @@ impl<R: Real> StrainSmoothing<R> {
     }
 
     /// The smoothed volumetric strain increments (solid, liquid) of material `m`'s points in
-    /// element `e`: the plain mean of the element's four nodal values.
+    /// element `e`: the plain mean of the element's nodal values.
     #[inline]
-    pub fn element_mean(&self, mesh: &TetMesh<R>, e: usize, m: u32) -> [R; 2] {
+    pub fn element_mean<E: Element>(&self, mesh: &Mesh<E, R>, e: usize, m: u32) -> [R; 2] {
         let c = self.column[m as usize];
-        let quarter = R::of(0.25);
+        // 1/4 for tetrahedra, exact in binary.
+        let share = R::ONE / R::of(E::NODES as f64);
         let mut out = [R::ZERO; 2];
-        for &node in &mesh.corners[e] {
+        for &node in mesh.corners[e].as_ref() {
             let v = self.nodal[node as usize * self.columns + c];
-            out[0] += v[0] * quarter;
-            out[1] += v[1] * quarter;
+            out[0] += v[0] * share;
+            out[1] += v[1] * share;
         }
         out
     }

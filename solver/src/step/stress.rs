@@ -1,7 +1,8 @@
 //! Strain increments from nodal velocities, the constitutive update, and the volume and position
 //! update of every particle.
 
-use crate::element::mesh::TetMesh;
+use crate::element::mesh::Mesh;
+use crate::element::Element;
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::gather::{Layout, Slots};
@@ -16,10 +17,10 @@ use crate::step::smoothing::StrainSmoothing;
 /// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
 /// increment ([`crate::step::smoothing`]). Each thread updates the particles of its elements.
 #[allow(clippy::too_many_arguments)]
-pub fn update_stress_and_move<R: Real>(
+pub fn update_stress_and_move<E: Element, R: Real>(
     team: &Team,
-    layout: &Layout<R>,
-    mesh: &TetMesh<R>,
+    layout: &Layout<R, E>,
+    mesh: &Mesh<E, R>,
     p: &mut Particles<R>,
     g: &Grid<R>,
     laws: &[Law<R>],
@@ -55,11 +56,12 @@ pub fn update_stress_and_move<R: Real>(
             }
             let e = element[i] as usize;
             let n = mesh.shape(e, &x[j]);
-            let grad = &mesh.grad[e];
+            let n = n.as_ref();
+            let grad = mesh.grad[e].as_ref();
             let mut l = [[R::ZERO; 3]; 3]; // velocity gradient L[a][b] = ∂v_a/∂x_b
             let mut dx = [R::ZERO; 3];
-            for k in 0..4 {
-                let v = g.vel[mesh.corners[e][k] as usize];
+            for k in 0..E::NODES {
+                let v = g.vel[mesh.corners[e].as_ref()[k] as usize];
                 for a in 0..3 {
                     dx[a] += n[k] * v[a];
                     for b in 0..3 {
@@ -118,11 +120,11 @@ pub fn update_stress_and_move<R: Real>(
 /// takes its element's rate, as Anura3D without `STRAIN_SMOOTHING`). With Anura3D's strain
 /// `smoothing` both increments are its smoothed ones instead.
 #[allow(clippy::too_many_arguments)]
-pub fn update_pore_pressure<R: Real>(
+pub fn update_pore_pressure<E: Element, R: Real>(
     team: &Team,
-    layout: &Layout<R>,
+    layout: &Layout<R, E>,
     slots: &mut Slots<R>,
-    mesh: &TetMesh<R>,
+    mesh: &Mesh<E, R>,
     p: &mut Particles<R>,
     g: &mut Grid<R>,
     fluids: &[Option<Fluid<R>>],
@@ -154,10 +156,10 @@ pub fn update_pore_pressure<R: Real>(
     let (vel, wvel) = (&g.vel, &gl.vel);
     // The rate of element e's points (one per element: linear tets).
     let rate_in = |e: usize, f: &Fluid<R>| {
-        let grad = &mesh.grad[e];
+        let grad = mesh.grad[e].as_ref();
         let (mut div_v, mut div_w) = (R::ZERO, R::ZERO);
-        for k in 0..4 {
-            let node = mesh.corners[e][k] as usize;
+        for k in 0..E::NODES {
+            let node = mesh.corners[e].as_ref()[k] as usize;
             let (v, w) = (vel[node], wvel[node]);
             for a in 0..3 {
                 div_v += v[a] * grad[k][a];
@@ -186,6 +188,7 @@ pub fn update_pore_pressure<R: Real>(
             };
             let rate = rate_in(e, f);
             let n = mesh.shape(e, &x[i]);
+            let n = n.as_ref();
             for (k, slot) in four.iter_mut().enumerate() {
                 slot[0] += volume[i] * n[k] * rate;
                 slot[1] += volume[i] * n[k];
@@ -206,9 +209,10 @@ pub fn update_pore_pressure<R: Real>(
             }
             let e = p.element[i] as usize;
             let n = mesh.shape(e, &x[i]);
+            let n = n.as_ref();
             let mut rate = R::ZERO;
-            for k in 0..4 {
-                rate += n[k] * nodal[mesh.corners[e][k] as usize];
+            for k in 0..E::NODES {
+                rate += n[k] * nodal[mesh.corners[e].as_ref()[k] as usize];
             }
             // SAFETY: particle i belongs to this thread only.
             unsafe { pressure.range(i..i + 1)[0] += rate * dt };
