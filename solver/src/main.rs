@@ -355,7 +355,7 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         }
         _ => how,
     };
-    let case = case.reordered(how).map_err(anyhow::Error::msg)?;
+    let case = case.reordered(how)?;
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));

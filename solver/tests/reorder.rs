@@ -28,7 +28,7 @@ fn reorder_refuses_an_extent_that_is_not_finite() {
     let (case, _) = mpm_solve::input::anura3d::load(&gom, &cps).unwrap();
     assert!(case.clone().reordered(Reorder::None).is_ok());
     for how in [Reorder::Morton, Reorder::Hilbert] {
-        let e = case.clone().reordered(how).unwrap_err();
+        let e = case.clone().reordered(how).unwrap_err().to_string();
         assert!(e.contains("far.GOM") && e.contains("--reorder"), "{e}");
         assert!(e.contains("the z extent"), "{e}");
     }

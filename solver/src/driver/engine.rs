@@ -16,7 +16,7 @@ pub use crate::parallel::team::Options;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::{Grid, LiquidNodes};
-use crate::state::particles::{self, FieldVisitor, Particles};
+use crate::state::particles::{self, Field, FieldVisitor, Particles, Value};
 use crate::step::grid_update::{DampingRule, Drag};
 use crate::step::load_curve::LoadCurve;
 use crate::step::{grid_to_particle, grid_update, particle_to_grid, stress};
@@ -41,8 +41,8 @@ pub enum SetupError {
     #[error(transparent)]
     Mesh(#[from] crate::element::mesh::MeshError),
     /// The material points cannot be placed (an unsupported count per element).
-    #[error("{0}")]
-    Points(String),
+    #[error(transparent)]
+    Points(#[from] crate::state::particles::PlacementError),
     /// Every element is empty.
     #[error("the case has no material points (every element is empty)")]
     NoPoints,
@@ -50,8 +50,11 @@ pub enum SetupError {
     #[error(transparent)]
     TimeStep(#[from] crate::input::time_step::TimeStepError),
     /// A load on material points has no points to carry it.
-    #[error("{0}")]
-    Loads(String),
+    #[error("the load on material points of the face with corner nodes {} {} {} has no filled element next to it", .nodes[0], .nodes[1], .nodes[2])]
+    UnloadedFace {
+        /// Input numbers of the face's corner nodes.
+        nodes: [u32; 3],
+    },
     /// More than one process: the nodal sums at shared nodes are not exchanged yet.
     #[error("a run over {ranks} processes needs the exchange of nodal sums at shared nodes, which this build does not have; run on one process")]
     Distributed {
@@ -244,8 +247,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             Some(&first_id),
             &|e| case.element_number(partition.global_element(e)),
             density,
-        )
-        .map_err(SetupError::Points)?;
+        )?;
         if particles.is_empty() {
             return Err(SetupError::NoPoints);
         }
@@ -312,8 +314,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         if two_phase {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
         }
-        let point_loads = resolve_point_loads(&mesh, &particles, case, comm.as_ref())
-            .map_err(SetupError::Loads)?;
+        let point_loads = resolve_point_loads(&mesh, &particles, case, comm.as_ref())?;
         let prescribed = case.prescribed.as_ref().map(|pv| {
             let pv = pv.clone().owned_by(&partition);
             crate::step::prescribed::Prescribed::new(&pv, &mesh, &particles)
@@ -654,7 +655,7 @@ fn resolve_point_loads<E: Element, R: Real>(
     p: &Particles<R>,
     case: &Case,
     comm: &dyn Communicator,
-) -> Result<Vec<(u32, V3<R>)>, String> {
+) -> Result<Vec<(u32, V3<R>)>, SetupError> {
     if case.point_loads.is_empty() {
         return Ok(Vec::new());
     }
@@ -683,11 +684,9 @@ fn resolve_point_loads<E: Element, R: Real>(
         }
         // Another process may carry the load: only no carrier anywhere is an error.
         if comm.sum_count(carriers.len() as u64) == 0 {
-            let ids = load.corners.map(|m| case.node_number(m));
-            return Err(format!(
-                "the load on material points of the face with corner nodes {} {} {} has no filled element next to it",
-                ids[0], ids[1], ids[2]
-            ));
+            return Err(SetupError::UnloadedFace {
+                nodes: load.corners.map(|m| case.node_number(m)),
+            });
         }
         let share = load.force.map(|f| R::of(f / carriers.len() as f64));
         out.extend(carriers.into_iter().map(|i| (i as u32, share)));
@@ -707,11 +706,8 @@ fn first_touch<E: Element, R: Real>(
         layout: &'a Layout<R, E>,
     }
     impl<R: Real, E: Element> FieldVisitor for Copy<'_, R, E> {
-        fn field<T: std::marker::Copy + Default + Send + Sync>(
-            &mut self,
-            v: &mut Vec<T>,
-            k: usize,
-        ) {
+        fn field<T: Value>(&mut self, field: Field, v: &mut Vec<T>) {
+            let k = field.per_point;
             let mut out: Vec<T> = Vec::with_capacity(v.len());
             let spare = out.spare_capacity_mut();
             let dst = Shared::new(spare);

@@ -12,6 +12,7 @@ use mpm_shared::vtu::{self, Cells, DataArray, Encoding, Piece, Values};
 use crate::driver::engine::Engine;
 use crate::input::case::Case;
 use crate::real::Real;
+use crate::state::particles::{Field, FieldReader, Value, Written};
 
 /// Accumulates the time series and writes the files.
 pub struct Output {
@@ -59,70 +60,31 @@ impl Output {
     pub fn write<R: Real>(&mut self, engine: &Engine<R>) -> mpm_shared::Result<()> {
         let p = &engine.particles;
         let active: Vec<usize> = (0..p.len()).filter(|&i| p.active[i]).collect();
-        let flat = |f: &dyn Fn(usize) -> Vec<f64>| -> Vec<f64> {
-            active.iter().flat_map(|&i| f(i)).collect()
+        // The particle file holds what the field list marks as written, in its order.
+        let mut arrays = Collect {
+            active: &active,
+            points: Vec::new(),
+            arrays: Vec::new(),
         };
-        let pts = flat(&|i| p.x[i].iter().map(|v| v.f64()).collect());
-        let disp = flat(&|i| p.u[i].iter().map(|v| v.f64()).collect());
-        let vel = flat(&|i| p.v[i].iter().map(|v| v.f64()).collect());
-        let stress = flat(&|i| p.stress[i].iter().map(|v| v.f64()).collect());
-        let material: Vec<i32> = active.iter().map(|&i| p.material[i] as i32).collect();
-        let element: Vec<i32> = active.iter().map(|&i| p.element[i] as i32 + 1).collect();
-        let id: Vec<i32> = active.iter().map(|&i| p.id[i] as i32).collect();
+        p.read_fields(&mut arrays);
         let cells = Cells::vertices(active.len());
         let piece = Piece {
-            points: &pts,
+            points: &arrays.points,
             cells: &cells,
-            point_data: vec![
-                DataArray {
-                    name: "displacement",
-                    components: 3,
-                    values: Values::F64(&disp),
-                },
-                DataArray {
-                    name: "velocity",
-                    components: 3,
-                    values: Values::F64(&vel),
-                },
-                DataArray {
-                    name: "stress",
-                    components: 6,
-                    values: Values::F64(&stress),
-                },
-                DataArray {
-                    name: "material",
-                    components: 1,
-                    values: Values::I32(&material),
-                },
-                DataArray {
-                    name: "element",
-                    components: 1,
-                    values: Values::I32(&element),
-                },
-                DataArray {
-                    name: "id",
-                    components: 1,
-                    values: Values::I32(&id),
-                },
-            ],
+            point_data: arrays
+                .arrays
+                .iter()
+                .map(|(name, components, values)| DataArray {
+                    name,
+                    components: *components,
+                    values: match values {
+                        Column::F64(v) => Values::F64(v),
+                        Column::I32(v) => Values::I32(v),
+                    },
+                })
+                .collect(),
             cell_data: Vec::new(),
         };
-        let (pore, liquid_vel);
-        let mut piece = piece;
-        if let Some(l) = &p.liquid {
-            pore = active.iter().map(|&i| l.p[i].f64()).collect::<Vec<f64>>();
-            liquid_vel = flat(&|i| l.w[i].iter().map(|v| v.f64()).collect());
-            piece.point_data.push(DataArray {
-                name: "pore_pressure",
-                components: 1,
-                values: Values::F64(&pore),
-            });
-            piece.point_data.push(DataArray {
-                name: "liquid_velocity",
-                components: 3,
-                values: Values::F64(&liquid_vel),
-            });
-        }
         let name = format!("particles_{:05}.vtu", self.pvd.len());
         write_output_with(&self.dir.join(&name), |w| {
             vtu::write_vtu(w, &piece, Encoding::Appended)
@@ -150,6 +112,49 @@ impl Output {
         mpm_shared::io::write_output(&self.dir.join("history.csv"), self.history.as_bytes())?;
         mpm_shared::io::write_output(&self.dir.join("energy.csv"), self.energy.as_bytes())?;
         Ok(())
+    }
+}
+
+/// One point-data array of a particle file.
+enum Column {
+    F64(Vec<f64>),
+    I32(Vec<i32>),
+}
+
+/// Gathers the written fields of the active points.
+struct Collect<'a> {
+    active: &'a [usize],
+    points: Vec<f64>,
+    arrays: Vec<(&'static str, usize, Column)>,
+}
+
+impl FieldReader for Collect<'_> {
+    fn field<T: Value>(&mut self, field: Field, values: &[T]) {
+        let (name, offset) = match field.written {
+            Written::No => return,
+            Written::Position => {
+                for &i in self.active {
+                    values[i].push_f64(&mut self.points);
+                }
+                return;
+            }
+            Written::As(name) => (name, 0),
+            Written::OneBased(name) => (name, 1),
+        };
+        let column = if T::INTEGER || offset != 0 {
+            let mut out = Vec::with_capacity(self.active.len() * T::COMPONENTS);
+            for &i in self.active {
+                values[i].push_i32(offset, &mut out);
+            }
+            Column::I32(out)
+        } else {
+            let mut out = Vec::with_capacity(self.active.len() * T::COMPONENTS);
+            for &i in self.active {
+                values[i].push_f64(&mut out);
+            }
+            Column::F64(out)
+        };
+        self.arrays.push((name, T::COMPONENTS, column));
     }
 }
 

@@ -18,8 +18,8 @@ pub enum RunError {
     Setup(#[from] crate::driver::engine::SetupError),
     /// A job could not start (e.g. a consolidation comparison on a case without one saturated
     /// material).
-    #[error("{0}")]
-    Job(String),
+    #[error(transparent)]
+    Job(Box<dyn std::error::Error + Send + Sync>),
     /// A material point left the mesh.
     #[error(transparent)]
     Lost(#[from] crate::driver::engine::Lost),

@@ -196,7 +196,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                     get("INTRINSIC_PERMEABILITY_LIQUID")?,
                     get("DYNAMIC_VISCOSITY_LIQUID")?,
                 )
-                .map_err(|e| unsupported(&gfile, &item, e))?;
+                .map_err(|e| unsupported(&gfile, &item, e.to_string()))?;
                 MaterialSpec::saturated(&m.name, get("DENSITY_SOLID")?, law, liquid)
             }
             // A dry material's mass is that of its solid grains: (1 - n) ρs.
@@ -216,7 +216,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                 law,
             ),
         }
-        .map_err(|e| unsupported(&gfile, &item, e))?;
+        .map_err(|e| unsupported(&gfile, &item, e.to_string()))?;
         materials[m.index.max(0) as usize] = Some(spec);
     }
     if drained && coupled {

@@ -1,6 +1,7 @@
 //! A case ready to run: mesh, materials, boundary conditions, loads and time controls, whether
 //! it came from a TOML scene or (later) an Anura3D GOM + CPS.
 
+use crate::material::error::MaterialError;
 use mpm_shared::Model;
 
 use crate::material::law::LawSpec;
@@ -32,15 +33,23 @@ pub struct MaterialSpec {
 impl MaterialSpec {
     /// A linear elastic material, checked and converted: `density_kg_m3` in kg/m³, `young` in
     /// kPa.
-    pub fn new(name: &str, density_kg_m3: f64, young: f64, poisson: f64) -> Result<Self, String> {
-        let law = LawSpec::linear_elastic(young, poisson).map_err(|e| e.to_string())?;
+    pub fn new(
+        name: &str,
+        density_kg_m3: f64,
+        young: f64,
+        poisson: f64,
+    ) -> Result<Self, MaterialError> {
+        let law = LawSpec::linear_elastic(young, poisson)?;
         Self::with_law(name, density_kg_m3, law)
     }
 
     /// A dry material of density `density_kg_m3` (kg/m³) following `law`.
-    pub fn with_law(name: &str, density_kg_m3: f64, law: LawSpec) -> Result<Self, String> {
+    pub fn with_law(name: &str, density_kg_m3: f64, law: LawSpec) -> Result<Self, MaterialError> {
         if !(density_kg_m3 > 0.0) {
-            return Err(format!("density must be positive, got {density_kg_m3}"));
+            return Err(MaterialError::NotPositive {
+                what: "density",
+                value: density_kg_m3,
+            });
         }
         Ok(MaterialSpec {
             name: name.to_string(),
@@ -60,7 +69,7 @@ impl MaterialSpec {
         grain_density_kg_m3: f64,
         law: LawSpec,
         liquid: crate::material::liquid::LiquidSpec,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, MaterialError> {
         let mut m =
             MaterialSpec::with_law(name, (1.0 - liquid.porosity) * grain_density_kg_m3, law)?;
         m.liquid = Some(liquid);
@@ -76,7 +85,7 @@ impl MaterialSpec {
         grain_density_kg_m3: f64,
         liquid_density_kg_m3: f64,
         law: LawSpec,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, MaterialError> {
         check_porosity(porosity)?;
         let mut m = MaterialSpec::with_law(name, (1.0 - porosity) * grain_density_kg_m3, law)?;
         m.weight_density = (1.0 - porosity) * (grain_density_kg_m3 - liquid_density_kg_m3) / 1000.0;
@@ -93,7 +102,7 @@ impl MaterialSpec {
         grain_density_kg_m3: f64,
         liquid_density_kg_m3: f64,
         law: LawSpec,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, MaterialError> {
         check_porosity(porosity)?;
         let saturated = (1.0 - porosity) * grain_density_kg_m3 + porosity * liquid_density_kg_m3;
         let mut m = MaterialSpec::with_law(name, saturated, law)?;
@@ -130,11 +139,14 @@ impl MaterialSpec {
     }
 }
 
-fn check_porosity(n: f64) -> Result<(), String> {
+fn check_porosity(n: f64) -> Result<(), MaterialError> {
     if (0.0..1.0).contains(&n) {
         Ok(())
     } else {
-        Err(format!("porosity must be in [0, 1), got {n}"))
+        Err(MaterialError::Porosity {
+            range: "[0, 1)",
+            value: n,
+        })
     }
 }
 
@@ -314,12 +326,28 @@ pub enum Reorder {
     Hilbert,
 }
 
+/// The mesh of a case cannot be ordered along the curve.
+#[derive(Debug, thiserror::Error)]
+pub enum ReorderError {
+    /// The curve cannot be laid over the mesh (its extent).
+    #[error("{from}: --reorder cannot order the mesh: {source}")]
+    Curve {
+        /// The case's input files ("the case" for built-in ones).
+        from: String,
+        /// What the ordering found.
+        source: sfcb::order::BoundsError,
+    },
+    /// The model cannot be renumbered.
+    #[error(transparent)]
+    Model(#[from] mpm_shared::Error),
+}
+
 impl Case {
     /// The case with its elements ordered along a space-filling curve and its nodes renumbered
     /// by first use (sfcb's ordering), every per-element and per-node datum following, and the
     /// material-point ids and the numbers messages give kept those of the input
     /// ([`Case::input_element`], [`Case::input_node`]). `Reorder::None` returns it unchanged.
-    pub fn reordered(mut self, how: Reorder) -> Result<Case, String> {
+    pub fn reordered(mut self, how: Reorder) -> Result<Case, ReorderError> {
         let curve = match how {
             Reorder::None => return Ok(self),
             Reorder::Morton => sfcb::order::Curve::Morton,
@@ -333,19 +361,16 @@ impl Case {
                 cubic: true,
             },
         )
-        .map_err(|e| {
+        .map_err(|source| ReorderError::Curve {
             // Built-in cases have no input files to name.
-            let from = if self.inputs.is_empty() {
+            from: if self.inputs.is_empty() {
                 "the case".to_string()
             } else {
                 self.inputs.join(", ")
-            };
-            format!("{from}: --reorder cannot order the mesh: {e}")
+            },
+            source,
         })?;
-        let model = self
-            .model
-            .reordered(&o.order, &o.node_new)
-            .map_err(|e| e.to_string())?;
+        let model = self.model.reordered(&o.order, &o.node_new)?;
         let by_element = |v: &[u32]| o.order.iter().map(|&e| v[e as usize]).collect::<Vec<u32>>();
         self.input_element = by_element(&self.input_element);
         self.element_material = by_element(&self.element_material);

@@ -380,14 +380,14 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
                 let mut s = MaterialSpec::saturated(
                     &m.physical,
                     m.density,
-                    LawSpec::linear_elastic(m.young, m.poisson).map_err(|e| e.to_string())?,
+                    LawSpec::linear_elastic(m.young, m.poisson)?,
                     liquid,
                 )?;
                 s.initial_pore_pressure = l.initial_pore_pressure;
                 Ok(s)
             }),
         }
-        .map_err(|e| invalid(item.clone(), e))?;
+        .map_err(|e| invalid(item.clone(), e.to_string()))?;
         materials[k] = Some(spec);
         points[k] = m.points_per_element;
         inputs[k] = Some(MaterialInput {

@@ -34,9 +34,20 @@ pub struct Layer {
     pub load: f64,
 }
 
+/// Why a case is not a consolidation problem.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum LayerError {
+    /// No `[consolidation]` table.
+    #[error("the case has no [consolidation] table")]
+    NoTable,
+    /// Not exactly one saturated material.
+    #[error("a consolidation run needs exactly one saturated material; the case has {0}")]
+    SaturatedMaterials(usize),
+}
+
 impl Layer {
     /// The layer of `case` (its one saturated material) under `spec`.
-    pub fn of(case: &Case, spec: &ConsolidationSpec) -> Result<Self, String> {
+    pub fn of(case: &Case, spec: &ConsolidationSpec) -> Result<Self, LayerError> {
         let sat: Vec<_> = case
             .materials
             .iter()
@@ -44,7 +55,7 @@ impl Layer {
             .filter(|m| m.liquid.is_some())
             .collect();
         let [m] = sat.as_slice() else {
-            return Err("a consolidation run needs exactly one saturated material".into());
+            return Err(LayerError::SaturatedMaterials(sat.len()));
         };
         let l: &LiquidSpec = m.liquid.as_ref().expect("saturated");
         let (mut lo, mut hi) = (f64::MAX, f64::MIN);
@@ -285,9 +296,9 @@ pub fn run_tracked_with<R: Real>(
 ) -> Result<(Engine<R>, Tracker), RunError> {
     let spec = case
         .consolidation
-        .ok_or_else(|| RunError::Job("the case has no [consolidation] table".into()))?;
+        .ok_or_else(|| RunError::Job(Box::new(LayerError::NoTable)))?;
     let mut observer = Observer {
-        layer: Layer::of(case, &spec).map_err(RunError::Job)?,
+        layer: Layer::of(case, &spec).map_err(|e| RunError::Job(Box::new(e)))?,
         start: spec.start,
         tracker: None,
     };
@@ -316,7 +327,7 @@ pub fn run_job_with<R: Real>(
 ) -> Result<(Engine<R>, Tracker, Option<Tracker>), RunError> {
     let spec = case
         .consolidation
-        .ok_or_else(|| RunError::Job("the case has no [consolidation] table".into()))?;
+        .ok_or_else(|| RunError::Job(Box::new(LayerError::NoTable)))?;
     let (engine, tracker) = run_tracked_with::<R>(case, dir, options, watch)?;
     let workshop = if spec.compare_rest && spec.start != Start::Rest {
         let mut twin = case.clone();

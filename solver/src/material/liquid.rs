@@ -2,6 +2,7 @@
 //! two-phase critical wave speed (Mieremet et al., docs/design.md §4) and the per-material constants the
 //! kernels use.
 
+use crate::material::error::MaterialError;
 use crate::real::Real;
 
 /// Gravity used to turn intrinsic permeability into hydraulic conductivity (m/s²), as Anura3D.
@@ -30,9 +31,12 @@ impl LiquidSpec {
         bulk_modulus: f64,
         intrinsic_permeability: f64,
         viscosity: f64,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, MaterialError> {
         if !(porosity > 0.0 && porosity < 1.0) {
-            return Err(format!("porosity must be in (0, 1), got {porosity}"));
+            return Err(MaterialError::Porosity {
+                range: "(0, 1)",
+                value: porosity,
+            });
         }
         for (name, v) in [
             ("liquid density", density_kg_m3),
@@ -41,7 +45,10 @@ impl LiquidSpec {
             ("liquid viscosity", viscosity),
         ] {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(format!("{name} must be positive, got {v}"));
+                return Err(MaterialError::NotPositive {
+                    what: name,
+                    value: v,
+                });
             }
         }
         Ok(LiquidSpec {

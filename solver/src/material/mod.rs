@@ -1,5 +1,6 @@
 //! Constitutive laws of the solid and the pore liquid's constants.
 
+pub mod error;
 pub mod law;
 pub mod linear_elastic;
 pub mod liquid;

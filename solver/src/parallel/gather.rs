@@ -16,7 +16,7 @@ use crate::element::tet4::Tet4;
 use crate::element::Element;
 use crate::parallel::team::{balanced_ranges, Shared, Team};
 use crate::real::Real;
-use crate::state::particles::{FieldVisitor, Particles};
+use crate::state::particles::{Field, FieldVisitor, Particles, Value};
 
 /// Widest slot (values per element node) a pass uses.
 pub const WIDTH: usize = 12;
@@ -235,8 +235,8 @@ pub fn sort_by_element<R: Real>(
         done: &'a mut Vec<bool>,
     }
     impl FieldVisitor for Permute<'_> {
-        fn field<T: Copy + Default + Send + Sync>(&mut self, v: &mut Vec<T>, per_point: usize) {
-            match per_point {
+        fn field<T: Value>(&mut self, field: Field, v: &mut Vec<T>) {
+            match field.per_point {
                 0 => {}
                 1 => v.permute(self.order, self.done),
                 k => permute_chunks(v, k, self.order, self.done),

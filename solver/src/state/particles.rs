@@ -36,11 +36,157 @@ pub struct Particles<R: Real> {
     pub liquid: Option<LiquidPoints<R>>,
 }
 
-/// Something done to every per-point array of [`Particles`] alike (re-sorting, first touch,
-/// counting bytes). [`Particles::visit_fields`] is the one list of those arrays.
+/// How a per-point array appears in the particle files (`particles_NNNNN.vtu`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Written {
+    /// Not written: working data.
+    No,
+    /// The points' coordinates.
+    Position,
+    /// A point-data array of this name.
+    As(&'static str),
+    /// A point-data array of this name, 0-based indices written 1-based.
+    OneBased(&'static str),
+}
+
+/// One per-point array of the field list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Field {
+    /// The array's name in [`Particles`].
+    pub name: &'static str,
+    /// Values per point.
+    pub per_point: usize,
+    /// How the particle files show it.
+    pub written: Written,
+}
+
+/// A value type of a per-point array, and how its components are written.
+pub trait Value: Copy + Default + Send + Sync + 'static {
+    /// Components per value.
+    const COMPONENTS: usize;
+    /// Written as integers (else as 64-bit floats).
+    const INTEGER: bool;
+    /// Appends the components as f64.
+    fn push_f64(&self, out: &mut Vec<f64>);
+    /// Appends the components as i32, plus `offset`.
+    fn push_i32(&self, offset: i32, out: &mut Vec<i32>);
+}
+
+impl<R: Real> Value for R {
+    const COMPONENTS: usize = 1;
+    const INTEGER: bool = false;
+    fn push_f64(&self, out: &mut Vec<f64>) {
+        out.push(self.f64());
+    }
+    fn push_i32(&self, offset: i32, out: &mut Vec<i32>) {
+        out.push(self.f64() as i32 + offset);
+    }
+}
+
+impl<R: Real, const N: usize> Value for [R; N]
+where
+    [R; N]: Default,
+{
+    const COMPONENTS: usize = N;
+    const INTEGER: bool = false;
+    fn push_f64(&self, out: &mut Vec<f64>) {
+        out.extend(self.iter().map(|v| v.f64()));
+    }
+    fn push_i32(&self, offset: i32, out: &mut Vec<i32>) {
+        out.extend(self.iter().map(|v| v.f64() as i32 + offset));
+    }
+}
+
+impl Value for u32 {
+    const COMPONENTS: usize = 1;
+    const INTEGER: bool = true;
+    fn push_f64(&self, out: &mut Vec<f64>) {
+        out.push(f64::from(*self));
+    }
+    fn push_i32(&self, offset: i32, out: &mut Vec<i32>) {
+        out.push(*self as i32 + offset);
+    }
+}
+
+impl Value for bool {
+    const COMPONENTS: usize = 1;
+    const INTEGER: bool = true;
+    fn push_f64(&self, out: &mut Vec<f64>) {
+        out.push(f64::from(u8::from(*self)));
+    }
+    fn push_i32(&self, offset: i32, out: &mut Vec<i32>) {
+        out.push(i32::from(*self) + offset);
+    }
+}
+
+/// Something done to every per-point array of [`Particles`] alike that changes them
+/// (re-sorting, first touch). [`Particles::visit_fields`] hands over the one field list.
 pub trait FieldVisitor {
-    /// One array, `per_point` values per point.
-    fn field<T: Copy + Default + Send + Sync>(&mut self, values: &mut Vec<T>, per_point: usize);
+    /// One array of the list.
+    fn field<T: Value>(&mut self, field: Field, values: &mut Vec<T>);
+}
+
+/// Something done to every per-point array of [`Particles`] alike that only reads them
+/// (counting bytes, writing the particle files). [`Particles::read_fields`] hands over the same
+/// list as [`Particles::visit_fields`].
+pub trait FieldReader {
+    /// One array of the list.
+    fn field<T: Value>(&mut self, field: Field, values: &[T]);
+}
+
+/// The one list of per-point arrays, for [`Particles::visit_fields`] and
+/// [`Particles::read_fields`]. The fields are taken apart exhaustively, so a field added to
+/// [`Particles`] (or [`LiquidPoints`]) does not compile until it is listed here; the order is
+/// that of the arrays in the particle files.
+macro_rules! field_list {
+    ($particles:expr, $visitor:expr) => {{
+        let Particles {
+            x,
+            u,
+            v: velocity,
+            mass,
+            volume,
+            stress,
+            element,
+            material,
+            id,
+            active,
+            state,
+            state_len,
+            liquid,
+        } = $particles;
+        let one = |name, written| Field {
+            name,
+            per_point: 1,
+            written,
+        };
+        $visitor.field(one("x", Written::Position), x);
+        $visitor.field(one("u", Written::As("displacement")), u);
+        $visitor.field(one("v", Written::As("velocity")), velocity);
+        $visitor.field(one("mass", Written::No), mass);
+        $visitor.field(one("volume", Written::No), volume);
+        $visitor.field(one("stress", Written::As("stress")), stress);
+        $visitor.field(one("material", Written::As("material")), material);
+        $visitor.field(one("element", Written::OneBased("element")), element);
+        $visitor.field(one("id", Written::As("id")), id);
+        $visitor.field(one("active", Written::No), active);
+        let per_point = *state_len;
+        $visitor.field(
+            Field {
+                name: "state",
+                per_point,
+                written: Written::No,
+            },
+            state,
+        );
+        if let Some(LiquidPoints { w, p, volume0 }) = liquid {
+            $visitor.field(one("p", Written::As("pore_pressure")), p);
+            $visitor.field(one("w", Written::As("liquid_velocity")), w);
+            if let Some(v0) = volume0 {
+                $visitor.field(one("volume0", Written::No), v0);
+            }
+        }
+    }};
 }
 
 /// Liquid state of the material points (one entry per point; zero at points of dry materials).
@@ -67,65 +213,26 @@ impl<R: Real> Particles<R> {
         self.x.is_empty()
     }
 
-    /// Hands every per-point array to `v`. The fields are taken apart exhaustively, so a field
-    /// added to [`Particles`] (or [`LiquidPoints`]) does not compile until it is listed here, and
-    /// sort, first touch and byte counts follow it.
+    /// Hands every per-point array to `v`, to change them alike (the one field list, in particle-file order).
     pub fn visit_fields(&mut self, v: &mut impl FieldVisitor) {
-        let Particles {
-            x,
-            u,
-            v: velocity,
-            mass,
-            volume,
-            stress,
-            element,
-            material,
-            id,
-            active,
-            state,
-            state_len,
-            liquid,
-        } = self;
-        v.field(x, 1);
-        v.field(u, 1);
-        v.field(velocity, 1);
-        v.field(mass, 1);
-        v.field(volume, 1);
-        v.field(stress, 1);
-        v.field(element, 1);
-        v.field(material, 1);
-        v.field(id, 1);
-        v.field(active, 1);
-        v.field(state, *state_len);
-        if let Some(LiquidPoints { w, p, volume0 }) = liquid {
-            v.field(w, 1);
-            v.field(p, 1);
-            if let Some(v0) = volume0 {
-                v.field(v0, 1);
-            }
-        }
+        field_list!(self, v);
+    }
+
+    /// Hands every per-point array to `r`, to read them alike (the same list as [`Particles::visit_fields`]).
+    pub fn read_fields(&self, r: &mut impl FieldReader) {
+        field_list!(self, r);
     }
 
     /// Bytes of state per point (more when the liquid is modelled or a law keeps state).
     pub fn bytes_per_point(&self) -> usize {
         struct Count(usize);
-        impl FieldVisitor for Count {
-            fn field<T: Copy + Default + Send + Sync>(&mut self, _: &mut Vec<T>, per_point: usize) {
-                self.0 += std::mem::size_of::<T>() * per_point;
+        impl FieldReader for Count {
+            fn field<T: Value>(&mut self, field: Field, _: &[T]) {
+                self.0 += std::mem::size_of::<T>() * field.per_point;
             }
         }
         let mut c = Count(0);
-        // Visiting needs `&mut`; counting touches no value, so a cheap empty copy will do.
-        let mut shape = Particles::<R> {
-            state_len: self.state_len,
-            liquid: self.liquid.as_ref().map(|l| LiquidPoints {
-                w: Vec::new(),
-                p: Vec::new(),
-                volume0: l.volume0.as_ref().map(|_| Vec::new()),
-            }),
-            ..Default::default()
-        };
-        shape.visit_fields(&mut c);
+        self.read_fields(&mut c);
         c.0
     }
 
@@ -138,6 +245,20 @@ impl<R: Real> Particles<R> {
             volume0: fixed_liquid_mass.then(|| self.volume.clone()),
         });
     }
+}
+
+/// An element asks for a number of material points its type cannot place.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("element {element}: {count} material points per element is not supported for {elements} (use {supported})")]
+pub struct PlacementError {
+    /// The element's 1-based input number.
+    pub element: u32,
+    /// Points asked for.
+    pub count: u32,
+    /// The element type, plural.
+    pub elements: &'static str,
+    /// The counts that are supported, in words.
+    pub supported: &'static str,
 }
 
 /// Places `points[e]` material points in every element `e` of material `material[e]` (0 = empty),
@@ -154,7 +275,7 @@ pub fn place<E: Element, R: Real>(
     first_id: Option<&[u32]>,
     number: &dyn Fn(usize) -> u32,
     density: impl Fn(u32) -> f64,
-) -> Result<Particles<R>, String> {
+) -> Result<Particles<R>, PlacementError> {
     let mut p = Particles::default();
     let mut id = 0u32;
     for e in 0..mesh.elements() {
@@ -163,12 +284,12 @@ pub fn place<E: Element, R: Real>(
         }
         let n = points[e];
         let Some(local) = E::point_placement(n) else {
-            return Err(format!(
-                "element {}: {n} material points per element is not supported for {} (use {})",
-                number(e),
-                E::NAME,
-                E::supported_point_counts()
-            ));
+            return Err(PlacementError {
+                element: number(e),
+                count: n,
+                elements: E::NAME,
+                supported: E::supported_point_counts(),
+            });
         };
         for l in local {
             id += 1;
@@ -197,4 +318,61 @@ pub fn place<E: Element, R: Real>(
         }
     }
     Ok(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Names(Vec<(&'static str, Written)>);
+    impl FieldReader for Names {
+        fn field<T: Value>(&mut self, field: Field, _: &[T]) {
+            self.0.push((field.name, field.written));
+        }
+    }
+
+    #[test]
+    fn the_field_list_names_every_array_once_in_file_order() {
+        let mut p = Particles::<f64> {
+            liquid: Some(LiquidPoints {
+                volume0: Some(Vec::new()),
+                ..Default::default()
+            }),
+            state_len: 2,
+            ..Default::default()
+        };
+        let mut names = Names(Vec::new());
+        p.read_fields(&mut names);
+        let written: Vec<&str> = names
+            .0
+            .iter()
+            .filter_map(|(_, w)| match w {
+                Written::As(n) | Written::OneBased(n) => Some(*n),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(
+            written,
+            [
+                "displacement",
+                "velocity",
+                "stress",
+                "material",
+                "element",
+                "id",
+                "pore_pressure",
+                "liquid_velocity"
+            ]
+        );
+        let mut all: Vec<&str> = names.0.iter().map(|(n, _)| *n).collect();
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all.len(), 14, "every array once");
+        // x u v (3 × 24) mass volume (16) stress (48) element material id (12) active (1),
+        // 2 state values (16), then p w volume0 (8 + 24 + 8).
+        assert_eq!(p.bytes_per_point(), 72 + 16 + 48 + 12 + 1 + 16 + 40);
+        p.liquid = None;
+        p.state_len = 0;
+        assert_eq!(p.bytes_per_point(), 149);
+    }
 }
