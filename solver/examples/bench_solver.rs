@@ -5,7 +5,7 @@
 //!
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
-//!  --order morton|random|none`
+//!  --order morton|random|none --precision f64|f32`
 //!
 //! `--order random` renumbers elements and nodes by a fixed pseudo-random permutation (the
 //! locality a mesh generator's worst case gives); `morton` applies the solver's curve ordering.
@@ -107,21 +107,18 @@ fn main() {
         pin,
         first_touch,
     };
-    let mut rates = Vec::new();
-    let mut phases = Vec::new();
-    let mut info = (0usize, 0usize, Vec::new());
-    for _ in 0..reps {
-        let mut engine = Engine::<f64>::new(&case, false).unwrap();
-        let np = engine.particles.len();
-        let t = Instant::now();
-        for _ in 0..steps {
-            engine.step(engine.dt, None).unwrap();
-        }
-        let secs = t.elapsed().as_secs_f64();
-        rates.push(np as f64 * steps as f64 / secs);
-        phases.push(engine.phase_seconds);
-        info = (np, engine.team.threads, engine.team.pinned.clone());
-    }
+    let f32 = arg(&a, "--precision") == Some("f32");
+    let result = if f32 {
+        measure::<f32>(&case, steps, reps)
+    } else {
+        measure::<f64>(&case, steps, reps)
+    };
+    let Measured {
+        rates,
+        phases,
+        info,
+        bytes_per_point,
+    } = result;
     let mut sorted = rates.clone();
     sorted.sort_by(f64::total_cmp);
     let median = sorted[sorted.len() / 2];
@@ -137,7 +134,7 @@ fn main() {
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
     println!(
-        "{{\"case\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}}}",
+        "{{\"case\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}}}",
         if saturated { "saturated" } else { "dry" },
         info.0,
         case.model.element_count(),
@@ -147,8 +144,42 @@ fn main() {
         first_touch,
         order,
         steps,
+        if f32 { "f32" } else { "f64" },
+        bytes_per_point,
         rates,
         median,
         per_phase.join(", ")
     );
+}
+
+/// What the repetitions measured.
+struct Measured {
+    rates: Vec<f64>,
+    phases: Vec<[f64; 6]>,
+    info: (usize, usize, Vec<Option<usize>>),
+    bytes_per_point: usize,
+}
+
+/// Times `reps` runs of `steps` steps of `case` in precision `R`.
+fn measure<R: mpm_solve::real::Real>(case: &Case, steps: usize, reps: usize) -> Measured {
+    let mut m = Measured {
+        rates: Vec::new(),
+        phases: Vec::new(),
+        info: (0, 0, Vec::new()),
+        bytes_per_point: 0,
+    };
+    for _ in 0..reps {
+        let mut engine = Engine::<R>::new(case, false).unwrap();
+        let np = engine.particles.len();
+        let t = Instant::now();
+        for _ in 0..steps {
+            engine.step(engine.dt, None).unwrap();
+        }
+        let secs = t.elapsed().as_secs_f64();
+        m.rates.push(np as f64 * steps as f64 / secs);
+        m.phases.push(engine.phase_seconds);
+        m.info = (np, engine.team.threads, engine.team.pinned.clone());
+        m.bytes_per_point = engine.particles.bytes_per_point();
+    }
+    m
 }

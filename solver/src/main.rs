@@ -13,6 +13,8 @@ use clap::Parser;
 mod progress;
 
 use mpm_solve::driver::units;
+use mpm_solve::input::case::Precision;
+use mpm_solve::real::Real;
 use progress::{Progress, Reporter};
 
 /// Run an explicit MPM simulation.
@@ -86,6 +88,17 @@ struct Args {
     /// velocities with Mieremet's critical step, as Anura3D: reproduces Anura3D to round-off).
     #[arg(long, value_enum, default_value = "implicit")]
     drag: DragArg,
+    /// Precision of the particle and grid state: `f32` halves the memory traffic and is faster,
+    /// `f64` is more accurate (docs/accuracy.md measures the trade) [default: the scene's
+    /// `precision`, else f64]. Time, work and energies are summed in f64 either way.
+    #[arg(long, value_enum)]
+    precision: Option<PrecisionArg>,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum PrecisionArg {
+    F64,
+    F32,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -325,6 +338,12 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         DragArg::Implicit => mpm_solve::input::case::Drag::Implicit,
         DragArg::Explicit => mpm_solve::input::case::Drag::Explicit,
     };
+    if let Some(p) = args.precision {
+        case.precision = match p {
+            PrecisionArg::F64 => Precision::F64,
+            PrecisionArg::F32 => Precision::F32,
+        };
+    }
     case.probes.extend(&args.probe);
     case.probes.sort_unstable();
     case.probes.dedup();
@@ -395,14 +414,24 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
             every: args.progress_every,
         }
     };
-    let mut reporter = Reporter::new(mode, plan.steps.min(u64::MAX as f64) as u64, case.end_time);
+    let reporter = Reporter::new(mode, plan.steps.min(u64::MAX as f64) as u64, case.end_time);
+    // One code path, compiled once per precision.
+    match case.precision {
+        Precision::F64 => execute::<f64>(&case, out, &options, reporter),
+        Precision::F32 => execute::<f32>(&case, out, &options, reporter),
+    }
+}
+
+/// Runs `case` (or its consolidation job) in precision `R`.
+fn execute<R: Real>(
+    case: &mpm_solve::input::case::Case,
+    out: &std::path::Path,
+    options: &mpm_solve::driver::run::RunOptions,
+    mut reporter: Reporter,
+) -> anyhow::Result<()> {
     if case.consolidation.is_some() {
-        let (engine, t, w) = mpm_solve::jobs::consolidation::run_job_with::<f64>(
-            &case,
-            out,
-            &options,
-            &mut reporter,
-        )?;
+        let (engine, t, w) =
+            mpm_solve::jobs::consolidation::run_job_with::<R>(case, out, options, &mut reporter)?;
         done(&engine, out);
         for (name, tr) in
             std::iter::once(("default", &t)).chain(w.as_ref().map(|w| ("workshop", w)))
@@ -419,13 +448,13 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         );
         return Ok(());
     }
-    let engine = mpm_solve::driver::run::run_with::<f64>(&case, out, &options, &mut reporter)?;
+    let engine = mpm_solve::driver::run::run_with::<R>(case, out, options, &mut reporter)?;
     done(&engine, out);
     Ok(())
 }
 
 /// The closing line of a run.
-fn done(engine: &mpm_solve::driver::engine::Engine<f64>, out: &std::path::Path) {
+fn done<R: Real>(engine: &mpm_solve::driver::engine::Engine<R>, out: &std::path::Path) {
     let lost = if engine.lost > 0 {
         format!(", {} left the mesh", units::count(engine.lost as f64))
     } else {

@@ -13,9 +13,16 @@ fn golden() -> PathBuf {
 }
 
 /// The cases: name, input file in `testdata/golden/`, extra arguments.
-const CASES: [(&str, &str, &[&str]); 3] = [
+const CASES: [(&str, &str, &[&str]); 5] = [
     ("column_dry", "column_dry.toml", &[]),
     ("column_saturated", "column_saturated.toml", &[]),
+    // Single precision is deterministic too, per precision.
+    ("column_dry_f32", "column_dry.toml", &["--precision", "f32"]),
+    (
+        "column_saturated_f32",
+        "column_saturated.toml",
+        &["--precision", "f32"],
+    ),
     (
         "column_anura3d",
         "column_anura3d.GOM",

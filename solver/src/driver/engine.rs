@@ -603,9 +603,9 @@ impl<R: Real, E: Element> Engine<R, E> {
                     id: p.id[i],
                     step: self.steps,
                     time: self.time,
-                    x: p.x[i][0].f64(),
-                    y: p.x[i][1].f64(),
-                    z: p.x[i][2].f64(),
+                    x: mesh.global(&p.x[i])[0],
+                    y: mesh.global(&p.x[i])[1],
+                    z: mesh.global(&p.x[i])[2],
                     element: self.input_element[e as usize] + 1,
                 });
             }

@@ -62,6 +62,7 @@ impl Output {
         let active: Vec<usize> = (0..p.len()).filter(|&i| p.active[i]).collect();
         // The particle file holds what the field list marks as written, in its order.
         let mut arrays = Collect {
+            origin: engine.mesh.origin,
             active: &active,
             points: Vec::new(),
             arrays: Vec::new(),
@@ -97,7 +98,10 @@ impl Output {
             };
             self.history.push_str(&real_to_string(engine.time));
             let _ = write!(self.history, ",{}", p.id[i]);
-            for v in p.x[i].iter().chain(&p.u[i]).chain(&p.stress[i]) {
+            for v in engine.mesh.global(&p.x[i]) {
+                csv_real(&mut self.history, v);
+            }
+            for v in p.u[i].iter().chain(&p.stress[i]) {
                 csv_real(&mut self.history, v.f64());
             }
             if let Some(l) = &p.liquid {
@@ -123,6 +127,8 @@ enum Column {
 
 /// Gathers the written fields of the active points.
 struct Collect<'a> {
+    /// Added to positions, so that files are in the input's coordinates.
+    origin: [f64; 3],
     active: &'a [usize],
     points: Vec<f64>,
     arrays: Vec<(&'static str, usize, Column)>,
@@ -134,7 +140,11 @@ impl FieldReader for Collect<'_> {
             Written::No => return,
             Written::Position => {
                 for &i in self.active {
+                    let start = self.points.len();
                     values[i].push_f64(&mut self.points);
+                    for (a, x) in self.points[start..].iter_mut().enumerate() {
+                        *x += self.origin[a];
+                    }
                 }
                 return;
             }

@@ -12,7 +12,11 @@ use crate::real::{Real, V3};
 /// A mesh of elements of type `E`.
 #[derive(Debug, Clone)]
 pub struct Mesh<E: Element, R: Real> {
-    /// Coordinates of the computational nodes.
+    /// The model origin: the smallest corner of the computational nodes' bounding box, in the
+    /// input's coordinates. Positions inside the solver are taken from it, so that single
+    /// precision keeps its resolution on sites in UTM coordinates (x ≈ 5e5 m, y ≈ 6e6 m).
+    pub origin: [f64; 3],
+    /// Coordinates of the computational nodes, relative to [`Mesh::origin`].
     pub x: Vec<V3<R>>,
     /// Model node (0-based) of each computational node.
     pub model_node: Vec<u32>,
@@ -89,11 +93,18 @@ impl<E: Element, R: Real> Mesh<E, R> {
                 node_of_model[m]
             }));
         }
+        let mut origin = [f64::INFINITY; 3];
+        for &m in &model_node {
+            let p = model.node(m as usize);
+            for a in 0..3 {
+                origin[a] = origin[a].min(p.get(a).copied().unwrap_or(0.0));
+            }
+        }
         let xf: Vec<[f64; 3]> = model_node
             .iter()
             .map(|&m| {
                 let p = model.node(m as usize);
-                [p[0], p[1], p[2]]
+                [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]]
             })
             .collect();
         let mut map = Vec::with_capacity(n_el);
@@ -137,6 +148,7 @@ impl<E: Element, R: Real> Mesh<E, R> {
             }
         }
         Ok(Mesh {
+            origin,
             x: xf.iter().map(|p| p.map(R::of)).collect(),
             model_node,
             node_of_model,
@@ -157,6 +169,12 @@ impl<E: Element, R: Real> Mesh<E, R> {
     /// Number of elements.
     pub fn elements(&self) -> usize {
         self.corners.len()
+    }
+
+    /// A position inside the solver (relative to the origin) in the input's coordinates.
+    #[inline]
+    pub fn global(&self, x: &V3<R>) -> [f64; 3] {
+        [0, 1, 2].map(|a| self.origin[a] + x[a].f64())
     }
 
     /// Shape-function values of element `e`'s nodes at `p`.

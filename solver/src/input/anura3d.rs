@@ -388,6 +388,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         probes,
         prescribed,
         engine: Default::default(),
+        precision: crate::input::case::Precision::F64,
     };
     Ok((case, s))
 }

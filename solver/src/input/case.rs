@@ -286,6 +286,45 @@ pub struct Case {
     pub prescribed: Option<crate::step::prescribed::PrescribedVelocity>,
     /// Threads, pinning and first touch of the run (not physics: results do not depend on it).
     pub engine: crate::parallel::team::Options,
+    /// Floating-point precision of the particle and grid state.
+    pub precision: Precision,
+}
+
+/// The precision a run computes in; sums that grow (time, work, energies) are f64 in both.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Precision {
+    /// Double precision (the default).
+    #[default]
+    F64,
+    /// Single precision: half the memory traffic of the particle and grid state.
+    F32,
+}
+
+impl Precision {
+    /// Parses `f64` or `f32`.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "f64" => Some(Precision::F64),
+            "f32" => Some(Precision::F32),
+            _ => None,
+        }
+    }
+
+    /// Bytes of one real number.
+    pub fn bytes(self) -> usize {
+        match self {
+            Precision::F64 => 8,
+            Precision::F32 => 4,
+        }
+    }
+
+    /// `f64` or `f32`, as `run.json` writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F64 => "f64",
+            Precision::F32 => "f32",
+        }
+    }
 }
 
 /// Fixities of a laterally confined box (an oedometer): nodes on the x and z faces of the
@@ -488,6 +527,7 @@ impl Case {
             probes: Vec::new(),
             prescribed: None,
             engine: Default::default(),
+            precision: Precision::F64,
         }
     }
 }

@@ -7,7 +7,7 @@ use std::fmt;
 use std::path::Path;
 
 use crate::driver::units;
-use crate::input::case::Case;
+use crate::input::case::{Case, Precision};
 
 /// Bytes one material point takes in a `particles_NNNNN.vtu` file: position, displacement and
 /// velocity (3 × f64 each), stress (6 × f64), material, element and id (i32), and the vertex
@@ -26,6 +26,9 @@ const HISTORY_ROW_BYTES: f64 = 15.0 * 24.0;
 const DRY_RATE_PER_THREAD: f64 = 6e6;
 /// The same for two-phase runs.
 const TWO_PHASE_RATE_PER_THREAD: f64 = 4e6;
+/// How much faster single precision steps, from `scripts/bench-solver` (docs/performance.md:
+/// the ratio of f32 to f64 particle-steps/s on the 1M-point cases, 2 threads).
+const F32_SPEEDUP: f64 = 1.3;
 /// Fixed cost of a step (thread barriers, bookkeeping), seconds.
 const STEP_OVERHEAD: f64 = 20e-6;
 
@@ -78,6 +81,8 @@ pub struct Plan {
     pub memory_bytes: f64,
     /// Threads the estimate assumes.
     pub threads: usize,
+    /// Precision the estimate assumes.
+    pub precision: Precision,
     /// Wall time the time steps will take, roughly (s).
     pub wall_seconds: f64,
 }
@@ -185,7 +190,7 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
         + case.model.element_count() as f64 * (corners * 8.0 + 9.0)
         + VTU_FILE_BYTES;
     let output_bytes = outputs as f64 * per_output + mesh_file;
-    let real = 8.0;
+    let real = case.precision.bytes() as f64;
     let point_bytes = if two_phase { 24.0 } else { 17.0 } * real + 13.0;
     let node_bytes = if two_phase { 32.0 } else { 16.0 } * real + 24.0 + 6.0;
     let element_bytes = (3.0 * 3.0 + 4.0 * 3.0 + 2.0) * real + 4.0 * 4.0 * 2.0;
@@ -193,12 +198,7 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
         + mesh.nodes() as f64 * node_bytes
         + mesh.elements() as f64 * element_bytes;
     let threads = threads.max(1);
-    let rate = threads as f64
-        * if two_phase {
-            TWO_PHASE_RATE_PER_THREAD
-        } else {
-            DRY_RATE_PER_THREAD
-        };
+    let rate = rate(threads, two_phase, case.precision);
     let wall_seconds = steps * (points as f64 / rate + STEP_OVERHEAD);
     Ok(Plan {
         points,
@@ -213,19 +213,29 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
         output_bytes,
         memory_bytes,
         threads,
+        precision: case.precision,
         wall_seconds,
     })
+}
+
+/// The assumed speed, point-steps per second.
+fn rate(threads: usize, two_phase: bool, precision: Precision) -> f64 {
+    let per_thread = if two_phase {
+        TWO_PHASE_RATE_PER_THREAD
+    } else {
+        DRY_RATE_PER_THREAD
+    };
+    let speedup = match precision {
+        Precision::F64 => 1.0,
+        Precision::F32 => F32_SPEEDUP,
+    };
+    threads as f64 * per_thread * speedup
 }
 
 impl Plan {
     /// The assumed speed, point-steps per second.
     fn rate(&self) -> f64 {
-        self.threads as f64
-            * if self.two_phase {
-                TWO_PHASE_RATE_PER_THREAD
-            } else {
-                DRY_RATE_PER_THREAD
-            }
+        rate(self.threads, self.two_phase, self.precision)
     }
 
     /// Checks the plan against `limits` and, when `out` is given, the free space where the
@@ -303,12 +313,18 @@ impl fmt::Display for Plan {
             self.probes,
             units::bytes(self.output_bytes)
         )?;
-        writeln!(f, "  memory: about {}", units::bytes(self.memory_bytes))?;
+        writeln!(
+            f,
+            "  memory: about {} in {}",
+            units::bytes(self.memory_bytes),
+            self.precision.name()
+        )?;
         write!(
             f,
-            "  wall time: roughly {} on {} thread(s) (at about {})",
+            "  wall time: roughly {} on {} thread(s) in {} (at about {})",
             units::duration(self.wall_seconds),
             self.threads,
+            self.precision.name(),
             units::rate_of(self.rate(), "point-steps")
         )
     }

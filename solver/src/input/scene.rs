@@ -49,6 +49,9 @@ use crate::material::liquid::LiquidSpec;
 #[serde(deny_unknown_fields)]
 struct Scene {
     mesh: PathBuf,
+    /// "f64" (default) or "f32".
+    #[serde(default)]
+    precision: Option<String>,
     time: Time,
     #[serde(default)]
     gravity: Option<Gravity>,
@@ -617,6 +620,15 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         }
         _ => None,
     };
+    let precision = match scene.precision.as_deref() {
+        None => crate::input::case::Precision::F64,
+        Some(s) => crate::input::case::Precision::parse(s).ok_or_else(|| {
+            invalid(
+                "precision".into(),
+                format!("{s:?} is not a precision; use \"f64\" or \"f32\""),
+            )
+        })?,
+    };
     let case = Case {
         name: path
             .file_stem()
@@ -659,6 +671,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         probes: scene.probes.clone(),
         prescribed: None,
         engine: Default::default(),
+        precision,
     };
     Ok(Resolved {
         case,

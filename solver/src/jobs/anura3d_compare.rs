@@ -117,8 +117,9 @@ pub fn compare<R: Real>(engine: &Engine<R>, expected: &Bms) -> Comparison {
         };
         let pore = p.liquid.as_ref().map_or(0.0, |l| l.p[i].f64());
         let mut ours = [0.0; 13];
+        let x = engine.mesh.global(&p.x[i]);
         for d in 0..3 {
-            ours[d] = p.x[i][d].f64();
+            ours[d] = x[d];
             ours[3 + d] = p.u[i][d].f64();
         }
         for c in 0..6 {

@@ -189,7 +189,8 @@ impl Tracker {
                     continue;
                 }
                 volume += p.volume[i].f64();
-                let zeta = ((l.top - p.x[i][1].f64()) / l.height).clamp(0.0, 1.0);
+                let y = engine.mesh.global(&p.x[i])[1];
+                let zeta = ((l.top - y) / l.height).clamp(0.0, 1.0);
                 let want = l.u0 * terzaghi::excess_pressure(zeta, tv);
                 let err = (-lp.p[i].f64() - want) / l.u0;
                 if keep {

@@ -176,6 +176,7 @@ impl Partition {
             })
             .collect();
         Mesh {
+            origin: global.origin,
             x: self
                 .node_global
                 .iter()
