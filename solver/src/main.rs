@@ -385,6 +385,13 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
     };
     let Some(out) = out else {
         println!("{plan}");
+        let cheaper = mpm_solve::input::preflight::cheaper_settings(&case);
+        if !cheaper.is_empty() {
+            println!("  cheaper at similar error on the accuracy map (docs/accuracy.md):");
+            for line in cheaper {
+                println!("    - {line}");
+            }
+        }
         plan.check(&limits, None)?;
         // Probes are checked against the points the run would place.
         mpm_solve::driver::engine::Engine::<f64>::with_options(

@@ -28,6 +28,8 @@ pub trait Real:
     const ZERO: Self;
     /// One.
     const ONE: Self;
+    /// Machine epsilon (the gap between 1 and the next number), as f64.
+    const EPSILON: f64;
     /// Conversion from `f64` (rounding for `f32`).
     fn of(v: f64) -> Self;
     /// Conversion to `f64`.
@@ -70,6 +72,7 @@ macro_rules! real {
             const NAME: &'static str = $name;
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
+            const EPSILON: f64 = <$t>::EPSILON as f64;
             #[inline(always)]
             fn of(v: f64) -> Self {
                 v as $t

@@ -154,3 +154,35 @@ fn precision_is_chosen_on_the_command_line_for_both_input_kinds_and_in_scenes() 
         .failure()
         .stderr(predicates::str::contains("\"f16\" is not a precision"));
 }
+
+#[test]
+fn the_check_names_the_precision_and_the_cheaper_settings_of_the_accuracy_map() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = common::scene(tmp.path(), &|t| t);
+    let out = |extra: &[&str]| -> String {
+        let o = Command::cargo_bin("mpm-solve")
+            .unwrap()
+            .arg(&scene)
+            .arg("--check")
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success());
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let f64_plan = out(&[]);
+    assert!(f64_plan.contains("in f64"), "{f64_plan}");
+    assert!(f64_plan.contains("--precision f32:"), "{f64_plan}");
+    assert!(f64_plan.contains("docs/accuracy.md"), "{f64_plan}");
+    let f32_plan = out(&["--precision", "f32"]);
+    assert!(f32_plan.contains("in f32"), "{f32_plan}");
+    assert!(!f32_plan.contains("--precision f32:"), "{f32_plan}");
+    // Half the bytes of state per point, so less memory predicted.
+    let memory = |plan: &str| -> String {
+        plan.lines()
+            .find(|l| l.contains("memory:"))
+            .unwrap()
+            .to_string()
+    };
+    assert_ne!(memory(&f64_plan), memory(&f32_plan));
+}

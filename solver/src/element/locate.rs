@@ -14,10 +14,17 @@ pub enum Found {
     Outside(u32),
 }
 
+/// How far outside an element (in local coordinates) a point may lie and still count as in
+/// it: 1e-10, or a hundred rounding errors of the precision where that is coarser (f32: 1.2e-5),
+/// so that a point on a face is not sent back and forth between its two elements.
+pub fn tolerance<R: Real>() -> f64 {
+    (100.0 * R::EPSILON).max(1e-10)
+}
+
 /// Finds the element holding `p`, starting from `start`.
 #[inline]
 pub fn walk<E: Element, R: Real>(mesh: &Mesh<E, R>, start: u32, p: &V3<R>) -> Found {
-    let tol = R::of(-1e-10);
+    let tol = R::of(-tolerance::<R>());
     let mut e = start;
     // A walk is bounded by the mesh size; the cap only guards against cycling on round-off.
     for _ in 0..mesh.elements().max(16) {
@@ -30,7 +37,9 @@ pub fn walk<E: Element, R: Real>(mesh: &Mesh<E, R>, start: u32, p: &V3<R>) -> Fo
         }
         e = next;
     }
-    Found::Outside(e)
+    // Cycling: the point lies on faces within round-off of every element it visits, so inside
+    // the mesh; it stays in the element it was last found in.
+    Found::In(start)
 }
 
 #[cfg(test)]
@@ -53,5 +62,53 @@ mod tests {
             walk(&mesh, e, &[1.2, 0.5, 0.5]),
             Found::Outside(_)
         ));
+    }
+
+    #[test]
+    fn in_single_precision_points_on_interior_faces_stay_in_the_mesh() {
+        // A mesh away from the origin's scale, in f32: face points computed in f32 lie off
+        // their face by rounding errors far above 1e-10.
+        let mut model = generate::box_mesh([6, 6, 6], [0.37, 1.3, 0.11], ElementType::Tet4);
+        // Interior nodes moved off the lattice (by up to 15 % of a cell), so that faces are
+        // oblique and their points' coordinates round in every direction.
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let size = [0.37, 1.3, 0.11];
+        for p in model.coords.chunks_exact_mut(3) {
+            let inside = (0..3).all(|a| p[a] > 1e-9 && p[a] < size[a] - 1e-9);
+            for a in 0..3 {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                if inside {
+                    p[a] += (seed as f64 / u64::MAX as f64 - 0.5) * 0.3 * size[a] / 6.0;
+                }
+            }
+        }
+        let mesh = TetMesh::<f32>::new(&model).unwrap();
+        let mut checked = 0;
+        for e in 0..mesh.elements() {
+            for k in 0..4 {
+                let other = mesh.neighbour[e][k];
+                if other == u32::MAX {
+                    continue;
+                }
+                let f = crate::element::tet4::FACE_OPPOSITE[k];
+                let mut p = [0.0f32; 3];
+                for &j in &f {
+                    let x = mesh.x[mesh.corners[e][j] as usize];
+                    for a in 0..3 {
+                        p[a] += x[a] / 3.0;
+                    }
+                }
+                for start in [e as u32, other] {
+                    assert!(
+                        matches!(walk(&mesh, start, &p), Found::In(_)),
+                        "a point on the face between {e} and {other} was lost"
+                    );
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 1000);
     }
 }
