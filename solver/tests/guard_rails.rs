@@ -45,7 +45,7 @@ fn last_output_reads_back(out: &Path) -> f64 {
     let vtu = vtu_read::read_vtu_file(&out.join(&last.file)).unwrap();
     let stress = vtu.point_data("stress").expect("stress");
     let xyz = vtu.coordinates().expect("points");
-    assert!(stress.len() > 0);
+    assert!(!stress.is_empty());
     for i in 0..stress.len() {
         for c in 0..6 {
             assert!(stress.get(i, c).is_finite(), "stress of point {i}");

@@ -64,11 +64,10 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         let er = layout.element_range(t);
         // SAFETY: the element ranges of the threads are disjoint; this thread's points lie in
         // its own elements.
-        let sums = guard_slots.as_ref().map(|g| unsafe { g.range(er.clone()) });
-        let mut sums = sums.map(|s| {
+        let mut sums = guard_slots.as_ref().map(|g| unsafe { g.range(er.clone()) });
+        if let Some(s) = sums.as_mut() {
             s.fill(GuardSums::EMPTY);
-            s
-        });
+        }
         for (j, i) in r.enumerate() {
             if !active[i] {
                 continue;
