@@ -5,7 +5,9 @@
 //!
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
-//!  --order morton|random|none --precision f64|f32`
+//!  --order morton|random|none --precision f64|f32 --guards on|off`
+//!
+//! `--guards off` skips the per-step guard rails (docs/design.md §4.14), to measure their cost.
 //!
 //! `--order random` renumbers elements and nodes by a fixed pseudo-random permutation (the
 //! locality a mesh generator's worst case gives); `morton` applies the solver's curve ordering.
@@ -102,6 +104,7 @@ fn main() {
     if order == "morton" {
         case = case.reordered(Reorder::Morton).unwrap();
     }
+    case.guards.enabled = arg(&a, "--guards") != Some("off");
     case.engine = Options {
         threads,
         pin,
@@ -134,7 +137,7 @@ fn main() {
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
     println!(
-        "{{\"case\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}}}",
+        "{{\"case\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}}}",
         if saturated { "saturated" } else { "dry" },
         info.0,
         case.model.element_count(),
@@ -145,6 +148,7 @@ fn main() {
         order,
         steps,
         if f32 { "f32" } else { "f64" },
+        case.guards.enabled,
         bytes_per_point,
         rates,
         median,

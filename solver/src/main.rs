@@ -93,7 +93,29 @@ struct Args {
     /// `precision`, else f64]. Time, work and energies are summed in f64 either way.
     #[arg(long, value_enum)]
     precision: Option<PrecisionArg>,
+    /// Run a Courant number above 1 (refused otherwise: the explicit step is unstable; the
+    /// guard rails then stop the run when it blows up).
+    #[arg(long)]
+    force: bool,
+    /// Stop the run when |kinetic + strain + dissipated - work| exceeds this share of the
+    /// largest energy term (single-phase runs; `off`: not checked) [default: 0.2].
+    #[arg(long, value_name = "SHARE|off", value_parser = tolerance)]
+    energy_tolerance: Option<Tolerance>,
 }
+
+/// `--energy-tolerance`: a positive share, or off.
+#[derive(Debug, Clone, Copy)]
+struct Tolerance(Option<f64>);
+
+fn tolerance(s: &str) -> Result<Tolerance, String> {
+    if s.eq_ignore_ascii_case("off") {
+        return Ok(Tolerance(None));
+    }
+    positive(s).map(|v| Tolerance(Some(v)))
+}
+
+/// Exit status of a run stopped by a guard rail (docs/design.md §4.14, README "Exit codes").
+const EXIT_DIVERGED: u8 = 3;
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 enum PrecisionArg {
@@ -156,7 +178,22 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("mpm-solve: error: {e:#}");
-            ExitCode::FAILURE
+            let diverged = e.chain().any(|c| {
+                c.downcast_ref::<mpm_solve::driver::guard::Divergence>()
+                    .is_some()
+                    || matches!(
+                        c.downcast_ref::<mpm_solve::driver::run::RunError>(),
+                        Some(mpm_solve::driver::run::RunError::Diverged(_))
+                    )
+            });
+            if diverged {
+                eprintln!(
+                    "mpm-solve: the outputs stop at the last good state (run.pvd); run.json has \"status\": \"diverged\" and the diagnosis"
+                );
+                ExitCode::from(EXIT_DIVERGED)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }
@@ -344,6 +381,10 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
             PrecisionArg::F32 => Precision::F32,
         };
     }
+    case.check_courant(args.force)?;
+    if let Some(Tolerance(t)) = args.energy_tolerance {
+        case.guards.energy_tolerance = t;
+    }
     case.probes.extend(&args.probe);
     case.probes.sort_unstable();
     case.probes.dedup();
@@ -411,6 +452,7 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
     let options = mpm_solve::driver::run::RunOptions {
         drop_lost: args.drop_lost,
         max_lost: args.max_lost,
+        force: args.force,
     };
     let mode = if args.quiet {
         Progress::Off

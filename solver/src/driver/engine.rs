@@ -6,7 +6,7 @@ use crate::element::locate::{walk, Found};
 use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::Element;
-use crate::input::case::{Case, Integration};
+use crate::input::case::{Case, Guards, Integration};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::comm::{Communicator, SingleProcess};
@@ -19,7 +19,21 @@ use crate::state::grid::{Grid, LiquidNodes};
 use crate::state::particles::{self, Field, FieldVisitor, Particles, Value};
 use crate::step::grid_update::{DampingRule, Drag};
 use crate::step::load_curve::LoadCurve;
+use crate::step::stress::{Guard, GuardSums};
 use crate::step::{grid_to_particle, grid_update, particle_to_grid, stress};
+
+pub use crate::driver::guard::{Check, Divergence};
+
+/// Why a step stopped the run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StepError {
+    /// A material point left the mesh.
+    #[error(transparent)]
+    Lost(#[from] Lost),
+    /// A guard rail tripped (docs/design.md §4.14).
+    #[error(transparent)]
+    Diverged(Box<Divergence>),
+}
 
 /// Phases timed in `run.json`.
 pub const PHASES: [&str; 6] = [
@@ -197,6 +211,30 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     /// Input element (0-based) of each local element, so that messages name elements as the
     /// input.
     input_element: Vec<u32>,
+    /// Input node number (1-based) of each computational node, for messages.
+    input_node: Vec<u32>,
+    /// The guard rails' settings.
+    pub guards: Guards,
+    /// The guard rails' per-element sums of the last step (empty when the guards are off).
+    guard_slots: Vec<GuardSums>,
+    /// Per material index: mass per initial volume of its points (t/m³).
+    initial_density: Vec<R>,
+    /// Strain energy taken up so far, Σ V σ:Δε over the steps (kJ).
+    pub strain_energy: f64,
+    /// Energy taken out by local damping so far (kJ; single phase).
+    pub dissipated: f64,
+    /// External work so far at the steps' mid-step nodal velocities (kJ): the energy balance's
+    /// work term (`external_work` counts it at the end-of-step velocities, as Anura3D).
+    pub balance_work: f64,
+    /// Kinetic energy of the points after the last step (kJ; from the guards' sums, 0 when off).
+    pub step_kinetic: f64,
+    /// Kinetic energy at the start (kJ).
+    initial_kinetic: f64,
+    /// The Courant number and the local element whose crossing time sets the step.
+    courant: (f64, usize),
+    /// Whether the blow-up check applies (no prescribed velocities, which add energy) and the
+    /// energy balance (single phase too: the liquid's energies are not counted).
+    energy_checked: (bool, bool),
 }
 
 impl<R: Real, E: Element> Engine<R, E> {
@@ -310,6 +348,10 @@ impl<R: Real, E: Element> Engine<R, E> {
         let dt = comm.min(crate::input::time_step::critical(case, own.clone(), |e| {
             mesh.min_altitude[e - own.start].f64()
         })?);
+        let (critical_element, _) =
+            crate::input::time_step::shortest_crossing(case, own.clone(), |e| {
+                mesh.min_altitude[e - own.start].f64()
+            });
         let mut grid = Grid::new(mesh.nodes());
         if two_phase {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
@@ -341,7 +383,36 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &case.element_material[own.clone()],
             )
         });
-        Ok(Engine {
+        let guard_slots = if case.guards.enabled {
+            vec![GuardSums::EMPTY; mesh.elements()]
+        } else {
+            Vec::new()
+        };
+        let initial_density = case
+            .materials
+            .iter()
+            .map(|m| R::of(m.as_ref().map_or(0.0, |s| s.density)))
+            .collect();
+        let input_node = mesh
+            .model_node
+            .iter()
+            .map(|&m| case.node_number(m as usize))
+            .collect();
+        let mut engine = Engine {
+            input_node,
+            guards: case.guards,
+            guard_slots,
+            initial_density,
+            strain_energy: 0.0,
+            dissipated: 0.0,
+            balance_work: 0.0,
+            step_kinetic: 0.0,
+            initial_kinetic: 0.0,
+            courant: (case.courant, critical_element - own.start),
+            energy_checked: (
+                case.prescribed.is_none(),
+                !two_phase && case.prescribed.is_none(),
+            ),
             comm,
             config: StepConfig::of(case),
             input_element: own.clone().map(|e| case.element_number(e) - 1).collect(),
@@ -375,12 +446,15 @@ impl<R: Real, E: Element> Engine<R, E> {
             layout,
             slots,
             sort_scratch: SortScratch::default(),
-        })
+        };
+        engine.initial_kinetic = engine.kinetic_energy();
+        engine.step_kinetic = engine.initial_kinetic;
+        Ok(engine)
     }
 
     /// One explicit MUSL step of length `dt`; `snap_to` sets the clock exactly when the step
     /// ends on an output time (so times print as given, not as sums of steps).
-    pub fn step(&mut self, dt: f64, snap_to: Option<f64>) -> Result<(), Lost> {
+    pub fn step(&mut self, dt: f64, snap_to: Option<f64>) -> Result<(), StepError> {
         let t0 = Instant::now();
         let case = &self.config;
         let gm = case.gravity_curve.at(self.time + dt);
@@ -442,10 +516,12 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &self.fixed,
                 R::of(case.damping),
                 case.damping_rule,
+                R::of(dt),
             );
             (f, grid_update::ForceSums::default())
         };
-        self.force_error = forces.reduced(&*self.comm).ratio();
+        let forces = forces.reduced(&*self.comm);
+        self.force_error = forces.ratio();
         self.liquid_force_error = liquid_forces.reduced(&*self.comm).ratio();
         let t2 = Instant::now();
         let pm = self
@@ -513,6 +589,10 @@ impl<R: Real, E: Element> Engine<R, E> {
             case.objective_stress,
             self.smoothing.as_ref(),
             R::of(dt),
+            self.guards.enabled.then_some(Guard {
+                slots: &mut self.guard_slots,
+                initial_density: &self.initial_density,
+            }),
         );
         if let Some(m) = &self.mixed {
             m.smooth_stresses(&self.team, &self.layout, &mut self.particles);
@@ -525,11 +605,15 @@ impl<R: Real, E: Element> Engine<R, E> {
                 w += (f * self.grid.vel[n][a]).f64();
             }
         }
-        self.external_work += self.comm.sum(w) * dt;
+        let w = self.comm.sum(w);
+        self.external_work += w * dt;
         self.steps += 1;
         self.time += dt;
         if let Some(t) = snap_to {
             self.time = t;
+        }
+        if self.guards.enabled {
+            self.check_step(dt, w, &forces)?;
         }
         let t4 = Instant::now();
         self.locate()?;
@@ -541,6 +625,91 @@ impl<R: Real, E: Element> Engine<R, E> {
             self.phase_seconds[k] += (b - a).as_secs_f64();
         }
         Ok(())
+    }
+
+    /// The guard rails after a step: sums the per-element slots in element order (so the
+    /// result does not depend on the threads), updates the energy terms and checks them. `w`:
+    /// the external power summed over the nodes this step; `forces`: the grid update's sums.
+    fn check_step(
+        &mut self,
+        dt: f64,
+        w: f64,
+        forces: &grid_update::ForceSums,
+    ) -> Result<(), StepError> {
+        let (mut strain, mut kinetic, mut ratio) = (0.0, 0.0, f64::INFINITY);
+        for s in &self.guard_slots {
+            strain += s.strain;
+            kinetic += s.kinetic;
+            if !(s.volume_ratio >= ratio) {
+                ratio = s.volume_ratio;
+            }
+        }
+        let strain = self.comm.sum(strain);
+        let kinetic = self.comm.sum(kinetic);
+        let ratio = self.comm.min(ratio);
+        let previous = self.step_kinetic;
+        self.strain_energy += strain;
+        self.step_kinetic = kinetic;
+        self.dissipated += forces.damping;
+        self.balance_work += forces.work;
+        let nodal = w * dt + forces.work + forces.damping + forces.unbalanced;
+        let fail = |check| Err(StepError::Diverged(Box::new(self.diagnose(check))));
+        // A non-finite stress or velocity makes the energies NaN or infinite; a non-finite
+        // position or pore pressure the volume ratio NaN; nodal values the nodal sums.
+        if !(strain + kinetic).is_finite() || ratio.is_nan() || !nodal.is_finite() {
+            return fail(Check::NonFinite);
+        }
+        if ratio <= self.guards.min_volume_ratio {
+            return fail(Check::Volume);
+        }
+        if self.energy_checked.0 {
+            let released = (-self.strain_energy).max(0.0);
+            let budget = self.initial_kinetic + self.balance_work.max(0.0) + released;
+            if kinetic > self.guards.blow_up_factor * budget && kinetic > previous {
+                return fail(Check::BlowUp);
+            }
+        }
+        if self.energy_checked.1 {
+            if let Some(tol) = self.guards.energy_tolerance {
+                if self.balance_error() > tol {
+                    return fail(Check::EnergyBalance);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// |kinetic + strain + dissipated - work - initial kinetic| over the largest of those
+    /// terms (0 while all are 0), with the kinetic energy of the last step.
+    pub fn balance_error(&self) -> f64 {
+        crate::driver::guard::balance_error(
+            self.step_kinetic,
+            self.strain_energy,
+            self.dissipated,
+            self.balance_work,
+            self.initial_kinetic,
+        )
+    }
+
+    /// What tripped, where: the point, element or node and the value, and the likely cause.
+    fn diagnose(&self, check: Check) -> Divergence {
+        crate::driver::guard::diagnose(
+            check,
+            &crate::driver::guard::View {
+                particles: &self.particles,
+                grid: &self.grid,
+                input_element: &self.input_element,
+                input_node: &self.input_node,
+                initial_density: &self.initial_density,
+                courant: self.courant.0,
+                critical_element: self.input_element[self.courant.1] + 1,
+                step: self.steps,
+                time: self.time,
+                kinetic: self.step_kinetic,
+                balance_error: self.balance_error(),
+                tolerance: self.guards.energy_tolerance,
+            },
+        )
     }
 
     /// Anura3D's quasi-static convergence test: out-of-balance forces of the mixture and of the

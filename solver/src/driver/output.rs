@@ -51,7 +51,7 @@ impl Output {
             } else {
                 "time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx\n".into()
             },
-            energy: "time,kinetic,external_work\n".into(),
+            energy: "time,kinetic,external_work,strain,dissipated,balance_error\n".into(),
             probes,
         })
     }
@@ -112,6 +112,9 @@ impl Output {
         self.energy.push_str(&real_to_string(engine.time));
         csv_real(&mut self.energy, engine.kinetic_energy());
         csv_real(&mut self.energy, engine.external_work);
+        csv_real(&mut self.energy, engine.strain_energy);
+        csv_real(&mut self.energy, engine.dissipated);
+        csv_real(&mut self.energy, engine.balance_error());
         self.energy.push('\n');
         mpm_shared::io::write_output(&self.dir.join("history.csv"), self.history.as_bytes())?;
         mpm_shared::io::write_output(&self.dir.join("energy.csv"), self.energy.as_bytes())?;
@@ -190,6 +193,7 @@ pub fn write_summary<R: Real>(
     engine: &Engine<R>,
     wall: f64,
     stepping: f64,
+    diverged: Option<&crate::driver::guard::Divergence>,
 ) -> mpm_shared::Result<()> {
     let phases: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
         .iter()
@@ -228,6 +232,29 @@ pub fn write_summary<R: Real>(
         "bytes_per_particle": engine.particles.bytes_per_point() as f64 + grid_bytes,
         "peak_rss_bytes": peak_rss_bytes(),
         "lost_particles": engine.lost,
+        "status": if diverged.is_some() { "diverged" } else { "completed" },
+        "energy": {
+            "kinetic": engine.kinetic_energy(),
+            "strain": engine.strain_energy,
+            "dissipated": engine.dissipated,
+            "external_work": engine.external_work,
+            "balance_work": engine.balance_work,
+            "balance_error": engine.balance_error(),
+            "energy_tolerance": engine.guards.energy_tolerance,
+            "guards": engine.guards.enabled,
+        },
+        "diagnosis": diverged.map(|d| serde_json::json!({
+            "check": d.check.name(),
+            "step": d.step,
+            "time": d.time,
+            "point": d.point,
+            "element": d.element,
+            "node": d.node,
+            "field": d.field,
+            "value": d.value,
+            "cause": d.cause,
+            "message": d.to_string(),
+        })),
     });
     let mut text = serde_json::to_string_pretty(&json).expect("plain JSON");
     text.push('\n');

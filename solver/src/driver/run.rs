@@ -23,6 +23,12 @@ pub enum RunError {
     /// A material point left the mesh.
     #[error(transparent)]
     Lost(#[from] crate::driver::engine::Lost),
+    /// A guard rail tripped: the run diverged (`run.json` says where and why).
+    #[error(transparent)]
+    Diverged(Box<crate::driver::guard::Divergence>),
+    /// A Courant number above 1 without `force`.
+    #[error(transparent)]
+    Courant(#[from] crate::input::case::CourantError),
     /// Writing an output failed.
     #[error(transparent)]
     Output(#[from] mpm_shared::Error),
@@ -53,6 +59,15 @@ pub enum RunError {
     },
 }
 
+impl From<crate::driver::engine::StepError> for RunError {
+    fn from(e: crate::driver::engine::StepError) -> Self {
+        match e {
+            crate::driver::engine::StepError::Lost(l) => RunError::Lost(l),
+            crate::driver::engine::StepError::Diverged(d) => RunError::Diverged(d),
+        }
+    }
+}
+
 fn list(ids: &[u32]) -> String {
     let mut s: Vec<String> = ids.iter().take(20).map(|i| i.to_string()).collect();
     if ids.len() > 20 {
@@ -69,6 +84,8 @@ pub struct RunOptions {
     /// With `drop_lost`, the share of the points (0–1) that may leave before the run stops with
     /// an error; the run stops anyway when every point has left.
     pub max_lost: f64,
+    /// Run a Courant number above 1 (refused otherwise).
+    pub force: bool,
 }
 
 impl Default for RunOptions {
@@ -76,6 +93,7 @@ impl Default for RunOptions {
         RunOptions {
             drop_lost: false,
             max_lost: 0.1,
+            force: false,
         }
     }
 }
@@ -171,6 +189,7 @@ fn drive<R: Real>(
     observer: &mut dyn Observer<R>,
 ) -> Result<Engine<R>, RunError> {
     let wall = Instant::now();
+    case.check_courant(options.force)?;
     let mut engine = Engine::<R>::new(case, options.drop_lost)?;
     check_probes(case, &engine)?;
     observer.on_start(&engine)?;
@@ -215,7 +234,25 @@ fn drive<R: Real>(
             } else {
                 (left, Some(t_out))
             };
-            engine.step(dt, snap)?;
+            if let Err(e) = engine.step(dt, snap) {
+                if let crate::driver::engine::StepError::Diverged(d) = &e {
+                    // The state at the failing step, when still finite, is the most useful
+                    // last output (where it went wrong); otherwise the outputs so far stand.
+                    if d.check != crate::driver::guard::Check::NonFinite {
+                        out.write(&engine)?;
+                    }
+                    stepping += t0.elapsed().as_secs_f64();
+                    output::write_summary(
+                        dir,
+                        case,
+                        &engine,
+                        wall.elapsed().as_secs_f64(),
+                        stepping,
+                        Some(d),
+                    )?;
+                }
+                return Err(e.into());
+            }
             taken += 1;
             if options.drop_lost && engine.lost > 0 {
                 check_lost(&engine, options.max_lost)?;
@@ -230,7 +267,14 @@ fn drive<R: Real>(
         engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
     }
     observer.on_end(&engine);
-    output::write_summary(dir, case, &engine, wall.elapsed().as_secs_f64(), stepping)?;
+    output::write_summary(
+        dir,
+        case,
+        &engine,
+        wall.elapsed().as_secs_f64(),
+        stepping,
+        None,
+    )?;
     Ok(engine)
 }
 

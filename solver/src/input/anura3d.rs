@@ -119,7 +119,8 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             ))
         }
     };
-    if !(s.courant > 0.0 && s.courant <= 1.0) {
+    // Above 1 is refused before the run unless --force (Case::check_courant).
+    if !(s.courant > 0.0 && s.courant.is_finite()) {
         return Err(unsupported(
             &cfile,
             "$$COURANT_NUMBER",
@@ -341,7 +342,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             .file_stem()
             .map(|x| x.to_string_lossy().to_string())
             .unwrap_or_default(),
-        inputs: vec![gfile, cfile],
+        inputs: vec![gfile, cfile.clone()],
         model,
         materials,
         element_material,
@@ -359,6 +360,8 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         gravity: g,
         gravity_curve,
         courant: s.courant,
+        courant_item: format!("{cfile}: $$COURANT_NUMBER"),
+        guards: Default::default(),
         damping: s.local_damping.unwrap_or(0.0),
         end_time: total,
         output_times,

@@ -237,8 +237,12 @@ pub struct Case {
     pub gravity: [f64; 3],
     /// Gravity multiplier.
     pub gravity_curve: LoadCurve,
-    /// Courant number.
+    /// Courant number (above 1 only runs with `--force`, see [`Case::check_courant`]).
     pub courant: f64,
+    /// Where the Courant number was given (file and key), for messages.
+    pub courant_item: String,
+    /// The run-time checks (guard rails) and their tolerances.
+    pub guards: Guards,
     /// Local damping factor α.
     pub damping: f64,
     /// End time (s).
@@ -288,6 +292,47 @@ pub struct Case {
     pub engine: crate::parallel::team::Options,
     /// Floating-point precision of the particle and grid state.
     pub precision: Precision,
+}
+
+/// The checks made at every step (docs/design.md §4.14): non-finite values, collapsing points,
+/// kinetic energy growing without work, the energy balance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Guards {
+    /// Make the checks at all (off only to measure what they cost).
+    pub enabled: bool,
+    /// Largest |kinetic + strain + dissipated - work| / (largest energy term) before the run
+    /// stops; `None`: not checked. Checked in single-phase runs without prescribed velocities.
+    pub energy_tolerance: Option<f64>,
+    /// A point whose volume falls to this share of its initial volume (or below, or to zero or
+    /// less: det F <= 0) stops the run.
+    pub min_volume_ratio: f64,
+    /// Kinetic energy above this many times what the work done and the strain energy released
+    /// could give (and still growing) stops the run as a blow-up.
+    pub blow_up_factor: f64,
+}
+
+/// Default tolerance of the energy balance (`--energy-tolerance`).
+pub const DEFAULT_ENERGY_TOLERANCE: f64 = 0.2;
+
+impl Default for Guards {
+    fn default() -> Self {
+        Guards {
+            enabled: true,
+            energy_tolerance: Some(DEFAULT_ENERGY_TOLERANCE),
+            min_volume_ratio: 1e-3,
+            blow_up_factor: 4.0,
+        }
+    }
+}
+
+/// A Courant number above 1 without `--force`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{item}: Courant number {courant} is above 1: the explicit step would be {courant}× the critical step and the run would blow up; use at most 1 (0.9 is usual), or --force to run it anyway")]
+pub struct CourantError {
+    /// File and key.
+    pub item: String,
+    /// The value given.
+    pub courant: f64,
 }
 
 /// The precision a run computes in; sums that grow (time, work, energies) are f64 in both.
@@ -382,6 +427,17 @@ pub enum ReorderError {
 }
 
 impl Case {
+    /// Refuses a Courant number above 1 unless `force`.
+    pub fn check_courant(&self, force: bool) -> Result<(), CourantError> {
+        if self.courant > 1.0 && !force {
+            return Err(CourantError {
+                item: self.courant_item.clone(),
+                courant: self.courant,
+            });
+        }
+        Ok(())
+    }
+
     /// The case with its elements ordered along a space-filling curve and its nodes renumbered
     /// by first use (sfcb's ordering), every per-element and per-node datum following, and the
     /// material-point ids and the numbers messages give kept those of the input
@@ -508,6 +564,8 @@ impl Case {
             gravity: [0.0; 3],
             gravity_curve: LoadCurve::Step,
             courant: 0.9,
+            courant_item: "courant".into(),
+            guards: Guards::default(),
             damping: 0.0,
             end_time: 1.0,
             output_times: vec![1.0],

@@ -351,7 +351,8 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         ));
     }
     let t = &scene.time;
-    if !(t.courant > 0.0 && t.courant <= 1.0) {
+    // Above 1 is refused before the run unless --force (Case::check_courant).
+    if !(t.courant > 0.0 && t.courant.is_finite()) {
         return Err(invalid(
             "time.courant".into(),
             format!("must be in (0, 1], got {}", t.courant),
@@ -652,6 +653,8 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         gravity,
         gravity_curve: LoadCurve::ramp(gravity_ramp),
         courant: t.courant,
+        courant_item: format!("{}: time.courant", path.display()),
+        guards: Default::default(),
         damping,
         end_time: end,
         output_times,

@@ -20,10 +20,25 @@ pub fn critical(
     elements: std::ops::Range<usize>,
     min_altitude: impl Fn(usize) -> f64,
 ) -> Result<f64, TimeStepError> {
+    let (_, crossing) = shortest_crossing(case, elements, min_altitude);
+    let dt = case.courant * crossing;
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(TimeStepError { dt });
+    }
+    Ok(dt)
+}
+
+/// The element (the case's numbering) a wave crosses fastest, and that time (s): the critical
+/// step is the Courant number times it. `(elements.start, ∞)` for no elements.
+pub fn shortest_crossing(
+    case: &Case,
+    elements: std::ops::Range<usize>,
+    min_altitude: impl Fn(usize) -> f64,
+) -> (usize, f64) {
     // Empty elements may fill: they take the fastest material's speed. An explicit drag must
     // be resolved by the step too: Mieremet's speed has its term.
     let anura3d_step = case.anura3d_time_step || case.drag == Drag::Explicit;
-    let mut dt = f64::INFINITY;
+    let mut best = (elements.start, f64::INFINITY);
     for e in elements {
         let dx = min_altitude(e);
         let m = case.element_material[e] as usize;
@@ -36,11 +51,11 @@ pub fn critical(
                 .map(|s| s.wave_speed_at(dx, anura3d_step))
                 .fold(0.0, f64::max),
         };
-        dt = dt.min(dx / c);
+        let t = dx / c;
+        // `<` keeps the first of equal ones and skips a NaN, as `f64::min` did.
+        if t < best.1 {
+            best = (e, t);
+        }
     }
-    let dt = case.courant * dt;
-    if !(dt > 0.0 && dt.is_finite()) {
-        return Err(TimeStepError { dt });
-    }
-    Ok(dt)
+    best
 }

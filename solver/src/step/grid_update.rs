@@ -61,7 +61,9 @@ pub const MASS_EPS: f64 = 1e-12;
 ///
 /// Returns this process's sums for the out-of-balance force ratio of Anura3D's quasi-static
 /// convergence check, |f_int + f_ext| / |f_ext| over the free components
-/// ([`ForceSums::ratio`] once summed over every process).
+/// ([`ForceSums::ratio`] once summed over every process), and the energy terms of the step
+/// at the nodes' mid-step velocities v + a Δt/2 (`dt`: the step): the work of the external
+/// force and the energy local damping took out.
 pub fn grid_update<R: Real>(
     g: &mut Grid<R>,
     traction: &[V3<R>],
@@ -69,8 +71,11 @@ pub fn grid_update<R: Real>(
     fixed: &[[bool; 3]],
     alpha: R,
     rule: DampingRule,
+    dt: R,
 ) -> ForceSums {
     let (mut unbalanced, mut external) = (0.0, 0.0);
+    let (mut work, mut damping) = (0.0, 0.0);
+    let half_dt = R::of(0.5) * dt;
     let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
     let eps = heaviest * R::of(MASS_EPS);
     g.empty_below = eps;
@@ -89,12 +94,19 @@ pub fn grid_update<R: Real>(
             let f = g.f_int[n][a] + ext;
             unbalanced += f.f64() * f.f64();
             external += ext.f64() * ext.f64();
-            g.acc[n][a] = damp(rule, alpha, f, g.momentum[n][a]) / m;
+            let fd = damp(rule, alpha, f, g.momentum[n][a]);
+            let acc = fd / m;
+            g.acc[n][a] = acc;
+            let v_mid = (g.momentum[n][a] / m + half_dt * acc).f64();
+            work += ext.f64() * v_mid;
+            damping += (f - fd).f64() * v_mid;
         }
     }
     ForceSums {
         unbalanced,
         external,
+        work: work * dt.f64(),
+        damping: damping * dt.f64(),
     }
 }
 
@@ -105,6 +117,11 @@ pub struct ForceSums {
     pub unbalanced: f64,
     /// Σ |f_ext|².
     pub external: f64,
+    /// Work of the external force over the step at the mid-step velocities (kJ; the energy
+    /// balance's work term, single phase only).
+    pub work: f64,
+    /// Energy taken out by local damping over the step (kJ; single phase only).
+    pub damping: f64,
 }
 
 impl ForceSums {
@@ -113,6 +130,8 @@ impl ForceSums {
         ForceSums {
             unbalanced: comm.sum(self.unbalanced),
             external: comm.sum(self.external),
+            work: comm.sum(self.work),
+            damping: comm.sum(self.damping),
         }
     }
 
@@ -166,6 +185,9 @@ pub fn grid_update_two_phase<R: Real>(
 ) -> (ForceSums, ForceSums) {
     let (mut unbalanced, mut external) = (0.0, 0.0);
     let (mut unbalanced_w, mut external_w) = (0.0, 0.0);
+    // Work of the mixture's external force at the solid's mid-step velocity (blow-up check).
+    let mut work = 0.0;
+    let half_dt = R::of(0.5) * dt;
     let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
     let eps = heaviest * R::of(MASS_EPS);
     g.empty_below = eps;
@@ -197,6 +219,9 @@ pub fn grid_update_two_phase<R: Real>(
                 } else {
                     damp(rule, alpha, f_mix, g.momentum[n][a]) / ms
                 };
+                if !fixed[n][a] {
+                    work += ext.f64() * (g.momentum[n][a] / ms + half_dt * g.acc[n][a]).f64();
+                }
                 gl.acc[n][a] = R::ZERO;
                 continue;
             }
@@ -273,16 +298,22 @@ pub fn grid_update_two_phase<R: Real>(
             };
             g.acc[n][a] = a_s;
             gl.acc[n][a] = a_w;
+            if !fixed[n][a] {
+                work += ext.f64() * (v + half_dt * a_s).f64();
+            }
         }
     }
     (
         ForceSums {
             unbalanced,
             external,
+            work: work * dt.f64(),
+            damping: 0.0,
         },
         ForceSums {
             unbalanced: unbalanced_w,
             external: external_w,
+            ..ForceSums::default()
         },
     )
 }

@@ -16,6 +16,10 @@ use crate::step::smoothing::StrainSmoothing;
 /// the rotation Δω σ - σ Δω with Δω = skew(L) Δt and -tr(Δε) σ); V *= 1 + tr Δε; x += Δt Σ N_n v_n. With `smoothing`, the
 /// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
 /// increment ([`crate::step::smoothing`]). Each thread updates the particles of its elements.
+///
+/// With `guard`, each element's [`GuardSums`] of its active points are written to its slot
+/// (strain-energy increment, kinetic energy, smallest volume check): the guard rails' sums,
+/// formed here so that they cost no extra pass over the points.
 #[allow(clippy::too_many_arguments)]
 pub fn update_stress_and_move<E: Element, R: Real>(
     team: &Team,
@@ -27,9 +31,16 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     objective: bool,
     smoothing: Option<&StrainSmoothing<R>>,
     dt: R,
+    guard: Option<Guard<'_, R>>,
 ) {
     let half = R::of(0.5);
     let third = R::ONE / R::of(3.0);
+    let (guard_slots, initial_density) = match guard {
+        Some(g) => (Some(Shared::new(g.slots)), g.initial_density),
+        None => (None, &[][..]),
+    };
+    let (velocity, mass) = (&p.v, &p.mass);
+    let pore = p.liquid.as_ref().map(|l| &l.p[..]);
     let xs = Shared::new(&mut p.x);
     let us = Shared::new(&mut p.u);
     let stresses = Shared::new(&mut p.stress);
@@ -50,6 +61,13 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         };
         // SAFETY: as above; each point's state is its own `k` values.
         let state = unsafe { states.range(k * r.start..k * r.end) };
+        let er = layout.element_range(t);
+        // SAFETY: the element ranges of the threads are disjoint; this thread's points lie in
+        // its own elements.
+        let mut sums = guard_slots.as_ref().map(|g| unsafe { g.range(er.clone()) });
+        if let Some(s) = sums.as_mut() {
+            s.fill(GuardSums::EMPTY);
+        }
         for (j, i) in r.enumerate() {
             if !active[i] {
                 continue;
@@ -98,14 +116,68 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     *s -= ev * v;
                 }
             }
+            let s0 = stress[j];
             laws[material[i] as usize].update(&mut stress[j], &de, &mut state[k * j..k * j + k]);
+            let v0 = volume[j];
             volume[j] *= R::ONE + de[0] + de[1] + de[2];
             for a in 0..3 {
                 x[j][a] += dt * dx[a];
                 u[j][a] += dt * dx[a];
             }
+            if let Some(sums) = sums.as_mut() {
+                // Work of the mean stress over the step (exact for a linear law) on the start
+                // volume; shear components count twice (tensor shear strains).
+                let s1 = stress[j];
+                let mut w = R::ZERO;
+                for c in 0..6 {
+                    let twice = if c < 3 { R::ONE } else { R::of(2.0) };
+                    w += twice * (s0[c] + s1[c]) * de[c];
+                }
+                let v = velocity[i];
+                let vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                // V/V0 (mass is constant, m = ρ0 V0), made NaN by any non-finite position or
+                // pore pressure: one comparison catches both.
+                let p = pore.map_or(R::ZERO, |p| p[i]);
+                let finite = R::ZERO * (x[j][0] + x[j][1] + x[j][2] + p);
+                let ratio = volume[j] * initial_density[material[i] as usize] / mass[i] + finite;
+                let slot = &mut sums[e - er.start];
+                slot.strain += half.f64() * (w * v0).f64();
+                slot.kinetic += half.f64() * (mass[i] * vv).f64();
+                // NaN wins (`!(a >= b)` is true for a NaN).
+                if !(ratio.f64() >= slot.volume_ratio) {
+                    slot.volume_ratio = ratio.f64();
+                }
+            }
         }
     });
+}
+
+/// Per element, the guard rails' sums over its active points after the stress update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GuardSums {
+    /// Σ V0 (σ0 + σ1)/2 : Δε, the strain energy taken up in the step (kJ).
+    pub strain: f64,
+    /// Σ m |v|² / 2 (kJ), with the step's new point velocities.
+    pub kinetic: f64,
+    /// Smallest V / V0 of the points; NaN when a position or pore pressure is not finite.
+    pub volume_ratio: f64,
+}
+
+impl GuardSums {
+    /// An element without points.
+    pub const EMPTY: GuardSums = GuardSums {
+        strain: 0.0,
+        kinetic: 0.0,
+        volume_ratio: f64::INFINITY,
+    };
+}
+
+/// What [`update_stress_and_move`] needs to form the guard rails' sums.
+pub struct Guard<'a, R> {
+    /// One slot per element.
+    pub slots: &'a mut [GuardSums],
+    /// Per material index, mass per initial volume of its points (ρ0, t/m³; 0 for none).
+    pub initial_density: &'a [R],
 }
 
 /// Pore-pressure update of saturated points (docs/design.md §4): Δp = (K_w / n) (n Δε_vol,w +

@@ -1,0 +1,229 @@
+//! The guard rails (docs/design.md §4.14): a case built to trip each, checking the message, the
+//! exit code, `run.json`'s status and diagnosis, and that the last output reads back.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use common::testdata;
+use mpm_shared::vtu_read;
+
+/// The golden dry column (461 tetrahedra, one point each) edited by `edit`, as `dir/NAME.toml`.
+fn column(dir: &Path, name: &str, edit: &dyn Fn(String) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(testdata("golden/column_dry.toml"))
+        .unwrap()
+        .replace(
+            "../column_tet4.msh",
+            &testdata("column_tet4.msh").display().to_string(),
+        );
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, edit(text)).unwrap();
+    p
+}
+
+fn solve(scene: &Path, out: &Path, extra: &[&str]) -> assert_cmd::assert::Assert {
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .args(["--quiet", "--threads", "2"])
+        .args(extra)
+        .assert()
+}
+
+fn run_json(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap()
+}
+
+/// The last particle file of `run.pvd` reads back with finite stresses and positions; returns
+/// its time.
+fn last_output_reads_back(out: &Path) -> f64 {
+    let sets = vtu_read::read_pvd_file(&out.join("run.pvd")).unwrap();
+    let last = sets.last().expect("at least one output");
+    let vtu = vtu_read::read_vtu_file(&out.join(&last.file)).unwrap();
+    let stress = vtu.point_data("stress").expect("stress");
+    let xyz = vtu.coordinates().expect("points");
+    assert!(!stress.is_empty());
+    for i in 0..stress.len() {
+        for c in 0..6 {
+            assert!(stress.get(i, c).is_finite(), "stress of point {i}");
+        }
+        for c in 0..3 {
+            assert!(xyz.get(i, c).is_finite(), "position of point {i}");
+        }
+    }
+    last.time
+}
+
+fn stderr_of(a: &assert_cmd::assert::Assert) -> String {
+    String::from_utf8_lossy(&a.get_output().stderr).into_owned()
+}
+
+#[test]
+fn a_normal_run_completes_and_reports_its_energy_balance() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    solve(&testdata("golden/column_dry.toml"), &out, &[]).success();
+    let j = run_json(&out);
+    assert_eq!(j["status"], "completed");
+    assert!(j["diagnosis"].is_null());
+    let e = &j["energy"];
+    for k in [
+        "kinetic",
+        "strain",
+        "dissipated",
+        "external_work",
+        "balance_error",
+    ] {
+        assert!(e[k].as_f64().is_some(), "{k}");
+    }
+    // Kinetic + strain + dissipated balances the work within a few per mille here.
+    assert!(e["balance_error"].as_f64().unwrap() < 0.01, "{e}");
+    assert!(e["strain"].as_f64().unwrap() > 0.0 && e["dissipated"].as_f64().unwrap() > 0.0);
+    let csv = std::fs::read_to_string(out.join("energy.csv")).unwrap();
+    assert!(csv.starts_with("time,kinetic,external_work,strain,dissipated,balance_error\n"));
+}
+
+#[test]
+fn a_courant_number_above_one_is_refused_without_force() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = column(dir.path(), "c3", &|t| {
+        t.replace("courant = 0.5", "courant = 3.0")
+    });
+    let a = solve(&scene, &dir.path().join("o"), &[]).code(1);
+    let err = stderr_of(&a);
+    assert!(err.contains("c3.toml: time.courant"), "{err}");
+    assert!(err.contains("Courant number 3 is above 1") && err.contains("--force"));
+    // --check refuses it too.
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(&scene)
+        .arg("--check")
+        .assert()
+        .code(1);
+}
+
+/// Courant 5, undamped, under --force: the kinetic energy outgrows the work done.
+#[test]
+fn a_forced_courant_number_of_five_is_caught_as_a_blow_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = column(dir.path(), "c5", &|t| {
+        t.replace("courant = 0.5", "courant = 5.0")
+            .replace("local = 0.75", "local = 0.0")
+            .replace("end = 0.01", "end = 0.2")
+    });
+    let out = dir.path().join("o");
+    let a = solve(&scene, &out, &["--force", "--energy-tolerance", "off"]).code(3);
+    let err = stderr_of(&a);
+    let j = run_json(&out);
+    assert_eq!(j["status"], "diverged", "{j}");
+    let d = &j["diagnosis"];
+    let check = d["check"].as_str().unwrap();
+    assert!(check == "blow_up" || check == "non_finite", "{d}");
+    assert!(d["step"].as_u64().unwrap() >= 1);
+    assert!(d["time"].as_f64().unwrap() > 0.0);
+    assert!(
+        d["point"].as_u64().is_some() && d["element"].as_u64().is_some(),
+        "{d}"
+    );
+    let cause = d["cause"].as_str().unwrap();
+    assert!(
+        cause.starts_with("time step 5× the critical step of element "),
+        "{cause}"
+    );
+    assert!(
+        err.contains("run diverged at step") && err.contains(cause),
+        "{err}"
+    );
+    assert!(err.contains("\"status\": \"diverged\""), "{err}");
+    let t = last_output_reads_back(&out);
+    assert!(t <= d["time"].as_f64().unwrap());
+}
+
+/// A tolerance no explicit run meets trips the energy balance at the first step; the failing
+/// state, still finite, is the last output.
+#[test]
+fn a_tiny_energy_tolerance_trips_the_balance() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let a = solve(
+        &testdata("golden/column_dry.toml"),
+        &out,
+        &["--energy-tolerance", "1e-9"],
+    )
+    .code(3);
+    let j = run_json(&out);
+    let d = &j["diagnosis"];
+    assert_eq!(
+        (d["check"].as_str(), d["step"].as_u64()),
+        (Some("energy_balance"), Some(1))
+    );
+    assert_eq!(d["field"], "energy_balance");
+    assert!(d["value"].as_f64().unwrap() > 1e-9);
+    assert!(d["cause"].as_str().unwrap().contains("--energy-tolerance"));
+    assert!(stderr_of(&a).contains("check energy_balance tripped"));
+    assert_eq!(last_output_reads_back(&out), d["time"].as_f64().unwrap());
+    // Off: the same run completes.
+    solve(
+        &testdata("golden/column_dry.toml"),
+        &dir.path().join("p"),
+        &["--energy-tolerance", "off"],
+    )
+    .success();
+}
+
+/// A material far too soft for its weight (E = 1 kPa under 20 kPa): the bottom points are
+/// crushed.
+#[test]
+fn a_collapsing_material_trips_the_volume_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = column(dir.path(), "soft", &|t| {
+        t.replace("young = 10000.0", "young = 1.0")
+            .replace("end = 0.01", "end = 2.0")
+            .replace("output_interval = 0.005", "output_interval = 0.1")
+    });
+    let out = dir.path().join("o");
+    let a = solve(&scene, &out, &[]).code(3);
+    let d = run_json(&out)["diagnosis"].clone();
+    assert_eq!(d["check"], "volume", "{d}");
+    assert_eq!(d["field"], "volume_ratio");
+    assert!(d["value"].as_f64().unwrap() <= 1e-3);
+    let (p, e) = (d["point"].as_u64().unwrap(), d["element"].as_u64().unwrap());
+    assert!((1..=461).contains(&p) && (1..=461).contains(&e));
+    let err = stderr_of(&a);
+    assert!(
+        err.contains(&format!("at material point {p} in element {e}")),
+        "{err}"
+    );
+    assert!(err.contains("crushed"));
+    last_output_reads_back(&out);
+}
+
+/// A non-finite stress (injected) is found at the next step and named by point, element and
+/// field.
+#[test]
+fn a_non_finite_stress_is_named() {
+    use mpm_solve::driver::engine::{Check, Engine, StepError};
+    let case = mpm_solve::input::scene::load(&testdata("golden/column_dry.toml")).unwrap();
+    let mut engine = Engine::<f64>::new(&case, false).unwrap();
+    engine.step(engine.dt, None).unwrap();
+    let i = 100;
+    engine.particles.stress[i][1] = f64::NAN;
+    let id = engine.particles.id[i];
+    match engine.step(engine.dt, None) {
+        Err(StepError::Diverged(d)) => {
+            assert_eq!((d.check, d.step), (Check::NonFinite, 2));
+            assert!(d.value.is_nan());
+            assert!(d.point.is_some() && d.element.is_some());
+            assert!(["stress", "velocity", "position"].contains(&d.field), "{d}");
+            // The injected point is reported when its stress is still the only bad value.
+            if d.field == "stress" {
+                assert_eq!(d.point, Some(id));
+            }
+            assert!(d.to_string().contains("check non_finite tripped"));
+        }
+        other => panic!("expected a divergence, got {other:?}"),
+    }
+}
