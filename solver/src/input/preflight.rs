@@ -29,8 +29,9 @@ const TWO_PHASE_RATE_PER_THREAD: f64 = 4e6;
 /// How much faster single precision steps, from `scripts/bench-solver` (docs/performance.md:
 /// the ratio of f32 to f64 particle-steps/s on the 1M-point cases, 2 threads).
 const F32_SPEEDUP: f64 = 1.3;
-/// Largest ratio of an f32 run's error to its f64 twin's on the accuracy map (docs/accuracy.md).
-const F32_ERROR_FACTOR: f64 = 1.5;
+/// Largest ratio between an f32 run's error and its f64 twin's on the accuracy map's dry
+/// problems and uncrossed consolidation (docs/accuracy.md, "Single precision against double").
+const F32_ERROR_FACTOR: f64 = 1.1;
 /// Fixed cost of a step (thread barriers, bookkeeping), seconds.
 const STEP_OVERHEAD: f64 = 20e-6;
 
@@ -287,8 +288,9 @@ pub fn cheaper_settings(case: &Case) -> Vec<String> {
     let mut out = Vec::new();
     if case.precision == Precision::F64 {
         out.push(format!(
-            "--precision f32: half the bytes per point and about {F32_SPEEDUP}× the speed; on the \
-             map every f32 run's error was within {F32_ERROR_FACTOR}× of its f64 twin's"
+            "--precision f32: about half the bytes per point and {F32_SPEEDUP}× the speed; on the \
+             map's dry problems and uncrossed consolidation its error was within \
+             {F32_ERROR_FACTOR}× of f64's (not under cell crossing: see the map)"
         ));
     }
     let four = case
