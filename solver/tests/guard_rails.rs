@@ -105,9 +105,10 @@ fn a_courant_number_above_one_is_refused_without_force() {
         .code(1);
 }
 
-/// Courant 5, undamped, under --force: the kinetic energy outgrows the work done.
+/// Courant 5, undamped, under --force: points collapse or the kinetic energy outgrows the work
+/// done, and the cause named is the time step.
 #[test]
-fn a_forced_courant_number_of_five_is_caught_as_a_blow_up() {
+fn a_forced_courant_number_of_five_is_caught() {
     let dir = tempfile::tempdir().unwrap();
     let scene = column(dir.path(), "c5", &|t| {
         t.replace("courant = 0.5", "courant = 5.0")
@@ -121,7 +122,10 @@ fn a_forced_courant_number_of_five_is_caught_as_a_blow_up() {
     assert_eq!(j["status"], "diverged", "{j}");
     let d = &j["diagnosis"];
     let check = d["check"].as_str().unwrap();
-    assert!(check == "blow_up" || check == "non_finite", "{d}");
+    assert!(
+        check == "blow_up" || check == "non_finite" || check == "volume",
+        "{d}"
+    );
     assert!(d["step"].as_u64().unwrap() >= 1);
     assert!(d["time"].as_f64().unwrap() > 0.0);
     assert!(
@@ -142,8 +146,8 @@ fn a_forced_courant_number_of_five_is_caught_as_a_blow_up() {
     assert!(t <= d["time"].as_f64().unwrap());
 }
 
-/// A tolerance no explicit run meets trips the energy balance at the first step; the failing
-/// state, still finite, is the last output.
+/// A tolerance no explicit run meets trips the energy balance at the first step it is checked
+/// at; the failing state, still finite, is the last output.
 #[test]
 fn a_tiny_energy_tolerance_trips_the_balance() {
     let dir = tempfile::tempdir().unwrap();
@@ -158,13 +162,18 @@ fn a_tiny_energy_tolerance_trips_the_balance() {
     let d = &j["diagnosis"];
     assert_eq!(
         (d["check"].as_str(), d["step"].as_u64()),
-        (Some("energy_balance"), Some(1))
+        (
+            Some("energy_balance"),
+            Some(mpm_solve::driver::engine::BALANCE_FROM_STEP + 1)
+        )
     );
     assert_eq!(d["field"], "energy_balance");
     assert!(d["value"].as_f64().unwrap() > 1e-9);
     assert!(d["cause"].as_str().unwrap().contains("--energy-tolerance"));
     assert!(stderr_of(&a).contains("check energy_balance tripped"));
-    assert_eq!(last_output_reads_back(&out), d["time"].as_f64().unwrap());
+    // The particle file's time, as the PVD prints it, is the failing step's.
+    let t = d["time"].as_f64().unwrap();
+    assert!((last_output_reads_back(&out) - t).abs() <= 1e-12 * t);
     // Off: the same run completes.
     solve(
         &testdata("golden/column_dry.toml"),

@@ -309,7 +309,7 @@ pub fn cheaper_settings(case: &Case) -> Vec<String> {
     if case.courant < 0.9 && !case.has_liquid() {
         out.push(format!(
             "Courant number 0.9 instead of {}: {:.1}× fewer steps; on the map's dry problems the \
-             error changed by under 10 % between Courant 0.1 and 0.9 with 4 points per element",
+             error changed by at most 10 % between Courant 0.1 and 0.9 with 4 points per element",
             case.courant,
             0.9 / case.courant
         ));
