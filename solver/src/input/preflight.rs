@@ -28,7 +28,7 @@ const DRY_RATE_PER_THREAD: f64 = 6e6;
 const TWO_PHASE_RATE_PER_THREAD: f64 = 4e6;
 /// How much faster single precision steps, from `scripts/bench-solver` (docs/performance.md:
 /// the ratio of f32 to f64 particle-steps/s on the 1M-point cases, 2 threads).
-const F32_SPEEDUP: f64 = 1.3;
+const F32_SPEEDUP: f64 = 1.1;
 /// Largest ratio between an f32 run's error and its f64 twin's on the accuracy map's dry
 /// problems and uncrossed consolidation (docs/accuracy.md, "Single precision against double").
 const F32_ERROR_FACTOR: f64 = 1.1;
