@@ -189,6 +189,17 @@ fn drive<R: Real>(
     observer: &mut dyn Observer<R>,
 ) -> Result<Engine<R>, RunError> {
     let wall = Instant::now();
+    // run.json, written at the end or where a guard rail stops the run.
+    let summary = |engine: &Engine<R>, stepping: f64, diverged| {
+        output::write_summary(
+            dir,
+            case,
+            engine,
+            wall.elapsed().as_secs_f64(),
+            stepping,
+            diverged,
+        )
+    };
     case.check_courant(options.force)?;
     let mut engine = Engine::<R>::new(case, options.drop_lost)?;
     check_probes(case, &engine)?;
@@ -242,14 +253,7 @@ fn drive<R: Real>(
                         out.write(&engine)?;
                     }
                     stepping += t0.elapsed().as_secs_f64();
-                    output::write_summary(
-                        dir,
-                        case,
-                        &engine,
-                        wall.elapsed().as_secs_f64(),
-                        stepping,
-                        Some(d),
-                    )?;
+                    summary(&engine, stepping, Some(d))?;
                 }
                 return Err(e.into());
             }
@@ -267,14 +271,7 @@ fn drive<R: Real>(
         engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
     }
     observer.on_end(&engine);
-    output::write_summary(
-        dir,
-        case,
-        &engine,
-        wall.elapsed().as_secs_f64(),
-        stepping,
-        None,
-    )?;
+    summary(&engine, stepping, None)?;
     Ok(engine)
 }
 
