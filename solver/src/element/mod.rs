@@ -77,6 +77,6 @@ pub trait Element: Copy + Debug + Default + Send + Sync + 'static {
     /// Which of the `n` points placed in an element (by [`Element::point_placement`]) carry a load
     /// on its face `face`: indices into the element's points.
     fn face_load_points(n: usize, face: usize) -> Vec<usize>;
-    /// Point counts [`Element::point_placement`] supports, for messages ("1 or 4").
+    /// Point counts [`Element::point_placement`] supports, for messages ("1, 4 or 10").
     fn supported_point_counts() -> &'static str;
 }

@@ -30,6 +30,10 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// The edges (corner pairs) of the 10-point rule's points 5 to 10, in Anura3D's order: its local
+/// coordinates (ξ, η, ζ) are the shape values of corners 2, 3 and 1, and corner 0 takes the rest.
+const TEN_POINT_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+
 impl Element for Tet4 {
     const NAME: &'static str = "4-node tetrahedra";
     const DIM: usize = 3;
@@ -107,8 +111,11 @@ impl Element for Tet4 {
         (lo < tol).then_some(k)
     }
 
-    /// 1 (centroid) and 4 (the 4-point Gauss rule, a = (5 - √5)/20 ≈ 0.1381966,
-    /// b = (5 + 3√5)/20 ≈ 0.5854102, point k nearest corner k, exactly as Anura3D places them).
+    /// 1 (centroid), 4 (the 4-point Gauss rule, a = (5 - √5)/20 ≈ 0.1381966,
+    /// b = (5 + 3√5)/20 ≈ 0.5854102, point k nearest corner k) and 10 (those four, then one
+    /// point per edge with the edge's two coordinates c = (a + b)/2 and the other two a, edges
+    /// in Anura3D's order 0–1, 0–2, 0–3, 1–2, 1–3, 2–3), exactly as Anura3D places them; equal
+    /// volumes.
     fn point_placement(n: u32) -> Option<Vec<[f64; 4]>> {
         // (5 - √5)/20 and (5 + 3√5)/20, written out (sqrt is not const).
         const A: f64 = 0.138_196_601_125_010_5;
@@ -125,20 +132,40 @@ impl Element for Tet4 {
                     })
                     .collect(),
             ),
+            10 => {
+                const C: f64 = (A + B) / 2.0;
+                let mut pts = Tet4::point_placement(4)?;
+                pts.extend(TEN_POINT_EDGES.iter().map(|&(i, j)| {
+                    let mut l = [A; 4];
+                    (l[i], l[j]) = (C, C);
+                    l
+                }));
+                Some(pts)
+            }
             _ => None,
         }
     }
 
-    /// The one point of a 1-point element; of 4 points, the three nearest the face's corners.
+    /// The one point of a 1-point element; of 4 points, the three nearest the face's corners;
+    /// of 10, the six on the face's side (the three corner points and the three edge points of
+    /// the face's edges: those farthest from the opposite corner).
     fn face_load_points(n: usize, face: usize) -> Vec<usize> {
         match n {
             4 => (0..4).filter(|&k| k != face).collect(),
+            10 => (0..4)
+                .filter(|&k| k != face)
+                .chain(
+                    (0..6)
+                        .filter(|&e| TEN_POINT_EDGES[e].0 != face && TEN_POINT_EDGES[e].1 != face)
+                        .map(|e| 4 + e),
+                )
+                .collect(),
             n => (0..n).collect(),
         }
     }
 
     fn supported_point_counts() -> &'static str {
-        "1 or 4"
+        "1, 4 or 10"
     }
 }
 
@@ -148,7 +175,7 @@ mod tests {
 
     #[test]
     fn placed_points_are_inside_and_share_the_volume_evenly() {
-        for n in [1, 4] {
+        for n in [1, 4, 10] {
             let pts = Tet4::point_placement(n).unwrap();
             assert_eq!(pts.len(), n as usize);
             let mut centroid = [0.0; 4];
@@ -161,8 +188,29 @@ mod tests {
             }
             // A symmetric rule: the points' mean is the centroid.
             assert!(centroid.iter().all(|&c| (c - 0.25).abs() < 1e-15));
+            // Distinct points.
+            for (i, a) in pts.iter().enumerate() {
+                assert!(pts[..i].iter().all(|b| b != a), "point {i} of {n}");
+            }
         }
         assert!(Tet4::point_placement(3).is_none());
+        // Anura3D's 10-point rule: its fifth point (A, A, C) and tenth (C, C, A) in (ξ, η, ζ).
+        let ten = Tet4::point_placement(10).unwrap();
+        let (a, b) = (0.138_196_601_125_010_5, 0.585_410_196_624_968_5);
+        let c = (a + b) / 2.0;
+        let local = |l: &[f64; 4]| [l[2], l[3], l[1]];
+        assert_eq!(local(&ten[4]), [a, a, c]);
+        assert_eq!(local(&ten[9]), [c, c, a]);
+        assert!((ten[4][0] - c).abs() < 1e-15 && (ten[9][0] - a).abs() < 1e-15);
+        // A face load on face k is carried by the six points nearest that face.
+        for k in 0..4 {
+            let on = Tet4::face_load_points(10, k);
+            assert_eq!(on.len(), 6);
+            assert!(
+                on.iter().all(|&i| (ten[i][k] - a).abs() < 1e-15),
+                "face {k}"
+            );
+        }
     }
 
     #[test]
