@@ -98,7 +98,7 @@ struct Args {
     #[arg(long)]
     force: bool,
     /// Stop the run when |kinetic + strain + dissipated - work| exceeds this share of the
-    /// largest energy term (single-phase runs; `off`: not checked) [default: 0.2].
+    /// largest energy term (single-phase runs; `off`: not checked) [default: 1].
     #[arg(long, value_name = "SHARE|off", value_parser = tolerance)]
     energy_tolerance: Option<Tolerance>,
 }

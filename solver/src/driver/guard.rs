@@ -236,7 +236,7 @@ pub fn diagnose<R: Real>(check: Check, v: &View<'_, R>) -> Divergence {
                 out.value
             ),
             Check::EnergyBalance => format!(
-                "energy not conserved within the tolerance {}: the time step ({c}× the critical step of element {el}) may be too close to the limit; lower the Courant number, or loosen --energy-tolerance",
+                "energy not conserved within the tolerance {}: the time step ({c}× the critical step of element {el}) may be too close to the limit, or one point per element too few for a sudden load (docs/stability.md); lower the Courant number, add points or damping, or loosen --energy-tolerance",
                 v.tolerance.map_or("off".into(), |t| t.to_string())
             ),
         }

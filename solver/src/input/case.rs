@@ -311,8 +311,11 @@ pub struct Guards {
     pub blow_up_factor: f64,
 }
 
-/// Default tolerance of the energy balance (`--energy-tolerance`).
-pub const DEFAULT_ENERGY_TOLERANCE: f64 = 0.2;
+/// Default tolerance of the energy balance (`--energy-tolerance`): the error as large as the
+/// largest energy term. Stable runs come near it: docs/stability.md's undamped wave with one
+/// point per element rings at 0.3 to 0.9 for a million steps before its slow instability
+/// (which the blow-up check then catches), so a tighter default would stop sound runs.
+pub const DEFAULT_ENERGY_TOLERANCE: f64 = 1.0;
 
 impl Default for Guards {
     fn default() -> Self {
