@@ -85,9 +85,20 @@ pub fn cap_for(len: usize) -> usize {
 /// cap. `Err` says what went wrong (panic message, hang, oversized allocation) and where the
 /// input was saved.
 pub fn guard(reader: &str, label: &str, data: &[u8], f: fn(&[u8])) -> Result<(), String> {
+    guard_with_cap(reader, label, data, f, cap_for(data.len()))
+}
+
+/// [`guard`] with an explicit allocation cap (for inputs that name other files, or whose values
+/// may size an allocation up to a documented limit).
+pub fn guard_with_cap(
+    reader: &str,
+    label: &str,
+    data: &[u8],
+    f: fn(&[u8]),
+    cap: usize,
+) -> Result<(), String> {
     let (tx, rx) = mpsc::channel();
     let owned = data.to_vec();
-    let cap = cap_for(data.len());
     std::thread::Builder::new()
         .name(format!("fuzz-{reader}"))
         .spawn(move || {
