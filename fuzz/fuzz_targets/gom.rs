@@ -1,4 +1,4 @@
-//! Coverage-guided fuzzing of the gom reader (see docs/design.md §7.6).
+//! Coverage-guided fuzzing of the gom reader (see docs/design.md §7.5, "Fuzzing").
 #![no_main]
 
 #[path = "../../shared/tests/fuzz_support/readers.rs"]

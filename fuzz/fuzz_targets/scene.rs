@@ -1,4 +1,4 @@
-//! Coverage-guided fuzzing of TOML scenes (see docs/design.md §7.6): the input is the scene's text,
+//! Coverage-guided fuzzing of TOML scenes (see docs/design.md §7.5, "Fuzzing"): the input is the scene's text,
 //! written beside a copy of the golden column mesh so that `mesh = "column_tet4.msh"` resolves.
 #![no_main]
 

@@ -1,4 +1,4 @@
-//! Fuzzing every reader of `mpm-shared` on stable Rust (issue 15, docs/design.md §7.6): bad
+//! Fuzzing every reader of `mpm-shared` on stable Rust (issue 15, docs/design.md §7.5, "Fuzzing"): bad
 //! input must give a typed error, never a panic, a hang or an allocation sized by a count the
 //! input merely claims.
 //!
@@ -9,7 +9,7 @@
 //! cap (`fuzz_support::guard`); a failure names the reader, seed file and mutations and saves the
 //! input under `target/tmp/fuzz-failures/<reader>/`.
 //!
-//! Budget: `CASES` per reader, about 15 s for the whole file with `cargo test --release` on 2
+//! Budget: `CASES` per reader, about 10 s for the whole file with `cargo test --release` on 2
 //! cores (the solver's scene harness has its own). Coverage-guided fuzzing of the same entry
 //! points, for local runs on nightly: `fuzz/` (`cargo fuzz run gom`).
 
@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 static ALLOC: CappedAlloc = CappedAlloc;
 
 /// Mutated cases per reader in CI; `FUZZ_CASES=N` runs N instead (a longer local search).
-const CASES: u32 = 1500;
+const CASES: u32 = 5000;
 
 fn cases() -> u32 {
     std::env::var("FUZZ_CASES")
@@ -79,8 +79,11 @@ fn seeds(reader: &str) -> Vec<PathBuf> {
     s
 }
 
+/// What a case runs on its input.
+type Exercise = fn(&[u8]);
+
 /// Every reader: its corpus name and the function that exercises it.
-const READERS: &[(&str, fn(&[u8]))] = &[
+const READERS: &[(&str, Exercise)] = &[
     ("gom", read_gom),
     ("msh", read_msh),
     ("cps", read_cps),

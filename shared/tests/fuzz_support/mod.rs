@@ -4,7 +4,7 @@
 //!
 //! Every case is deterministic (the mutations are data, drawn by proptest from a fixed seed), so a
 //! failure names its reader, seed file and mutations, and the guard saves the failing input under
-//! `target/tmp/fuzz-failures/` for replay. See docs/design.md §7.6.
+//! `target/tmp/fuzz-failures/` for replay. See docs/design.md §7.5, "Fuzzing".
 #![allow(dead_code)]
 
 pub mod readers;

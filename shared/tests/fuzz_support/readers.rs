@@ -45,7 +45,7 @@ fn golden_model() -> &'static mpm_shared::Model {
             env!("CARGO_MANIFEST_DIR"),
             "/../testdata/golden/column_anura3d.GOM"
         );
-        gom::read(&std::fs::read(&p).unwrap(), "golden").unwrap()
+        gom::read(&std::fs::read(p).unwrap(), "golden").unwrap()
     })
 }
 
