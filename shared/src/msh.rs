@@ -156,6 +156,12 @@ impl<'a> Reader<'a> {
         Ok((n, out))
     }
 
+    /// `v` as a count of `what` at line `n`: negative counts are refused.
+    fn count(&self, n: usize, v: i64, what: &str) -> Result<usize> {
+        usize::try_from(v)
+            .map_err(|_| Error::format(self.at(n), format!("{what} is {v}, must not be negative")))
+    }
+
     fn expect_end(&mut self, end: &str) -> Result<()> {
         let (n, l) = self.line(end)?;
         if text::trim(l) != end.as_bytes() {
@@ -242,7 +248,8 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
         match t {
             b"$PhysicalNames" => {
                 r.section = "$PhysicalNames";
-                let (_, [count]) = r.numbers::<1>("the number of names")?;
+                let (n0, [count]) = r.numbers::<1>("the number of names")?;
+                let count = r.count(n0, count, "the number of names")?;
                 for _ in 0..count {
                     let (n, l) = r.line("a physical name")?;
                     let toks: Vec<&[u8]> = Tokens::new(l).collect();
@@ -272,8 +279,11 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
             }
             b"$Entities" if v4 => {
                 r.section = "$Entities";
-                let (_, [np, nc, ns, nv]) =
+                let (n0, [np, nc, ns, nv]) =
                     r.numbers::<4>("'numPoints numCurves numSurfaces numVolumes'")?;
+                let what = "an entity count";
+                let [np, nc, ns, nv] = [np, nc, ns, nv].map(|v| r.count(n0, v, what));
+                let (np, nc, ns, nv) = (np?, nc?, ns?, nv?);
                 for (dim, count) in [(0usize, np), (1, nc), (2, ns), (3, nv)] {
                     for _ in 0..count {
                         let (n, l) = r.line("an entity")?;
@@ -311,8 +321,20 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                 if v4 {
                     let (n0, [blocks, total, _min, _max]) =
                         r.numbers::<4>("'numEntityBlocks numNodes minNodeTag maxNodeTag'")?;
-                    let total = usize::try_from(total)
-                        .map_err(|_| Error::format(r.at(n0), "negative node count"))?;
+                    let blocks = r.count(n0, blocks, "the number of node blocks")?;
+                    let total = r.count(n0, total, "the number of nodes")?;
+                    // A node takes at least 8 bytes ("1\n0 0 0\n"): a header that claims more
+                    // nodes than the rest of the file can hold is refused before anything is
+                    // allocated for them.
+                    let room = data.len().saturating_sub(r.lines.offset()) / 8;
+                    if total > room {
+                        return Err(Error::format(
+                            r.at(n0),
+                            format!(
+                                "the header claims {total} nodes, but the rest of the file can hold at most {room} (truncated?)"
+                            ),
+                        ));
+                    }
                     mesh.coords.reserve(total * 3);
                     mesh.node_tags.reserve(total);
                     for _ in 0..blocks {
@@ -324,6 +346,7 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                                 message: "parametric node coordinates".into(),
                             });
                         }
+                        let count = r.count(n, count, "numNodesInBlock")?;
                         let start = mesh.node_tags.len();
                         for _ in 0..count {
                             let (n, [tag]) = r.numbers::<1>("a node tag")?;
@@ -339,10 +362,20 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                             let (n, l) = r.line("node coordinates")?;
                             push_xyz(&mut mesh.coords, l, &r.at(n))?;
                         }
-                        debug_assert_eq!(mesh.node_tags.len() - start, count as usize);
+                        debug_assert_eq!(mesh.node_tags.len() - start, count);
+                    }
+                    if mesh.node_tags.len() != total {
+                        return Err(Error::invalid(
+                            r.at(n0),
+                            format!(
+                                "the header says {total} nodes, its blocks hold {}",
+                                mesh.node_tags.len()
+                            ),
+                        ));
                     }
                 } else {
-                    let (_, [count]) = r.numbers::<1>("the number of nodes")?;
+                    let (n0, [count]) = r.numbers::<1>("the number of nodes")?;
+                    let count = r.count(n0, count, "the number of nodes")?;
                     for _ in 0..count {
                         let (n, l) = r.line("a node line 'tag x y z'")?;
                         let mut t = Tokens::new(l);
@@ -385,12 +418,14 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                 r.section = "$Elements";
                 have_elements = true;
                 if v4 {
-                    let (_, [blocks, _total, _min, _max]) = r.numbers::<4>(
+                    let (n0, [blocks, _total, _min, _max]) = r.numbers::<4>(
                         "'numEntityBlocks numElements minElementTag maxElementTag'",
                     )?;
+                    let blocks = r.count(n0, blocks, "the number of element blocks")?;
                     for _ in 0..blocks {
                         let (n, [edim, etag, etype, count]) =
                             r.numbers::<4>("'entityDim entityTag elementType numElementsInBlock'")?;
+                        let count = r.count(n, count, "numElementsInBlock")?;
                         let per =
                             nodes_of_type(etype as i32).ok_or_else(|| Error::Unsupported {
                                 at: r.at(n),
@@ -414,7 +449,8 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
                         }
                     }
                 } else {
-                    let (_, [count]) = r.numbers::<1>("the number of elements")?;
+                    let (n0, [count]) = r.numbers::<1>("the number of elements")?;
+                    let count = r.count(n0, count, "the number of elements")?;
                     for _ in 0..count {
                         let (n, l) = r.line("an element line")?;
                         let toks: Vec<&[u8]> = Tokens::new(l).collect();
@@ -723,6 +759,36 @@ mod tests {
         }
         assert_eq!(model.materials()[0].name, "soil");
         assert_eq!(model.element_materials(), Some(vec![1, 1]));
+    }
+
+    /// Fuzz finds (issue 15): counts in a 4.1 `$Nodes` header are checked before use.
+    #[test]
+    fn v41_node_counts_are_checked_before_use() {
+        const V41: &str = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1 2\n3 1 0 2\n1\n2\n0 0 0\n1 0 0\n$EndNodes\n";
+        assert!(
+            read(V41.as_bytes(), "a.msh").is_err_and(|e| e.to_string().contains("no $Elements"))
+        );
+        // A header claiming 10^12 nodes is refused before anything is reserved for them.
+        let huge = V41.replace("1 2 1 2\n", "1 1000000000000 1 2\n");
+        let e = read(huge.as_bytes(), "a.msh").unwrap_err().to_string();
+        assert!(
+            e.starts_with("a.msh:5") && e.contains("claims 1000000000000 nodes"),
+            "{e}"
+        );
+        // A negative block size was read as an empty block, then failed a debug assertion.
+        let neg = V41.replace("3 1 0 2\n", "3 1 0 -2147483648\n");
+        let e = read(neg.as_bytes(), "a.msh").unwrap_err().to_string();
+        assert!(
+            e.starts_with("a.msh:6") && e.contains("must not be negative"),
+            "{e}"
+        );
+        // Blocks that hold fewer nodes than the header says.
+        let short = V41.replace("1 2 1 2\n", "1 3 1 2\n");
+        let e = read(short.as_bytes(), "a.msh").unwrap_err().to_string();
+        assert!(
+            e.contains("the header says 3 nodes, its blocks hold 2"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -322,7 +322,15 @@ pub fn parse(data: Input, file: &str) -> Result<VtuFile> {
                 )
             })?;
         let bytes = u64::from_le_bytes(data[header..header + 8].try_into().expect("8 bytes"));
-        let size = a.ty.size() * a.components;
+        let size = a.ty.size().checked_mul(a.components).ok_or_else(|| {
+            err(
+                header,
+                format!(
+                    "array '{}' claims {} components per tuple, far more than any file holds",
+                    a.name, a.components
+                ),
+            )
+        })?;
         if a.section == Section::Cells {
             a.tuples = (bytes / size as u64) as usize;
         }
@@ -501,6 +509,36 @@ mod tests {
             .unwrap()
             .to_string();
         assert!(e.contains("a.vtu: unsupported: ASCII"), "{e}");
+    }
+
+    /// Fuzz find (issue 15): a huge `NumberOfComponents` overflowed the tuple size (a panic
+    /// with overflow checks, a division by zero or a wrong size without).
+    #[test]
+    fn huge_component_counts_are_errors() {
+        let good = std::fs::read(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../testdata/golden/column_dry/mesh.vtu"
+        ))
+        .unwrap();
+        for n in [
+            "9223372036854775807",
+            "2305843009213693952",
+            "18446744073709551615",
+        ] {
+            let mut bad = Vec::new();
+            let at = memchr::memmem::find(&good, b"NumberOfComponents=\"1\"").unwrap();
+            bad.extend_from_slice(&good[..at]);
+            bad.extend_from_slice(format!("NumberOfComponents=\"{n}\"").as_bytes());
+            bad.extend_from_slice(&good[at + 22..]);
+            let e = match parse(Input::Buffer(bad), "m.vtu") {
+                Ok(_) => panic!("{n} components accepted"),
+                Err(e) => e.to_string(),
+            };
+            assert!(
+                e.starts_with("m.vtu: at byte") && e.contains("'material'"),
+                "{e}"
+            );
+        }
     }
 
     #[test]

@@ -224,7 +224,8 @@ fn physical_surface<'m>(mesh: &'m MshMesh, name: &str) -> Option<Vec<&'m [u32]>>
     Some(out)
 }
 
-/// The triangles (model node ids of their corners) of the physical surface group `name`.
+/// The triangles (model node ids of their corners; `u32::MAX` for a corner no volume element
+/// uses) of the physical surface group `name`.
 fn physical_faces(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<[u32; 3]>> {
     let faces = physical_surface(mesh, name)?;
     Some(
@@ -492,6 +493,16 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
                 format!("no physical surface of that name in {mesh_name}"),
             )
         })?;
+        // A face corner that no volume element uses has no model node to load.
+        if let Some(k) = faces.iter().position(|f| f.contains(&u32::MAX)) {
+            return Err(invalid(
+                format!("traction \"{}\"", tr.physical),
+                format!(
+                    "face {} of the surface in {mesh_name} has a node that no tetrahedron uses (the surface must lie on the meshed volume)",
+                    k + 1
+                ),
+            ));
+        }
         add_face_loads(&model, &faces, tr.traction, &mut traction);
         traction_ramp = traction_ramp.max(tr.ramp);
         tractions.push(TractionInput {
