@@ -114,7 +114,7 @@ struct Args {
     /// holds a completed run of the same case and options (which is then replaced).
     #[arg(long)]
     overwrite: bool,
-    /// For tests of --resume: abort right after this step, as a crash would.
+    /// For tests of --resume: abort, as a crash would, once this process has taken STEP steps.
     #[arg(long, hide = true, value_name = "STEP")]
     abort_after_step: Option<u64>,
 }

@@ -110,7 +110,8 @@ pub struct RunOptions {
     pub resume: bool,
     /// Set (to the signal's number) to stop after the current step with a checkpoint.
     pub stop: Option<Arc<AtomicUsize>>,
-    /// For tests of resuming: abort the process right after this step, as a crash would.
+    /// For tests of resuming: abort the process, as a crash would, once it has taken this many
+    /// steps (counted over the runs of a job, from where a resumed run starts).
     pub abort_after_step: Option<u64>,
 }
 
@@ -240,6 +241,9 @@ pub fn run_with<R: Real>(
 ) -> Result<Engine<R>, RunError> {
     drive(case, dir, options, observer)
 }
+
+/// Steps taken by this process, for [`RunOptions::abort_after_step`].
+static PROCESS_STEPS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 fn drive<R: Real>(
     case: &Case,
@@ -381,8 +385,10 @@ fn drive<R: Real>(
                 check_lost(&engine, options.max_lost)?;
             }
             observer.on_step(&engine);
-            if options.abort_after_step == Some(engine.steps) {
-                std::process::abort();
+            if let Some(n) = options.abort_after_step {
+                if PROCESS_STEPS.fetch_add(1, Ordering::SeqCst) + 1 >= n {
+                    std::process::abort();
+                }
             }
             let interrupted = stopped(&engine);
             let due = match options.checkpoint {
