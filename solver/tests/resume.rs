@@ -44,7 +44,6 @@ fn scene(dir: &Path, golden: &str, name: &str, edit: &dyn Fn(String) -> String) 
 fn long_scene(dir: &Path) -> PathBuf {
     scene(dir, "column_dry", "long", &|t| {
         t.replace("end = 0.01", "end = 0.2")
-            .replace("output_interval = 0.005", "output_interval = 0.005")
     })
 }
 
@@ -110,6 +109,10 @@ fn assert_same(a: &Path, b: &Path, what: &str) {
     }
 }
 
+/// Abort after so many steps, the checkpoint options, the threads before and after, and a
+/// second abort during the resume.
+type Plan<'a> = (u64, &'a [&'a str], &'a str, &'a str, Option<u64>);
+
 /// Kills at several steps (with the checkpoints of the default policy or every 7 steps), then
 /// resumes with another thread count, once or twice: the folder ends as the uninterrupted one.
 fn killed_and_resumed(golden: &str, precision: &str) {
@@ -123,7 +126,7 @@ fn killed_and_resumed(golden: &str, precision: &str) {
     ));
     // (abort after steps, checkpoint policy, threads before, threads after; a second abort
     // during the resume).
-    let plans: [(u64, &[&str], &str, &str, Option<u64>); 5] = [
+    let plans: [Plan; 5] = [
         (1, &[], "2", "1", None),
         (30, &["--checkpoint-every", "7"], "1", "3", None),
         (53, &[], "3", "2", None),

@@ -753,7 +753,8 @@ pub fn lock(dir: &Path) -> Result<FolderLock, CheckpointError> {
 pub enum Holds {
     /// Nothing.
     Nothing,
-    /// A finished run (its checkpoint at the end time) of this case and options.
+    /// A run of this case and options that ended (its checkpoint at the end time, or a guard
+    /// rail stopped it).
     SameFinished,
     /// A run of this case stopped before its end time (a checkpoint to resume from).
     SameUnfinished,
@@ -790,9 +791,14 @@ pub fn holds(dir: &Path, now: &Fingerprint, outputs: usize) -> Result<Holds, Che
         Ok(None) | Err(CheckpointError::Corrupt { .. }) => return Ok(Holds::Unknown),
         Err(e) => return Err(e),
     };
+    // A run stopped by a guard rail ended too: resuming it would diverge again.
+    let diverged = std::fs::read(dir.join("run.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .is_some_and(|j| j["status"] == "diverged");
     Ok(match saved.fingerprint.difference(now) {
         Some(d) => Holds::Other(d),
-        None if saved.finished(outputs) => Holds::SameFinished,
+        None if saved.finished(outputs) || diverged => Holds::SameFinished,
         None => Holds::SameUnfinished,
     })
 }
