@@ -101,6 +101,88 @@ struct Args {
     /// largest energy term (single-phase runs; `off`: not checked) [default: 1].
     #[arg(long, value_name = "SHARE|off", value_parser = tolerance)]
     energy_tolerance: Option<Tolerance>,
+    /// Write the run's complete state to OUT/checkpoint/ every N steps, or every DURATION of
+    /// wall time (500, 30s, 10m, 2h) [default: at every output, and at most 10 minutes apart].
+    /// It is written at the end and when a signal stops the run too.
+    #[arg(long, value_name = "N|DURATION", value_parser = every)]
+    checkpoint_every: Option<Every>,
+    /// Continue the run in DIR from its last checkpoint, instead of --out DIR: give the case and
+    /// the options of that run (a different case or result-changing option is refused by name).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "overwrite", "check", "export_anura3d"])]
+    resume: Option<PathBuf>,
+    /// Replace what the --out folder holds. Without it a non-empty folder is refused unless it
+    /// holds a completed run of the same case and options (which is then replaced).
+    #[arg(long)]
+    overwrite: bool,
+    /// For tests of --resume: abort, as a crash would, once this process has taken STEP steps.
+    #[arg(long, hide = true, value_name = "STEP")]
+    abort_after_step: Option<u64>,
+}
+
+use mpm_solve::driver::checkpoint::{self, Every, Holds};
+
+/// `--checkpoint-every`: a step count, or a duration with s, m or h.
+fn every(s: &str) -> Result<Every, String> {
+    let t = s.trim();
+    let bad =
+        || format!("expected a step count (500) or a wall-clock duration (30s, 10m, 2h), got {s}");
+    if let Ok(n) = t.parse::<u64>() {
+        return if n > 0 {
+            Ok(Every::Steps(n))
+        } else {
+            Err(bad())
+        };
+    }
+    let (num, scale) = match t.char_indices().last() {
+        Some((i, 's')) => (&t[..i], 1.0),
+        Some((i, 'm')) => (&t[..i], 60.0),
+        Some((i, 'h')) => (&t[..i], 3600.0),
+        _ => return Err(bad()),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(Every::Wall(v * scale)),
+        _ => Err(bad()),
+    }
+}
+
+/// The command that resumes this run: this one's arguments, `--out DIR` (and `--overwrite`)
+/// replaced by `--resume DIR`.
+fn resume_command(dir: &std::path::Path) -> String {
+    let mut words = Vec::new();
+    let mut args = std::env::args_os();
+    words.push(
+        args.next()
+            .map_or("mpm-solve".into(), |a| a.to_string_lossy().into_owned()),
+    );
+    let mut rest = args.map(|a| a.to_string_lossy().into_owned());
+    while let Some(a) = rest.next() {
+        match a.as_str() {
+            "--out" | "--resume" | "--abort-after-step" => {
+                rest.next();
+            }
+            "--overwrite" => {}
+            _ if a.starts_with("--out=")
+                || a.starts_with("--resume=")
+                || a.starts_with("--abort-after-step=") => {}
+            _ => words.push(a),
+        }
+    }
+    words.push("--resume".into());
+    words.push(dir.to_string_lossy().into_owned());
+    words
+        .iter()
+        .map(|w| {
+            if !w.is_empty()
+                && w.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "-_./=,:+@%".contains(c))
+            {
+                w.clone()
+            } else {
+                format!("'{}'", w.replace('\'', "'\\''"))
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// `--energy-tolerance`: a positive share, or off.
@@ -116,6 +198,11 @@ fn tolerance(s: &str) -> Result<Tolerance, String> {
 
 /// Exit status of a run stopped by a guard rail (docs/design.md §4.14, README "Exit codes").
 const EXIT_DIVERGED: u8 = 3;
+
+/// Exit status of a run stopped by signal `n` (130 for SIGINT, 143 for SIGTERM).
+fn exit_signal(n: usize) -> u8 {
+    (128 + n).min(255) as u8
+}
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 enum PrecisionArg {
@@ -177,6 +264,17 @@ fn main() -> ExitCode {
     match run(Args::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            if let Some(mpm_solve::driver::run::RunError::Interrupted { signal, dir, .. }) = e
+                .chain()
+                .find_map(|c| c.downcast_ref::<mpm_solve::driver::run::RunError>())
+            {
+                eprintln!("mpm-solve: {e:#}");
+                eprintln!(
+                    "mpm-solve: the outputs so far are valid; to continue the run:\n  {}",
+                    resume_command(dir)
+                );
+                return ExitCode::from(exit_signal(*signal));
+            }
             eprintln!("mpm-solve: error: {e:#}");
             let diverged = e.chain().any(|c| {
                 c.downcast_ref::<mpm_solve::driver::guard::Divergence>()
@@ -355,7 +453,7 @@ fn run(args: Args) -> anyhow::Result<()> {
 
 /// Runs `case` with the command line's probes, output folder and options.
 fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<()> {
-    let out = match (&args.out, args.check) {
+    let out = match (args.out.as_ref().or(args.resume.as_ref()), args.check) {
         (_, true) => None,
         (Some(out), false) => {
             if out.exists() && !out.is_dir() {
@@ -367,8 +465,8 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
             Some(out.as_path())
         }
         (None, false) => bail!(
-            "--out DIR is required to run a case (a folder for the outputs, created if missing); \
-             --check only predicts what a run would cost"
+            "--out DIR is required to run a case (a folder for the outputs, created if missing; \
+             --resume DIR continues an interrupted run); --check only predicts what a run would cost"
         ),
     };
     case.drag = match args.drag {
@@ -449,10 +547,31 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         return Ok(());
     };
     plan.check(&limits, Some(out))?;
+    let _lock = take_folder(&case, out, args)?;
+    // A first SIGINT or SIGTERM stops the run after its step, with a checkpoint; a second one
+    // ends the process at once.
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let twice = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(
+            sig,
+            i32::from(exit_signal(sig as usize)),
+            std::sync::Arc::clone(&twice),
+        )
+        .and_then(|_| signal_hook::flag::register(sig, std::sync::Arc::clone(&twice)))
+        .and_then(|_| {
+            signal_hook::flag::register_usize(sig, std::sync::Arc::clone(&stop), sig as usize)
+        })
+        .context("installing the signal handlers")?;
+    }
     let options = mpm_solve::driver::run::RunOptions {
         drop_lost: args.drop_lost,
         max_lost: args.max_lost,
         force: args.force,
+        checkpoint: Some(args.checkpoint_every.unwrap_or_default()),
+        resume: args.resume.is_some(),
+        stop: Some(stop),
+        abort_after_step: args.abort_after_step,
     };
     let mode = if args.quiet {
         Progress::Off
@@ -469,6 +588,71 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         Precision::F64 => execute::<f64>(&case, out, &options, reporter),
         Precision::F32 => execute::<f32>(&case, out, &options, reporter),
     }
+}
+
+/// Takes the output folder for this run under its lock: a new or empty folder, a completed run
+/// of the same case and options (replaced), anything under `--overwrite` (emptied), or, under
+/// `--resume`, the run to continue. Anything else is refused by name.
+fn take_folder(
+    case: &mpm_solve::input::case::Case,
+    out: &std::path::Path,
+    args: &Args,
+) -> anyhow::Result<checkpoint::FolderLock> {
+    let shown = out.display();
+    if args.resume.is_some() && !out.is_dir() {
+        bail!("--resume {shown}: no such folder");
+    }
+    let fingerprint = checkpoint::Fingerprint::of(case, args.drop_lost);
+    let lock = checkpoint::lock(out)?;
+    let holds = checkpoint::holds(out, &fingerprint, case.output_times.len())?;
+    if args.resume.is_some() {
+        match holds {
+            Holds::Other(what) => {
+                return Err(checkpoint::CheckpointError::Mismatch {
+                    dir: out.to_path_buf(),
+                    what,
+                }
+                .into())
+            }
+            // Killed before its first checkpoint: nothing done is lost by starting again.
+            Holds::Unknown if !checkpoint::path(out).exists() => {
+                eprintln!("mpm-solve: {shown} holds no checkpoint yet (the run stopped during its set-up); starting from the beginning");
+                checkpoint::clear(out)?;
+            }
+            // A damaged checkpoint: the library's read names the problem.
+            Holds::Unknown => {
+                checkpoint::read(out)?;
+            }
+            Holds::Nothing => {}
+            Holds::SameFinished => {
+                eprintln!("mpm-solve: the run in {shown} had already completed; its outputs are rewritten as they were");
+            }
+            Holds::SameUnfinished => {}
+        }
+        return Ok(lock);
+    }
+    if args.overwrite {
+        checkpoint::clear(out)?;
+        return Ok(lock);
+    }
+    match holds {
+        Holds::Nothing => {}
+        Holds::SameFinished => {
+            eprintln!("mpm-solve: replacing the completed run of this case in {shown}");
+            checkpoint::clear(out)?;
+        }
+        Holds::SameUnfinished => bail!(
+            "--out {shown}: holds an interrupted run of this case; continue it with\n  {}\nor replace it with --overwrite",
+            resume_command(out)
+        ),
+        Holds::Other(what) => bail!(
+            "--out {shown}: holds a run of another case or with other options ({what}); choose another folder, or replace it with --overwrite"
+        ),
+        Holds::Unknown => bail!(
+            "--out {shown}: is not empty and holds no run of this case (no readable checkpoint); choose another folder, or replace what it holds with --overwrite"
+        ),
+    }
+    Ok(lock)
 }
 
 /// Runs `case` (or its consolidation job) in precision `R`.

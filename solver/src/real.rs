@@ -38,6 +38,12 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// Absolute value.
     fn abs(self) -> Self;
+    /// Bytes of one value.
+    const BYTES: usize;
+    /// Appends the value's bits, little-endian (checkpoints round-trip exactly).
+    fn put_bits(self, out: &mut Vec<u8>);
+    /// The value of exactly [`Real::BYTES`] little-endian bytes (`None` for another length).
+    fn from_bits(b: &[u8]) -> Option<Self>;
     /// +1, -1 or 0 (0 for 0, unlike `f64::signum`).
     fn sign(self) -> Self {
         if self > Self::ZERO {
@@ -67,12 +73,19 @@ pub trait Real:
 }
 
 macro_rules! real {
-    ($t:ty, $name:expr) => {
+    ($t:ty, $bits:ty, $name:expr) => {
         impl Real for $t {
             const NAME: &'static str = $name;
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
             const EPSILON: f64 = <$t>::EPSILON as f64;
+            const BYTES: usize = std::mem::size_of::<$t>();
+            fn put_bits(self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_bits().to_le_bytes());
+            }
+            fn from_bits(b: &[u8]) -> Option<Self> {
+                Some(<$t>::from_bits(<$bits>::from_le_bytes(b.try_into().ok()?)))
+            }
             #[inline(always)]
             fn of(v: f64) -> Self {
                 v as $t
@@ -92,8 +105,8 @@ macro_rules! real {
         }
     };
 }
-real!(f64, "f64");
-real!(f32, "f32");
+real!(f64, u64, "f64");
+real!(f32, u32, "f32");
 
 /// A 3-vector.
 pub type V3<R> = [R; 3];

@@ -60,11 +60,14 @@ fn compare_bin() -> Command {
     Command::cargo_bin("mpm-compare").unwrap()
 }
 
-/// Copies a run folder (flat).
+/// Copies a run folder's output files (flat: not its checkpoint).
 fn copy(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap() {
         let e = e.unwrap();
+        if e.path().is_dir() || e.file_name() == ".lock" {
+            continue;
+        }
         std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
     }
 }

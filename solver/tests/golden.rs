@@ -30,11 +30,12 @@ const CASES: [(&str, &str, &[&str]); 5] = [
     ),
 ];
 
+/// The output files: `run.json` (timings), the checkpoint and the lock left out.
 fn files(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n != "run.json")
+        .filter(|n| !matches!(n.as_str(), "run.json" | "checkpoint" | ".lock"))
         .collect();
     names.sort();
     names

@@ -11,13 +11,18 @@ fn testdata(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// The files of `dir` (recursively, but `run.json`), with their bytes.
+/// The files of `dir` (recursively, but `run.json`, the checkpoint, which holds timings, and
+/// the lock), with their bytes.
 fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
         for e in std::fs::read_dir(&d).unwrap() {
             let path = e.unwrap().path();
+            let name = path.file_name().unwrap();
+            if name == "checkpoint" || name == ".lock" {
+                continue;
+            }
             if path.is_dir() {
                 stack.push(path);
             } else if path.file_name().unwrap() != "run.json" {

@@ -1,5 +1,6 @@
 //! Running a case: the engine (state and buffers, one step), the loop over output times with its observers, the output files, and numbers in words for people.
 
+pub mod checkpoint;
 pub mod engine;
 pub mod guard;
 pub mod output;

@@ -9,6 +9,7 @@ use mpm_shared::io::write_output_with;
 use mpm_shared::text::real_to_string;
 use mpm_shared::vtu::{self, Cells, DataArray, Encoding, Piece, Values};
 
+use crate::driver::checkpoint::Series;
 use crate::driver::engine::Engine;
 use crate::input::case::Case;
 use crate::real::Real;
@@ -17,9 +18,7 @@ use crate::state::particles::{Field, FieldReader, Value, Written};
 /// Accumulates the time series and writes the files.
 pub struct Output {
     dir: PathBuf,
-    pvd: Vec<(f64, String)>,
-    history: String,
-    energy: String,
+    series: Series,
     probes: Vec<u32>,
 }
 
@@ -45,15 +44,48 @@ impl Output {
             .collect();
         Ok(Output {
             dir: dir.to_path_buf(),
-            pvd: Vec::new(),
-            history: if p.liquid.is_some() {
-                "time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx,pore_pressure\n".into()
-            } else {
-                "time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx\n".into()
+            series: Series {
+                pvd: Vec::new(),
+                history: if p.liquid.is_some() {
+                    "time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx,pore_pressure\n".into()
+                } else {
+                    "time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx\n".into()
+                },
+                energy: "time,kinetic,external_work,strain,dissipated,balance_error\n".into(),
             },
-            energy: "time,kinetic,external_work,strain,dissipated,balance_error\n".into(),
             probes,
         })
+    }
+
+    /// What the series files hold so far (for a checkpoint).
+    pub fn series(&self) -> &Series {
+        &self.series
+    }
+
+    /// Continues from a checkpoint's series: rewrites `run.pvd`, `history.csv` and `energy.csv`
+    /// as they were then (none of them before the first output).
+    pub fn resume(&mut self, series: Series) -> mpm_shared::Result<()> {
+        self.series = series;
+        if self.series.pvd.is_empty() {
+            for f in ["run.pvd", "history.csv", "energy.csv"] {
+                let p = self.dir.join(f);
+                match std::fs::remove_file(&p) {
+                    Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                        return Err(mpm_shared::Error::io(&p, e))
+                    }
+                    _ => {}
+                }
+            }
+            return Ok(());
+        }
+        self.write_series()
+    }
+
+    fn write_series(&self) -> mpm_shared::Result<()> {
+        let s = &self.series;
+        write_output_with(&self.dir.join("run.pvd"), |w| vtu::write_pvd(w, &s.pvd))?;
+        mpm_shared::io::write_output(&self.dir.join("history.csv"), s.history.as_bytes())?;
+        mpm_shared::io::write_output(&self.dir.join("energy.csv"), s.energy.as_bytes())
     }
 
     /// Writes the state at the current time: a particle file and the updated series.
@@ -86,39 +118,39 @@ impl Output {
                 .collect(),
             cell_data: Vec::new(),
         };
-        let name = format!("particles_{:05}.vtu", self.pvd.len());
+        let name = format!("particles_{:05}.vtu", self.series.pvd.len());
         write_output_with(&self.dir.join(&name), |w| {
             vtu::write_vtu(w, &piece, Encoding::Appended)
         })?;
-        self.pvd.push((engine.time, name));
-        write_output_with(&self.dir.join("run.pvd"), |w| vtu::write_pvd(w, &self.pvd))?;
+        let s = &mut self.series;
+        s.pvd.push((engine.time, name));
         for &id in &self.probes {
             let Some(i) = p.id.iter().position(|&x| x == id) else {
                 continue;
             };
-            self.history.push_str(&real_to_string(engine.time));
-            let _ = write!(self.history, ",{}", p.id[i]);
+            s.history.push_str(&real_to_string(engine.time));
+            let _ = write!(s.history, ",{}", p.id[i]);
             for v in engine.mesh.global(&p.x[i]) {
-                csv_real(&mut self.history, v);
+                csv_real(&mut s.history, v);
             }
             for v in p.u[i].iter().chain(&p.stress[i]) {
-                csv_real(&mut self.history, v.f64());
+                csv_real(&mut s.history, v.f64());
             }
             if let Some(l) = &p.liquid {
-                csv_real(&mut self.history, l.p[i].f64());
+                csv_real(&mut s.history, l.p[i].f64());
             }
-            self.history.push('\n');
+            s.history.push('\n');
         }
-        self.energy.push_str(&real_to_string(engine.time));
-        csv_real(&mut self.energy, engine.kinetic_energy());
-        csv_real(&mut self.energy, engine.external_work);
-        csv_real(&mut self.energy, engine.strain_energy);
-        csv_real(&mut self.energy, engine.dissipated);
-        csv_real(&mut self.energy, engine.balance_error());
-        self.energy.push('\n');
-        mpm_shared::io::write_output(&self.dir.join("history.csv"), self.history.as_bytes())?;
-        mpm_shared::io::write_output(&self.dir.join("energy.csv"), self.energy.as_bytes())?;
-        Ok(())
+        s.energy.push_str(&real_to_string(engine.time));
+        csv_real(&mut s.energy, engine.kinetic_energy());
+        csv_real(&mut s.energy, engine.external_work);
+        csv_real(&mut s.energy, engine.strain_energy);
+        csv_real(&mut s.energy, engine.dissipated);
+        csv_real(&mut s.energy, engine.balance_error());
+        s.energy.push('\n');
+        // The particle file first, then the series that name it: a reader of run.pvd mid-run
+        // sees complete outputs only.
+        self.write_series()
     }
 }
 
@@ -194,6 +226,7 @@ pub fn write_summary<R: Real>(
     wall: f64,
     stepping: f64,
     diverged: Option<&crate::driver::guard::Divergence>,
+    interrupted: bool,
 ) -> mpm_shared::Result<()> {
     let phases: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
         .iter()
@@ -232,7 +265,13 @@ pub fn write_summary<R: Real>(
         "bytes_per_particle": engine.particles.bytes_per_point() as f64 + grid_bytes,
         "peak_rss_bytes": peak_rss_bytes(),
         "lost_particles": engine.lost,
-        "status": if diverged.is_some() { "diverged" } else { "completed" },
+        "status": if diverged.is_some() {
+            "diverged"
+        } else if interrupted {
+            "interrupted"
+        } else {
+            "completed"
+        },
         "energy": {
             "kinetic": engine.kinetic_energy(),
             "strain": engine.strain_energy,

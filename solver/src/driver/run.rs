@@ -2,8 +2,11 @@
 //! observers (jobs, progress reporters, tests) as it goes.
 
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
+use crate::driver::checkpoint::{self, CheckpointError, Driver, Every, Fingerprint};
 use crate::driver::engine::Engine;
 use crate::driver::output::{self, Output};
 use crate::driver::units;
@@ -32,6 +35,21 @@ pub enum RunError {
     /// Writing an output failed.
     #[error(transparent)]
     Output(#[from] mpm_shared::Error),
+    /// Writing or reading the checkpoint failed, or it belongs to another case.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// A signal stopped the run after a step; the checkpoint holds its state.
+    #[error("stopped by signal {signal} after step {step} (t = {time} s); the checkpoint and the outputs so far are in {}", .dir.display())]
+    Interrupted {
+        /// The signal's number.
+        signal: usize,
+        /// Steps taken.
+        step: u64,
+        /// Simulated time.
+        time: f64,
+        /// The output folder.
+        dir: std::path::PathBuf,
+    },
     /// The step limit was reached before the end time.
     #[error("stopped after the maximum of {0} time steps at t = {1} s")]
     MaxSteps(u64, f64),
@@ -76,8 +94,8 @@ fn list(ids: &[u32]) -> String {
     s.join(", ")
 }
 
-/// How a run treats lost points.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// How a run treats lost points, checkpoints and signals.
+#[derive(Debug, Clone)]
 pub struct RunOptions {
     /// Deactivate material points that leave the mesh instead of stopping.
     pub drop_lost: bool,
@@ -86,6 +104,15 @@ pub struct RunOptions {
     pub max_lost: f64,
     /// Run a Courant number above 1 (refused otherwise).
     pub force: bool,
+    /// When to write the checkpoint (`None`: never).
+    pub checkpoint: Option<Every>,
+    /// Continue from the folder's checkpoint (from the start when it has none).
+    pub resume: bool,
+    /// Set (to the signal's number) to stop after the current step with a checkpoint.
+    pub stop: Option<Arc<AtomicUsize>>,
+    /// For tests of resuming: abort the process, as a crash would, once it has taken this many
+    /// steps (counted over the runs of a job, from where a resumed run starts).
+    pub abort_after_step: Option<u64>,
 }
 
 impl Default for RunOptions {
@@ -94,6 +121,10 @@ impl Default for RunOptions {
             drop_lost: false,
             max_lost: 0.1,
             force: false,
+            checkpoint: None,
+            resume: false,
+            stop: None,
+            abort_after_step: None,
         }
     }
 }
@@ -115,6 +146,16 @@ pub trait Observer<R: Real> {
 
     /// The run reached its end time.
     fn on_end(&mut self, _engine: &Engine<R>) {}
+
+    /// The observer's state that a resumed run needs (for a checkpoint; empty when none).
+    fn save(&self) -> Vec<u8> {
+        Vec::new()
+    }
+
+    /// Takes back the state of [`Observer::save`] (after `on_start`, when a run resumes).
+    fn restore(&mut self, _state: &[u8]) -> Result<(), String> {
+        Ok(())
+    }
 }
 
 /// Two observers, told in turn.
@@ -139,6 +180,25 @@ impl<R: Real> Observer<R> for Both<'_, R> {
     fn on_end(&mut self, engine: &Engine<R>) {
         self.0.on_end(engine);
         self.1.on_end(engine);
+    }
+
+    fn save(&self) -> Vec<u8> {
+        let a = self.0.save();
+        let mut out = (a.len() as u64).to_le_bytes().to_vec();
+        out.extend(a);
+        out.extend(self.1.save());
+        out
+    }
+
+    fn restore(&mut self, state: &[u8]) -> Result<(), String> {
+        let n = state
+            .get(..8)
+            .and_then(|b| b.try_into().ok())
+            .map(u64::from_le_bytes)
+            .filter(|&n| n <= (state.len() - 8) as u64)
+            .ok_or("observers' state cut short")? as usize;
+        self.0.restore(&state[8..8 + n])?;
+        self.1.restore(&state[8 + n..])
     }
 }
 
@@ -182,6 +242,9 @@ pub fn run_with<R: Real>(
     drive(case, dir, options, observer)
 }
 
+/// Steps taken by this process, for [`RunOptions::abort_after_step`].
+static PROCESS_STEPS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
 fn drive<R: Real>(
     case: &Case,
     dir: &Path,
@@ -189,42 +252,102 @@ fn drive<R: Real>(
     observer: &mut dyn Observer<R>,
 ) -> Result<Engine<R>, RunError> {
     let wall = Instant::now();
-    // run.json, written at the end or where a guard rail stops the run.
-    let summary = |engine: &Engine<R>, stepping: f64, diverged| {
-        output::write_summary(
-            dir,
-            case,
-            engine,
-            wall.elapsed().as_secs_f64(),
-            stepping,
-            diverged,
-        )
-    };
     case.check_courant(options.force)?;
+    let fingerprint = Fingerprint::of(case, options.drop_lost);
+    let saved = if options.resume {
+        checkpoint::read(dir)?
+    } else {
+        None
+    };
+    if let Some(s) = &saved {
+        if let Some(what) = s.fingerprint.difference(&fingerprint) {
+            return Err(CheckpointError::Mismatch {
+                dir: dir.to_path_buf(),
+                what,
+            }
+            .into());
+        }
+    }
     let mut engine = Engine::<R>::new(case, options.drop_lost)?;
     check_probes(case, &engine)?;
     observer.on_start(&engine)?;
     let mut out = Output::new(dir, case, &engine)?;
-    let mut stepping = 0.0;
-    let mut load_step_start = 0.0;
-    for &t_out in &case.output_times {
+    let mut d = Driver::default();
+    if let Some(s) = saved {
+        checkpoint::tidy(dir, &s.series, s.finished(case.output_times.len()))?;
+        engine.restore(&s)?;
+        observer
+            .restore(&s.observer)
+            .map_err(|what| s.corrupt(format!("job state: {what}")))?;
+        out.resume(s.series.clone())?;
+        d = s.driver;
+    }
+    // Wall seconds before this process, for run.json.
+    let wall_before = d.wall;
+    let elapsed = || wall_before + wall.elapsed().as_secs_f64();
+    // run.json, written at the end, where a guard rail stops the run, or at a signal.
+    let summary = |engine: &Engine<R>, d: &Driver, diverged, interrupted| {
+        output::write_summary(
+            dir,
+            case,
+            engine,
+            elapsed(),
+            d.stepping,
+            diverged,
+            interrupted,
+        )
+    };
+    let save = |engine: &Engine<R>, out: &Output, d: &mut Driver, observer: &dyn Observer<R>| {
+        d.wall = elapsed();
+        let scalars = engine.checkpoint_scalars();
+        let observed = observer.save();
+        checkpoint::write(
+            dir,
+            &checkpoint::State {
+                fingerprint: &fingerprint,
+                driver: *d,
+                scalars: &scalars,
+                particles: &engine.particles,
+                series: out.series(),
+                observer: &observed,
+            },
+        )
+    };
+    let mut last_checkpoint = Instant::now();
+    if options.checkpoint.is_some() && engine.steps == 0 && d.next_output == 0 {
+        // A run killed before its first output resumes from here, not from nothing.
+        save(&engine, &out, &mut d, &*observer)?;
+    }
+    let stopped = |engine: &Engine<R>| {
+        options
+            .stop
+            .as_ref()
+            .map(|s| s.load(Ordering::SeqCst))
+            .filter(|&s| s != 0)
+            .map(|signal| RunError::Interrupted {
+                signal,
+                step: engine.steps,
+                time: engine.time,
+                dir: dir.to_path_buf(),
+            })
+    };
+    for (k, &t_out) in case.output_times.iter().enumerate().skip(d.next_output) {
         let t0 = Instant::now();
-        let mut taken = 0u64;
-        let begun = engine.time;
+        let t_start = d.stepping;
         loop {
             if let Some(qs) = &case.quasi_static {
                 // Anura3D ends a quasi-static load step once converged or when its step counter,
                 // which starts at 1, exceeds the limit: after `limit + 1` steps, the first of
                 // the calculation being its tiny initial step. Without a limit, at the load
                 // step's duration.
-                let done = if taken == 0 {
+                let done = if d.taken == 0 {
                     false
                 } else if engine.converged(qs) {
                     true
                 } else if let Some(m) = qs.max_steps {
-                    taken > m
+                    d.taken > m
                 } else {
-                    engine.time - begun >= (t_out - load_step_start) * (1.0 - 1e-12)
+                    engine.time - d.begun >= (t_out - d.load_step_start) * (1.0 - 1e-12)
                 };
                 if done {
                     break;
@@ -246,32 +369,71 @@ fn drive<R: Real>(
                 (left, Some(t_out))
             };
             if let Err(e) = engine.step(dt, snap) {
-                if let crate::driver::engine::StepError::Diverged(d) = &e {
+                if let crate::driver::engine::StepError::Diverged(dv) = &e {
                     // The state at the failing step, when still finite, is the most useful
                     // last output (where it went wrong); otherwise the outputs so far stand.
-                    if d.check != crate::driver::guard::Check::NonFinite {
+                    if dv.check != crate::driver::guard::Check::NonFinite {
                         out.write(&engine)?;
                     }
-                    stepping += t0.elapsed().as_secs_f64();
-                    summary(&engine, stepping, Some(d))?;
+                    d.stepping = t_start + t0.elapsed().as_secs_f64();
+                    summary(&engine, &d, Some(dv), false)?;
                 }
                 return Err(e.into());
             }
-            taken += 1;
+            d.taken += 1;
             if options.drop_lost && engine.lost > 0 {
                 check_lost(&engine, options.max_lost)?;
             }
             observer.on_step(&engine);
+            if let Some(n) = options.abort_after_step {
+                if PROCESS_STEPS.fetch_add(1, Ordering::SeqCst) + 1 >= n {
+                    std::process::abort();
+                }
+            }
+            let interrupted = stopped(&engine);
+            let due = match options.checkpoint {
+                None => false,
+                Some(Every::Steps(n)) => engine.steps % n.max(1) == 0,
+                Some(Every::Wall(s) | Every::Outputs { max_wall: s }) => {
+                    last_checkpoint.elapsed().as_secs_f64() >= s
+                }
+            };
+            if due || interrupted.is_some() {
+                d.stepping = t_start + t0.elapsed().as_secs_f64();
+                save(&engine, &out, &mut d, &*observer)?;
+                last_checkpoint = Instant::now();
+            }
+            if let Some(e) = interrupted {
+                summary(&engine, &d, None, true)?;
+                return Err(e);
+            }
         }
-        load_step_start = t_out;
-        stepping += t0.elapsed().as_secs_f64();
+        d.load_step_start = t_out;
+        d.stepping = t_start + t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         out.write(&engine)?;
         observer.on_output(&engine);
+        // The next load step starts here.
+        (d.next_output, d.taken, d.begun) = (k + 1, 0, engine.time);
+        let last = k + 1 == case.output_times.len();
+        // A signal during the last output lets the run complete.
+        let interrupted = stopped(&engine).filter(|_| !last);
+        if options.checkpoint.is_some()
+            && (last
+                || interrupted.is_some()
+                || matches!(options.checkpoint, Some(Every::Outputs { .. })))
+        {
+            save(&engine, &out, &mut d, &*observer)?;
+            last_checkpoint = Instant::now();
+        }
         engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
+        if let Some(e) = interrupted {
+            summary(&engine, &d, None, true)?;
+            return Err(e);
+        }
     }
     observer.on_end(&engine);
-    summary(&engine, stepping, None)?;
+    summary(&engine, &d, None, false)?;
     Ok(engine)
 }
 

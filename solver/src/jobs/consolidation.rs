@@ -276,6 +276,68 @@ impl<R: Real> crate::driver::run::Observer<R> for Observer {
             t.record(engine);
         }
     }
+
+    /// The records and profiles so far (the rest follows from the start state), as f64 bits.
+    fn save(&self) -> Vec<u8> {
+        let Some(t) = &self.tracker else {
+            return Vec::new();
+        };
+        let mut v: Vec<f64> = vec![t.records.len() as f64];
+        for r in &t.records {
+            v.extend([r.time, r.tv, r.settlement, r.terzaghi, r.rms, r.max]);
+        }
+        v.push(t.profiles.len() as f64);
+        for (tv, points) in &t.profiles {
+            v.extend([*tv, points.len() as f64]);
+            v.extend(points.iter().flat_map(|&(a, b)| [a, b]));
+        }
+        v.iter().flat_map(|x| x.to_bits().to_le_bytes()).collect()
+    }
+
+    fn restore(&mut self, state: &[u8]) -> Result<(), String> {
+        let Some(t) = &mut self.tracker else {
+            return Ok(());
+        };
+        if state.len() % 8 != 0 {
+            return Err("consolidation records of a ragged length".into());
+        }
+        let v: Vec<f64> = state
+            .chunks_exact(8)
+            .map(|c| f64::from_bits(u64::from_le_bytes(c.try_into().unwrap_or_default())))
+            .collect();
+        let mut it = v.into_iter();
+        let count = |it: &mut std::vec::IntoIter<f64>, per: usize| {
+            let n = it.next().ok_or("consolidation records cut short")?;
+            if n < 0.0 || n.fract() != 0.0 || n * per as f64 > it.len() as f64 {
+                return Err("a consolidation record count beyond the state".to_string());
+            }
+            Ok(n as usize)
+        };
+        let next = |it: &mut std::vec::IntoIter<f64>| it.next().unwrap_or(f64::NAN);
+        let n = count(&mut it, 6)?;
+        t.records = (0..n)
+            .map(|_| Record {
+                time: next(&mut it),
+                tv: next(&mut it),
+                settlement: next(&mut it),
+                terzaghi: next(&mut it),
+                rms: next(&mut it),
+                max: next(&mut it),
+            })
+            .collect();
+        let n = count(&mut it, 2)?;
+        t.profiles.clear();
+        for _ in 0..n {
+            let tv = next(&mut it);
+            let m = count(&mut it, 2)?;
+            let points = (0..m).map(|_| (next(&mut it), next(&mut it))).collect();
+            t.profiles.push((tv, points));
+        }
+        if it.len() != 0 {
+            return Err("consolidation records longer than announced".into());
+        }
+        Ok(())
+    }
 }
 
 /// Runs the consolidation case `case` into `dir`: its final engine and the record of every

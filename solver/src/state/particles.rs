@@ -70,11 +70,25 @@ pub trait Value: Copy + Default + Send + Sync + 'static {
     fn push_f64(&self, out: &mut Vec<f64>);
     /// Appends the components as i32, plus `offset`.
     fn push_i32(&self, offset: i32, out: &mut Vec<i32>);
+    /// Bytes of one value in a checkpoint.
+    const BYTES: usize;
+    /// Appends the value's bits, little-endian (a checkpoint round-trips exactly).
+    fn put_bits(&self, out: &mut Vec<u8>);
+    /// The value of exactly [`Value::BYTES`] bytes written by [`Value::put_bits`] (`None` when
+    /// they are not such a value).
+    fn from_bits(b: &[u8]) -> Option<Self>;
 }
 
 impl<R: Real> Value for R {
     const COMPONENTS: usize = 1;
     const INTEGER: bool = false;
+    const BYTES: usize = R::BYTES;
+    fn put_bits(&self, out: &mut Vec<u8>) {
+        Real::put_bits(*self, out);
+    }
+    fn from_bits(b: &[u8]) -> Option<Self> {
+        <R as Real>::from_bits(b)
+    }
     fn push_f64(&self, out: &mut Vec<f64>) {
         out.push(self.f64());
     }
@@ -89,6 +103,22 @@ where
 {
     const COMPONENTS: usize = N;
     const INTEGER: bool = false;
+    const BYTES: usize = N * R::BYTES;
+    fn put_bits(&self, out: &mut Vec<u8>) {
+        for &v in self {
+            Real::put_bits(v, out);
+        }
+    }
+    fn from_bits(b: &[u8]) -> Option<Self> {
+        if b.len() != Self::BYTES {
+            return None;
+        }
+        let mut out = [R::ZERO; N];
+        for (o, c) in out.iter_mut().zip(b.chunks_exact(R::BYTES)) {
+            *o = <R as Real>::from_bits(c)?;
+        }
+        Some(out)
+    }
     fn push_f64(&self, out: &mut Vec<f64>) {
         out.extend(self.iter().map(|v| v.f64()));
     }
@@ -100,6 +130,13 @@ where
 impl Value for u32 {
     const COMPONENTS: usize = 1;
     const INTEGER: bool = true;
+    const BYTES: usize = 4;
+    fn put_bits(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+    fn from_bits(b: &[u8]) -> Option<Self> {
+        Some(u32::from_le_bytes(b.try_into().ok()?))
+    }
     fn push_f64(&self, out: &mut Vec<f64>) {
         out.push(f64::from(*self));
     }
@@ -111,6 +148,17 @@ impl Value for u32 {
 impl Value for bool {
     const COMPONENTS: usize = 1;
     const INTEGER: bool = true;
+    const BYTES: usize = 1;
+    fn put_bits(&self, out: &mut Vec<u8>) {
+        out.push(u8::from(*self));
+    }
+    fn from_bits(b: &[u8]) -> Option<Self> {
+        match b {
+            [0] => Some(false),
+            [1] => Some(true),
+            _ => None,
+        }
+    }
     fn push_f64(&self, out: &mut Vec<f64>) {
         out.push(f64::from(u8::from(*self)));
     }
