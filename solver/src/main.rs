@@ -547,6 +547,7 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         return Ok(());
     };
     plan.check(&limits, Some(out))?;
+    let created = !out.exists();
     let _lock = take_folder(&case, out, args)?;
     // A first SIGINT or SIGTERM stops the run after its step, with a checkpoint; a second one
     // ends the process at once.
@@ -584,10 +585,21 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
     };
     let reporter = Reporter::new(mode, plan.steps.min(u64::MAX as f64) as u64, case.end_time);
     // One code path, compiled once per precision.
-    match case.precision {
+    let result = match case.precision {
         Precision::F64 => execute::<f64>(&case, out, &options, reporter),
         Precision::F32 => execute::<f32>(&case, out, &options, reporter),
+    };
+    // A run refused at set-up (before its first output) leaves no folder it created.
+    if result.is_err() && created {
+        let only_lock = std::fs::read_dir(out)
+            .map(|d| d.flatten().all(|e| e.file_name() == checkpoint::LOCK))
+            .unwrap_or(false);
+        if only_lock {
+            let _ = std::fs::remove_file(out.join(checkpoint::LOCK));
+            let _ = std::fs::remove_dir(out);
+        }
     }
+    result
 }
 
 /// Takes the output folder for this run under its lock: a new or empty folder, a completed run

@@ -107,13 +107,17 @@ fn precision_is_chosen_on_the_command_line_for_both_input_kinds_and_in_scenes() 
     };
     let scene = common::scene(tmp.path(), &|t| t);
     let gom = common::testdata("golden/column_anura3d.GOM");
-    for (input, extra, want) in [
+    for (k, (input, extra, want)) in [
         (scene.clone(), vec![], "f64"),
         (scene.clone(), vec!["--precision", "f32"], "f32"),
         (gom.clone(), vec!["--precision", "f32"], "f32"),
         (gom, vec![], "f64"),
-    ] {
-        let out = tmp.path().join(format!("out-{want}-{}", extra.len()));
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        // One folder per run: a folder holding another case's run is refused.
+        let out = tmp.path().join(format!("out-{want}-{k}"));
         Command::cargo_bin("mpm-solve")
             .unwrap()
             .arg(&input)
