@@ -68,12 +68,14 @@ struct Args {
     /// file's stem), and exit without running; what Anura3D cannot reproduce is refused by name.
     #[arg(long, value_name = "DIR")]
     export_anura3d: Option<PathBuf>,
-    /// Worker threads [default: all cores available to the process]. Results are
-    /// byte-identical for any count.
+    /// Worker threads [default: one per core available to the process that no other process
+    /// keeps busy at the start]. Results are byte-identical for any count.
     #[arg(long)]
     threads: Option<usize>,
-    /// Thread placement: one thread per core, or left to the OS.
-    #[arg(long, value_enum, default_value = "cores")]
+    /// Thread placement: `auto` pins one thread per free core when each thread has one and
+    /// leaves them to the OS otherwise; `cores` pins thread k to the k-th core whatever runs
+    /// there; `none` leaves placement to the OS.
+    #[arg(long, value_enum, default_value = "auto")]
     pin: PinArg,
     /// Let each thread first touch (and so place) the data it computes on; `off` initialises
     /// everything on the main thread (for measurement).
@@ -220,6 +222,7 @@ enum DragArg {
 enum PinArg {
     None,
     Cores,
+    Auto,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -259,6 +262,8 @@ impl log::Log for Messages {
 static MESSAGES: Messages = Messages;
 
 fn main() -> ExitCode {
+    // The team's look at which cores are free overlaps reading the input.
+    mpm_solve::parallel::machine::begin_early();
     // Only fails when a logger is already set, which nothing else does.
     let _ = log::set_logger(&MESSAGES).map(|()| log::set_max_level(log::LevelFilter::Warn));
     match run(Args::parse()) {
@@ -494,6 +499,7 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         pin: match args.pin {
             PinArg::None => mpm_solve::parallel::team::Pin::None,
             PinArg::Cores => mpm_solve::parallel::team::Pin::Cores,
+            PinArg::Auto => mpm_solve::parallel::team::Pin::Auto,
         },
         first_touch: matches!(args.first_touch, OnOff::On),
     };

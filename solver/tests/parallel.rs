@@ -38,7 +38,7 @@ fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
 fn check_identical(scene: &Path, extra: &[&str]) {
     let mut reference: Option<Vec<(String, Vec<u8>)>> = None;
     for threads in ["1", "2", "3", "4"] {
-        for pin in ["none", "cores"] {
+        for pin in ["none", "cores", "auto"] {
             let dir = tempfile::tempdir().unwrap();
             Command::cargo_bin("mpm-solve")
                 .unwrap()

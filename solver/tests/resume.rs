@@ -16,7 +16,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_mpm-solve");
 
 /// Keys of run.json that describe this process rather than the results: wall times, rates,
 /// memory, and the threads (outputs do not depend on them).
-const RUN_SPECIFIC: [&str; 7] = [
+const RUN_SPECIFIC: [&str; 8] = [
     "wall_seconds",
     "particle_steps_per_second",
     "phase_seconds",
@@ -24,6 +24,7 @@ const RUN_SPECIFIC: [&str; 7] = [
     "threads",
     "pinning",
     "pinned_cores",
+    "busy_cores",
 ];
 
 /// A golden column scene (`column_dry` or `column_saturated`) with the mesh path made absolute

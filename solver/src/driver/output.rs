@@ -249,8 +249,10 @@ pub fn write_summary<R: Real>(
         "pinning": match case.engine.pin {
             crate::parallel::team::Pin::None => "none",
             crate::parallel::team::Pin::Cores => "cores",
+            crate::parallel::team::Pin::Auto => "auto",
         },
         "pinned_cores": engine.team.pinned,
+        "busy_cores": engine.team.busy,
         "first_touch": case.engine.first_touch,
         "precision": R::NAME,
         "particles": n,

@@ -2,5 +2,6 @@
 
 pub mod comm;
 pub mod gather;
+pub mod machine;
 pub mod partition;
 pub mod team;

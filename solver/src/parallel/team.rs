@@ -15,6 +15,10 @@ pub enum Pin {
     None,
     /// Thread k on the k-th core available to the process.
     Cores,
+    /// Thread k on the k-th free core when every thread has a free core of its own; else left
+    /// to the OS (a pinned thread sharing its core with another process stalls the team at
+    /// every barrier: [`crate::parallel::machine`]).
+    Auto,
 }
 
 /// A pool of `threads` workers.
@@ -24,6 +28,9 @@ pub struct Team {
     pub threads: usize,
     /// The core each thread was pinned to (`None` where pinning was not asked for or refused).
     pub pinned: Vec<Option<usize>>,
+    /// Cores available to the process that other processes kept busy when the team started
+    /// (looked at for the automatic thread count and `Pin::Auto` only).
+    pub busy: Vec<usize>,
 }
 
 impl std::fmt::Debug for Team {
@@ -46,12 +53,33 @@ pub struct TeamError {
 }
 
 impl Team {
-    /// Starts `threads` workers (0: one per core available to the process), pinned as `pin`
-    /// asks.
+    /// Starts `threads` workers (0: one per free core available to the process, at least one),
+    /// pinned as `pin` asks.
     pub fn new(threads: usize, pin: Pin) -> Result<Team, TeamError> {
-        let cores = core_affinity::get_core_ids().unwrap_or_default();
+        let all = core_affinity::get_core_ids().unwrap_or_default();
         let available = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let threads = if threads == 0 { available } else { threads };
+        let look = (threads == 0 || pin == Pin::Auto) && available > 1 && all.len() > 1;
+        let ids: Vec<usize> = all.iter().map(|c| c.id).collect();
+        let busy = if look {
+            crate::parallel::machine::busy_cores(&ids).unwrap_or_default()
+        } else {
+            Vec::new()
+        };
+        let free: Vec<core_affinity::CoreId> = all
+            .iter()
+            .copied()
+            .filter(|c| !busy.contains(&c.id))
+            .collect();
+        let threads = match threads {
+            0 if look => free.len().clamp(1, available),
+            0 => available,
+            n => n,
+        };
+        let cores = match pin {
+            Pin::Cores => all,
+            Pin::Auto if threads <= free.len() => free,
+            Pin::Auto | Pin::None => Vec::new(),
+        };
         let granted: Vec<std::sync::Mutex<Option<usize>>> =
             (0..threads).map(|_| std::sync::Mutex::new(None)).collect();
         let granted = std::sync::Arc::new(granted);
@@ -60,7 +88,7 @@ impl Team {
             .num_threads(threads)
             .thread_name(|k| format!("mpm-worker-{k}"))
             .start_handler(move |k| {
-                if pin == Pin::Cores && !cores.is_empty() {
+                if !cores.is_empty() {
                     let core = cores[k % cores.len()];
                     if core_affinity::set_for_current(core) {
                         *g[k].lock().expect("not poisoned") = Some(core.id);
@@ -82,6 +110,7 @@ impl Team {
             pool,
             threads,
             pinned,
+            busy,
         })
     }
 
@@ -238,11 +267,11 @@ pub struct Options {
 }
 
 impl Default for Options {
-    /// One thread per core, placed by the OS, first touch on.
+    /// One thread per free core, pinned when each has a free core of its own, first touch on.
     fn default() -> Self {
         Options {
             threads: 0,
-            pin: Pin::None,
+            pin: Pin::Auto,
             first_touch: true,
         }
     }

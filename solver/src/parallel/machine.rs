@@ -1,0 +1,171 @@
+//! Which cores are free: a short look at the kernel's per-core counters (`/proc/stat`) before
+//! the team starts, so that a run on a shared machine neither pins a thread to a core another
+//! process keeps busy nor waits at every barrier for the thread that shares it (docs/design.md
+//! §5.1). Only the team's start consults it; results never depend on it.
+
+use std::time::Duration;
+
+/// How long the counters are watched: five of the kernel's 10 ms ticks per core.
+pub const WINDOW: Duration = Duration::from_millis(50);
+
+/// A core counts as busy when others used more than this share of it during the window.
+pub const BUSY_SHARE: f64 = 0.5;
+
+/// Per-core (busy, total) jiffies from the text of `/proc/stat`: the `cpuN` lines, busy being
+/// everything but idle and iowait. Lines that do not parse are skipped.
+pub fn parse_stat(text: &str) -> Vec<(usize, u64, u64)> {
+    let mut out = Vec::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        let Some(name) = words.next() else { continue };
+        let Some(Ok(core)) = name.strip_prefix("cpu").map(str::parse::<usize>) else {
+            continue;
+        };
+        let counts: Vec<u64> = words.map_while(|w| w.parse().ok()).collect();
+        if counts.len() < 4 {
+            continue;
+        }
+        let total: u64 = counts.iter().sum();
+        let idle = counts[3] + counts.get(4).copied().unwrap_or(0);
+        out.push((core, total.saturating_sub(idle), total));
+    }
+    out
+}
+
+/// The cores of `cores` whose busy share between the samples `before` and `after` (from
+/// [`parse_stat`]) exceeds [`BUSY_SHARE`]. A core missing from either sample, or without ticks
+/// in between, is taken as free.
+pub fn busy_between(
+    cores: &[usize],
+    before: &[(usize, u64, u64)],
+    after: &[(usize, u64, u64)],
+) -> Vec<usize> {
+    let find = |s: &[(usize, u64, u64)], c| s.iter().find(|e| e.0 == c).map(|e| (e.1, e.2));
+    cores
+        .iter()
+        .copied()
+        .filter(|&c| match (find(before, c), find(after, c)) {
+            (Some((b0, t0)), Some((b1, t1))) if t1 > t0 => {
+                b1.saturating_sub(b0) as f64 / (t1 - t0) as f64 > BUSY_SHARE
+            }
+            _ => false,
+        })
+        .collect()
+}
+
+/// This process's threads: per thread id, (busy jiffies, the core it last ran on), from
+/// `/proc/self/task/*/stat` (utime, stime and processor: fields 14, 15 and 39).
+fn own_threads() -> Vec<(u64, u64, usize)> {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for entry in dir.flatten() {
+        let Ok(tid) = entry.file_name().to_string_lossy().parse::<u64>() else {
+            continue;
+        };
+        let Ok(text) = std::fs::read_to_string(entry.path().join("stat")) else {
+            continue;
+        };
+        // The command name, in parentheses, may hold spaces: fields count from after it.
+        let Some(rest) = text.rfind(')').map(|i| &text[i + 1..]) else {
+            continue;
+        };
+        let f: Vec<&str> = rest.split_whitespace().collect();
+        let num = |i: usize| f.get(i).and_then(|w| w.parse::<u64>().ok());
+        if let (Some(u), Some(s), Some(core)) = (num(11), num(12), num(36)) {
+            out.push((tid, u + s, core as usize));
+        }
+    }
+    out
+}
+
+/// A look at the cores under way: the counters when it began.
+#[derive(Debug)]
+pub struct Look {
+    at: std::time::Instant,
+    cores: Vec<(usize, u64, u64)>,
+    own: Vec<(u64, u64, usize)>,
+}
+
+impl Look {
+    /// Begins a look (`None` where `/proc/stat` cannot be read).
+    pub fn begin() -> Option<Look> {
+        let text = std::fs::read_to_string("/proc/stat").ok()?;
+        Some(Look {
+            at: std::time::Instant::now(),
+            cores: parse_stat(&text),
+            own: own_threads(),
+        })
+    }
+
+    /// Ends the look, at least [`WINDOW`] after it began (sleeping the rest): the cores of
+    /// `cores` that other processes kept busy. This process's own work in the meantime (the
+    /// input being read) is taken off the core each of its threads last ran on.
+    pub fn busy(self, cores: &[usize]) -> Option<Vec<usize>> {
+        if let Some(rest) = WINDOW.checked_sub(self.at.elapsed()) {
+            std::thread::sleep(rest);
+        }
+        let own = own_threads();
+        let mut after = parse_stat(&std::fs::read_to_string("/proc/stat").ok()?);
+        for &(tid, ticks, core) in &own {
+            let before = self.own.iter().find(|t| t.0 == tid).map_or(0, |t| t.1);
+            if let Some(c) = after.iter_mut().find(|c| c.0 == core) {
+                c.1 = c.1.saturating_sub(ticks.saturating_sub(before));
+            }
+        }
+        Some(busy_between(cores, &self.cores, &after))
+    }
+}
+
+/// The look begun at the program's start ([`begin_early`]), if any.
+static EARLY: std::sync::Mutex<Option<Look>> = std::sync::Mutex::new(None);
+
+/// Begins the look now, so that reading the input overlaps its window; the team takes it.
+pub fn begin_early() {
+    if let Ok(mut early) = EARLY.lock() {
+        *early = Look::begin();
+    }
+}
+
+/// The cores of `cores` that other processes keep busy: from the look begun early, or from
+/// one begun now (watched for [`WINDOW`]); `None` where the counters cannot be read (not
+/// Linux, no `/proc`).
+pub fn busy_cores(cores: &[usize]) -> Option<Vec<usize>> {
+    let early = EARLY.lock().ok().and_then(|mut e| e.take());
+    early.or_else(Look::begin)?.busy(cores)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SAMPLE: &str = "cpu  100 0 50 1000 10 0 0 0 0 0\n\
+cpu0 50 0 25 500 5 0 0 0 0 0\n\
+cpu1 50 0 25 500 5 0 0 0 0 0\n\
+intr 12345 1 2\n\
+ctxt 999\n";
+
+    #[test]
+    fn the_per_core_lines_are_read_and_the_summary_line_skipped() {
+        let s = parse_stat(SAMPLE);
+        assert_eq!(s, vec![(0, 75, 580), (1, 75, 580)]);
+        assert!(parse_stat("cpuX 1 2 3 4\ncpu3 1 2\n").is_empty());
+    }
+
+    #[test]
+    fn a_core_used_mostly_by_others_is_busy() {
+        let before = vec![(0, 75, 580), (1, 75, 580), (2, 0, 10)];
+        // Core 0: 4 of 5 ticks busy; core 1: 1 of 5; core 2: no ticks; core 3 unknown.
+        let after = vec![(0, 79, 585), (1, 76, 585), (2, 0, 10)];
+        assert_eq!(busy_between(&[0, 1, 2, 3], &before, &after), vec![0]);
+    }
+
+    #[test]
+    fn this_machine_can_be_looked_at() {
+        // On Linux the counters read; the answer depends on the machine's load.
+        if std::path::Path::new("/proc/stat").exists() {
+            assert!(busy_cores(&[0]).is_some());
+        }
+    }
+}
