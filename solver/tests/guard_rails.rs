@@ -11,15 +11,7 @@ use mpm_shared::vtu_read;
 
 /// The golden dry column (461 tetrahedra, one point each) edited by `edit`, as `dir/NAME.toml`.
 fn column(dir: &Path, name: &str, edit: &dyn Fn(String) -> String) -> PathBuf {
-    let text = std::fs::read_to_string(testdata("golden/column_dry.toml"))
-        .unwrap()
-        .replace(
-            "../column_tet4.msh",
-            &testdata("column_tet4.msh").display().to_string(),
-        );
-    let p = dir.join(format!("{name}.toml"));
-    std::fs::write(&p, edit(text)).unwrap();
-    p
+    common::golden_scene(dir, "column_dry", name, edit)
 }
 
 fn solve(scene: &Path, out: &Path, extra: &[&str]) -> assert_cmd::assert::Assert {

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use common::testdata;
+use common::{golden_scene, testdata};
 
 const BIN: &str = env!("CARGO_BIN_EXE_mpm-solve");
 
@@ -27,23 +27,9 @@ const RUN_SPECIFIC: [&str; 8] = [
     "busy_cores",
 ];
 
-/// A golden column scene (`column_dry` or `column_saturated`) with the mesh path made absolute
-/// and `edit` applied, as `dir/NAME.toml`.
-fn scene(dir: &Path, golden: &str, name: &str, edit: &dyn Fn(String) -> String) -> PathBuf {
-    let text = std::fs::read_to_string(testdata(&format!("golden/{golden}.toml")))
-        .unwrap()
-        .replace(
-            "../column_tet4.msh",
-            &testdata("column_tet4.msh").display().to_string(),
-        );
-    let p = dir.join(format!("{name}.toml"));
-    std::fs::write(&p, edit(text)).unwrap();
-    p
-}
-
 /// A longer dry column: 0.2 s in 40 outputs (about 2,100 steps), for signals from outside.
 fn long_scene(dir: &Path) -> PathBuf {
-    scene(dir, "column_dry", "long", &|t| {
+    golden_scene(dir, "column_dry", "long", &|t| {
         t.replace("end = 0.01", "end = 0.2")
     })
 }
@@ -118,7 +104,7 @@ type Plan<'a> = (u64, &'a [&'a str], &'a str, &'a str, Option<u64>);
 /// resumes with another thread count, once or twice: the folder ends as the uninterrupted one.
 fn killed_and_resumed(golden: &str, precision: &str) {
     let tmp = tempfile::tempdir().unwrap();
-    let input = scene(tmp.path(), golden, golden, &|t| t);
+    let input = golden_scene(tmp.path(), golden, golden, &|t| t);
     let full = tmp.path().join("full");
     let p = ["--precision", precision];
     ok(&run(
@@ -390,7 +376,7 @@ fn a_folder_in_use_is_refused() {
 #[test]
 fn a_resume_with_another_case_or_options_is_refused_by_name() {
     let tmp = tempfile::tempdir().unwrap();
-    let input = scene(tmp.path(), "column_dry", "dry", &|t| t);
+    let input = golden_scene(tmp.path(), "column_dry", "dry", &|t| t);
     let out = tmp.path().join("out");
     let o = out.to_str().unwrap();
     let first = run(&input, &["--out", o, "--abort-after-step", "20"]);
@@ -417,7 +403,7 @@ fn a_resume_with_another_case_or_options_is_refused_by_name() {
         "damping differs (checkpoint: 0.75, now: 0.7)",
     );
     // A new run into the interrupted one's folder is refused, naming --resume.
-    let fresh = scene(tmp.path(), "column_dry", "dry", &|t| t);
+    let fresh = golden_scene(tmp.path(), "column_dry", "dry", &|t| t);
     refused(&["--out", o], &fresh, "--resume");
     // The thread count may change.
     ok(&run(&fresh, &["--resume", o, "--threads", "3"]));
@@ -426,7 +412,7 @@ fn a_resume_with_another_case_or_options_is_refused_by_name() {
 #[test]
 fn output_folder_rules() {
     let tmp = tempfile::tempdir().unwrap();
-    let input = scene(tmp.path(), "column_dry", "dry", &|t| t);
+    let input = golden_scene(tmp.path(), "column_dry", "dry", &|t| t);
     let out = tmp.path().join("out");
     let o = out.to_str().unwrap();
     ok(&run(&input, &["--out", o]));
@@ -588,7 +574,7 @@ fn a_full_disk_stops_with_the_file_named_and_the_checkpoint_intact() {
 #[test]
 fn a_read_only_folder_is_an_error_naming_it() {
     let tmp = tempfile::tempdir().unwrap();
-    let input = scene(tmp.path(), "column_dry", "dry", &|t| t);
+    let input = golden_scene(tmp.path(), "column_dry", "dry", &|t| t);
     let disk = tmp.path().join("ro");
     if tmpfs(&disk, "1m").is_none() {
         return;

@@ -25,3 +25,22 @@ pub fn scene(dir: &Path, edit: &dyn Fn(String) -> String) -> PathBuf {
     std::fs::write(&p, edit(text)).unwrap();
     p
 }
+
+/// A golden column scene (`column_dry` or `column_saturated`) with the mesh path made absolute
+/// and `edit` applied, as `dir/NAME.toml`.
+pub fn golden_scene(
+    dir: &Path,
+    golden: &str,
+    name: &str,
+    edit: &dyn Fn(String) -> String,
+) -> PathBuf {
+    let text = std::fs::read_to_string(testdata(&format!("golden/{golden}.toml")))
+        .unwrap()
+        .replace(
+            "../column_tet4.msh",
+            &testdata("column_tet4.msh").display().to_string(),
+        );
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, edit(text)).unwrap();
+    p
+}
