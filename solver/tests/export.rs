@@ -609,3 +609,44 @@ fn exported_gom_round_trips_through_the_writer() {
         .iter()
         .all(|s| !matches!(s.body, Body::Opaque(_))));
 }
+
+#[test]
+fn integration_and_objective_stress_of_a_scene_reach_the_case_and_the_export() {
+    let dir = tempfile::tempdir().unwrap();
+    let with = |t: String| {
+        let t = short_column(t);
+        t.replacen(
+            "mesh = ",
+            "integration = \"mixed\"\nobjective_stress = true\nmesh = ",
+            1,
+        )
+    };
+    let s = scene(dir.path(), "column_gravity.toml", "column", &with);
+    let sc = mpm_solve::input::scene::load(&s).unwrap();
+    assert_eq!(
+        sc.integration,
+        mpm_solve::input::case::Integration::Mixed { filling: 0.9 }
+    );
+    assert!(sc.objective_stress);
+    let (gom_path, cps_path) = export(&s, &dir.path().join("a3d"));
+    let cps = std::fs::read(&cps_path).unwrap();
+    let (cps, _) = mpm_shared::cps::Cps::read(&cps, "x").unwrap();
+    let line = |k: &str| cps.get(k).unwrap().lines.join("|");
+    assert_eq!(line("COMPUTATION_METHOD"), "MPM-MIXED");
+    assert_eq!(line("APPLY_OBJECTIVE_STRESS"), "1");
+    assert_eq!(line("DEGREE_OF_FILLING"), "0.9");
+    // The GOM route reads them back the same.
+    let (gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
+    assert_eq!(gc.integration, sc.integration);
+    assert_eq!(gc.objective_stress, sc.objective_stress);
+    check_runs(&sc, &gc, 1e-9);
+
+    let bad = scene(dir.path(), "column_gravity.toml", "bad", &|t| {
+        t.replacen("mesh = ", "integration = \"gauss\"\nmesh = ", 1)
+    });
+    let e = mpm_solve::input::scene::load(&bad).unwrap_err().to_string();
+    assert!(
+        e.contains("bad.toml") && e.contains("integration") && e.contains("\"gauss\""),
+        "{e}"
+    );
+}

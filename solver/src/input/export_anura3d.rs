@@ -24,8 +24,8 @@ use mpm_shared::model::{Body, LineEnding, Refs, Section, Table, Token};
 use mpm_shared::text::real_to_string;
 use mpm_shared::{Dimension, ElementType, Model};
 
-use crate::input::case::LoadCurve;
 use crate::input::case::Start;
+use crate::input::case::{Integration, LoadCurve};
 use crate::input::scene::{self, Resolved, SceneError};
 
 /// The version line written at the top of both files (the one the benchmark suite uses).
@@ -612,7 +612,13 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         ("TIME_PER_LOADSTEP", one(&r(v.interval))),
         ("TOTAL_TIME", one("0.0")),
         ("COURANT_NUMBER", one(&r(case.courant))),
-        ("COMPUTATION_METHOD", one("MPM-MP")),
+        (
+            "COMPUTATION_METHOD",
+            one(match case.integration {
+                Integration::MaterialPoints => "MPM-MP",
+                Integration::Mixed { .. } => "MPM-MIXED",
+            }),
+        ),
         ("GRAVITY_ACCELERATION", one(&r(g_abs))),
         (
             "GRAVITY_VECTOR",
@@ -642,8 +648,17 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         ("REMOVE_FIXITIES", one("0 0 0")),
         ("K0_PROCEDURE", one("0")),
         ("SUBMERGED_CALCULATION", one("0 1")),
-        ("APPLY_OBJECTIVE_STRESS", one("0")),
-        ("DEGREE_OF_FILLING", one("0.9")),
+        (
+            "APPLY_OBJECTIVE_STRESS",
+            one(if case.objective_stress { "1" } else { "0" }),
+        ),
+        (
+            "DEGREE_OF_FILLING",
+            one(&match case.integration {
+                Integration::Mixed { filling } => r(filling),
+                Integration::MaterialPoints => "0.9".into(),
+            }),
+        ),
         ("NUMBER_OF_ACTIVE_ELEMENTS", one("0")),
         (
             "OUTPUT_NUMBER_OF_MATERIAL_POINTS",

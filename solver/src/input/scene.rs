@@ -6,6 +6,8 @@
 //!
 //! ```toml
 //! mesh = "column_tet4.msh"        # relative to the scene file
+//! integration = "points"          # or "mixed" (Anura3D's MPM-MP / MPM-MIXED); optional
+//! objective_stress = false        # Anura3D's objective stress rate, for large rotations
 //! [time]
 //! end = 0.5                       # s
 //! courant = 0.5
@@ -52,6 +54,12 @@ struct Scene {
     /// "f64" (default) or "f32".
     #[serde(default)]
     precision: Option<String>,
+    /// "points" (default; Anura3D's MPM-MP) or "mixed" (MPM-MIXED).
+    #[serde(default)]
+    integration: Option<String>,
+    /// Anura3D's objective stress rate (`APPLY_OBJECTIVE_STRESS`): on for large rotations.
+    #[serde(default)]
+    objective_stress: bool,
     time: Time,
     #[serde(default)]
     gravity: Option<Gravity>,
@@ -641,6 +649,17 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
             )
         })?,
     };
+    let integration = match scene.integration.as_deref() {
+        None | Some("points") => Integration::MaterialPoints,
+        // Anura3D's default degree of filling (CPS `DEGREE_OF_FILLING`).
+        Some("mixed") => Integration::Mixed { filling: 0.9 },
+        Some(s) => {
+            return Err(invalid(
+                "integration".into(),
+                format!("{s:?} is not an integration; use \"points\" or \"mixed\""),
+            ))
+        }
+    };
     let case = Case {
         name: path
             .file_stem()
@@ -671,8 +690,8 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         output_times,
         max_steps: t.max_steps,
         quasi_static: None,
-        objective_stress: false,
-        integration: Integration::MaterialPoints,
+        objective_stress: scene.objective_stress,
+        integration,
         anura3d_time_step: false,
         damping_rule,
         drag: crate::input::case::Drag::Implicit,
