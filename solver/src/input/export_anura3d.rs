@@ -551,6 +551,9 @@ fn gom_model(r: &Resolved, mesh: Tet10Mesh, loads: Table, notes: &mut Vec<String
     let mut elmmat = Table::with_capacity(case.element_material.len(), 1);
     let mut points = Table::with_capacity(case.element_material.len(), 2);
     for (&m, &n) in case.element_material.iter().zip(&case.points_per_element) {
+        // Anura3D refuses an element with a material but no points: an element the scene
+        // leaves empty (`points_per_element = 0`) is written as inactive (material 0).
+        let m = if n == 0 { 0 } else { m };
         elmmat.push_row([Token::Int(m as i64)]);
         let n = if m == 0 { 0 } else { n };
         points.push_row([Token::Int(n as i64), Token::Int(0)]);
