@@ -617,7 +617,7 @@ fn integration_and_objective_stress_of_a_scene_reach_the_case_and_the_export() {
         let t = short_column(t);
         t.replacen(
             "mesh = ",
-            "integration = \"mixed\"\nobjective_stress = true\nmesh = ",
+            "integration = \"mixed\"\nobjective_stress = true\nstrain_smoothing = true\nmesh = ",
             1,
         )
     };
@@ -627,7 +627,7 @@ fn integration_and_objective_stress_of_a_scene_reach_the_case_and_the_export() {
         sc.integration,
         mpm_solve::input::case::Integration::Mixed { filling: 0.9 }
     );
-    assert!(sc.objective_stress);
+    assert!(sc.objective_stress && sc.strain_smoothing);
     let (gom_path, cps_path) = export(&s, &dir.path().join("a3d"));
     let cps = std::fs::read(&cps_path).unwrap();
     let (cps, _) = mpm_shared::cps::Cps::read(&cps, "x").unwrap();
@@ -635,10 +635,12 @@ fn integration_and_objective_stress_of_a_scene_reach_the_case_and_the_export() {
     assert_eq!(line("COMPUTATION_METHOD"), "MPM-MIXED");
     assert_eq!(line("APPLY_OBJECTIVE_STRESS"), "1");
     assert_eq!(line("DEGREE_OF_FILLING"), "0.9");
+    assert_eq!(line("STRAIN_SMOOTHING"), "1");
     // The GOM route reads them back the same.
     let (gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
     assert_eq!(gc.integration, sc.integration);
     assert_eq!(gc.objective_stress, sc.objective_stress);
+    assert_eq!(gc.strain_smoothing, sc.strain_smoothing);
     check_runs(&sc, &gc, 1e-9);
 
     let bad = scene(dir.path(), "column_gravity.toml", "bad", &|t| {

@@ -250,7 +250,7 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
         ));
     }
 
-    if smooths(case) {
+    if smooths(case) && !case.strain_smoothing {
         notes.push("STRAIN_SMOOTHING 1: Anura3D (and mpm-solve on the exported GOM) smooths the volumetric strain of both phases element by element; the scene smooths pore-pressure rates through V N-weighted nodal averages".into());
     }
     let mesh = Tet10Mesh::of(&case.model, &case.fixed, &case.liquid_fixed)
@@ -272,11 +272,12 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
     Ok(Anura3dCase { gom, cps, notes })
 }
 
-/// Whether the CPS switches `STRAIN_SMOOTHING` on: when the case smooths pore pressures and has
-/// some (for a dry case Anura3D's smoothing would act on the solid strain, which the scene does
+/// Whether the CPS switches `STRAIN_SMOOTHING` on: when the scene asks for Anura3D's strain
+/// smoothing, or when it smooths pore pressures and has some (for a dry case without
+/// `strain_smoothing` Anura3D's smoothing would act on the solid strain, which the scene does
 /// not smooth).
 fn smooths(case: &crate::input::case::Case) -> bool {
-    case.smooth_pressure && case.has_liquid()
+    case.strain_smoothing || (case.smooth_pressure && case.has_liquid())
 }
 
 /// The mesh as 10-node tetrahedra with the fixities of every node.

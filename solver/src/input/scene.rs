@@ -8,6 +8,7 @@
 //! mesh = "column_tet4.msh"        # relative to the scene file
 //! integration = "points"          # or "mixed" (Anura3D's MPM-MP / MPM-MIXED); optional
 //! objective_stress = false        # Anura3D's objective stress rate, for large rotations
+//! strain_smoothing = false        # Anura3D's strain smoothing (eases volumetric locking)
 //! [time]
 //! end = 0.5                       # s
 //! courant = 0.5
@@ -60,6 +61,10 @@ struct Scene {
     /// Anura3D's objective stress rate (`APPLY_OBJECTIVE_STRESS`): on for large rotations.
     #[serde(default)]
     objective_stress: bool,
+    /// Anura3D's strain smoothing (`STRAIN_SMOOTHING`): each element's volumetric strain
+    /// increment replaced by a nodal average (eases volumetric locking of linear tetrahedra).
+    #[serde(default)]
+    strain_smoothing: bool,
     time: Time,
     #[serde(default)]
     gravity: Option<Gravity>,
@@ -697,7 +702,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         drag: crate::input::case::Drag::Implicit,
         initial_step: None,
         smooth_pressure: true,
-        strain_smoothing: false,
+        strain_smoothing: scene.strain_smoothing,
         fixed_liquid_mass: false,
         consolidation,
         initial_state,
