@@ -153,6 +153,7 @@ fn pushed_column(speed: f64) -> Case {
         })
         .collect();
     case.prescribed = Some(PrescribedVelocity {
+        name: "top".into(),
         rows,
         scale: 1.0,
         curve: LoadCurve::Step,

@@ -119,10 +119,12 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "PRESCRIBED_MATERIAL_POINT_VELOCITY_*",
         Modelled,
     ),
+    // Velocities prescribed on listed nodes (with CPS $$PRESCRIBED_VELOCITY).
+    (GomSection, "PRESCRIBED_NODAL_VELOCITY_*", Modelled),
     (
         GomSection,
         "PRESCRIBED_*",
-        RefusedUnlessInert("prescribed nodal velocities; inert: an empty list"),
+        RefusedUnlessInert("other prescribed quantities; inert: an empty list"),
     ),
     (
         GomSection,
