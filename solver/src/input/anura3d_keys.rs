@@ -120,7 +120,10 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         Modelled,
     ),
     // Velocities prescribed on listed nodes (with CPS $$PRESCRIBED_VELOCITY).
-    (GomSection, "PRESCRIBED_NODAL_VELOCITY_*", Modelled),
+    (GomSection, "PRESCRIBED_NODAL_VELOCITY_VOLUME", Modelled),
+    (GomSection, "PRESCRIBED_NODAL_VELOCITY_SURFACE", Modelled),
+    (GomSection, "PRESCRIBED_NODAL_VELOCITY_LINE", Modelled),
+    (GomSection, "PRESCRIBED_NODAL_VELOCITY_POINT", Modelled),
     (
         GomSection,
         "PRESCRIBED_*",
