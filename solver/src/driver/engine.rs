@@ -726,7 +726,6 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &mut self.reactions,
                 self.time,
                 dt,
-                self.steps == 0,
             );
         }
         for r in &mut self.reactions {

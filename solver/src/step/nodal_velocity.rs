@@ -4,11 +4,12 @@
 //!
 //! A prescribed component behaves as a fixity with a value: after the grid update its
 //! acceleration is the prescribed velocity's rate over the step, value × (multiplier at the
-//! step's end - multiplier at its start) / Δt, the body starting at rest (so a sudden velocity
-//! is one jump in the first step), and after the MUSL re-mapping its nodal velocity is value ×
-//! the multiplier at the step's end. This is what Anura3D does (its acceleration multiplier is
-//! the velocity multiplier's rate: the jump over the first step for a `step` load, the slope
-//! for a `linear` one). The prescription overrides a fixity of the same component (Anura3D's
+//! step's end - multiplier at its start) / Δt, and after the MUSL re-mapping its nodal velocity
+//! is value × the multiplier at the step's end. This is what Anura3D does: its acceleration
+//! multiplier is the velocity multiplier's rate, the slope of a `linear` load and 0 for a
+//! `step` one, whose multiplier is already at its value at t = 0 (so a sudden velocity gives
+//! the points next to the nodes no jump: only the nodes move at once; a ramp from 0 carries
+//! them along). The prescription overrides a fixity of the same component (Anura3D's
 //! rule too); components a row does not prescribe stay free, or fixed where a fixity says so.
 //! Where two rows prescribe the same component of a node, the later wins.
 //!
@@ -223,8 +224,8 @@ impl<R: Real> NodalVelocity<R> {
         }
     }
 
-    /// After the grid update of a step of length `dt` from `t` (`first`: the calculation's
-    /// first step, which starts from rest): the prescribed components take their acceleration,
+    /// After the grid update of a step of length `dt` from `t`: the prescribed components take
+    /// their acceleration,
     /// and each set's reaction becomes Σ (m a - f) over its components (`traction` × `tm`: the
     /// face loads; empty nodes add nothing).
     #[allow(clippy::too_many_arguments)]
@@ -236,14 +237,13 @@ impl<R: Real> NodalVelocity<R> {
         reactions: &mut [Reaction],
         t: f64,
         dt: f64,
-        first: bool,
     ) {
         for (k, r) in reactions[self.first..self.first + self.now.len()]
             .iter_mut()
             .enumerate()
         {
             let end = r.multiplier(t + dt);
-            let start = if first { 0.0 } else { r.multiplier(t) };
+            let start = r.multiplier(t);
             self.now[k] = R::of(end);
             self.rate[k] = R::of((end - start) / dt);
             r.force = [0.0; 3];
@@ -309,21 +309,23 @@ mod tests {
         let traction = vec![[0.0, 0.0, 0.25], [0.0; 3], [0.0; 3]];
         let mut reactions = vec![Reaction::new("mp", [0.0; 3], [false; 3], 1.0, LoadCurve::Step)];
         reactions.extend(sets.iter().map(|s| s.reaction()));
-        // First step, 0.5 s: set a jumps to full speed, set b ramps to half.
-        nv.after_grid_update(&mut g, &traction, 2.0, &mut reactions, 0.0, 0.5, true);
-        assert_eq!(g.acc[0], [2.0, 5.0, 6.0]);
-        assert_eq!(g.acc[2], [0.0, -2.0, 0.0]);
+        // 0.5 s from t = 0: set a is at full speed from the start (no acceleration), set b
+        // ramps to half.
+        nv.after_grid_update(&mut g, &traction, 2.0, &mut reactions, 0.0, 0.5);
+        assert_eq!(g.acc[0], [0.0, 5.0, 0.0]);
+        assert_eq!(g.acc[2], [0.0, 0.0, 0.0]);
         assert_eq!(g.acc[1], [0.0; 3]);
         // m a - (f_int + f_ext + 2 traction) at node 0; node 2 is empty.
-        assert_eq!(reactions[1].force, [2.0 * 2.0 - 1.0, 0.0, 2.0 * 6.0 - 1.5]);
+        assert_eq!(reactions[1].force, [-1.0, 0.0, -1.5]);
         assert_eq!(reactions[2].force, [0.0, 2.0 * 5.0 - 0.5, 0.0]);
         assert_eq!(reactions[0].force, [0.0; 3]);
         nv.after_remap(&mut g);
         assert_eq!(g.vel[0], [1.0, 2.5, 3.0]);
         assert_eq!(g.vel[2], [0.0, -1.0, 0.0]);
-        // A later step: set a steady (no acceleration), set b still ramping.
-        nv.after_grid_update(&mut g, &traction, 2.0, &mut reactions, 0.5, 0.25, false);
-        assert_eq!(g.acc[0], [0.0, 5.0, 0.0]);
-        assert_eq!(reactions[1].force, [-1.0, 0.0, -1.5]);
+        // Past the ramp's end, 0.5 s to 1.5 s: set b reaches full speed at 1 s.
+        nv.after_grid_update(&mut g, &traction, 2.0, &mut reactions, 0.5, 1.0);
+        assert_eq!(g.acc[0], [0.0, 2.5, 0.0]);
+        nv.after_remap(&mut g);
+        assert_eq!(g.vel[0], [1.0, 5.0, 3.0]);
     }
 }
