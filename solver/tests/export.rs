@@ -623,7 +623,10 @@ fn prescribed_velocities_export_and_run_the_same() {
     });
     let (gom_path, cps_path) = export(&s, &dir.path().join("platen"));
     let cps = std::fs::read_to_string(&cps_path).unwrap();
-    assert!(cps.contains("$$PRESCRIBED_VELOCITY\nlinear  0.0  1.0\n"), "{cps}");
+    assert!(
+        cps.contains("$$PRESCRIBED_VELOCITY\nlinear  0.0  1.0\n"),
+        "{cps}"
+    );
     let sc = mpm_solve::input::scene::load(&s).unwrap();
     let (gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
     let (a, b) = (&sc.nodal_velocity[0], &gc.nodal_velocity[0]);

@@ -328,14 +328,25 @@ fn gom_nodal_rows_are_read_and_bad_ones_refused() {
     // other than 0 or 1, a missing value.
     let err = load(
         &column_gom(
-            &(nodal_rows("SURFACE", &["3 0 1 0 0 -1 0"]) + &nodal_rows("LINE", &["4 0 1 0 0 -1 0"])),
+            &(nodal_rows("SURFACE", &["3 0 1 0 0 -1 0"])
+                + &nodal_rows("LINE", &["4 0 1 0 0 -1 0"])),
         ),
         CPS,
     )
     .unwrap_err();
-    assert!(err.contains("more than one section") && err.contains("LINE"), "{err}");
-    let err = load(&column_gom(&nodal_rows("POINT", &["99999 0 1 0 0 -1 0"])), CPS).unwrap_err();
-    assert!(err.contains("PRESCRIBED_NODAL_VELOCITY_POINT") && err.contains("99999"), "{err}");
+    assert!(
+        err.contains("more than one section") && err.contains("LINE"),
+        "{err}"
+    );
+    let err = load(
+        &column_gom(&nodal_rows("POINT", &["99999 0 1 0 0 -1 0"])),
+        CPS,
+    )
+    .unwrap_err();
+    assert!(
+        err.contains("PRESCRIBED_NODAL_VELOCITY_POINT") && err.contains("99999"),
+        "{err}"
+    );
     let err = load(&column_gom(&nodal_rows("POINT", &["3 0 2 0 0 -1 0"])), CPS).unwrap_err();
     assert!(err.contains("0 or 1"), "{err}");
     let err = load(&column_gom(&nodal_rows("POINT", &["3 0 1 0 0 -1"])), CPS).unwrap_err();

@@ -115,14 +115,23 @@ name = "platen""#;
 #[test]
 fn a_slow_rough_platen_meets_the_closed_form_reaction() {
     let dir = tempfile::tempdir().unwrap();
-    let rows = run_scene(&column(dir.path(), "rough", PUSH), &dir.path().join("out"), 1);
+    let rows = run_scene(
+        &column(dir.path(), "rough", PUSH),
+        &dir.path().join("out"),
+        1,
+    );
     assert_eq!(rows.len(), 7);
     let m = constrained_modulus();
     for r in &rows {
         assert_eq!(r.set, "platen");
         // The displacement: 0.01 m/s over the time, less half the ramp (0.5 ms).
         let want_u = -0.01 * (r.time - 0.05);
-        assert!((r.u[1] - want_u).abs() < 1e-5, "t = {}: u {:?}", r.time, r.u);
+        assert!(
+            (r.u[1] - want_u).abs() < 1e-5,
+            "t = {}: u {:?}",
+            r.time,
+            r.u
+        );
         assert_eq!((r.u[0], r.u[2]), (0.0, 0.0));
         if r.time < 0.25 {
             continue;
@@ -130,9 +139,17 @@ fn a_slow_rough_platen_meets_the_closed_form_reaction() {
         // The platen pushes the body down: F_y = A M ε with ε = u_y / H (negative).
         let want = AREA * m * r.u[1] / HEIGHT;
         let err = (r.f[1] - want).abs() / want.abs();
-        assert!(err < 0.02, "t = {}: F_y {} vs A M ε = {want} ({err:.4})", r.time, r.f[1]);
+        assert!(
+            err < 0.02,
+            "t = {}: F_y {} vs A M ε = {want} ({err:.4})",
+            r.time,
+            r.f[1]
+        );
         // A symmetric column: no net lateral reaction.
-        assert!(r.f[0].abs() < 1e-3 * want.abs() && r.f[2].abs() < 1e-3 * want.abs(), "{r:?}");
+        assert!(
+            r.f[0].abs() < 1e-3 * want.abs() && r.f[2].abs() < 1e-3 * want.abs(),
+            "{r:?}"
+        );
     }
 }
 
@@ -141,9 +158,20 @@ fn a_smooth_platen_takes_no_lateral_reaction_and_a_rough_one_does() {
     let dir = tempfile::tempdir().unwrap();
     let slant = "velocity = [0.002, -0.01, 0.0]";
     let rough = PUSH.replace("velocity = [0.0, -0.01, 0.0]", slant);
-    let smooth = rough.replace("ramp = 0.1", "ramp = 0.1\ncomponents = [false, true, false]");
-    let r = run_scene(&column(dir.path(), "rough", &rough), &dir.path().join("r"), 1);
-    let s = run_scene(&column(dir.path(), "smooth", &smooth), &dir.path().join("s"), 1);
+    let smooth = rough.replace(
+        "ramp = 0.1",
+        "ramp = 0.1\ncomponents = [false, true, false]",
+    );
+    let r = run_scene(
+        &column(dir.path(), "rough", &rough),
+        &dir.path().join("r"),
+        1,
+    );
+    let s = run_scene(
+        &column(dir.path(), "smooth", &smooth),
+        &dir.path().join("s"),
+        1,
+    );
     let (r, s) = (r.last().unwrap(), s.last().unwrap());
     // The rough platen drags the top sideways: it pushes the body along +x.
     assert!(r.f[0] > 0.2 * r.f[1].abs(), "rough: {r:?}");
@@ -151,7 +179,10 @@ fn a_smooth_platen_takes_no_lateral_reaction_and_a_rough_one_does() {
     // The smooth one prescribes y only: nothing sideways, and the closed form in y.
     assert_eq!((s.u[0], s.f[0], s.f[2]), (0.0, 0.0, 0.0), "smooth: {s:?}");
     let want = AREA * constrained_modulus() * s.u[1] / HEIGHT;
-    assert!((s.f[1] - want).abs() < 0.02 * want.abs(), "smooth: {s:?} vs {want}");
+    assert!(
+        (s.f[1] - want).abs() < 0.02 * want.abs(),
+        "smooth: {s:?} vs {want}"
+    );
 }
 
 #[test]
@@ -172,11 +203,8 @@ fn reaction_csv_is_the_same_for_any_thread_count() {
 /// A confined column 1 × 4 × 1 m (2 × 8 × 2 cells), fixed at the bottom, whose top row of
 /// cells (y > 3.5) is pushed down at 0.01 m/s as a material-point set.
 fn pushed_points() -> Case {
-    let model = mpm_shared::generate::box_mesh(
-        [2, 8, 2],
-        [1.0, 4.0, 1.0],
-        mpm_shared::ElementType::Tet4,
-    );
+    let model =
+        mpm_shared::generate::box_mesh([2, 8, 2], [1.0, 4.0, 1.0], mpm_shared::ElementType::Tet4);
     let fixed = mpm_solve::input::case::confined_box(&model);
     let material = MaterialSpec::new("soil", 1000.0, 1000.0, 0.0).unwrap();
     let mut case = Case::single_material("pushed", model, material, 4, fixed);
@@ -235,8 +263,10 @@ fn velocity_entries_are_resolved_and_bad_ones_refused() {
     let s = &c.nodal_velocity[0];
     assert_eq!(s.name, "top");
     assert_eq!(s.rows.len(), 9);
-    assert!(s.rows.iter().all(|r| r.directions == [true; 3]
-        && c.model.node(r.node as usize)[1] == 1.0));
+    assert!(s
+        .rows
+        .iter()
+        .all(|r| r.directions == [true; 3] && c.model.node(r.node as usize)[1] == 1.0));
     assert_eq!(s.curve, LoadCurve::Step);
     // A plane, with components and a ramp.
     let c = try_scene("[[velocity]]\nplane = \"y = 1.0\"\nvelocity = [0.0, -1.0, 0.0]\ncomponents = [false, true, false]\nramp = 0.5").unwrap();
@@ -245,7 +275,9 @@ fn velocity_entries_are_resolved_and_bad_ones_refused() {
     assert_eq!(s.rows[0].directions, [false, true, false]);
     assert_eq!(s.curve, LoadCurve::Ramp { over: 0.5 });
     // A volume: the points of its elements.
-    let c = try_scene("[[velocity]]\nphysical = \"soil\"\nvelocity = [0.0, -1.0, 0.0]\nname = \"all\"").unwrap();
+    let c =
+        try_scene("[[velocity]]\nphysical = \"soil\"\nvelocity = [0.0, -1.0, 0.0]\nname = \"all\"")
+            .unwrap();
     let p = c.prescribed.as_ref().unwrap();
     assert_eq!((p.name.as_str(), p.rows.len()), ("all", 480));
     assert!(c.nodal_velocity.is_empty());

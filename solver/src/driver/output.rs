@@ -169,7 +169,12 @@ impl Output {
         csv_real(&mut s.energy, engine.balance_error());
         s.energy.push('\n');
         for r in &engine.reactions {
-            let _ = write!(s.reaction, "{},{},", engine.steps, real_to_string(engine.time));
+            let _ = write!(
+                s.reaction,
+                "{},{},",
+                engine.steps,
+                real_to_string(engine.time)
+            );
             csv_text(&mut s.reaction, &r.name);
             for v in r.displacement().iter().chain(&r.force) {
                 csv_real(&mut s.reaction, *v);

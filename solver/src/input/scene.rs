@@ -786,7 +786,12 @@ fn velocities(
 > {
     let (mut points, mut nodal, mut out) = (None::<PrescribedVelocity>, Vec::new(), Vec::new());
     for v in entries {
-        let label = v.physical.as_ref().or(v.plane.as_ref()).cloned().unwrap_or_default();
+        let label = v
+            .physical
+            .as_ref()
+            .or(v.plane.as_ref())
+            .cloned()
+            .unwrap_or_default();
         let name = v.name.clone().unwrap_or_else(|| label.clone());
         let item = format!("velocity \"{name}\"");
         let components = v.components.unwrap_or([true; 3]);
@@ -794,13 +799,23 @@ fn velocities(
             return Err((item, "components = [false, false, false] prescribes nothing; mark at least one component true".into()));
         }
         if !v.velocity.iter().all(|x| x.is_finite()) {
-            return Err((item, format!("velocity must be three numbers, got {:?}", v.velocity)));
+            return Err((
+                item,
+                format!("velocity must be three numbers, got {:?}", v.velocity),
+            ));
         }
         if !(v.ramp >= 0.0 && v.ramp.is_finite()) {
-            return Err((item, format!("ramp must be 0 or more seconds, got {}", v.ramp)));
+            return Err((
+                item,
+                format!("ramp must be 0 or more seconds, got {}", v.ramp),
+            ));
         }
         if materials.iter().flatten().any(|m| m.liquid.is_some()) {
-            return Err((item, "prescribed velocities are not supported yet in scenes with a saturated material".into()));
+            return Err((
+                item,
+                "prescribed velocities are not supported yet in scenes with a saturated material"
+                    .into(),
+            ));
         }
         let curve = LoadCurve::ramp(v.ramp);
         let target = match (&v.physical, &v.plane) {
@@ -820,7 +835,12 @@ fn velocities(
             }
             (None, Some(plane)) => {
                 let (axis, value) = parse_plane(plane).ok_or_else(|| {
-                    (item.clone(), format!("plane \"{plane}\": expected 'x = value', 'y = value' or 'z = value'"))
+                    (
+                        item.clone(),
+                        format!(
+                            "plane \"{plane}\": expected 'x = value', 'y = value' or 'z = value'"
+                        ),
+                    )
                 })?;
                 let tol = 1e-9 * size.max(1e-300);
                 let found: Vec<u32> = (0..model.node_count() as u32)
@@ -832,7 +852,10 @@ fn velocities(
                 VelocityTarget::Nodes(found)
             }
             _ => {
-                return Err((item, "give exactly one of physical = \"name\" or plane = \"x = value\"".into()))
+                return Err((
+                    item,
+                    "give exactly one of physical = \"name\" or plane = \"x = value\"".into(),
+                ))
             }
         };
         match &target {

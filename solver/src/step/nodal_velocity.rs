@@ -76,11 +76,14 @@ pub const SECTIONS: [&str; 4] = [
     "PRESCRIBED_NODAL_VELOCITY_POINT",
 ];
 
+/// A GOM section's keyword and its rows.
+pub type NodalSection = (String, Vec<PrescribedNode>);
+
 /// Reads the prescribed nodal velocities of `model`: rows `node fx fy fz vx vy vz` (node ids
 /// 1-based, flags 1 for prescribed and 0 for free). Returns the section's keyword and its rows
 /// (`None` when there is no section or it is empty), or the section and what is wrong with it.
 /// Two sections at once are refused, as Anura3D refuses them.
-pub fn read_rows(model: &Model) -> Result<Option<(String, Vec<PrescribedNode>)>, (String, String)> {
+pub fn read_rows(model: &Model) -> Result<Option<NodalSection>, (String, String)> {
     let present: Vec<&mpm_shared::model::Section> = model
         .sections
         .iter()
@@ -292,9 +295,23 @@ mod tests {
     #[test]
     fn components_are_imposed_like_fixities_with_a_value_and_the_reaction_balances_them() {
         let sets = [
-            set("a", &[(2, [false, true, false], [0.0, -1.0, 0.0]), (0, [true; 3], [1.0, 2.0, 3.0])], LoadCurve::Step),
+            set(
+                "a",
+                &[
+                    (2, [false, true, false], [0.0, -1.0, 0.0]),
+                    (0, [true; 3], [1.0, 2.0, 3.0]),
+                ],
+                LoadCurve::Step,
+            ),
             // Node 0's y by the later set wins; node 3 is no computational node.
-            set("b", &[(0, [false, true, false], [0.0, 5.0, 0.0]), (3, [true; 3], [9.0; 3])], LoadCurve::ramp(1.0)),
+            set(
+                "b",
+                &[
+                    (0, [false, true, false], [0.0, 5.0, 0.0]),
+                    (3, [true; 3], [9.0; 3]),
+                ],
+                LoadCurve::ramp(1.0),
+            ),
         ];
         let node_of_model = [0, 1, 2, u32::MAX];
         let mut nv = NodalVelocity::<f64>::new(&sets, &node_of_model, 1);
@@ -307,7 +324,13 @@ mod tests {
         g.f_int = vec![[1.0, 1.0, 1.0], [7.0; 3], [4.0; 3]];
         g.f_ext = vec![[0.0, -0.5, 0.0], [0.0; 3], [0.0; 3]];
         let traction = vec![[0.0, 0.0, 0.25], [0.0; 3], [0.0; 3]];
-        let mut reactions = vec![Reaction::new("mp", [0.0; 3], [false; 3], 1.0, LoadCurve::Step)];
+        let mut reactions = vec![Reaction::new(
+            "mp",
+            [0.0; 3],
+            [false; 3],
+            1.0,
+            LoadCurve::Step,
+        )];
         reactions.extend(sets.iter().map(|s| s.reaction()));
         // 0.5 s from t = 0: set a is at full speed from the start (no acceleration), set b
         // ramps to half.

@@ -70,7 +70,13 @@ impl PrescribedVelocity {
     /// The set's entry in the reaction list (velocity of its first row).
     pub fn reaction(&self) -> crate::step::reaction::Reaction {
         let v = self.rows.first().map_or([0.0; 3], |r| r.velocity);
-        crate::step::reaction::Reaction::new(&self.name, v, self.directions(), self.scale, self.curve)
+        crate::step::reaction::Reaction::new(
+            &self.name,
+            v,
+            self.directions(),
+            self.scale,
+            self.curve,
+        )
     }
 
     /// The rows of the elements `partition` owns, numbered locally (all of them, unchanged, on
@@ -308,7 +314,8 @@ impl<R: Real> Prescribed<R> {
             }
             for d in 0..3 {
                 if self.directions[d] {
-                    out[d] -= g.f_int[n][d].f64() + g.f_ext[n][d].f64() + tm.f64() * traction[n][d].f64();
+                    out[d] -=
+                        g.f_int[n][d].f64() + g.f_ext[n][d].f64() + tm.f64() * traction[n][d].f64();
                 }
             }
         }

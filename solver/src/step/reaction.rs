@@ -31,7 +31,13 @@ pub struct Reaction {
 
 impl Reaction {
     /// A set at rest, before any step.
-    pub fn new(name: &str, velocity: [f64; 3], directions: [bool; 3], scale: f64, curve: LoadCurve) -> Self {
+    pub fn new(
+        name: &str,
+        velocity: [f64; 3],
+        directions: [bool; 3],
+        scale: f64,
+        curve: LoadCurve,
+    ) -> Self {
         Reaction {
             name: name.to_string(),
             velocity: [0, 1, 2].map(|d| if directions[d] { velocity[d] } else { 0.0 }),
@@ -64,9 +70,21 @@ mod tests {
 
     #[test]
     fn travel_sums_the_end_of_step_multiplier() {
-        let mut r = Reaction::new("top", [0.0, -2.0, 1.0], [false, true, true], 1.0, LoadCurve::ramp(1.0));
+        let mut r = Reaction::new(
+            "top",
+            [0.0, -2.0, 1.0],
+            [false, true, true],
+            1.0,
+            LoadCurve::ramp(1.0),
+        );
         assert_eq!(r.velocity, [0.0, -2.0, 1.0]);
-        let mut r0 = Reaction::new("top", [3.0, -2.0, 1.0], [false, true, false], 1.0, LoadCurve::Step);
+        let mut r0 = Reaction::new(
+            "top",
+            [3.0, -2.0, 1.0],
+            [false, true, false],
+            1.0,
+            LoadCurve::Step,
+        );
         assert_eq!(r0.velocity, [0.0, -2.0, 0.0]);
         for k in 1..=4 {
             r.advance(0.25 * k as f64, 0.25);
