@@ -652,3 +652,77 @@ fn integration_and_objective_stress_of_a_scene_reach_the_case_and_the_export() {
         "{e}"
     );
 }
+
+/// `[[velocity]]` entries export to Anura3D's prescribed-velocity sections under one
+/// multiplier: a rough platen on the top nodes (with the new mid-edge nodes between them)
+/// ramped over the run runs the same from the GOM; a volume's points go to the material-point
+/// section; entries Anura3D's one multiplier cannot express are refused by name.
+#[test]
+fn prescribed_velocities_export_and_run_the_same() {
+    let dir = tempfile::tempdir().unwrap();
+    let platen = "\n[[velocity]]\nphysical = \"top\"\nvelocity = [0.0, -0.05, 0.0]\nramp = 0.02\n";
+    let s = scene(dir.path(), "column_gravity.toml", "platen", &|t| {
+        format!("{}{platen}", short_column(t))
+    });
+    let (gom_path, cps_path) = export(&s, &dir.path().join("platen"));
+    let cps = std::fs::read_to_string(&cps_path).unwrap();
+    assert!(
+        cps.contains("$$PRESCRIBED_VELOCITY\nlinear  0.0  1.0\n"),
+        "{cps}"
+    );
+    let sc = mpm_solve::input::scene::load(&s).unwrap();
+    let (gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
+    let (a, b) = (&sc.nodal_velocity[0], &gc.nodal_velocity[0]);
+    // The top's 4-node corners, then the mid-edge nodes the export adds between them.
+    let gom = mpm_shared::read_gom_file(&gom_path).unwrap();
+    let rows = rows(&gom, "PRESCRIBED_NODAL_VELOCITY_SURFACE");
+    assert!(rows.len() > a.rows.len());
+    assert_eq!(b.rows[..a.rows.len()], a.rows[..]);
+    for r in &b.rows[a.rows.len()..] {
+        assert!(r.node as usize >= sc.model.node_count());
+        assert_eq!(gom.node(r.node as usize)[1], 1.0);
+    }
+    assert_eq!(gc.reactions()[0].curve, sc.reactions()[0].curve);
+    check_runs(&sc, &gc, 1e-9);
+
+    // A physical volume: every element's row in the material-point section.
+    let s = scene(dir.path(), "column_gravity.toml", "block", &|t| {
+        format!(
+            "{}\n[[velocity]]\nphysical = \"soil\"\nvelocity = [0.0, 0.0, 0.1]\ncomponents = [false, false, true]\n",
+            short_column(t)
+        )
+    });
+    let (gom_path, cps_path) = export(&s, &dir.path().join("block"));
+    let (gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
+    let sc = mpm_solve::input::scene::load(&s).unwrap();
+    let (a, b) = (sc.prescribed.unwrap(), gc.prescribed.unwrap());
+    assert_eq!(a.rows, b.rows);
+    assert_eq!(a.rows.len(), sc.model.element_count());
+    assert!(std::fs::read_to_string(&cps_path)
+        .unwrap()
+        .contains("$$PRESCRIBED_VELOCITY\nstep  1.0  1.0\n"));
+
+    // Two ramps, or a ramp shorter than the run: refused, naming the entry.
+    for (k, (extra, item)) in [
+        (
+            format!("{platen}[[velocity]]\nplane = \"y = 0.5\"\nvelocity = [0.0, -0.05, 0.0]\nname = \"mid\"\n"),
+            "velocity \"mid\".ramp",
+        ),
+        (platen.replace("ramp = 0.02", "ramp = 0.01"), "velocity \"top\".ramp"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let s = scene(dir.path(), "column_gravity.toml", &format!("bad{k}"), &|t| {
+            format!("{}{extra}", short_column(t))
+        });
+        Command::cargo_bin("mpm-solve")
+            .unwrap()
+            .arg(&s)
+            .arg("--export-anura3d")
+            .arg(dir.path().join(format!("bad{k}")))
+            .assert()
+            .failure()
+            .stderr(predicate::str::contains(item));
+    }
+}

@@ -382,3 +382,70 @@ fn liquid_load_mixed_objective_smoothing_match_anura3d() {
         }
     }
 }
+
+/// A dry column compressed by a rough platen (`[[velocity]]` on its top surface, exported as
+/// `$$PRESCRIBED_NODAL_VELOCITY_SURFACE`), sudden (`step`) and ramped over the run (`linear`),
+/// against Anura3D point by point: u and σ' agree to round-off in every load step.
+#[test]
+fn prescribed_nodal_velocity_matches_anura3d() {
+    let Some(bin) = oracle() else { return };
+    for (name, ramp) in [("sudden", 0.0), ("ramped", 0.2)] {
+        let dir = tempfile::tempdir().unwrap();
+        let text = format!(
+            r#"mesh = "{}"
+[time]
+end = 0.2
+courant = 0.5
+output_interval = 0.05
+[damping]
+local = 0.1
+[[material]]
+physical = "soil"
+density = 2000.0
+young = 1000.0
+poisson = 0.3
+points_per_element = 4
+[[fixity]]
+physical = "bottom"
+fixed = [true, true, true]
+[[fixity]]
+plane = "x = 0"
+fixed = [true, false, false]
+[[fixity]]
+plane = "x = 0.1"
+fixed = [true, false, false]
+[[velocity]]
+physical = "top"
+velocity = [0.002, -0.01, 0.0]
+ramp = {ramp}
+"#,
+            testdata("oracle_column_tet4.msh").display()
+        );
+        let scene = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&scene, text).unwrap();
+        let a3d = dir.path().join("a3d");
+        let files = mpm_solve::input::export_anura3d::export_scene(&scene, &a3d).unwrap();
+        let gom = std::fs::read_to_string(&files.gom).unwrap();
+        assert!(gom.contains("$$PRESCRIBED_NODAL_VELOCITY_SURFACE\n25\n"));
+        run_oracle(&bin, &a3d, name);
+        let out = tempfile::tempdir().unwrap();
+        run_ours(&files.gom, &files.cps, Drag::Explicit, out.path());
+        // The GOM's nodal set records its reaction.
+        assert!(out.path().join("reaction.csv").exists());
+        let report = mpm_solve::compare::compare(&a3d, out.path(), &Tolerances::default())
+            .unwrap_or_else(|e| panic!("cannot compare with Anura3D: {e}"));
+        assert_eq!(report.outputs.len(), 4);
+        for o in &report.outputs {
+            for field in ["displacement", "stress"] {
+                let f = o.fields.iter().find(|f| f.field == field).unwrap();
+                eprintln!("{name} {}: {field} max rel {:.2e}", o.golden, f.max_rel);
+                assert!(
+                    f.max_rel <= 1e-10,
+                    "{name}, {}: {field} differs by {:.2e} of its largest value",
+                    o.golden,
+                    f.max_rel
+                );
+            }
+        }
+    }
+}

@@ -153,6 +153,7 @@ fn pushed_column(speed: f64) -> Case {
         })
         .collect();
     case.prescribed = Some(PrescribedVelocity {
+        name: "top".into(),
         rows,
         scale: 1.0,
         curve: LoadCurve::Step,
@@ -273,4 +274,81 @@ fn pushed_points_and_nodes_move_exactly_with_the_prescribed_velocity() {
             assert_eq!(q.3[1], -speed);
         }
     }
+}
+
+/// `$$PRESCRIBED_NODAL_VELOCITY_*` rows on the top nodes (y = 4) of the column GOM.
+fn nodal_rows(section: &str, rows: &[&str]) -> String {
+    let mut s = format!("$$PRESCRIBED_NODAL_VELOCITY_{section}\n{}\n", rows.len());
+    for r in rows {
+        s += r;
+        s.push('\n');
+    }
+    s
+}
+
+#[test]
+fn gom_nodal_rows_are_read_and_bad_ones_refused() {
+    let gom = column_gom(&nodal_rows(
+        "SURFACE",
+        &["3 0 1 0 0.0 -0.2 0.0", "4 1 1 1 0.0 -0.2 0.0"],
+    ));
+    let case = load(&gom, CPS).unwrap();
+    assert!(case.prescribed.is_none());
+    let [set] = &case.nodal_velocity[..] else {
+        panic!("one nodal set: {:?}", case.nodal_velocity)
+    };
+    assert_eq!(set.name, "$$PRESCRIBED_NODAL_VELOCITY_SURFACE");
+    assert_eq!((set.rows[0].node, set.rows[1].node), (2, 3));
+    assert_eq!(set.rows[0].directions, [false, true, false]);
+    assert_eq!(set.rows[1].velocity, [0.0, -0.2, 0.0]);
+    assert_eq!((set.scale, set.curve), (1.0, LoadCurve::Step));
+    assert_eq!(case.reactions().len(), 1);
+    // With points prescribed too: two sets, the points' first.
+    let both = load(
+        &column_gom(&(rows(&["0 1 0"; 6]) + &nodal_rows("POINT", &["3 0 1 0 0 -1 0"]))),
+        CPS,
+    )
+    .unwrap();
+    let names: Vec<String> = both.reactions().into_iter().map(|r| r.name).collect();
+    assert_eq!(
+        names,
+        [
+            "$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME",
+            "$$PRESCRIBED_NODAL_VELOCITY_POINT"
+        ]
+    );
+    // An off multiplier switches them off, as in Anura3D; an empty section is none.
+    let off = CPS.replace("step 1.0 1.0", "off 0.0 1.0");
+    assert!(load(&gom, &off).unwrap().nodal_velocity.is_empty());
+    assert!(load(&column_gom(&nodal_rows("LINE", &[])), CPS)
+        .unwrap()
+        .nodal_velocity
+        .is_empty());
+    // Two kinds of section at once (Anura3D refuses them), a node outside the mesh, a flag
+    // other than 0 or 1, a missing value.
+    let err = load(
+        &column_gom(
+            &(nodal_rows("SURFACE", &["3 0 1 0 0 -1 0"])
+                + &nodal_rows("LINE", &["4 0 1 0 0 -1 0"])),
+        ),
+        CPS,
+    )
+    .unwrap_err();
+    assert!(
+        err.contains("more than one section") && err.contains("LINE"),
+        "{err}"
+    );
+    let err = load(
+        &column_gom(&nodal_rows("POINT", &["99999 0 1 0 0 -1 0"])),
+        CPS,
+    )
+    .unwrap_err();
+    assert!(
+        err.contains("PRESCRIBED_NODAL_VELOCITY_POINT") && err.contains("99999"),
+        "{err}"
+    );
+    let err = load(&column_gom(&nodal_rows("POINT", &["3 0 2 0 0 -1 0"])), CPS).unwrap_err();
+    assert!(err.contains("0 or 1"), "{err}");
+    let err = load(&column_gom(&nodal_rows("POINT", &["3 0 1 0 0 -1"])), CPS).unwrap_err();
+    assert!(err.contains("row 1"), "{err}");
 }

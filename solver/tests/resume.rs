@@ -103,8 +103,13 @@ type Plan<'a> = (u64, &'a [&'a str], &'a str, &'a str, Option<u64>);
 /// Kills at several steps (with the checkpoints of the default policy or every 7 steps), then
 /// resumes with another thread count, once or twice: the folder ends as the uninterrupted one.
 fn killed_and_resumed(golden: &str, precision: &str) {
+    killed_and_resumed_with(golden, precision, &|t| t)
+}
+
+/// [`killed_and_resumed`] with the scene edited by `edit`.
+fn killed_and_resumed_with(golden: &str, precision: &str, edit: &dyn Fn(String) -> String) {
     let tmp = tempfile::tempdir().unwrap();
-    let input = golden_scene(tmp.path(), golden, golden, &|t| t);
+    let input = golden_scene(tmp.path(), golden, golden, edit);
     let full = tmp.path().join("full");
     let p = ["--precision", precision];
     ok(&run(
@@ -175,6 +180,19 @@ fn killed_and_resumed(golden: &str, precision: &str) {
 fn killed_dry_runs_resume_byte_identical_in_f64_and_f32() {
     killed_and_resumed("column_dry", "f64");
     killed_and_resumed("column_dry", "f32");
+}
+
+/// A platen pushed into the dry column (a ramped nodal set) and the whole column's points
+/// (a material-point set): `reaction.csv`, whose imposed displacement sums over the steps, ends
+/// as the uninterrupted run's.
+#[test]
+fn killed_runs_with_prescribed_velocities_resume_byte_identical() {
+    killed_and_resumed_with("column_dry", "f64", &|t| {
+        t + "[[velocity]]\nphysical = \"top\"\nvelocity = [0.0, -0.05, 0.0]\nramp = 0.004\nname = \"platen, rough\"\n"
+    });
+    killed_and_resumed_with("column_dry", "f32", &|t| {
+        t + "[[velocity]]\nphysical = \"soil\"\nvelocity = [0.0, 0.0, 0.01]\ncomponents = [false, false, true]\n"
+    });
 }
 
 #[test]

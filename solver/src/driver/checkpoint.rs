@@ -9,7 +9,7 @@
 //! (named hashes of the case and of every result-changing option), the driver's counters, the
 //! engine's scalars (by name), every per-point array of the field list (name, values per point,
 //! bytes per value, value count, raw bits), the output bookkeeping (the `run.pvd` entries, the
-//! text of `history.csv` and `energy.csv`) and the observers' state (a job's records).
+//! text of `history.csv`, `energy.csv` and `reaction.csv`) and the observers' state (a job's records).
 
 use std::fmt::Write as _;
 use std::io::Write;
@@ -22,7 +22,7 @@ use crate::state::particles::{Field, FieldReader, FieldVisitor, Particles, Value
 /// The first bytes of a checkpoint.
 pub const MAGIC: &[u8; 8] = b"MPMCKPT\0";
 /// Version of the layout: raised whenever a section changes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The checkpoint's folder inside the output folder.
 pub const FOLDER: &str = "checkpoint";
 /// The checkpoint's file name in [`FOLDER`].
@@ -174,12 +174,13 @@ impl Fingerprint {
             initial_state,
             probes,
             prescribed,
+            nodal_velocity,
             // Threads, pinning and first touch: the results do not depend on them.
             engine: _,
             precision,
         } = case;
         let version = env!("CARGO_PKG_VERSION");
-        let items: [(&str, &dyn std::fmt::Debug); 42] = [
+        let items: [(&str, &dyn std::fmt::Debug); 43] = [
             ("solver version", &version),
             ("case name", name),
             ("input files", inputs),
@@ -220,6 +221,7 @@ impl Fingerprint {
             ("initial state", initial_state),
             ("probes (--probe)", probes),
             ("prescribed velocities", prescribed),
+            ("prescribed nodal velocities", nodal_velocity),
             ("precision (--precision)", precision),
             ("--drop-lost", &drop_lost),
         ];
@@ -313,6 +315,8 @@ pub struct Series {
     pub history: String,
     /// Text of `energy.csv`.
     pub energy: String,
+    /// Text of `reaction.csv` (empty when the case has no prescribed velocities).
+    pub reaction: String,
 }
 
 /// A checkpoint read back; the particle arrays stay in the file's bytes until applied.
@@ -479,6 +483,7 @@ fn write_file<R: Real>(tmp: &Path, s: &State<'_, R>) -> Result<(), CheckpointErr
         }
         enc.str(&s.series.history)?;
         enc.str(&s.series.energy)?;
+        enc.str(&s.series.reaction)?;
         enc.bytes(s.observer)?;
         let sum = enc.sum.0;
         enc.w.write_all(&sum.to_le_bytes())?;
@@ -627,6 +632,7 @@ fn decode(bytes: Vec<u8>, path: &Path) -> Result<Saved, String> {
         pvd,
         history: d.str()?,
         energy: d.str()?,
+        reaction: d.str()?,
     };
     let observer = d.bytes()?.to_vec();
     if d.at != body {
@@ -868,6 +874,7 @@ mod tests {
             pvd: vec![(0.5, "particles_00000.vtu".into())],
             history: "h\n".into(),
             energy: "e\n".into(),
+            reaction: "r\n".into(),
         };
         let state = State {
             fingerprint: &fp,

@@ -211,6 +211,11 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     gravity_by_material: Vec<V3<R>>,
     /// Velocities prescribed on material points (only when the case has them).
     pub prescribed: Option<crate::step::prescribed::Prescribed<R>>,
+    /// Velocities prescribed on nodes (only when the case has them).
+    pub nodal_velocity: Option<crate::step::nodal_velocity::NodalVelocity<R>>,
+    /// The prescribed-velocity sets' reactions and imposed displacements
+    /// ([`Case::reactions`]'s order), updated every step.
+    pub reactions: Vec<crate::step::reaction::Reaction>,
     /// Input element (0-based) of each local element, so that messages name elements as the
     /// input.
     input_element: Vec<u32>,
@@ -343,6 +348,17 @@ impl<R: Real, E: Element> Engine<R, E> {
             traction[c] = case.traction[m as usize].map(R::of);
             liquid_traction[c] = case.liquid_traction[m as usize].map(R::of);
         }
+        let reactions = case.reactions();
+        let nodal_velocity = (!case.nodal_velocity.is_empty()).then(|| {
+            let nv = crate::step::nodal_velocity::NodalVelocity::new(
+                &case.nodal_velocity,
+                &mesh.node_of_model,
+                usize::from(case.prescribed.is_some()),
+            );
+            // The grid update and the re-mapping treat them as fixed; they are set after each.
+            nv.constrain(&mut fixed);
+            nv
+        });
         let laws = case
             .materials
             .iter()
@@ -416,8 +432,8 @@ impl<R: Real, E: Element> Engine<R, E> {
             // pore-pressure work, drag) are not counted, so two-phase runs are not checked (a
             // consolidation column under cell crossing tripped the blow-up check falsely).
             energy_checked: (
-                !two_phase && case.prescribed.is_none(),
-                !two_phase && case.prescribed.is_none(),
+                !two_phase && reactions.is_empty(),
+                !two_phase && reactions.is_empty(),
             ),
             comm,
             config: StepConfig::of(case),
@@ -447,6 +463,8 @@ impl<R: Real, E: Element> Engine<R, E> {
             fluids,
             liquid_fixed,
             prescribed,
+            nodal_velocity,
+            reactions,
             locate_outcome: vec![((usize::MAX, 0), 0); team.threads],
             team,
             layout,
@@ -497,6 +515,9 @@ impl<R: Real, E: Element> Engine<R, E> {
             // Indices of points: they follow the points (by id) when restored.
             point_loads: _,
             prescribed: _,
+            nodal_velocity: _,
+            // Saved below, by set.
+            reactions,
             // Saved, the time step to check that the set-up matches.
             dt,
             time,
@@ -532,6 +553,14 @@ impl<R: Real, E: Element> Engine<R, E> {
                 .zip(phase_seconds)
                 .map(|(&n, s)| (n, s.to_bits())),
         );
+        for r in reactions {
+            out.push(("reaction_travel", r.travel.to_bits()));
+            out.extend(
+                ["reaction_fx", "reaction_fy", "reaction_fz"]
+                    .into_iter()
+                    .zip(r.force.map(f64::to_bits)),
+            );
+        }
         out
     }
 
@@ -600,6 +629,11 @@ impl<R: Real, E: Element> Engine<R, E> {
         self.initial_kinetic = f(11);
         for (k, s) in self.phase_seconds.iter_mut().enumerate() {
             *s = f(12 + k);
+        }
+        let at = 12 + PHASES.len();
+        for (k, r) in self.reactions.iter_mut().enumerate() {
+            r.travel = f(at + 4 * k);
+            r.force = [1, 2, 3].map(|j| f(at + 4 * k + j));
         }
         Ok(())
     }
@@ -682,6 +716,20 @@ impl<R: Real, E: Element> Engine<R, E> {
             .map_or(R::ZERO, |pr| R::of(pr.multiplier(self.time + dt)));
         if let Some(pr) = &self.prescribed {
             pr.after_grid_update(&mut self.grid, &mut self.particles, pm);
+            self.reactions[0].force = pr.reaction(&self.grid, &self.traction, tm);
+        }
+        if let Some(nv) = &mut self.nodal_velocity {
+            nv.after_grid_update(
+                &mut self.grid,
+                &self.traction,
+                tm,
+                &mut self.reactions,
+                self.time,
+                dt,
+            );
+        }
+        for r in &mut self.reactions {
+            r.advance(self.time + dt, dt);
         }
         grid_to_particle::grid_to_particle(
             &self.team,
@@ -706,6 +754,9 @@ impl<R: Real, E: Element> Engine<R, E> {
         );
         if let Some(pr) = &mut self.prescribed {
             pr.after_remap(&self.mesh, &mut self.grid, &mut self.particles, pm);
+        }
+        if let Some(nv) = &self.nodal_velocity {
+            nv.after_remap(&mut self.grid);
         }
         let t3 = Instant::now();
         if let Some(sm) = &mut self.smoothing {

@@ -1,5 +1,5 @@
 //! Run outputs (docs/design.md §2.4): `mesh.vtu`, `particles_NNNNN.vtu`, `run.pvd`, `history.csv`,
-//! `energy.csv`, `run.json`. Every file is written whole and atomically; the CSV and PVD files are
+//! `energy.csv`, `reaction.csv` (cases with prescribed velocities), `run.json`. Every file is written whole and atomically; the CSV and PVD files are
 //! rewritten after each output time so that a run stopped by an error leaves what it completed.
 
 use std::fmt::Write as _;
@@ -27,6 +27,17 @@ fn csv_real(s: &mut String, v: f64) {
     s.push_str(&real_to_string(v));
 }
 
+/// A text field, quoted (inner quotes doubled) when it holds a comma, quote or line break.
+fn csv_text(s: &mut String, t: &str) {
+    if t.contains([',', '"', '\n', '\r']) {
+        s.push('"');
+        s.push_str(&t.replace('"', "\"\""));
+        s.push('"');
+    } else {
+        s.push_str(t);
+    }
+}
+
 impl Output {
     /// Prepares `dir` (created if missing) and writes `mesh.vtu`.
     pub fn new<R: Real>(dir: &Path, case: &Case, engine: &Engine<R>) -> mpm_shared::Result<Self> {
@@ -52,6 +63,11 @@ impl Output {
                     "time,id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,syz,szx\n".into()
                 },
                 energy: "time,kinetic,external_work,strain,dissipated,balance_error\n".into(),
+                reaction: if engine.reactions.is_empty() {
+                    String::new()
+                } else {
+                    "step,time,set,ux,uy,uz,fx,fy,fz\n".into()
+                },
             },
             probes,
         })
@@ -62,12 +78,12 @@ impl Output {
         &self.series
     }
 
-    /// Continues from a checkpoint's series: rewrites `run.pvd`, `history.csv` and `energy.csv`
-    /// as they were then (none of them before the first output).
+    /// Continues from a checkpoint's series: rewrites `run.pvd`, `history.csv`, `energy.csv` and
+    /// `reaction.csv` as they were then (none of them before the first output).
     pub fn resume(&mut self, series: Series) -> mpm_shared::Result<()> {
         self.series = series;
         if self.series.pvd.is_empty() {
-            for f in ["run.pvd", "history.csv", "energy.csv"] {
+            for f in ["run.pvd", "history.csv", "energy.csv", "reaction.csv"] {
                 let p = self.dir.join(f);
                 match std::fs::remove_file(&p) {
                     Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
@@ -85,7 +101,11 @@ impl Output {
         let s = &self.series;
         write_output_with(&self.dir.join("run.pvd"), |w| vtu::write_pvd(w, &s.pvd))?;
         mpm_shared::io::write_output(&self.dir.join("history.csv"), s.history.as_bytes())?;
-        mpm_shared::io::write_output(&self.dir.join("energy.csv"), s.energy.as_bytes())
+        mpm_shared::io::write_output(&self.dir.join("energy.csv"), s.energy.as_bytes())?;
+        if !s.reaction.is_empty() {
+            mpm_shared::io::write_output(&self.dir.join("reaction.csv"), s.reaction.as_bytes())?;
+        }
+        Ok(())
     }
 
     /// Writes the state at the current time: a particle file and the updated series.
@@ -148,6 +168,19 @@ impl Output {
         csv_real(&mut s.energy, engine.dissipated);
         csv_real(&mut s.energy, engine.balance_error());
         s.energy.push('\n');
+        for r in &engine.reactions {
+            let _ = write!(
+                s.reaction,
+                "{},{},",
+                engine.steps,
+                real_to_string(engine.time)
+            );
+            csv_text(&mut s.reaction, &r.name);
+            for v in r.displacement().iter().chain(&r.force) {
+                csv_real(&mut s.reaction, *v);
+            }
+            s.reaction.push('\n');
+        }
         // The particle file first, then the series that name it: a reader of run.pvd mid-run
         // sees complete outputs only.
         self.write_series()

@@ -302,12 +302,14 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             point_loads.extend(face_loads_on_points(&model, rows));
         } else if k.starts_with("START_REMOVE_FIXITY_")
             || k.starts_with("START_LOAD_ON_")
-            || (k.starts_with("PRESCRIBED_") && !crate::step::prescribed::SECTIONS.contains(&k))
+            || (k.starts_with("PRESCRIBED_")
+                && !crate::step::prescribed::SECTIONS.contains(&k)
+                && !crate::step::nodal_velocity::SECTIONS.contains(&k))
             || k.starts_with("ABSORBING_")
             || k.starts_with("START_FIXITY_")
             || k == "START_EXCAVATION_SOLID"
         {
-            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (supported: fixities of either phase, $$START_LOAD_ON_NODES_SOLID, $$START_LOAD_ON_NODES_LIQUID, $$START_LOAD_ON_MATERIAL_POINTS_SOLID and $$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME or _SURFACE)"));
+            return Err(unsupported(&gfile, &format!("$${k}"), "not supported yet (supported: fixities of either phase, $$START_LOAD_ON_NODES_SOLID, $$START_LOAD_ON_NODES_LIQUID, $$START_LOAD_ON_MATERIAL_POINTS_SOLID, $$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME or _SURFACE and $$PRESCRIBED_NODAL_VELOCITY_VOLUME, _SURFACE, _LINE or _POINT)"));
         }
     }
     let total = s.load_steps as f64 * s.time_per_load_step;
@@ -332,6 +334,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         ));
     }
     let prescribed = prescribed_velocity(&model, &s, &materials, total, &gfile, &cfile)?;
+    let nodal_velocity = nodal_velocity(&model, &s, &materials, total, &gfile, &cfile)?;
     let (gm, gravity_curve) = curve(s.gravity_load, total, &cfile, "$$GRAVITY_LOAD")?;
     let g = s.gravity_vector.map(|v| v * s.gravity_acceleration * gm);
     let output_times = (1..=s.load_steps)
@@ -390,6 +393,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         initial_state: None,
         probes,
         prescribed,
+        nodal_velocity,
         engine: Default::default(),
         precision: crate::input::case::Precision::F64,
     };
@@ -490,10 +494,50 @@ fn prescribed_velocity(
     }
     let (scale, curve) = curve(s.prescribed_velocity, total, cfile, "$$PRESCRIBED_VELOCITY")?;
     Ok(Some(crate::step::prescribed::PrescribedVelocity {
+        name: crate::step::prescribed::SECTIONS
+            .iter()
+            .find(|k| model.sections.iter().any(|s| s.keyword == **k))
+            .map_or(String::new(), |k| format!("$${k}")),
         rows,
         scale,
         curve,
     }))
+}
+
+/// The prescribed nodal velocities of the GOM (one set, named by its section) with the CPS
+/// `$$PRESCRIBED_VELOCITY` multiplier; none when there are none or the multiplier is `off`.
+fn nodal_velocity(
+    model: &Model,
+    s: &Settings,
+    materials: &[Option<MaterialSpec>],
+    total: f64,
+    gfile: &str,
+    cfile: &str,
+) -> Result<Vec<crate::step::nodal_velocity::NodalVelocitySet>, CaseError> {
+    let Some((keyword, rows)) = crate::step::nodal_velocity::read_rows(model)
+        .map_err(|(item, message)| unsupported(gfile, &item, message))?
+    else {
+        return Ok(Vec::new());
+    };
+    let name = format!("$${keyword}");
+    if s.prescribed_velocity == Multiplier::Off {
+        log::warn!("{gfile}: the prescribed nodal velocities are not applied: $$PRESCRIBED_VELOCITY is off in {cfile}");
+        return Ok(Vec::new());
+    }
+    if materials.iter().flatten().any(|m| m.liquid.is_some()) {
+        return Err(unsupported(
+            gfile,
+            &name,
+            "prescribed velocities are not supported yet in cases with a saturated material",
+        ));
+    }
+    let (scale, curve) = curve(s.prescribed_velocity, total, cfile, "$$PRESCRIBED_VELOCITY")?;
+    Ok(vec![crate::step::nodal_velocity::NodalVelocitySet {
+        name,
+        rows,
+        scale,
+        curve,
+    }])
 }
 
 /// The loads of `$$START_LOAD_ON_MATERIAL_POINTS_SOLID` rows (3 corners first, then a traction

@@ -119,10 +119,15 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "PRESCRIBED_MATERIAL_POINT_VELOCITY_*",
         Modelled,
     ),
+    // Velocities prescribed on listed nodes (with CPS $$PRESCRIBED_VELOCITY).
+    (GomSection, "PRESCRIBED_NODAL_VELOCITY_VOLUME", Modelled),
+    (GomSection, "PRESCRIBED_NODAL_VELOCITY_SURFACE", Modelled),
+    (GomSection, "PRESCRIBED_NODAL_VELOCITY_LINE", Modelled),
+    (GomSection, "PRESCRIBED_NODAL_VELOCITY_POINT", Modelled),
     (
         GomSection,
         "PRESCRIBED_*",
-        RefusedUnlessInert("prescribed nodal velocities; inert: an empty list"),
+        RefusedUnlessInert("other prescribed quantities; inert: an empty list"),
     ),
     (
         GomSection,

@@ -288,6 +288,9 @@ pub struct Case {
     /// Velocities prescribed on the material points of some elements (Anura3D's
     /// `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_*`); `None`: none, or the multiplier is off.
     pub prescribed: Option<crate::step::prescribed::PrescribedVelocity>,
+    /// Velocities prescribed on nodes (Anura3D's `$$PRESCRIBED_NODAL_VELOCITY_*`, scenes'
+    /// `[[velocity]]` on surfaces and planes), one reaction each.
+    pub nodal_velocity: Vec<crate::step::nodal_velocity::NodalVelocitySet>,
     /// Threads, pinning and first touch of the run (not physics: results do not depend on it).
     pub engine: crate::parallel::team::Options,
     /// Floating-point precision of the particle and grid state.
@@ -495,6 +498,10 @@ impl Case {
             }
             self.prescribed = Some(pv.renumbered(&new_of_old));
         }
+        self.nodal_velocity = std::mem::take(&mut self.nodal_velocity)
+            .into_iter()
+            .map(|s| s.renumbered(&o.node_new))
+            .collect();
         self.model = model;
         Ok(self)
     }
@@ -534,6 +541,16 @@ impl Case {
     /// True when some material is saturated: the run then allocates and computes the liquid.
     pub fn has_liquid(&self) -> bool {
         self.materials.iter().flatten().any(|m| m.liquid.is_some())
+    }
+
+    /// The prescribed-velocity sets whose reactions `reaction.csv` records, in its order: the
+    /// material-point set first, then the nodal sets as given.
+    pub fn reactions(&self) -> Vec<crate::step::reaction::Reaction> {
+        self.prescribed
+            .iter()
+            .map(|p| p.reaction())
+            .chain(self.nodal_velocity.iter().map(|s| s.reaction()))
+            .collect()
     }
 
     /// A case of one material filling every element with `points` material points each, the
@@ -587,6 +604,7 @@ impl Case {
             initial_state: None,
             probes: Vec::new(),
             prescribed: None,
+            nodal_velocity: Vec::new(),
             engine: Default::default(),
             precision: Precision::F64,
         }

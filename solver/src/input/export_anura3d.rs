@@ -14,7 +14,10 @@
 //! of a consolidation run, output times that are not equally spaced (Anura3D writes one output
 //! per load step of equal length), load ramps other than one over the whole run, an initial pore
 //! pressure, a cap on the time steps, material-point counts Anura3D does not place and more than
-//! 99 output points.
+//! 99 output points. Prescribed velocities go to `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME`
+//! (a physical volume's elements) and `$$PRESCRIBED_NODAL_VELOCITY_SURFACE` (nodes, a new
+//! mid-edge node taking a set's velocity where both its corners are in the set) under one CPS
+//! `$$PRESCRIBED_VELOCITY` multiplier: entries whose ramps differ are refused.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -182,6 +185,31 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
     } else {
         multiplier(case.traction_curve, "traction.ramp")?
     };
+    // Anura3D has one multiplier for every prescribed velocity.
+    let prescribed_velocity = match r.velocities.first() {
+        None => "off  0.0  1.0",
+        Some(first) => {
+            if let Some(v) = r.velocities.iter().find(|v| v.ramp != first.ramp) {
+                return Err(refuse(
+                    &format!("velocity \"{}\".ramp", v.name),
+                    format!(
+                        "Anura3D has one multiplier for every prescribed velocity: give every [[velocity]] the ramp of \"{}\" ({} s), not {} s",
+                        first.name, first.ramp, v.ramp
+                    ),
+                ));
+            }
+            multiplier(
+                LoadCurve::ramp(first.ramp),
+                &format!("velocity \"{}\".ramp", first.name),
+            )?
+        }
+    };
+    if r.case.nodal_velocity.len() > 1 {
+        notes.push(format!(
+            "[[velocity]]: the {} nodal sets go to one GOM section, so a run of the GOM records one reaction for all of them",
+            r.case.nodal_velocity.len()
+        ));
+    }
     let n_mat = case.materials.len().saturating_sub(1);
     for k in 1..=n_mat {
         let Some(m) = &r.materials[k] else {
@@ -267,6 +295,7 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
             solid_traction,
             smoothing,
             probes: &probes,
+            prescribed_velocity,
         },
     );
     Ok(Anura3dCase { gom, cps, notes })
@@ -504,6 +533,52 @@ fn gom_model(r: &Resolved, mesh: Tet10Mesh, loads: Table, notes: &mut Vec<String
     if !loads.is_empty() {
         sections.push(counted("START_LOAD_ON_NODES_SOLID", Refs::Nodes(6), loads));
     }
+    let row = |id: u32, d: [bool; 3], v: [f64; 3]| {
+        std::iter::once(Token::Int(id as i64 + 1))
+            .chain(d.map(|x| Token::Int(x as i64)))
+            .chain(v.map(Token::Real))
+    };
+    if let Some(pv) = &case.prescribed {
+        let mut t = Table::with_capacity(pv.rows.len(), 7);
+        for p in &pv.rows {
+            t.push_row(row(p.element, p.directions, p.velocity));
+        }
+        sections.push(counted(
+            "PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME",
+            Refs::Element,
+            t,
+        ));
+    }
+    if !case.nodal_velocity.is_empty() {
+        let original = case.model.node_count() as u32;
+        let mut t = Table::new();
+        for set in &case.nodal_velocity {
+            for p in &set.rows {
+                t.push_row(row(p.node, p.directions, p.velocity));
+            }
+            // New mid-edge nodes between two of the set's nodes, in node order.
+            let mut inside = vec![false; original as usize];
+            for p in &set.rows {
+                inside[p.node as usize] = true;
+            }
+            let first = set.rows.first().expect("a set has nodes");
+            let mut mids: Vec<u32> = mesh
+                .mid
+                .iter()
+                .filter(|(&(a, b), &m)| m >= original && inside[a as usize] && inside[b as usize])
+                .map(|(_, &m)| m)
+                .collect();
+            mids.sort_unstable();
+            for m in mids {
+                t.push_row(row(m, first.directions, first.velocity));
+            }
+        }
+        sections.push(counted(
+            "PRESCRIBED_NODAL_VELOCITY_SURFACE",
+            Refs::Nodes(1),
+            t,
+        ));
+    }
     sections.push(counted("START_CONTACT_VOLUME", Refs::Element, Table::new()));
     let n_mat = case.materials.len().saturating_sub(1);
     sections.push(text("NUMBER_OF_MATERIALS", &[&n_mat.to_string()]));
@@ -583,6 +658,7 @@ struct CpsValues<'a> {
     solid_traction: &'static str,
     smoothing: bool,
     probes: &'a [u32],
+    prescribed_velocity: &'static str,
 }
 
 /// The CPS: the scene's controls, every other key at the inert value of Anura3D's template.
@@ -633,7 +709,7 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         ("SOLID_TRACTION_B", one("off  0.0  1.0")),
         ("LIQUID_PRESSURE", one("off  0.0  1.0")),
         ("LIQUID_PRESSURE_B", one("off  0.0  1.0")),
-        ("PRESCRIBED_VELOCITY", one("off  0.0  1.0")),
+        ("PRESCRIBED_VELOCITY", one(v.prescribed_velocity)),
         ("QUASISTATIC_CONVERGENCE", one("0")),
         ("TOLERATED_ERROR_SOLID", one("0.01 0.01")),
         ("TOLERATED_ERROR_LIQUID", one("0.01 0.01")),

@@ -33,6 +33,12 @@
 //! physical = "top"
 //! traction = [0.0, -10.0, 0.0]    # kPa
 //! ramp = 0.0                      # s to reach full load (0: sudden)
+//! [[velocity]]                    # a rough rigid platen pushed down (nodes of a surface)
+//! physical = "top"                # or plane = "y = 1.0"; a physical volume: its points
+//! velocity = [0.0, -0.01, 0.0]    # m/s
+//! components = [true, true, true] # prescribed components (default: all three)
+//! ramp = 0.0                      # s to reach full velocity (0: at once)
+//! name = "platen"                 # in reaction.csv (default: the physical or plane)
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -46,6 +52,8 @@ use crate::input::case::{Case, Integration, LoadCurve, MaterialSpec};
 use crate::input::case::{ConsolidationSpec, Start, UndrainedState};
 use crate::material::law::LawSpec;
 use crate::material::liquid::LiquidSpec;
+use crate::step::nodal_velocity::{NodalVelocitySet, PrescribedNode};
+use crate::step::prescribed::{PrescribedElement, PrescribedVelocity};
 
 /// The scene file's content.
 #[derive(Debug, Deserialize)]
@@ -75,6 +83,8 @@ struct Scene {
     fixity: Vec<Fixity>,
     #[serde(default)]
     traction: Vec<Traction>,
+    #[serde(default)]
+    velocity: Vec<Velocity>,
     #[serde(default)]
     probes: Vec<u32>,
     #[serde(default)]
@@ -190,6 +200,48 @@ struct Traction {
     traction: [f64; 3],
     #[serde(default)]
     ramp: f64,
+}
+
+/// `[[velocity]]`: a prescribed velocity on the nodes of a physical surface or a plane, or on
+/// the material points of a physical volume.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Velocity {
+    #[serde(default)]
+    physical: Option<String>,
+    #[serde(default)]
+    plane: Option<String>,
+    velocity: [f64; 3],
+    #[serde(default)]
+    components: Option<[bool; 3]>,
+    #[serde(default)]
+    ramp: f64,
+    #[serde(default)]
+    name: Option<String>,
+}
+
+/// What a `[[velocity]]` entry prescribes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum VelocityTarget {
+    /// Nodes (model ids, 0-based, ascending) of a physical surface or a plane.
+    Nodes(Vec<u32>),
+    /// The material points of a physical volume's elements (the case's material-point set).
+    Volume(String),
+}
+
+/// A `[[velocity]]` entry resolved against the mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VelocityInput {
+    /// The set's name (`name`, else the physical or plane string).
+    pub name: String,
+    /// What it prescribes.
+    pub target: VelocityTarget,
+    /// Velocity (m/s).
+    pub velocity: [f64; 3],
+    /// Prescribed components.
+    pub components: [bool; 3],
+    /// Seconds to full velocity (0: at once).
+    pub ramp: f64,
 }
 
 /// Errors in a scene, naming the file and the item.
@@ -330,6 +382,8 @@ pub struct Resolved {
     pub materials: Vec<Option<MaterialInput>>,
     /// The scene's tractions in file order.
     pub tractions: Vec<TractionInput>,
+    /// The scene's prescribed velocities in file order.
+    pub velocities: Vec<VelocityInput>,
 }
 
 /// Reads a scene file and builds the case it describes.
@@ -495,6 +549,18 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
             }
         }
     }
+    let (prescribed, nodal_velocity, velocities) = velocities(
+        &scene.velocity,
+        &msh_mesh,
+        &node_map,
+        &model,
+        &names,
+        &element_material,
+        &materials,
+        size,
+        &mesh_name,
+    )
+    .map_err(|(item, message)| invalid(item, message))?;
     let nodes = model.node_count();
     let mut traction = vec![[0.0; 3]; nodes];
     let mut traction_ramp = 0.0f64;
@@ -707,7 +773,8 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         consolidation,
         initial_state,
         probes: scene.probes.clone(),
-        prescribed: None,
+        prescribed,
+        nodal_velocity,
         engine: Default::default(),
         precision,
     };
@@ -715,7 +782,153 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         case,
         materials: inputs,
         tractions,
+        velocities,
     })
+}
+
+/// The case's prescribed velocities from the `[[velocity]]` entries: at most one material-point
+/// set (a physical volume's elements), the nodal sets in file order, and the entries as
+/// resolved. Errors name the entry.
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn velocities(
+    entries: &[Velocity],
+    msh_mesh: &MshMesh,
+    node_map: &[u32],
+    model: &Model,
+    volumes: &[String],
+    element_material: &[u32],
+    materials: &[Option<MaterialSpec>],
+    size: f64,
+    mesh_name: &str,
+) -> Result<
+    (
+        Option<PrescribedVelocity>,
+        Vec<NodalVelocitySet>,
+        Vec<VelocityInput>,
+    ),
+    (String, String),
+> {
+    let (mut points, mut nodal, mut out) = (None::<PrescribedVelocity>, Vec::new(), Vec::new());
+    for v in entries {
+        let label = v
+            .physical
+            .as_ref()
+            .or(v.plane.as_ref())
+            .cloned()
+            .unwrap_or_default();
+        let name = v.name.clone().unwrap_or_else(|| label.clone());
+        let item = format!("velocity \"{name}\"");
+        let components = v.components.unwrap_or([true; 3]);
+        if !components.iter().any(|&c| c) {
+            return Err((item, "components = [false, false, false] prescribes nothing; mark at least one component true".into()));
+        }
+        if !v.velocity.iter().all(|x| x.is_finite()) {
+            return Err((
+                item,
+                format!("velocity must be three numbers, got {:?}", v.velocity),
+            ));
+        }
+        if !(v.ramp >= 0.0 && v.ramp.is_finite()) {
+            return Err((
+                item,
+                format!("ramp must be 0 or more seconds, got {}", v.ramp),
+            ));
+        }
+        if materials.iter().flatten().any(|m| m.liquid.is_some()) {
+            return Err((
+                item,
+                "prescribed velocities are not supported yet in scenes with a saturated material"
+                    .into(),
+            ));
+        }
+        let curve = LoadCurve::ramp(v.ramp);
+        let target = match (&v.physical, &v.plane) {
+            (Some(p), None) => {
+                let surface = physical_nodes(msh_mesh, node_map, p);
+                let volume = volumes.iter().position(|n| n == p);
+                match (surface, volume) {
+                    (Some(_), Some(_)) => {
+                        return Err((item, format!("\"{p}\" names both a physical surface and a physical volume; rename one")))
+                    }
+                    (Some(nodes), None) => VelocityTarget::Nodes(nodes),
+                    (None, Some(_)) => VelocityTarget::Volume(p.clone()),
+                    (None, None) => {
+                        return Err((item, format!("no physical surface or volume \"{p}\" in {mesh_name} (volumes: {volumes:?})")))
+                    }
+                }
+            }
+            (None, Some(plane)) => {
+                let (axis, value) = parse_plane(plane).ok_or_else(|| {
+                    (
+                        item.clone(),
+                        format!(
+                            "plane \"{plane}\": expected 'x = value', 'y = value' or 'z = value'"
+                        ),
+                    )
+                })?;
+                let tol = 1e-9 * size.max(1e-300);
+                let found: Vec<u32> = (0..model.node_count() as u32)
+                    .filter(|&n| (model.node(n as usize)[axis] - value).abs() <= tol)
+                    .collect();
+                if found.is_empty() {
+                    return Err((item, format!("plane \"{plane}\" selects no node")));
+                }
+                VelocityTarget::Nodes(found)
+            }
+            _ => {
+                return Err((
+                    item,
+                    "give exactly one of physical = \"name\" or plane = \"x = value\"".into(),
+                ))
+            }
+        };
+        match &target {
+            VelocityTarget::Nodes(nodes) => nodal.push(NodalVelocitySet {
+                name: name.clone(),
+                rows: nodes
+                    .iter()
+                    .map(|&node| PrescribedNode {
+                        node,
+                        directions: components,
+                        velocity: v.velocity,
+                    })
+                    .collect(),
+                scale: 1.0,
+                curve,
+            }),
+            VelocityTarget::Volume(p) => {
+                if let Some(first) = &points {
+                    return Err((item, format!("a second material-point velocity (after \"{}\"); give one physical volume per scene, or prescribe nodes", first.name)));
+                }
+                let k = volumes.iter().position(|n| n == p).expect("found above") as u32 + 1;
+                let rows: Vec<PrescribedElement> = (0..element_material.len() as u32)
+                    .filter(|&e| element_material[e as usize] == k)
+                    .map(|element| PrescribedElement {
+                        element,
+                        directions: components,
+                        velocity: v.velocity,
+                    })
+                    .collect();
+                if rows.is_empty() {
+                    return Err((item, format!("physical volume \"{p}\" has no elements")));
+                }
+                points = Some(PrescribedVelocity {
+                    name: name.clone(),
+                    rows,
+                    scale: 1.0,
+                    curve,
+                });
+            }
+        }
+        out.push(VelocityInput {
+            name,
+            target,
+            velocity: v.velocity,
+            components,
+            ramp: v.ramp,
+        });
+    }
+    Ok((points, nodal, out))
 }
 
 /// The one saturated material of a consolidation scene, `None` when there are none or several.

@@ -45,6 +45,8 @@ pub struct PrescribedElement {
 /// The prescribed velocities of a case.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PrescribedVelocity {
+    /// The set's name in `reaction.csv` (the GOM section's keyword, or the scene entry's name).
+    pub name: String,
     /// The rows, in the input's order (a later row for the same element wins).
     pub rows: Vec<PrescribedElement>,
     /// Multiplier value at full load.
@@ -63,6 +65,18 @@ impl PrescribedVelocity {
     /// [`read_rows`]).
     pub fn directions(&self) -> [bool; 3] {
         self.rows.first().map_or([false; 3], |r| r.directions)
+    }
+
+    /// The set's entry in the reaction list (velocity of its first row).
+    pub fn reaction(&self) -> crate::step::reaction::Reaction {
+        let v = self.rows.first().map_or([0.0; 3], |r| r.velocity);
+        crate::step::reaction::Reaction::new(
+            &self.name,
+            v,
+            self.directions(),
+            self.scale,
+            self.curve,
+        )
     }
 
     /// The rows of the elements `partition` owns, numbered locally (all of them, unchanged, on
@@ -286,6 +300,26 @@ impl<R: Real> Prescribed<R> {
                 }
             }
         }
+    }
+
+    /// The reaction after the grid update: the masked components' accelerations are zeroed,
+    /// so it is -Σ f over them (f = f_int + f_ext + `traction` × `tm`), by ascending node, at
+    /// nodes that are not empty.
+    pub fn reaction(&self, g: &Grid<R>, traction: &[V3<R>], tm: R) -> [f64; 3] {
+        let mut out = [0.0; 3];
+        for &n in &self.nodes {
+            let n = n as usize;
+            if g.mass[n] <= g.empty_below {
+                continue;
+            }
+            for d in 0..3 {
+                if self.directions[d] {
+                    out[d] -=
+                        g.f_int[n][d].f64() + g.f_ext[n][d].f64() + tm.f64() * traction[n][d].f64();
+                }
+            }
+        }
+        out
     }
 
     /// After the MUSL re-mapping: the marked points take the prescribed velocity again, and the
