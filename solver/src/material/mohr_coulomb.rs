@@ -73,8 +73,10 @@ struct Planes<R: Real> {
     k: [R; 6],
 }
 
-/// Active sets tried in turn without the cut-off: face, extension edge, compression edge, apex.
-const PYRAMID: [&[usize]; 4] = [&[0], &[0, 2], &[0, 1], &[0, 1, 2]];
+/// Active sets tried in turn without the cut-off: face, extension edge, compression edge; a
+/// trial none of them takes goes to the apex (whose planes' flow directions are dependent for
+/// ψ = 0, so no multiplier system describes it).
+const PYRAMID: [&[usize]; 3] = [&[0], &[0, 2], &[0, 1]];
 
 /// Active sets tried in turn with the cut-off: faces, edges, the face–cut-off line, the corners
 /// (σa, σa, σt), (σa, σt, σt) (four planes meet there: each triple spans part of its cone) and
@@ -109,7 +111,8 @@ impl<R: Real> Surface<R> {
             sin_psi: R::of(dilatancy_deg.to_radians().sin()),
             cohesion: R::of(cohesion * (1.0 - s * s).sqrt()),
             tension: R::of(tension),
-            cut_off: tension < apex(friction_deg, cohesion),
+            // A σt equal to the apex (to the digits it was written with) cuts nothing.
+            cut_off: tension < apex(friction_deg, cohesion) * (1.0 - 1e-9),
             bound: R::of(1.0 + sc * sc / 3.0),
         }
     }
@@ -216,8 +219,8 @@ impl<R: Real> Surface<R> {
         } else {
             &PYRAMID
         };
-        // The first consistent candidate wins; failing all (round-off at a region boundary),
-        // the least inconsistent one.
+        // The first consistent candidate wins. Failing all, the least inconsistent one if only
+        // round-off at a region boundary failed it, else the apex (without cut-off).
         let mut best: Option<([R; 3], R)> = None;
         for set in sets {
             let Some((back, violation)) = self.candidate(el, &planes, &f, sig, set) else {
@@ -230,12 +233,16 @@ impl<R: Real> Surface<R> {
                 best = Some((back, violation));
             }
         }
-        best.map_or(*sig, |(b, _)| b)
+        let near = best.filter(|&(_, v)| v <= R::of(1e4) * tol);
+        if near.is_none() && !self.cut_off && self.sin_phi > R::ZERO {
+            return [self.cohesion / self.sin_phi; 3];
+        }
+        near.or(best).map_or(*sig, |(b, _)| b)
     }
 
     /// The return with the planes `set` active: the stress, and how far it is from consistent
     /// (a negative multiplier as 2G Δλ, a yield function above 0), in kPa. `None` when the
-    /// planes' system is singular (φ = 0 makes the apex's three planes dependent).
+    /// planes' system is singular.
     fn candidate(
         &self,
         el: &LinearElastic<R>,
@@ -343,5 +350,320 @@ impl<R: Real> MohrCoulomb<R> {
     pub fn update(&self, s: &mut [R; 6], de: &[R; 6]) {
         self.elastic.update(s, de);
         self.surface.return_map(&self.elastic, s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    const E: f64 = 10_000.0;
+
+    fn law(nu: f64, phi: f64, c: f64, psi: f64, t: f64) -> MohrCoulomb<f64> {
+        MohrCoulomb::new(E, nu, phi, c, psi, t)
+    }
+
+    /// D⁻¹ σ with tensor shear strains.
+    fn compliance(nu: f64, s: &[f64; 6]) -> [f64; 6] {
+        let tr = s[0] + s[1] + s[2];
+        let g2 = E / (1.0 + nu);
+        let n = |x: f64| ((1.0 + nu) * x - nu * tr) / E;
+        [n(s[0]), n(s[1]), n(s[2]), s[3] / g2, s[4] / g2, s[5] / g2]
+    }
+
+    /// The returned principal stresses of the trial diag(`sig`).
+    fn returned(l: &MohrCoulomb<f64>, sig: [f64; 3]) -> [f64; 3] {
+        let mut s = [sig[0], sig[1], sig[2], 0.0, 0.0, 0.0];
+        l.surface.return_map(&l.elastic, &mut s);
+        assert!(s[3].abs() + s[4].abs() + s[5].abs() < 1e-12, "{s:?}");
+        [s[0], s[1], s[2]]
+    }
+
+    fn close(got: [f64; 3], want: [f64; 3], tol: f64) {
+        for i in 0..3 {
+            assert!((got[i] - want[i]).abs() < tol, "{got:?} != {want:?}");
+        }
+    }
+
+    /// Drained triaxial compression along x from an isotropic `p0`: each step shortens x by
+    /// `dx` and finds the lateral strain (y and z alike) that keeps the lateral stress at `p0`
+    /// (secants; the law is piecewise linear in it). Returns each step's stress and strain
+    /// increment.
+    fn triaxial(l: &MohrCoulomb<f64>, p0: f64, dx: f64, steps: usize) -> Vec<([f64; 6], [f64; 6])> {
+        let mut s = [p0, p0, p0, 0.0, 0.0, 0.0];
+        let mut out = Vec::new();
+        for _ in 0..steps {
+            let lateral = |y: f64| {
+                let mut t = s;
+                l.update(&mut t, &[dx, y, y, 0.0, 0.0, 0.0]);
+                (t[1] - p0, t)
+            };
+            let (mut y0, mut y1) = (0.0, -0.5 * dx);
+            let (mut g0, _) = lateral(y0);
+            for _ in 0..60 {
+                let (g1, _) = lateral(y1);
+                if g1.abs() < 1e-13 * p0.abs() || g1 == g0 {
+                    break;
+                }
+                let y2 = y1 - g1 * (y1 - y0) / (g1 - g0);
+                (y0, g0, y1) = (y1, g1, y2);
+            }
+            let (_, t) = lateral(y1);
+            out.push((t, [dx, y1, y1, 0.0, 0.0, 0.0]));
+            s = t;
+        }
+        out
+    }
+
+    #[test]
+    fn drained_triaxial_reaches_the_closed_form_peak() {
+        for (phi, c, psi) in [(30.0, 10.0, 0.0), (35.0, 0.0, 5.0), (20.0, 25.0, 20.0)] {
+            let l = law(0.3, phi, c, psi, 0.0);
+            let p0 = -100.0;
+            let path = triaxial(&l, p0, -1e-4, 600);
+            let s = phi.to_radians().sin();
+            let peak = (p0 * (1.0 + s) - 2.0 * c * phi.to_radians().cos()) / (1.0 - s);
+            let (last, _) = path.last().unwrap();
+            assert!(
+                ((last[0] - peak) / peak).abs() < 1e-9,
+                "φ {phi}: σ1 {} against {peak}",
+                last[0]
+            );
+            assert!(((last[1] - p0) / p0).abs() < 1e-9 && ((last[2] - p0) / p0).abs() < 1e-9);
+            // The path reached the peak some steps before the end and stayed there.
+            let (mid, _) = path[450];
+            assert!(((mid[0] - peak) / peak).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn plastic_strain_follows_the_flow_rule() {
+        // Volumetric over major principal plastic strain (tension positive, so ε1^p < 0 and
+        // a dilatant ψ > 0 gives ε_v^p > 0): -2 sin ψ / (1 - sin ψ), on the compression edge
+        // (the triaxial path) and on the face (a true-triaxial path).
+        for psi in [0.0, 10.0, 25.0] {
+            let nu = 0.25;
+            let l = law(nu, 30.0, 5.0, psi, 0.0);
+            let want = -2.0 * psi.to_radians().sin() / (1.0 - psi.to_radians().sin());
+            let path = triaxial(&l, -100.0, -1e-4, 500);
+            let mut checked = 0;
+            for w in path.windows(2) {
+                let ((s0, _), (s1, de)) = (w[0], w[1]);
+                let ds = core::array::from_fn::<f64, 6, _>(|i| s1[i] - s0[i]);
+                let ee = compliance(nu, &ds);
+                let ep: Vec<f64> = (0..6).map(|i| de[i] - ee[i]).collect();
+                if ep[0].abs() < 1e-9 {
+                    continue;
+                }
+                let ratio = (ep[0] + ep[1] + ep[2]) / ep[0];
+                assert!((ratio - want).abs() < 1e-8, "ψ {psi}: {ratio} against {want}");
+                checked += 1;
+            }
+            assert!(checked > 100, "{checked} plastic steps");
+            // On the face: principal stresses all different, shear along (x, z).
+            let mut s = [-150.0, -100.0, -50.0, 0.0, 0.0, 0.0];
+            let mut faces = 0;
+            for _ in 0..400 {
+                let de = [-2e-5, 0.0, 2e-5, 0.0, 0.0, 0.0];
+                let s0 = s;
+                l.update(&mut s, &de);
+                let ds = core::array::from_fn::<f64, 6, _>(|i| s[i] - s0[i]);
+                let ee = compliance(nu, &ds);
+                let ep: Vec<f64> = (0..6).map(|i| de[i] - ee[i]).collect();
+                if ep[0].abs() < 1e-9 {
+                    continue;
+                }
+                assert!(s[0] < s[1] - 1.0 && s[1] < s[2] - 1.0, "left the face: {s:?}");
+                let ratio = (ep[0] + ep[1] + ep[2]) / ep[0];
+                assert!((ratio - want).abs() < 1e-8, "face, ψ {psi}: {ratio} against {want}");
+                // And no plastic strain along the intermediate direction.
+                assert!((ep[1] / ep[0]).abs() < 1e-8);
+                faces += 1;
+            }
+            assert!(faces > 100);
+        }
+    }
+
+    #[test]
+    fn hand_checked_returns() {
+        // φ = 30°, c = 0: σ1 = 3 σ3 on the pyramid; ψ = 0 keeps the volume.
+        let l = law(0.3, 30.0, 0.0, 0.0, 0.0);
+        assert!(!l.surface.cut_off);
+        // Compression edge (σ2 = σ3): both multipliers G Δλ = 20.
+        close(
+            returned(&l, [-400.0, -100.0, -100.0]),
+            [-360.0, -120.0, -120.0],
+            1e-10,
+        );
+        // Extension edge (σ1 = σ2): σ1 = σ2 = -100 + x, σ3 = 20 - 2x, x = 160/7.
+        let x = 160.0 / 7.0;
+        close(
+            returned(&l, [-100.0, -100.0, 20.0]),
+            [-100.0 + x, -100.0 + x, 20.0 - 2.0 * x],
+            1e-10,
+        );
+        // The face: a trial between the edges keeps σ2; Δσ along G(-1, 0, 1).
+        let back = returned(&l, [-400.0, -200.0, -100.0]);
+        assert!((back[1] + 200.0).abs() < 1e-10 && (back[0] + back[2] + 500.0).abs() < 1e-10);
+        assert!((back[0] - 3.0 * back[2]).abs() < 1e-10);
+        // Apex: c = 0 puts it at the origin.
+        close(returned(&l, [10.0, 20.0, 30.0]), [0.0; 3], 1e-10);
+        // Apex of a cohesive pyramid without cut-off: c cos φ / sin φ = 10 √3.
+        let top = 10.0 * 3f64.sqrt();
+        let l = law(0.3, 30.0, 10.0, 0.0, top);
+        assert!(!l.surface.cut_off);
+        close(returned(&l, [50.0, 60.0, 70.0]), [top; 3], 1e-9);
+        // Tension cut-off at 5 kPa, ν = 0.25 (λ = G): D = G [[3,1,1],[1,3,1],[1,1,3]].
+        let l = law(0.25, 30.0, 10.0, 0.0, 5.0);
+        assert!(l.surface.cut_off);
+        // The cut-off plane: Δσ = Δλ (λ, λ, λ + 2G), λ / (λ + 2G) = 1/3.
+        close(returned(&l, [-5.0, 0.0, 20.0]), [-10.0, -5.0, 5.0], 1e-10);
+        // The cut-off's edge σ2 = σ3 = σt: G Δλ2 = 1.875, G Δλ3 = 4.375.
+        close(returned(&l, [-5.0, 15.0, 20.0]), [-11.25, 5.0, 5.0], 1e-10);
+        // Its apex.
+        close(returned(&l, [30.0, 40.0, 50.0]), [5.0; 3], 1e-10);
+        // The line where pyramid and cut-off meet: σ3 = σt, F = 0, the rest a combination of
+        // both flow directions.
+        let back = returned(&l, [-30.0, -20.0, 20.0]);
+        assert!((back[2] - 5.0).abs() < 1e-10, "{back:?}");
+        assert!(l.surface.yield_value(back[0], back[2]).abs() < 1e-10);
+        // A rotated trial returns to the rotated result (coaxial).
+        let (c, s) = (0.6f64, 0.8f64);
+        let sig = [-400.0, -100.0, -100.0];
+        let rot = |v: [f64; 3]| {
+            [
+                c * c * v[0] + s * s * v[1],
+                s * s * v[0] + c * c * v[1],
+                v[2],
+                c * s * (v[0] - v[1]),
+                0.0,
+                0.0,
+            ]
+        };
+        let l = law(0.3, 30.0, 0.0, 0.0, 0.0);
+        let mut t = rot(sig);
+        l.surface.return_map(&l.elastic, &mut t);
+        let want = rot([-360.0, -120.0, -120.0]);
+        for i in 0..6 {
+            assert!((t[i] - want[i]).abs() < 1e-10, "{t:?} != {want:?}");
+        }
+    }
+
+    #[test]
+    fn an_elastic_mohr_coulomb_step_is_the_linear_elastic_one() {
+        let l = law(0.3, 30.0, 50.0, 10.0, 5.0);
+        let mut a = [-100.0, -80.0, -90.0, 5.0, -3.0, 2.0];
+        let mut b = a;
+        let de = [1e-5, -2e-5, 3e-6, 1e-6, 0.0, -4e-6];
+        l.update(&mut a, &de);
+        l.elastic.update(&mut b, &de);
+        assert_eq!(a, b);
+    }
+
+    fn exact_f(l: &Surface<f64>, s: &[f64; 6]) -> (f64, f64) {
+        let p = principal(s);
+        (l.yield_value(p.values[0], p.values[2]), p.values[2])
+    }
+
+    /// σ:D⁻¹σ with tensor shear components.
+    fn energy(nu: f64, d: &[f64; 6]) -> f64 {
+        let e = compliance(nu, d);
+        (0..6)
+            .map(|i| if i < 3 { d[i] * e[i] } else { 2.0 * d[i] * e[i] })
+            .sum()
+    }
+
+    /// (ν, φ, ψ, c, σt), with the special cases (c = 0, ψ = 0, ψ = φ, σt at the apex, φ = 0)
+    /// drawn often.
+    fn material() -> impl Strategy<Value = (f64, f64, f64, f64, f64)> {
+        let phi = prop_oneof![Just(0.0), 0.0f64..60.0, 0.0f64..60.0];
+        let psi = prop_oneof![Just(0.0), Just(1.0), 0.0f64..1.0];
+        let c = prop_oneof![Just(0.0), 0.0f64..40.0, 0.0f64..40.0];
+        let t = prop_oneof![Just(0.0), Just(1.0), 0.0f64..1.0];
+        (0.0f64..0.45, phi, psi, c, t).prop_map(|(nu, phi, psi, c, t)| {
+            let top = apex(phi, c);
+            let t = if top.is_finite() { t * top } else { t * 40.0 };
+            (nu, phi, psi * phi, c, t)
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(5000))]
+        #[test]
+        fn returns_are_consistent_coaxial_and_idempotent(
+            (nu, phi, psi, c, t) in material(),
+            trial in prop::array::uniform6(-300.0f64..300.0),
+        ) {
+            let l = law(nu, phi, c, psi, t);
+            let sf = &l.surface;
+            let scale = 300.0 + c;
+            let tol = 1e-9 * scale;
+            let (f0, top0) = exact_f(sf, &trial);
+            let mut s = trial;
+            let plastic = sf.return_map(&l.elastic, &mut s);
+            let (f, top) = exact_f(sf, &s);
+            prop_assert!(f <= tol, "F = {f} after the return of {trial:?}");
+            if sf.cut_off {
+                prop_assert!(top - t <= tol, "σ3 = {top} above σt = {t}");
+            }
+            if f0 < -tol && (!sf.cut_off || top0 < t - tol) {
+                prop_assert!(plastic.is_none());
+                prop_assert_eq!(s, trial);
+            }
+            // Coaxial: the returned stress commutes with the trial.
+            let m = |v: &[f64; 6]| [[v[0], v[3], v[5]], [v[3], v[1], v[4]], [v[5], v[4], v[2]]];
+            let (a, b) = (m(&trial), m(&s));
+            for i in 0..3 {
+                for j in 0..3 {
+                    let ab: f64 = (0..3).map(|k| a[i][k] * b[k][j] - b[i][k] * a[k][j]).sum();
+                    prop_assert!(ab.abs() < 1e-9 * scale * scale, "[σB, σC] = {ab}");
+                }
+            }
+            // Idempotent.
+            let mut again = s;
+            sf.return_map(&l.elastic, &mut again);
+            for i in 0..6 {
+                prop_assert!((again[i] - s[i]).abs() < tol, "{s:?} -> {again:?}");
+            }
+        }
+
+        #[test]
+        fn associated_returns_are_the_closest_point_in_the_energy_norm(
+            (nu, phi, _psi, c, t) in material(),
+            trial in prop::array::uniform6(-300.0f64..150.0),
+            moves in prop::collection::vec(prop::array::uniform6(-1.0f64..1.0), 40),
+        ) {
+            let l = law(nu, phi, c, phi, t);
+            let sf = &l.surface;
+            let mut s = trial;
+            if sf.return_map(&l.elastic, &mut s).is_none() {
+                return Ok(());
+            }
+            let d = |x: &[f64; 6]| energy(nu, &core::array::from_fn::<f64, 6, _>(|i| trial[i] - x[i]));
+            let best = d(&s);
+            let size = best.sqrt().max(1e-6);
+            for (k, mv) in moves.iter().enumerate() {
+                // Small moves from the returned point, kept if they stay admissible (on the
+                // surface or inside): none may be closer to the trial.
+                let h = size * 10f64.powi(-(k as i32 % 4)) * 0.1;
+                let x: [f64; 6] = core::array::from_fn(|i| s[i] + h * mv[i]);
+                let (f, top) = exact_f(sf, &x);
+                if f > 0.0 || (sf.cut_off && top > t) {
+                    continue;
+                }
+                prop_assert!(d(&x) >= best * (1.0 - 1e-9) - 1e-12, "closer: {} < {best}", d(&x));
+            }
+        }
+    }
+
+    #[test]
+    fn f32_returns_stay_on_the_surface() {
+        let l = MohrCoulomb::<f32>::new(E, 0.3, 30.0, 10.0, 5.0, 2.0);
+        let mut s = [-400.0f32, -100.0, -100.0, 30.0, -10.0, 5.0];
+        l.surface.return_map(&l.elastic, &mut s);
+        let p = principal(&s);
+        let f = l.surface.yield_value(p.values[0], p.values[2]);
+        assert!(f.abs() < 1e-3, "{f}");
     }
 }
