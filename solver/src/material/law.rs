@@ -6,7 +6,7 @@
 
 use crate::material::linear_elastic::LinearElastic;
 use crate::material::mohr_coulomb::{apex, MohrCoulomb};
-use crate::material::strain_softening_mohr_coulomb::{Strength, StrainSofteningMohrCoulomb};
+use crate::material::strain_softening_mohr_coulomb::{StrainSofteningMohrCoulomb, Strength};
 use crate::real::Real;
 
 /// A material's law and its parameters (kPa, angles in degrees), as the input gives them.
@@ -102,7 +102,12 @@ fn parameter(message: String) -> LawError {
 
 /// Checks a friction angle, a dilatancy angle no larger and a cohesion (`what`: "peak ",
 /// "residual " or "").
-fn check_strength(what: &str, friction: f64, dilatancy: f64, cohesion: f64) -> Result<(), LawError> {
+fn check_strength(
+    what: &str,
+    friction: f64,
+    dilatancy: f64,
+    cohesion: f64,
+) -> Result<(), LawError> {
     if !(0.0..90.0).contains(&friction) {
         return Err(parameter(format!(
             "{what}friction angle must be in [0, 90) degrees, got {friction}"
@@ -401,11 +406,174 @@ mod tests {
         let law = LawSpec::by_name("linear_elasticity", &params).unwrap();
         assert_eq!(law.state_len(), 0);
         assert!((law.constrained_modulus() - 1346.153846153846).abs() < 1e-9);
+        let e = LawSpec::by_name("hardening_soil", &params).unwrap_err();
+        assert!(
+            e.to_string().contains("linear_elasticity, mohr_coulomb"),
+            "{e}"
+        );
         let e = LawSpec::by_name("mohr_coulomb", &params).unwrap_err();
-        assert!(e.to_string().contains("linear_elasticity"), "{e}");
+        assert_eq!(e.to_string(), "mohr_coulomb needs FRICTION_ANGLE");
         let e = LawSpec::by_name("linear_elasticity", &|_| None).unwrap_err();
         assert!(e.to_string().contains("YOUNG_MODULUS"), "{e}");
         assert!(LawSpec::linear_elastic(1000.0, 0.5).is_err());
+    }
+
+    /// The Mohr–Coulomb keys with `key` set to `value` (c = 10, φ = 30: apex 10 √3).
+    fn mc(key: &str, value: f64) -> Result<LawSpec, LawError> {
+        let owned = key.to_string();
+        LawSpec::by_name("mohr_coulomb", &move |k| {
+            if k == owned {
+                return Some(value);
+            }
+            Some(match k {
+                "YOUNG_MODULUS" => 1e4,
+                "POISSON_RATIO" => 0.3,
+                "FRICTION_ANGLE" => 30.0,
+                "COHESION" => 10.0,
+                "DILATANCY_ANGLE" => 5.0,
+                "TENSILE_STRENGTH" => 1.0,
+                _ => return None,
+            })
+        })
+    }
+
+    #[test]
+    fn mohr_coulomb_parameters_are_read_and_checked() {
+        let law = mc("", 0.0).unwrap();
+        assert_eq!(law.name(), "mohr_coulomb");
+        assert_eq!(law.state_len(), 0);
+        assert!((law.constrained_modulus() - 13461.538461538461).abs() < 1e-8);
+        let back: Vec<_> = law.parameters();
+        assert_eq!(
+            back,
+            vec![
+                ("YOUNG_MODULUS", 1e4),
+                ("POISSON_RATIO", 0.3),
+                ("FRICTION_ANGLE", 30.0),
+                ("COHESION", 10.0),
+                ("DILATANCY_ANGLE", 5.0),
+                ("TENSILE_STRENGTH", 1.0),
+            ]
+        );
+        assert_eq!(
+            LawSpec::by_name("mohr_coulomb", &|k| back
+                .iter()
+                .find(|p| p.0 == k)
+                .map(|p| p.1)),
+            Ok(law)
+        );
+        for (key, value, says) in [
+            ("FRICTION_ANGLE", 90.0, "friction angle must be in [0, 90)"),
+            ("FRICTION_ANGLE", -1.0, "friction angle must be in [0, 90)"),
+            (
+                "DILATANCY_ANGLE",
+                31.0,
+                "dilatancy angle must be in [0, friction angle 30]",
+            ),
+            ("DILATANCY_ANGLE", -1.0, "dilatancy angle"),
+            ("COHESION", -1.0, "cohesion must be non-negative"),
+            (
+                "TENSILE_STRENGTH",
+                -1.0,
+                "tensile strength must be in [0, 17.32",
+            ),
+            (
+                "TENSILE_STRENGTH",
+                17.4,
+                "tensile strength must be in [0, 17.32",
+            ),
+            ("YOUNG_MODULUS", 0.0, "Young's modulus"),
+            ("POISSON_RATIO", 0.5, "Poisson's ratio"),
+            ("COHESION", f64::NAN, "cohesion"),
+        ] {
+            let e = mc(key, value).unwrap_err().to_string();
+            assert!(e.contains(says), "{key} = {value}: {e}");
+        }
+        // σt at the apex, as written with a few digits, and any σt for φ = 0.
+        assert!(mc("TENSILE_STRENGTH", 10.0 * 3f64.sqrt()).is_ok());
+        assert!(LawSpec::mohr_coulomb(1e4, 0.3, 0.0, 10.0, 0.0, 1e3).is_ok());
+        // ψ = φ (associated) is accepted.
+        assert!(mc("DILATANCY_ANGLE", 30.0).is_ok());
+    }
+
+    #[test]
+    fn strain_softening_parameters_are_read_and_checked() {
+        let keys = keys("strain_softening_mohr_coulomb").unwrap();
+        let values = [1e4, 0.3, 20.0, 2.0, 35.0, 25.0, 5.0, 0.0, 50.0];
+        let get = |k: &str| keys.iter().position(|&x| x == k).map(|i| values[i]);
+        let law = LawSpec::by_name("strain_softening_mohr_coulomb", &get).unwrap();
+        assert_eq!(law.state_len(), 1);
+        let LawSpec::StrainSofteningMohrCoulomb {
+            peak,
+            residual,
+            shape_factor,
+            ..
+        } = law
+        else {
+            panic!("{law:?}");
+        };
+        assert_eq!(
+            (peak.cohesion, peak.friction, peak.dilatancy),
+            (20.0, 35.0, 5.0)
+        );
+        assert_eq!(
+            (residual.cohesion, residual.friction, residual.dilatancy),
+            (2.0, 25.0, 0.0)
+        );
+        assert_eq!(shape_factor, 50.0);
+        assert_eq!(
+            law.parameters(),
+            keys.iter().copied().zip(values).collect::<Vec<_>>()
+        );
+        for (i, value, says) in [
+            (8, -1.0, "shape factor must be non-negative"),
+            (5, 90.0, "residual friction angle must be in [0, 90)"),
+            (
+                6,
+                36.0,
+                "peak dilatancy angle must be in [0, peak friction angle 35]",
+            ),
+            (3, -2.0, "residual cohesion must be non-negative"),
+        ] {
+            let mut v = values;
+            v[i] = value;
+            let get = |k: &str| keys.iter().position(|&x| x == k).map(|i| v[i]);
+            let e = LawSpec::by_name("strain_softening_mohr_coulomb", &get).unwrap_err();
+            assert!(e.to_string().contains(says), "{e}");
+        }
+        let e = LawSpec::by_name("strain_softening_mohr_coulomb", &|k| {
+            (k != "SHAPE_FACTOR").then_some(1.0)
+        })
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "strain_softening_mohr_coulomb needs SHAPE_FACTOR"
+        );
+    }
+
+    #[test]
+    fn laws_dispatch_by_kind() {
+        let mc = LawSpec::mohr_coulomb(1e4, 0.3, 30.0, 0.0, 0.0, 0.0)
+            .unwrap()
+            .build::<f64>();
+        // Pure shear beyond the cohesionless pyramid: returned, unlike the elastic law.
+        let mut s = [-10.0, -10.0, -10.0, 0.0, 0.0, 0.0];
+        mc.update(&mut s, &[0.0, 0.0, 0.0, 1e-2, 0.0, 0.0], &mut []);
+        assert!(s[3] > 0.0 && s[3] < 10.0, "{s:?}");
+        let ss = LawSpec::by_name("strain_softening_mohr_coulomb", &|k| {
+            Some(match k {
+                "YOUNG_MODULUS" => 1e4,
+                "POISSON_RATIO" => 0.3,
+                k if k.contains("FRICTION") => 30.0,
+                "SHAPE_FACTOR" => 10.0,
+                _ => 0.0,
+            })
+        })
+        .unwrap()
+        .build::<f64>();
+        let (mut s, mut state) = ([-10.0, -10.0, -10.0, 0.0, 0.0, 0.0], [0.0]);
+        ss.update(&mut s, &[0.0, 0.0, 0.0, 1e-2, 0.0, 0.0], &mut state);
+        assert!(state[0] > 0.0 && s[3] < 10.0);
     }
 
     #[test]

@@ -130,10 +130,8 @@ impl<R: Real> Surface<R> {
     fn surely_inside(&self, s: &[R; 6]) -> bool {
         let p = (s[0] + s[1] + s[2]) * R::of(1.0 / 3.0);
         let (d0, d1, d2) = (s[0] - p, s[1] - p, s[2] - p);
-        let j2 = R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2)
-            + s[3] * s[3]
-            + s[4] * s[4]
-            + s[5] * s[5];
+        let j2 =
+            R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + s[3] * s[3] + s[4] * s[4] + s[5] * s[5];
         // Largest (σ3 - σ1)/2 - σ2' sin φ / 2 over the Lode angle: sqrt(J2 (1 + sin²φ/3)).
         let r = self.cohesion - p * self.sin_phi;
         let pyramid = r >= R::ZERO && j2 * self.bound <= r * r;
@@ -273,11 +271,11 @@ impl<R: Real> Surface<R> {
                 dl[1] = (a * rhs(1) - c * rhs(0)) / det;
             }
             _ => {
-                let k = [[m(0, 0), m(0, 1), m(0, 2)], [m(1, 0), m(1, 1), m(1, 2)], [
-                    m(2, 0),
-                    m(2, 1),
-                    m(2, 2),
-                ]];
+                let k = [
+                    [m(0, 0), m(0, 1), m(0, 2)],
+                    [m(1, 0), m(1, 1), m(1, 2)],
+                    [m(2, 0), m(2, 1), m(2, 2)],
+                ];
                 let r = [rhs(0), rhs(1), rhs(2)];
                 let det3 = |c: &[[R; 3]; 3]| {
                     c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
@@ -457,7 +455,10 @@ mod tests {
                     continue;
                 }
                 let ratio = (ep[0] + ep[1] + ep[2]) / ep[0];
-                assert!((ratio - want).abs() < 1e-8, "ψ {psi}: {ratio} against {want}");
+                assert!(
+                    (ratio - want).abs() < 1e-8,
+                    "ψ {psi}: {ratio} against {want}"
+                );
                 checked += 1;
             }
             assert!(checked > 100, "{checked} plastic steps");
@@ -474,9 +475,15 @@ mod tests {
                 if ep[0].abs() < 1e-9 {
                     continue;
                 }
-                assert!(s[0] < s[1] - 1.0 && s[1] < s[2] - 1.0, "left the face: {s:?}");
+                assert!(
+                    s[0] < s[1] - 1.0 && s[1] < s[2] - 1.0,
+                    "left the face: {s:?}"
+                );
                 let ratio = (ep[0] + ep[1] + ep[2]) / ep[0];
-                assert!((ratio - want).abs() < 1e-8, "face, ψ {psi}: {ratio} against {want}");
+                assert!(
+                    (ratio - want).abs() < 1e-8,
+                    "face, ψ {psi}: {ratio} against {want}"
+                );
                 // And no plastic strain along the intermediate direction.
                 assert!((ep[1] / ep[0]).abs() < 1e-8);
                 faces += 1;
@@ -570,7 +577,13 @@ mod tests {
     fn energy(nu: f64, d: &[f64; 6]) -> f64 {
         let e = compliance(nu, d);
         (0..6)
-            .map(|i| if i < 3 { d[i] * e[i] } else { 2.0 * d[i] * e[i] })
+            .map(|i| {
+                if i < 3 {
+                    d[i] * e[i]
+                } else {
+                    2.0 * d[i] * e[i]
+                }
+            })
             .sum()
     }
 

@@ -100,3 +100,105 @@ impl<R: Real> StrainSofteningMohrCoulomb<R> {
 fn surface<R: Real>(s: &Strength) -> Surface<R> {
     Surface::new(s.friction, s.cohesion, s.dilatancy, f64::INFINITY)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::principal::principal;
+
+    const PEAK: Strength = Strength {
+        cohesion: 20.0,
+        friction: 35.0,
+        dilatancy: 5.0,
+    };
+    const RESIDUAL: Strength = Strength {
+        cohesion: 2.0,
+        friction: 25.0,
+        dilatancy: 0.0,
+    };
+
+    #[test]
+    fn strength_goes_from_peak_to_residual_by_the_formula() {
+        let l = StrainSofteningMohrCoulomb::<f64>::new(1e4, 0.3, PEAK, RESIDUAL, 50.0);
+        assert_eq!(l.strength(0.0), PEAK);
+        let s = l.strength(0.01);
+        let w = (-0.5f64).exp();
+        assert!((s.cohesion - (2.0 + 18.0 * w)).abs() < 1e-12);
+        assert!((s.friction - (25.0 + 10.0 * w)).abs() < 1e-12);
+        assert!((s.dilatancy - 5.0 * w).abs() < 1e-12);
+        let r = l.strength(10.0);
+        assert!((r.cohesion - 2.0).abs() < 1e-12 && (r.friction - 25.0).abs() < 1e-12);
+        // η = 0: no softening.
+        let hard = StrainSofteningMohrCoulomb::<f64>::new(1e4, 0.3, PEAK, RESIDUAL, 0.0);
+        assert_eq!(hard.strength(1.0), PEAK);
+    }
+
+    /// D⁻¹ σ with tensor shear strains (E, ν).
+    fn compliance(e: f64, nu: f64, s: &[f64; 6]) -> [f64; 6] {
+        let tr = s[0] + s[1] + s[2];
+        let g2 = e / (1.0 + nu);
+        let n = |x: f64| ((1.0 + nu) * x - nu * tr) / e;
+        [n(s[0]), n(s[1]), n(s[2]), s[3] / g2, s[4] / g2, s[5] / g2]
+    }
+
+    #[test]
+    fn shearing_softens_to_residual_and_counts_the_equivalent_plastic_strain() {
+        let (e, nu) = (1e4, 0.3);
+        let l = StrainSofteningMohrCoulomb::<f64>::new(e, nu, PEAK, RESIDUAL, 50.0);
+        let mut s = [-100.0, -100.0, -100.0, 0.0, 0.0, 0.0];
+        let mut state = [0.0];
+        let mut sum = 0.0;
+        let mut largest_shear: f64 = 0.0;
+        // Simple shear in xy with the normal strains held.
+        let de = [0.0, 0.0, 0.0, 1e-4, 0.0, 0.0];
+        for _ in 0..4000 {
+            let (s0, eq0) = (s, state[0]);
+            l.update(&mut s, &de, &mut state);
+            // The test's own ε_eq^p: the plastic strain from the stress change, its deviator,
+            // sqrt(2/3 e:e) with the shear components counted twice.
+            let ds: [f64; 6] = core::array::from_fn(|i| s[i] - s0[i]);
+            let ee = compliance(e, nu, &ds);
+            let ep: [f64; 6] = core::array::from_fn(|i| de[i] - ee[i]);
+            let m = (ep[0] + ep[1] + ep[2]) / 3.0;
+            let dev = [ep[0] - m, ep[1] - m, ep[2] - m];
+            let ee2 = dev.iter().map(|x| x * x).sum::<f64>()
+                + 2.0 * (ep[3] * ep[3] + ep[4] * ep[4] + ep[5] * ep[5]);
+            sum += (2.0 / 3.0 * ee2).sqrt();
+            assert!(
+                (state[0] - sum).abs() < 1e-10 * sum.max(1e-6),
+                "ε_eq^p {} against {sum}",
+                state[0]
+            );
+            // On the surface of the strength the step started with (explicit update).
+            if state[0] > eq0 {
+                let st = l.strength(eq0);
+                let p = principal(&s);
+                let sf = Surface::<f64>::new(st.friction, st.cohesion, st.dilatancy, f64::INFINITY);
+                let f = sf.yield_value(p.values[0], p.values[2]);
+                assert!(f.abs() < 1e-9, "F = {f}");
+            }
+            largest_shear = largest_shear.max(s[3]);
+        }
+        assert!(state[0] > 0.4, "ε_eq^p = {}", state[0]);
+        // At the end the strength is residual: the shear stress has dropped from its peak to
+        // the residual one at the final mean stress.
+        let r = l.strength(state[0]);
+        assert!((r.friction - 25.0).abs() < 1e-6 && (r.cohesion - 2.0).abs() < 1e-6);
+        let p = principal(&s);
+        let sf = Surface::<f64>::new(25.0, 2.0, 0.0, f64::INFINITY);
+        assert!(sf.yield_value(p.values[0], p.values[2]).abs() < 1e-4);
+        assert!(
+            s[3] < 0.9 * largest_shear,
+            "{} against peak {largest_shear}",
+            s[3]
+        );
+    }
+
+    #[test]
+    fn a_missing_state_slot_does_not_panic() {
+        let l = StrainSofteningMohrCoulomb::<f32>::new(1e4, 0.3, PEAK, RESIDUAL, 50.0);
+        let mut s = [-10.0f32, -10.0, -10.0, 0.0, 0.0, 0.0];
+        l.update(&mut s, &[0.0, 0.0, 0.0, 1e-2, 0.0, 0.0], &mut []);
+        assert!(s.iter().all(|x| x.is_finite()));
+    }
+}
