@@ -540,10 +540,10 @@ fn gom_model(r: &Resolved, mesh: Tet10Mesh, loads: Table, notes: &mut Vec<String
         }
         block.extend([
             ("K0_VALUE_SOLID", num(0.0)),
-            ("MATERIAL_MODEL_SOLID", "linear_elasticity".to_string()),
-            ("YOUNG_MODULUS", num(m.young)),
-            ("POISSON_RATIO", num(m.poisson)),
+            ("MATERIAL_MODEL_SOLID", m.law.name().to_string()),
         ]);
+        // The law's keys in the order Anura3D reads them.
+        block.extend(m.law.parameters().into_iter().map(|(k, v)| (k, num(v))));
         for (key, value) in block {
             sections.push(text(key, &[&value]));
         }
