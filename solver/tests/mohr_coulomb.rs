@@ -154,6 +154,38 @@ fn scenes_refuse_keys_of_another_law_and_unknown_laws() {
 }
 
 #[test]
+fn the_export_refuses_the_strain_softening_law() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml = scene(dir.path(), "soft", &|t| {
+        t.replace(
+            "law = \"mohr_coulomb\"",
+            "law = \"strain_softening_mohr_coulomb\"",
+        )
+        .replace(
+            "friction_angle = 30.0\ncohesion = 0.0",
+            "peak_cohesion = 20.0\nresidual_cohesion = 2.0\npeak_friction_angle = 35.0\n\
+                 residual_friction_angle = 25.0\npeak_dilatancy_angle = 5.0\n\
+                 residual_dilatancy_angle = 0.0\nshape_factor = 50.0",
+        )
+    });
+    assert_eq!(
+        mpm_solve::input::scene::load(&toml).unwrap().materials[1]
+            .as_ref()
+            .unwrap()
+            .law
+            .state_len(),
+        1
+    );
+    let e = mpm_solve::input::export_anura3d::export_scene(&toml, &dir.path().join("a3d"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("material \"soil\".law") && e.contains("no stress routine"),
+        "{e}"
+    );
+}
+
+#[test]
 fn gom_files_with_mohr_coulomb_laws_are_read_and_exported_with_anura3d_keys() {
     let dir = tempfile::tempdir().unwrap();
     let toml = scene(dir.path(), "mc", &|t| {

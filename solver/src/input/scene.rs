@@ -2,7 +2,7 @@
 //! plane selector, tractions, gravity, time, Courant number, damping and output interval.
 //!
 //! Units are Anura3D's: kN, m, s, t; densities are given in kg/m³ (divided by 1000 here), moduli
-//! and tractions in kPa. Example (`testdata/column_gravity.toml`):
+//! and tractions in kPa. Example (`testdata/column_gravity.toml` with a Mohr–Coulomb law):
 //!
 //! ```toml
 //! mesh = "column_tet4.msh"        # relative to the scene file
@@ -19,6 +19,11 @@
 //! density = 2000.0                # kg/m³
 //! young = 10000.0                 # kPa
 //! poisson = 0.3
+//! law = "mohr_coulomb"            # default "linear_elasticity"
+//! friction_angle = 30.0           # degrees
+//! cohesion = 5.0                  # kPa
+//! dilatancy_angle = 0.0           # degrees (default 0)
+//! tensile_strength = 0.0          # kPa (default 0)
 //! points_per_element = 4
 //! [[fixity]]
 //! physical = "bottom"
@@ -31,6 +36,10 @@
 //! traction = [0.0, -10.0, 0.0]    # kPa
 //! ramp = 0.0                      # s to reach full load (0: sudden)
 //! ```
+//!
+//! `law = "strain_softening_mohr_coulomb"` takes `peak_cohesion`, `residual_cohesion`,
+//! `peak_friction_angle`, `residual_friction_angle`, `peak_dilatancy_angle`,
+//! `residual_dilatancy_angle` and `shape_factor` instead; a key of another law is refused.
 
 use std::path::{Path, PathBuf};
 

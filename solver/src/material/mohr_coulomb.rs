@@ -680,3 +680,76 @@ mod tests {
         assert!(f.abs() < 1e-3, "{f}");
     }
 }
+
+#[cfg(test)]
+mod cost {
+    use super::*;
+    use std::hint::black_box;
+    use std::time::Instant;
+
+    /// ns per update of `f` over `states` (best of five passes).
+    fn time(states: &[[f64; 6]], de: &[f64; 6], f: &dyn Fn(&mut [f64; 6], &[f64; 6])) -> f64 {
+        let mut best = f64::INFINITY;
+        for _ in 0..5 {
+            let t = Instant::now();
+            for _ in 0..20 {
+                for s in states {
+                    let mut s = *s;
+                    f(black_box(&mut s), black_box(de));
+                    black_box(s);
+                }
+            }
+            best = best.min(t.elapsed().as_secs_f64() * 1e9 / (20 * states.len()) as f64);
+        }
+        best
+    }
+
+    /// The law's cost against linear elasticity's, per update, for geostatic elastic states,
+    /// states near yield and plastic ones: `cargo test --release -p mpm-solve --lib
+    /// material::mohr_coulomb::cost -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn mohr_coulomb_update_cost() {
+        let l = MohrCoulomb::<f64>::new(1e4, 0.3, 30.0, 5.0, 0.0, 0.0);
+        let de = [-1e-7, -3e-7, 1e-7, 2e-8, 0.0, -1e-8];
+        let mut x = 12345u64;
+        let mut rand = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 100_000;
+        // At rest under gravity (K0 = 0.43) with a little shear: elastic.
+        let rest: Vec<[f64; 6]> = (0..n)
+            .map(|_| {
+                let v = -200.0 * rand();
+                [
+                    0.43 * v,
+                    v,
+                    0.43 * v,
+                    0.05 * v * rand(),
+                    0.0,
+                    0.05 * v * rand(),
+                ]
+            })
+            .collect();
+        // On the pyramid (active state K = 1/3, c added): plastic at every step.
+        let yielding: Vec<[f64; 6]> = (0..n)
+            .map(|_| {
+                let v = -200.0 * rand() - 10.0;
+                let h = (v * 0.5 - 2.0 * 5.0 * 0.75f64.sqrt()) / 1.5;
+                [h, v, h, 0.0, 0.0, 0.0]
+            })
+            .collect();
+        let le = l.elastic;
+        for (name, states) in [("at rest", &rest), ("yielding", &yielding)] {
+            let a = time(states, &de, &|s, d| le.update(s, d));
+            let b = time(states, &de, &|s, d| l.update(s, d));
+            println!(
+                "{name}: linear elastic {a:.2} ns, Mohr-Coulomb {b:.2} ns, ratio {:.2}",
+                b / a
+            );
+        }
+    }
+}

@@ -17,8 +17,10 @@
 //! Anura3D 2025 reads these keys (in this order: YOUNG_MODULUS, POISSON_RATIO, PEAK_COHESION,
 //! RESIDUAL_COHESION, PEAK_FRICTION_ANGLE, RESIDUAL_FRICTION_ANGLE, PEAK_DILATANCY_ANGLE,
 //! RESIDUAL_DILATANCY_ANGLE, SHAPE_FACTOR) but assigns this law no stress routine (its pointer
-//! is commented out): the oracle cannot run a case that uses it, so this law has no Anura3D
-//! reference (its source holds no softening formula either; the one above is this solver's).
+//! is commented out): the oracle built from that source stops with a segmentation fault in the
+//! first step of a case that uses it (checked on a column of `testdata/mc_column.toml`'s mesh).
+//! This law therefore has no Anura3D reference, and its source holds no softening formula either:
+//! the one above is this solver's.
 
 use crate::material::linear_elastic::LinearElastic;
 use crate::material::mohr_coulomb::Surface;
