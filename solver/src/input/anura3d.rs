@@ -1,6 +1,7 @@
 //! Anura3D cases (GOM + CPS) turned into a [`Case`]: dry and saturated
-//! (`saturated_material_coupled`) linear elastic materials, fixities of both phases, face loads
-//! on nodes and on material points, gravity, local damping, load steps, quasi-static
+//! (`saturated_material_coupled`) materials with the laws of [`crate::material::law::KNOWN`]
+//! (linear elasticity, Mohr–Coulomb, strain-softening Mohr–Coulomb), fixities of both phases,
+//! face loads on nodes and on material points, gravity, local damping, load steps, quasi-static
 //! convergence, objective stress, MPM-MP and MPM-MIXED integration, with Anura3D's two-phase
 //! time step, liquid damping and (per `STRAIN_SMOOTHING`) pressure smoothing. Features this
 //! solver does not model yet are refused with the item named, never silently ignored.

@@ -235,7 +235,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (MaterialKey, "MATERIAL_INDEX", Modelled),
     (MaterialKey, "MATERIAL_NAME", Ignored("a label")),
     (MaterialKey, "MATERIAL_TYPE", Modelled), // dry, saturated coupled, drained, undrained total; others refused
-    (MaterialKey, "MATERIAL_MODEL_SOLID", Modelled), // linear_elasticity; others refused
+    (MaterialKey, "MATERIAL_MODEL_SOLID", Modelled), // linear_elasticity, mohr_coulomb, strain_softening_mohr_coulomb; others refused
     (MaterialKey, "POROSITY_SOLID", Modelled),
     (MaterialKey, "DENSITY_SOLID", Modelled),
     (MaterialKey, "YOUNG_MODULUS", Modelled),
@@ -259,45 +259,37 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "POISSON_RATIO_UNDRAINED",
         Ignored("for undrained effective-stress materials, which are refused"),
     ),
-    (
-        MaterialKey,
-        "FRICTION_ANGLE",
-        Ignored("Mohr-Coulomb parameter; only linear_elasticity is accepted"),
-    ),
-    (
-        MaterialKey,
-        "COHESION",
-        Ignored("Mohr-Coulomb parameter; only linear_elasticity is accepted"),
-    ),
-    (
-        MaterialKey,
-        "DILATANCY_ANGLE",
-        Ignored("Mohr-Coulomb parameter; only linear_elasticity is accepted"),
-    ),
-    (
-        MaterialKey,
-        "TENSILE_STRENGTH",
-        Ignored("Mohr-Coulomb parameter; only linear_elasticity is accepted"),
-    ),
+    // Mohr-Coulomb (mohr_coulomb) and strain-softening Mohr-Coulomb parameters.
+    (MaterialKey, "FRICTION_ANGLE", Modelled),
+    (MaterialKey, "COHESION", Modelled),
+    (MaterialKey, "DILATANCY_ANGLE", Modelled),
+    (MaterialKey, "TENSILE_STRENGTH", Modelled),
+    (MaterialKey, "PEAK_COHESION", Modelled),
+    (MaterialKey, "RESIDUAL_COHESION", Modelled),
+    (MaterialKey, "PEAK_FRICTION_ANGLE", Modelled),
+    (MaterialKey, "RESIDUAL_FRICTION_ANGLE", Modelled),
+    (MaterialKey, "PEAK_DILATANCY_ANGLE", Modelled),
+    (MaterialKey, "RESIDUAL_DILATANCY_ANGLE", Modelled),
+    (MaterialKey, "SHAPE_FACTOR", Modelled),
     (
         MaterialKey,
         "MATERIAL_MODEL_DLL",
-        Ignored("external soil model; only linear_elasticity is accepted"),
+        Ignored("external soil model; only linear_elasticity, mohr_coulomb and strain_softening_mohr_coulomb are accepted"),
     ),
     (
         MaterialKey,
         "UMAT_DIMENSION",
-        Ignored("external soil model; only linear_elasticity is accepted"),
+        Ignored("external soil model; only linear_elasticity, mohr_coulomb and strain_softening_mohr_coulomb are accepted"),
     ),
     (
         MaterialKey,
         "MATERIAL_PARAMETER_SOLID_*",
-        Ignored("external soil model parameters; only linear_elasticity is accepted"),
+        Ignored("external soil model parameters; only linear_elasticity, mohr_coulomb and strain_softening_mohr_coulomb are accepted"),
     ),
     (
         MaterialKey,
         "INITIAL_STATE_VARIABLE_SOLID_*",
-        Ignored("external soil model state; only linear_elasticity is accepted"),
+        Ignored("external soil model state; only linear_elasticity, mohr_coulomb and strain_softening_mohr_coulomb are accepted"),
     ),
     (
         MaterialKey,
@@ -762,7 +754,13 @@ mod tests {
             "BULK_MODULUS_LIQUID",
             "INTRINSIC_PERMEABILITY_LIQUID",
             "DYNAMIC_VISCOSITY_LIQUID",
-        ] {
+        ]
+        .into_iter()
+        .chain(
+            crate::material::law::KNOWN
+                .iter()
+                .flat_map(|&l| crate::material::law::keys(l).unwrap_or(&[]).iter().copied()),
+        ) {
             assert_eq!(status(MaterialKey, k), KeyStatus::Modelled, "{k}");
         }
     }

@@ -8,15 +8,16 @@
 //! original nodes in order of first appearance. Fixities go to the surface sections of both
 //! phases (a new mid-edge node is fixed in a component when both its corners are), tractions to
 //! `$$START_LOAD_ON_NODES_SOLID` (one row per face, the same vector at its six nodes), materials
-//! to `dry_material` or `saturated_material_coupled` with `linear_elasticity`.
+//! to `dry_material` or `saturated_material_coupled` with their law's Anura3D keys.
 //!
 //! What has no exact Anura3D equivalent is refused with the scene item named: the undrained start
 //! of a consolidation run, output times that are not equally spaced (Anura3D writes one output
 //! per load step of equal length), load ramps other than one over the whole run, an initial pore
-//! pressure, a cap on the time steps, material-point counts Anura3D does not place and more than
-//! 99 output points. Prescribed velocities go to `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME`
-//! (a physical volume's elements) and `$$PRESCRIBED_NODAL_VELOCITY_SURFACE` (nodes, a new
-//! mid-edge node taking a set's velocity where both its corners are in the set) under one CPS
+//! pressure, a cap on the time steps, material-point counts Anura3D does not place, more than
+//! 99 output points and the strain-softening law (which Anura3D reads but cannot run).
+//! Prescribed velocities go to `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME` (a physical
+//! volume's elements) and `$$PRESCRIBED_NODAL_VELOCITY_SURFACE` (nodes, a new mid-edge node
+//! taking a set's velocity where both its corners are in the set) under one CPS
 //! `$$PRESCRIBED_VELOCITY` multiplier: entries whose ramps differ are refused.
 
 use std::collections::HashMap;
@@ -227,6 +228,12 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
                     "Anura3D places {ANURA3D_POINT_COUNTS:?} material points in a tetrahedron, not {}",
                     m.points_per_element
                 ),
+            ));
+        }
+        if let crate::material::law::LawSpec::StrainSofteningMohrCoulomb { .. } = m.law {
+            return Err(refuse(
+                &format!("{item}.law"),
+                "Anura3D reads strain_softening_mohr_coulomb but has no stress routine for it (its run stops with a segmentation fault)".into(),
             ));
         }
         if let Some(l) = &m.liquid {
@@ -616,10 +623,10 @@ fn gom_model(r: &Resolved, mesh: Tet10Mesh, loads: Table, notes: &mut Vec<String
         }
         block.extend([
             ("K0_VALUE_SOLID", num(0.0)),
-            ("MATERIAL_MODEL_SOLID", "linear_elasticity".to_string()),
-            ("YOUNG_MODULUS", num(m.young)),
-            ("POISSON_RATIO", num(m.poisson)),
+            ("MATERIAL_MODEL_SOLID", m.law.name().to_string()),
         ]);
+        // The law's keys in the order Anura3D reads them.
+        block.extend(m.law.parameters().into_iter().map(|(k, v)| (k, num(v))));
         for (key, value) in block {
             sections.push(text(key, &[&value]));
         }

@@ -2,7 +2,7 @@
 //! plane selector, tractions, gravity, time, Courant number, damping and output interval.
 //!
 //! Units are Anura3D's: kN, m, s, t; densities are given in kg/m³ (divided by 1000 here), moduli
-//! and tractions in kPa. Example (`testdata/column_gravity.toml`):
+//! and tractions in kPa. Example (`testdata/column_gravity.toml` with a Mohr–Coulomb law):
 //!
 //! ```toml
 //! mesh = "column_tet4.msh"        # relative to the scene file
@@ -22,6 +22,11 @@
 //! density = 2000.0                # kg/m³
 //! young = 10000.0                 # kPa
 //! poisson = 0.3
+//! law = "mohr_coulomb"            # default "linear_elasticity"
+//! friction_angle = 30.0           # degrees
+//! cohesion = 5.0                  # kPa
+//! dilatancy_angle = 0.0           # degrees (default 0)
+//! tensile_strength = 0.0          # kPa (default 0)
 //! points_per_element = 4
 //! [[fixity]]
 //! physical = "bottom"
@@ -40,6 +45,10 @@
 //! ramp = 0.0                      # s to reach full velocity (0: at once)
 //! name = "platen"                 # in reaction.csv (default: the physical or plane)
 //! ```
+//!
+//! `law = "strain_softening_mohr_coulomb"` takes `peak_cohesion`, `residual_cohesion`,
+//! `peak_friction_angle`, `residual_friction_angle`, `peak_dilatancy_angle`,
+//! `residual_dilatancy_angle` and `shape_factor` instead; a key of another law is refused.
 
 use std::path::{Path, PathBuf};
 
@@ -156,10 +165,95 @@ struct Material {
     density: f64,
     young: f64,
     poisson: f64,
+    /// The law by Anura3D's name (`crate::material::law::KNOWN`).
+    #[serde(default = "default_law")]
+    law: String,
+    // The plastic laws' parameters: Anura3D's keys in lower case (angles in degrees, kPa).
+    friction_angle: Option<f64>,
+    cohesion: Option<f64>,
+    dilatancy_angle: Option<f64>,
+    tensile_strength: Option<f64>,
+    peak_cohesion: Option<f64>,
+    residual_cohesion: Option<f64>,
+    peak_friction_angle: Option<f64>,
+    residual_friction_angle: Option<f64>,
+    peak_dilatancy_angle: Option<f64>,
+    residual_dilatancy_angle: Option<f64>,
+    shape_factor: Option<f64>,
     #[serde(default = "default_points")]
     points_per_element: u32,
     #[serde(default)]
     liquid: Option<Liquid>,
+}
+
+fn default_law() -> String {
+    "linear_elasticity".into()
+}
+
+/// The scene's name of Anura3D's law parameter `key`.
+fn scene_key(key: &str) -> String {
+    match key {
+        "YOUNG_MODULUS" => "young".into(),
+        "POISSON_RATIO" => "poisson".into(),
+        k => k.to_ascii_lowercase(),
+    }
+}
+
+impl Material {
+    /// The law with its parameters: each given key must belong to the law, each key of the law
+    /// must be given (Mohr–Coulomb's dilatancy angle and tensile strength default to 0).
+    fn law(&self) -> Result<LawSpec, String> {
+        let keys = crate::material::law::keys(&self.law).ok_or_else(|| {
+            format!(
+                "law {:?} is not known (known: {})",
+                self.law,
+                crate::material::law::KNOWN.join(", ")
+            )
+        })?;
+        let given = [
+            ("YOUNG_MODULUS", Some(self.young)),
+            ("POISSON_RATIO", Some(self.poisson)),
+            ("FRICTION_ANGLE", self.friction_angle),
+            ("COHESION", self.cohesion),
+            ("DILATANCY_ANGLE", self.dilatancy_angle),
+            ("TENSILE_STRENGTH", self.tensile_strength),
+            ("PEAK_COHESION", self.peak_cohesion),
+            ("RESIDUAL_COHESION", self.residual_cohesion),
+            ("PEAK_FRICTION_ANGLE", self.peak_friction_angle),
+            ("RESIDUAL_FRICTION_ANGLE", self.residual_friction_angle),
+            ("PEAK_DILATANCY_ANGLE", self.peak_dilatancy_angle),
+            ("RESIDUAL_DILATANCY_ANGLE", self.residual_dilatancy_angle),
+            ("SHAPE_FACTOR", self.shape_factor),
+        ];
+        for (key, value) in given {
+            if value.is_some() && !keys.contains(&key) {
+                return Err(format!(
+                    "{} does not belong to law {} (its keys: {})",
+                    scene_key(key),
+                    self.law,
+                    keys.iter()
+                        .map(|k| scene_key(k))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            }
+        }
+        let mohr_coulomb = self.law == "mohr_coulomb";
+        let get = |k: &str| {
+            given
+                .iter()
+                .find(|g| g.0 == k)
+                .and_then(|g| g.1)
+                .or(match k {
+                    "DILATANCY_ANGLE" | "TENSILE_STRENGTH" if mohr_coulomb => Some(0.0),
+                    _ => None,
+                })
+        };
+        if let Some(k) = keys.iter().find(|k| get(k).is_none()) {
+            return Err(format!("law {} needs {}", self.law, scene_key(k)));
+        }
+        LawSpec::by_name(&self.law, &get).map_err(|e| e.to_string())
+    }
 }
 
 /// The pore liquid of a saturated material (`[material.liquid]`); `density` of the material is
@@ -336,6 +430,8 @@ pub struct MaterialInput {
     pub young: f64,
     /// Poisson's ratio.
     pub poisson: f64,
+    /// The law with all its parameters (defaults filled in).
+    pub law: LawSpec,
     /// Material points per element.
     pub points_per_element: u32,
     /// The pore liquid of a saturated material.
@@ -439,8 +535,9 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
                 format!("no physical volume of that name in {mesh_name} (it has {names:?})"),
             )
         })? + 1;
+        let law = m.law().map_err(|e| invalid(item.clone(), e))?;
         let spec = match &m.liquid {
-            None => MaterialSpec::new(&m.physical, m.density, m.young, m.poisson),
+            None => MaterialSpec::with_law(&m.physical, m.density, law),
             Some(l) => LiquidSpec::new(
                 l.porosity,
                 l.density,
@@ -449,12 +546,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
                 l.viscosity,
             )
             .and_then(|liquid| {
-                let mut s = MaterialSpec::saturated(
-                    &m.physical,
-                    m.density,
-                    LawSpec::linear_elastic(m.young, m.poisson)?,
-                    liquid,
-                )?;
+                let mut s = MaterialSpec::saturated(&m.physical, m.density, law, liquid)?;
                 s.initial_pore_pressure = l.initial_pore_pressure;
                 Ok(s)
             }),
@@ -467,6 +559,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
             density: m.density,
             young: m.young,
             poisson: m.poisson,
+            law,
             points_per_element: m.points_per_element,
             liquid: m.liquid.as_ref().map(|l| LiquidInput {
                 porosity: l.porosity,

@@ -4,3 +4,6 @@ pub mod error;
 pub mod law;
 pub mod linear_elastic;
 pub mod liquid;
+pub mod mohr_coulomb;
+pub mod principal;
+pub mod strain_softening_mohr_coulomb;
