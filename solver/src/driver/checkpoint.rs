@@ -172,6 +172,7 @@ impl Fingerprint {
             strain_smoothing,
             consolidation,
             initial_state,
+            initial_stress,
             probes,
             prescribed,
             // Threads, pinning and first touch: the results do not depend on them.
@@ -179,7 +180,7 @@ impl Fingerprint {
             precision,
         } = case;
         let version = env!("CARGO_PKG_VERSION");
-        let items: [(&str, &dyn std::fmt::Debug); 42] = [
+        let items: [(&str, &dyn std::fmt::Debug); 43] = [
             ("solver version", &version),
             ("case name", name),
             ("input files", inputs),
@@ -218,6 +219,7 @@ impl Fingerprint {
             ("strain smoothing", strain_smoothing),
             ("consolidation job", consolidation),
             ("initial state", initial_state),
+            ("initial stresses", initial_stress),
             ("probes (--probe)", probes),
             ("prescribed velocities", prescribed),
             ("precision (--precision)", precision),

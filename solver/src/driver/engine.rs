@@ -328,6 +328,9 @@ impl<R: Real, E: Element> Engine<R, E> {
                 lp.p[i] = R::of(s.pore_pressure);
             }
         }
+        if let Some(init) = &case.initial_stress {
+            apply_initial_stress(init, case, &partition, &mut particles);
+        }
         let fluids: Vec<Option<Fluid<R>>> = case
             .materials
             .iter()
@@ -966,6 +969,33 @@ impl<R: Real, E: Element> Engine<R, E> {
                 })
                 .sum()
         }))
+    }
+}
+
+/// Sets the initial stresses (and, for saturated points of a K0 material, pore pressures) of
+/// the points just placed. The K0 procedure reads the element's corners from the case's model
+/// (global coordinates, as the input gives them), not from the computational mesh.
+fn apply_initial_stress<R: Real>(
+    init: &crate::input::initial_stress::InitialStress,
+    case: &Case,
+    partition: &Partition,
+    particles: &mut Particles<R>,
+) {
+    for i in 0..particles.len() {
+        let e = partition.global_element(particles.element[i] as usize);
+        let nodes = case.model.element(e);
+        let corner = |k: usize| {
+            let p = case.model.node(nodes[k] as usize);
+            [p[0], p[1], p[2]]
+        };
+        let corners = [corner(0), corner(1), corner(2), corner(3)];
+        let Some(s) = init.at(particles.material[i] as usize, corners) else {
+            continue;
+        };
+        particles.stress[i] = s.stress.map(R::of);
+        if let (Some(p), Some(lp)) = (s.pore_pressure, particles.liquid.as_mut()) {
+            lp.p[i] = R::of(p);
+        }
     }
 }
 

@@ -8,13 +8,14 @@
 //! original nodes in order of first appearance. Fixities go to the surface sections of both
 //! phases (a new mid-edge node is fixed in a component when both its corners are), tractions to
 //! `$$START_LOAD_ON_NODES_SOLID` (one row per face, the same vector at its six nodes), materials
-//! to `dry_material` or `saturated_material_coupled` with `linear_elasticity`.
+//! to `dry_material` or `saturated_material_coupled` with `linear_elasticity`, and materials'
+//! `k0` to `$$K0_PROCEDURE 1` with `$$K0_VALUE_SOLID` and the ground's `$$SURFACE_ELEVATION`.
 //!
 //! What has no exact Anura3D equivalent is refused with the scene item named: the undrained start
 //! of a consolidation run, output times that are not equally spaced (Anura3D writes one output
 //! per load step of equal length), load ramps other than one over the whole run, an initial pore
-//! pressure, a cap on the time steps, material-point counts Anura3D does not place and more than
-//! 99 output points.
+//! pressure, a uniform initial stress (and `k0` on some materials only), a cap on the time
+//! steps, material-point counts Anura3D does not place and more than 99 output points.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -201,6 +202,25 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
                 ),
             ));
         }
+        if m.initial_stress.is_some() {
+            return Err(refuse(
+                &format!("{item}.initial_stress"),
+                "Anura3D has no uniform initial stress ($$K0_PROCEDURE sets K0 stresses, $$MP_STRESS_INITIALIZATION_FROMFILE reads them from a results file); use k0 or none".into(),
+            ));
+        }
+        if let Some(k0) = m.k0 {
+            if k0 > 1.0 {
+                return Err(refuse(
+                    &format!("{item}.k0"),
+                    format!("Anura3D accepts K0 in [0, 1] only, got {k0}"),
+                ));
+            }
+        } else if r.materials.iter().flatten().any(|o| o.k0.is_some()) {
+            return Err(refuse(
+                &item,
+                "Anura3D's K0 procedure stresses every material (a material without K0 would start with its vertical stress): give it k0 too".into(),
+            ));
+        }
         if let Some(l) = &m.liquid {
             if l.initial_pore_pressure != 0.0 {
                 return Err(refuse(
@@ -267,6 +287,11 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
             solid_traction,
             smoothing,
             probes: &probes,
+            k0_surface: case
+                .initial_stress
+                .as_ref()
+                .and_then(|i| i.k0.as_ref())
+                .map(|k| k.surface_point[1]),
         },
     );
     Ok(Anura3dCase { gom, cps, notes })
@@ -539,7 +564,7 @@ fn gom_model(r: &Resolved, mesh: Tet10Mesh, loads: Table, notes: &mut Vec<String
             ]),
         }
         block.extend([
-            ("K0_VALUE_SOLID", num(0.0)),
+            ("K0_VALUE_SOLID", num(m.k0.unwrap_or(0.0))),
             ("MATERIAL_MODEL_SOLID", "linear_elasticity".to_string()),
             ("YOUNG_MODULUS", num(m.young)),
             ("POISSON_RATIO", num(m.poisson)),
@@ -579,6 +604,8 @@ struct CpsValues<'a> {
     solid_traction: &'static str,
     smoothing: bool,
     probes: &'a [u32],
+    /// Height of the ground surface when the K0 procedure is on.
+    k0_surface: Option<f64>,
 }
 
 /// The CPS: the scene's controls, every other key at the inert value of Anura3D's template.
@@ -607,7 +634,7 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         v.probes.iter().map(|p| p.to_string()).collect()
     };
     let one = |s: &str| vec![s.to_string()];
-    let entries: Vec<(&str, Vec<String>)> = vec![
+    let mut entries: Vec<(&str, Vec<String>)> = vec![
         ("NUMBER_OF_LOADSTEPS", one(&v.load_steps.to_string())),
         ("TIME_PER_LOADSTEP", one(&r(v.interval))),
         ("TOTAL_TIME", one("0.0")),
@@ -640,7 +667,10 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         ("INITIAL_VELOCITY", one("0")),
         ("RESET_DISPLACEMENTS", one("0")),
         ("REMOVE_FIXITIES", one("0 0 0")),
-        ("K0_PROCEDURE", one("0")),
+        (
+            "K0_PROCEDURE",
+            one(if v.k0_surface.is_some() { "1" } else { "0" }),
+        ),
         ("SUBMERGED_CALCULATION", one("0 1")),
         ("APPLY_OBJECTIVE_STRESS", one("0")),
         ("DEGREE_OF_FILLING", one("0.9")),
@@ -651,6 +681,15 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         ),
         ("OUTPUT_MATERIAL_POINTS", probes),
     ];
+    if let Some(y) = v.k0_surface {
+        // Anura3D reads the surface's height as the first number.
+        let at = entries
+            .iter()
+            .position(|e| e.0 == "K0_PROCEDURE")
+            .expect("listed")
+            + 1;
+        entries.insert(at, ("SURFACE_ELEVATION", one(&r(y))));
+    }
     Cps {
         file: String::new(),
         version: VERSION.into(),
