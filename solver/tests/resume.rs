@@ -103,8 +103,13 @@ type Plan<'a> = (u64, &'a [&'a str], &'a str, &'a str, Option<u64>);
 /// Kills at several steps (with the checkpoints of the default policy or every 7 steps), then
 /// resumes with another thread count, once or twice: the folder ends as the uninterrupted one.
 fn killed_and_resumed(golden: &str, precision: &str) {
+    killed_and_resumed_edited(golden, precision, &|t| t)
+}
+
+/// [`killed_and_resumed`] on the golden scene edited by `edit`.
+fn killed_and_resumed_edited(golden: &str, precision: &str, edit: &dyn Fn(String) -> String) {
     let tmp = tempfile::tempdir().unwrap();
-    let input = golden_scene(tmp.path(), golden, golden, &|t| t);
+    let input = golden_scene(tmp.path(), golden, golden, edit);
     let full = tmp.path().join("full");
     let p = ["--precision", precision];
     ok(&run(
@@ -181,6 +186,19 @@ fn killed_dry_runs_resume_byte_identical_in_f64_and_f32() {
 fn killed_saturated_runs_resume_byte_identical_in_f64_and_f32() {
     killed_and_resumed("column_saturated", "f64");
     killed_and_resumed("column_saturated", "f32");
+}
+
+/// A run from K0 stresses (the ground below the top, so the column moves): a resumed run takes
+/// the checkpoint's stresses and does not set the initial ones again.
+#[test]
+fn killed_k0_runs_resume_byte_identical() {
+    killed_and_resumed_edited("column_dry", "f64", &|t| {
+        let t = t
+            .replace("points_per_element = 1", "points_per_element = 1\nk0 = 0.5")
+            .replace("[gravity]\n", "[gravity]\nk0_surface = 0.8\n");
+        assert!(t.contains("k0 = 0.5") && t.contains("k0_surface = 0.8"));
+        t
+    });
 }
 
 /// The consolidation job (two runs, the second into `workshop/`, and its records in
