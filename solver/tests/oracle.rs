@@ -523,3 +523,35 @@ fn saturated_k0_column_matches_anura3d_point_by_point() {
         }
     }
 }
+
+/// Benchmark 0011 (saturated, MPM-MIXED, quasi-static) starts from the K0 procedure with a
+/// surface load (`$$INITIAL_VERTICAL_LOAD_K0 -50`): its initial σ' and p agree with Anura3D's
+/// point by point (needs `ANURA3D_BENCHMARKS` too).
+#[test]
+fn benchmark_0011_k0_start_matches_anura3d() {
+    let Some(bin) = oracle() else { return };
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let found = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    let Some(root) = found else {
+        mpm_shared::suite::skipped("benchmark 0011 against Anura3D (ANURA3D_BENCHMARKS not set)");
+        return;
+    };
+    let case = root.join(
+        "Benchmarks/Pre-Commit_Tests/0011_1D_Oedometer_Elasticity_2Phase_MPM_SuddenLoad_Consolidation_Ex2_1a",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["GOM", "CPS_001"] {
+        std::fs::copy(
+            case.join(format!("test-11_2021.{ext}")),
+            dir.path().join(format!("c.{ext}")),
+        )
+        .unwrap();
+    }
+    run_oracle(&bin, dir.path(), "c");
+    let (ds, dp) = initial_state_difference(dir.path(), "c");
+    eprintln!("benchmark 0011, initial σ' and p: largest differences {ds:.1e} and {dp:.1e}");
+    assert!(
+        ds <= 1e-12 && dp <= 1e-12,
+        "initial σ' {ds:.2e}, p {dp:.2e}"
+    );
+}

@@ -517,8 +517,8 @@ fn k0_procedure(
 ) -> Result<Option<InitialStress>, CaseError> {
     match cps_number(cps, "K0_PROCEDURE", cfile)? {
         None => return Ok(None),
-        Some(v) if v == 0.0 => return Ok(None),
-        Some(v) if v == 1.0 => {}
+        Some(0.0) => return Ok(None),
+        Some(1.0) => {}
         Some(v) => {
             return Err(unsupported(
                 cfile,

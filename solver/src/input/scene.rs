@@ -31,6 +31,13 @@
 //! traction = [0.0, -10.0, 0.0]    # kPa
 //! ramp = 0.0                      # s to reach full load (0: sudden)
 //! ```
+//!
+//! Initial stresses, per material: `k0 = 0.5` starts its points from Anura3D's K0 procedure
+//! (gravity along -y, no ramp): σ'yy = depth below the ground (`[gravity] k0_surface`, default
+//! the highest node) × the material's *own* unit weight (not the weight of the materials
+//! actually above it), less the hydrostatic pore pressure when saturated, at each element's
+//! centroid, σ'xx = σ'zz = K0 σ'yy; `initial_stress = [sxx, syy, szz, sxy, syz, szx]` (kPa,
+//! tension positive) a uniform effective stress instead ([`crate::input::initial_stress`]).
 
 use std::path::{Path, PathBuf};
 
