@@ -201,6 +201,19 @@ fn killed_saturated_runs_resume_byte_identical_in_f64_and_f32() {
     killed_and_resumed("column_saturated", "f32");
 }
 
+/// A run from K0 stresses (the ground below the top, so the column moves): a resumed run takes
+/// the checkpoint's stresses and does not set the initial ones again.
+#[test]
+fn killed_k0_runs_resume_byte_identical() {
+    killed_and_resumed_with("column_dry", "f64", &|t| {
+        let t = t
+            .replace("points_per_element = 1", "points_per_element = 1\nk0 = 0.5")
+            .replace("[gravity]\n", "[gravity]\nk0_surface = 0.8\n");
+        assert!(t.contains("k0 = 0.5") && t.contains("k0_surface = 0.8"));
+        t
+    });
+}
+
 /// The consolidation job (two runs, the second into `workshop/`, and its records in
 /// `consolidation.csv`), killed in either run.
 #[test]

@@ -172,6 +172,7 @@ impl Fingerprint {
             strain_smoothing,
             consolidation,
             initial_state,
+            initial_stress,
             probes,
             prescribed,
             nodal_velocity,
@@ -180,7 +181,7 @@ impl Fingerprint {
             precision,
         } = case;
         let version = env!("CARGO_PKG_VERSION");
-        let items: [(&str, &dyn std::fmt::Debug); 43] = [
+        let items: [(&str, &dyn std::fmt::Debug); 44] = [
             ("solver version", &version),
             ("case name", name),
             ("input files", inputs),
@@ -219,6 +220,7 @@ impl Fingerprint {
             ("strain smoothing", strain_smoothing),
             ("consolidation job", consolidation),
             ("initial state", initial_state),
+            ("initial stresses", initial_stress),
             ("probes (--probe)", probes),
             ("prescribed velocities", prescribed),
             ("prescribed nodal velocities", nodal_velocity),

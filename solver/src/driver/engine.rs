@@ -238,6 +238,9 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub step_kinetic: f64,
     /// Kinetic energy at the start (kJ).
     initial_kinetic: f64,
+    /// Elastic energy the initial stresses hold (kJ), estimated as Σ V σ0:σ0 / 2M (M the
+    /// constrained modulus): the energy balance's scale for an initially stressed body.
+    stored_energy: f64,
     /// The Courant number and the local element whose crossing time sets the step.
     courant: (f64, usize),
     /// Whether the blow-up check applies (no prescribed velocities, which add energy) and the
@@ -333,6 +336,9 @@ impl<R: Real, E: Element> Engine<R, E> {
                 lp.p[i] = R::of(s.pore_pressure);
             }
         }
+        if let Some(init) = &case.initial_stress {
+            apply_initial_stress(init, case, &partition, &mut particles);
+        }
         let fluids: Vec<Option<Fluid<R>>> = case
             .materials
             .iter()
@@ -427,6 +433,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             balance_work: 0.0,
             step_kinetic: 0.0,
             initial_kinetic: 0.0,
+            stored_energy: 0.0,
             courant: (case.courant, critical_element - own.start),
             // Both energy checks need every energy term: the liquid's (its kinetic energy, the
             // pore-pressure work, drag) are not counted, so two-phase runs are not checked (a
@@ -471,6 +478,9 @@ impl<R: Real, E: Element> Engine<R, E> {
             slots,
             sort_scratch: SortScratch::default(),
         };
+        if case.initial_stress.is_some() {
+            engine.stored_energy = engine.comm.sum(stored_energy(case, &engine.particles));
+        }
         engine.initial_kinetic = engine.kinetic_energy();
         engine.step_kinetic = engine.initial_kinetic;
         Ok(engine)
@@ -510,6 +520,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             initial_density: _,
             courant: _,
             energy_checked: _,
+            stored_energy: _,
             // Saved through the field list.
             particles: _,
             // Indices of points: they follow the points (by id) when restored.
@@ -893,6 +904,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             self.dissipated,
             self.balance_work,
             self.initial_kinetic,
+            self.stored_energy,
         )
     }
 
@@ -1017,6 +1029,51 @@ impl<R: Real, E: Element> Engine<R, E> {
                 })
                 .sum()
         }))
+    }
+}
+
+/// Σ V σ:σ / 2M over the points (shear components twice, M the constrained modulus of the
+/// point's material): the elastic energy their stresses hold, as a scale (kJ).
+fn stored_energy<R: Real>(case: &Case, particles: &Particles<R>) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..particles.len() {
+        let Some(m) = case.materials[particles.material[i] as usize].as_ref() else {
+            continue;
+        };
+        let s = particles.stress[i].map(|v| v.f64());
+        let ss = s[0] * s[0]
+            + s[1] * s[1]
+            + s[2] * s[2]
+            + 2.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]);
+        sum += particles.volume[i].f64() * ss / (2.0 * m.oedometric());
+    }
+    sum
+}
+
+/// Sets the initial stresses (and, for saturated points of a K0 material, pore pressures) of
+/// the points just placed. The K0 procedure reads the element's corners from the case's model
+/// (global coordinates, as the input gives them), not from the computational mesh.
+fn apply_initial_stress<R: Real>(
+    init: &crate::input::initial_stress::InitialStress,
+    case: &Case,
+    partition: &Partition,
+    particles: &mut Particles<R>,
+) {
+    for i in 0..particles.len() {
+        let e = partition.global_element(particles.element[i] as usize);
+        let nodes = case.model.element(e);
+        let corner = |k: usize| {
+            let p = case.model.node(nodes[k] as usize);
+            [p[0], p[1], p[2]]
+        };
+        let corners = [corner(0), corner(1), corner(2), corner(3)];
+        let Some(s) = init.at(particles.material[i] as usize, corners) else {
+            continue;
+        };
+        particles.stress[i] = s.stress.map(R::of);
+        if let (Some(p), Some(lp)) = (s.pore_pressure, particles.liquid.as_mut()) {
+            lp.p[i] = R::of(p);
+        }
     }
 }
 

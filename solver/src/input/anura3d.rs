@@ -13,6 +13,10 @@ use mpm_shared::model::{Body, Token};
 use mpm_shared::{ElementType, Model};
 
 use crate::input::case::{Case, FaceLoad, Integration, LoadCurve, MaterialSpec, QuasiStatic};
+use crate::input::initial_stress::{
+    k0_unit_weights, InitialStress, K0Material, K0Pores, K0Procedure, MaterialStart,
+    DEFAULT_MAX_SUCTION,
+};
 use crate::material::law::{LawError, LawSpec};
 use crate::material::liquid::LiquidSpec;
 
@@ -142,6 +146,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let max_index = mats.iter().map(|m| m.index).max().unwrap_or(0).max(0) as usize;
     let mut materials: Vec<Option<MaterialSpec>> = vec![None; max_index + 1];
     let (mut drained, mut coupled) = (false, false);
+    let mut k0_inputs = Vec::new();
     for m in &mats {
         let item = format!("material {} \"{}\"", m.index, m.name);
         #[derive(PartialEq)]
@@ -219,6 +224,26 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             ),
         }
         .map_err(|e| unsupported(&gfile, &item, e.to_string()))?;
+        // What the K0 procedure reads of the material (used only when it is on).
+        k0_inputs.push(K0Input {
+            index: m.index.max(0) as usize,
+            item: item.clone(),
+            k0: m.get_f64("K0_VALUE_SOLID"),
+            porosity: n,
+            grains: get("DENSITY_SOLID")?,
+            // Anura3D does not read a dry material's liquid density: 0.
+            liquid: if kind == Kind::Dry {
+                0.0
+            } else {
+                get("DENSITY_LIQUID")?
+            },
+            pores: match kind {
+                Kind::Dry => K0Pores::Dry,
+                Kind::UndrainedTotal => K0Pores::Total,
+                Kind::Coupled | Kind::Drained => K0Pores::Effective,
+            },
+            coupled: kind == Kind::Coupled,
+        });
         materials[m.index.max(0) as usize] = Some(spec);
     }
     if drained && coupled {
@@ -336,6 +361,19 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     }
     let prescribed = prescribed_velocity(&model, &s, &materials, total, &gfile, &cfile)?;
     let nodal_velocity = nodal_velocity(&model, &s, &materials, total, &gfile, &cfile)?;
+    let initial_stress = k0_procedure(
+        &model,
+        &cps,
+        &s,
+        &k0_inputs,
+        K0Case {
+            coupled,
+            submerged: drained,
+            materials: materials.len(),
+        },
+        &gfile,
+        &cfile,
+    )?;
     let (gm, gravity_curve) = curve(s.gravity_load, total, &cfile, "$$GRAVITY_LOAD")?;
     let g = s.gravity_vector.map(|v| v * s.gravity_acceleration * gm);
     let output_times = (1..=s.load_steps)
@@ -392,6 +430,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         }),
         consolidation: None,
         initial_state: None,
+        initial_stress,
         probes,
         prescribed,
         nodal_velocity,
@@ -399,6 +438,203 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         precision: crate::input::case::Precision::F64,
     };
     Ok((case, s))
+}
+
+/// What the K0 procedure reads of one GOM material.
+struct K0Input {
+    index: usize,
+    item: String,
+    k0: Option<f64>,
+    porosity: f64,
+    grains: f64,
+    liquid: f64,
+    pores: K0Pores,
+    coupled: bool,
+}
+
+/// What the K0 procedure reads of the case as a whole.
+struct K0Case {
+    /// Some material is saturated and coupled (Anura3D's two-phase calculation).
+    coupled: bool,
+    /// Some material is drained (Anura3D's submerged calculation).
+    submerged: bool,
+    /// Length of the case's material table.
+    materials: usize,
+}
+
+/// The first number of CPS key `key`'s value, `None` when the key is absent.
+fn cps_number(cps: &Cps, key: &str, file: &str) -> Result<Option<f64>, CaseError> {
+    let Some(e) = cps.get(key) else {
+        return Ok(None);
+    };
+    let word = e
+        .lines
+        .first()
+        .and_then(|l| l.split_whitespace().next())
+        .unwrap_or("");
+    word.parse::<f64>().map(Some).map_err(|_| {
+        unsupported(
+            file,
+            &format!("$${key}"),
+            format!("expected a number, got {word:?}"),
+        )
+    })
+}
+
+/// A load multiplier's value at the start of the calculation, as Anura3D sets it when it reads
+/// the key: the first of its two numbers (0 when off or absent).
+fn initial_multiplier(cps: &Cps, key: &str, m: Multiplier, file: &str) -> Result<f64, CaseError> {
+    Ok(match m {
+        Multiplier::Off => 0.0,
+        Multiplier::Linear { start, .. } | Multiplier::File { start, .. } => start,
+        Multiplier::Step { .. } => {
+            // The parsed multiplier keeps the final value; the start is the first number.
+            let e = cps
+                .get(key)
+                .expect("a step multiplier was read from its key");
+            let word = e
+                .lines
+                .first()
+                .and_then(|l| l.split_whitespace().nth(1))
+                .unwrap_or("");
+            word.parse::<f64>().map_err(|_| {
+                unsupported(
+                    file,
+                    &format!("$${key}"),
+                    format!("expected a number after step, got {word:?}"),
+                )
+            })?
+        }
+    })
+}
+
+/// Anura3D's K0 procedure (`$$K0_PROCEDURE 1`) resolved into initial stresses; `None` when it
+/// is off. What Anura3D's procedure would compute otherwise (soil or phreatic surfaces given by
+/// nodes, a water surface from a file, several soil layers) is refused by name.
+fn k0_procedure(
+    model: &Model,
+    cps: &Cps,
+    s: &Settings,
+    inputs: &[K0Input],
+    case: K0Case,
+    gfile: &str,
+    cfile: &str,
+) -> Result<Option<InitialStress>, CaseError> {
+    match cps_number(cps, "K0_PROCEDURE", cfile)? {
+        None => return Ok(None),
+        Some(0.0) => return Ok(None),
+        Some(1.0) => {}
+        Some(v) => {
+            return Err(unsupported(
+                cfile,
+                "$$K0_PROCEDURE",
+                format!("must be 0 or 1, got {v}"),
+            ))
+        }
+    }
+    for sec in &model.sections {
+        let key = sec.keyword.as_str();
+        let given = match key {
+            "START_SOIL_SURFACE_NODES" | "START_PHREATIC_SURFACE_NODES" => {
+                section_lines(&sec.body).is_some_and(|l| !l.is_empty())
+            }
+            // Anura3D switches the water surface from a file on by the section alone.
+            "INITIAL_WATER_SURFACE_FROM_FILE" => true,
+            _ => false,
+        };
+        if given {
+            return Err(unsupported(
+                gfile,
+                &format!("$${key}"),
+                "the K0 procedure with a soil or phreatic surface other than the horizontal line at $$SURFACE_ELEVATION is not modelled",
+            ));
+        }
+    }
+    if let Some(layers) = cps_number(cps, "NUMBER_SOIL_LAYERS", cfile)? {
+        if layers > 1.0 {
+            return Err(unsupported(
+                cfile,
+                "$$NUMBER_SOIL_LAYERS",
+                format!("{layers} soil layers: Anura3D's multi-layer K0 (borehole) set-up is not modelled; use 1"),
+            ));
+        }
+    }
+    let g = s.gravity_vector;
+    if g[0] == 0.0 && g[1] == 0.0 {
+        return Err(unsupported(
+            cfile,
+            "$$GRAVITY_VECTOR",
+            "the K0 procedure measures depth along gravity's x-y direction, and this gravity has none",
+        ));
+    }
+    // INITIAL_VERTICAL_LOAD_K0 and CONSIDERED_LOAD_K0 set the same value: the last one read wins.
+    let mut load = 0.0;
+    for e in cps
+        .entries
+        .iter()
+        .filter(|e| e.keyword == "INITIAL_VERTICAL_LOAD_K0" || e.keyword == "CONSIDERED_LOAD_K0")
+    {
+        let word = e
+            .lines
+            .first()
+            .and_then(|l| l.split_whitespace().next())
+            .unwrap_or("");
+        load = word.parse::<f64>().map_err(|_| {
+            unsupported(
+                cfile,
+                &format!("$${}", e.keyword),
+                format!("expected a number, got {word:?}"),
+            )
+        })?;
+    }
+    let traction = initial_multiplier(cps, "SOLID_TRACTION", s.solid_traction, cfile)?;
+    let k0 = K0Procedure {
+        surface_point: [
+            0.0,
+            cps_number(cps, "SURFACE_ELEVATION", cfile)?.unwrap_or(0.0),
+        ],
+        gravity_direction: [g[0], g[1]],
+        gravity_factor: initial_multiplier(cps, "GRAVITY_LOAD", s.gravity_load, cfile)?,
+        surface_load: load * traction,
+        max_suction: cps_number(cps, "K0_MAX_SUCTION", cfile)?.unwrap_or(DEFAULT_MAX_SUCTION),
+    };
+    let mut materials = vec![None; case.materials];
+    for m in inputs {
+        let k0 = m.k0.ok_or_else(|| {
+            unsupported(
+                gfile,
+                &m.item,
+                "missing or non-numeric $$K0_VALUE_SOLID (the K0 procedure is on)",
+            )
+        })?;
+        if !(0.0..=1.0).contains(&k0) {
+            return Err(unsupported(
+                gfile,
+                &m.item,
+                format!("$$K0_VALUE_SOLID must be in [0, 1] (Anura3D's check), got {k0}"),
+            ));
+        }
+        let (unit_weight, liquid_unit_weight) = k0_unit_weights(
+            m.porosity,
+            m.grains,
+            m.liquid,
+            s.gravity_acceleration,
+            case.coupled,
+            case.submerged,
+            m.pores != K0Pores::Dry,
+        );
+        materials[m.index] = Some(MaterialStart::K0(K0Material {
+            k0,
+            unit_weight,
+            liquid_unit_weight,
+            pores: m.pores,
+            sets_pore_pressure: m.coupled,
+        }));
+    }
+    Ok(Some(InitialStress {
+        k0: Some(k0),
+        materials,
+    }))
 }
 
 /// Checks every GOM section (outside material blocks) and every CPS key against the key table
@@ -418,25 +654,8 @@ fn check_keys(
         if mpm_shared::model::is_material_key(key) {
             continue;
         }
-        let lines: Vec<String> = match &sec.body {
-            Body::Table { rows, .. } if rows.is_empty() => Vec::new(),
-            Body::Table { rows, .. } => vec![format!("{} rows", rows.len())],
-            Body::PerElement(t) => {
-                let nonzero = t
-                    .rows()
-                    .flatten()
-                    .filter(|v| v.as_f64().is_some_and(|x| x != 0.0))
-                    .count();
-                if nonzero == 0 {
-                    Vec::new()
-                } else {
-                    vec![format!("{nonzero} non-zero values")]
-                }
-            }
-            Body::Text(l) => l.clone(),
-            Body::Opaque(l) if mpm_shared::model::opaque_is_empty(l) => Vec::new(),
-            Body::Opaque(l) => l.clone(),
-            _ => continue,
+        let Some(lines) = section_lines(&sec.body) else {
+            continue;
         };
         if status(KeyKind::GomSection, key) == KeyStatus::Unknown {
             log::warn!("{gfile}: section $${key} is not known to this solver and is ignored");
@@ -449,6 +668,31 @@ fn check_keys(
         check(KeyKind::CpsKey, &e.keyword, &e.lines, cfile, e.line)?;
     }
     Ok(())
+}
+
+/// A GOM section's content as the key table checks it: nothing for an empty list, a summary
+/// line for tables, the text otherwise; `None` for the geometry sections.
+fn section_lines(body: &Body) -> Option<Vec<String>> {
+    Some(match body {
+        Body::Table { rows, .. } if rows.is_empty() => Vec::new(),
+        Body::Table { rows, .. } => vec![format!("{} rows", rows.len())],
+        Body::PerElement(t) => {
+            let nonzero = t
+                .rows()
+                .flatten()
+                .filter(|v| v.as_f64().is_some_and(|x| x != 0.0))
+                .count();
+            if nonzero == 0 {
+                Vec::new()
+            } else {
+                vec![format!("{nonzero} non-zero values")]
+            }
+        }
+        Body::Text(l) => l.clone(),
+        Body::Opaque(l) if mpm_shared::model::opaque_is_empty(l) => Vec::new(),
+        Body::Opaque(l) => l.clone(),
+        _ => return None,
+    })
 }
 
 /// The 1-based line of the section `$$key` in the GOM file `path` (0 when it cannot be read

@@ -173,17 +173,17 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         GomSection,
         "START_SOIL_SURFACE_NODES",
-        Ignored("only used by the K0 procedure (CPS $$K0_PROCEDURE)"),
+        Ignored("only used by the K0 procedure (CPS $$K0_PROCEDURE), which refuses a non-empty list"),
     ),
     (
         GomSection,
         "START_PHREATIC_SURFACE_NODES",
-        Ignored("only used by the K0 procedure (CPS $$K0_PROCEDURE)"),
+        Ignored("only used by the K0 procedure (CPS $$K0_PROCEDURE), which refuses a non-empty list"),
     ),
     (
         GomSection,
         "INITIAL_WATER_SURFACE_FROM_FILE",
-        Ignored("only used by the K0 procedure (CPS $$K0_PROCEDURE)"),
+        Ignored("only used by the K0 procedure (CPS $$K0_PROCEDURE), which refuses the section"),
     ),
     (
         GomSection,
@@ -244,11 +244,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (MaterialKey, "BULK_MODULUS_LIQUID", Modelled),
     (MaterialKey, "INTRINSIC_PERMEABILITY_LIQUID", Modelled),
     (MaterialKey, "DYNAMIC_VISCOSITY_LIQUID", Modelled),
-    (
-        MaterialKey,
-        "K0_VALUE_SOLID",
-        Ignored("only used by the K0 procedure (CPS $$K0_PROCEDURE)"),
-    ),
+    (MaterialKey, "K0_VALUE_SOLID", Modelled), // with CPS $$K0_PROCEDURE 1; in [0, 1]
     (
         MaterialKey,
         "MATERIAL_MODEL_LIQUID",
@@ -433,11 +429,8 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         RefusedUnlessInert("displacements reset to zero at the start; inert: 0"),
     ),
     // --- CPS: initial state and hydraulics.
-    (
-        CpsKey,
-        "K0_PROCEDURE",
-        RefusedUnlessInert("initial stresses (and pore pressures) by the K0 procedure; inert: 0"),
-    ),
+    // K0 stresses (and pore pressures) below the horizontal line at $$SURFACE_ELEVATION.
+    (CpsKey, "K0_PROCEDURE", Modelled),
     (
         CpsKey,
         "INITIAL_WATER_PRESSURE",
@@ -468,20 +461,21 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "HYDRAULIC_HEAD",
         RefusedUnlessInert("prescribed hydraulic head; inert: off"),
     ),
+    // The K0 procedure's settings (read only when it is on).
+    (CpsKey, "K0_MAX_SUCTION", Modelled),
+    (CpsKey, "INITIAL_VERTICAL_LOAD_K0", Modelled), // times SOLID_TRACTION's first value
+    (CpsKey, "CONSIDERED_LOAD_K0", Modelled),       // the same load; the last one read wins
+    (CpsKey, "SURFACE_ELEVATION", Modelled),        // first number: the surface's y
+    (CpsKey, "NUMBER_SOIL_LAYERS", Modelled), // with the K0 procedure: more than 1 refused
     (
         CpsKey,
-        "K0_MAX_SUCTION",
-        Ignored("only used by the K0 procedure ($$K0_PROCEDURE)"),
+        "THICKNESS_SOIL_LAYERS",
+        Ignored("only read with $$NUMBER_SOIL_LAYERS above 1, which the K0 procedure refuses"),
     ),
     (
         CpsKey,
-        "INITIAL_VERTICAL_LOAD_K0",
-        Ignored("only used by the K0 procedure ($$K0_PROCEDURE)"),
-    ),
-    (
-        CpsKey,
-        "SURFACE_ELEVATION",
-        Ignored("only used by the K0 procedure ($$K0_PROCEDURE)"),
+        "LIQUID_SURFACE",
+        Ignored("only used by the double-point formulation's K0 procedure; double-point is refused"),
     ),
     // --- CPS: staging and output.
     (

@@ -283,6 +283,9 @@ pub struct Case {
     /// A uniform initial state of the saturated points (the undrained start of a consolidation
     /// run); `None`: at rest.
     pub initial_state: Option<UndrainedState>,
+    /// Stresses (and pore pressures) the points start with: the K0 procedure or uniform
+    /// stresses per material ([`crate::input::initial_stress`]); `None`: unstressed.
+    pub initial_stress: Option<crate::input::initial_stress::InitialStress>,
     /// Material-point ids written to `history.csv`.
     pub probes: Vec<u32>,
     /// Velocities prescribed on the material points of some elements (Anura3D's
@@ -602,6 +605,7 @@ impl Case {
             fixed_liquid_mass: false,
             consolidation: None,
             initial_state: None,
+            initial_stress: None,
             probes: Vec::new(),
             prescribed: None,
             nodal_velocity: Vec::new(),

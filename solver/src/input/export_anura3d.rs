@@ -8,13 +8,15 @@
 //! original nodes in order of first appearance. Fixities go to the surface sections of both
 //! phases (a new mid-edge node is fixed in a component when both its corners are), tractions to
 //! `$$START_LOAD_ON_NODES_SOLID` (one row per face, the same vector at its six nodes), materials
-//! to `dry_material` or `saturated_material_coupled` with their law's Anura3D keys.
+//! to `dry_material` or `saturated_material_coupled` with their law's Anura3D keys, and materials'
+//! `k0` to `$$K0_PROCEDURE 1` with `$$K0_VALUE_SOLID` and the ground's `$$SURFACE_ELEVATION`.
 //!
 //! What has no exact Anura3D equivalent is refused with the scene item named: the undrained start
 //! of a consolidation run, output times that are not equally spaced (Anura3D writes one output
 //! per load step of equal length), load ramps other than one over the whole run, an initial pore
-//! pressure, a cap on the time steps, material-point counts Anura3D does not place, more than
-//! 99 output points and the strain-softening law (which Anura3D reads but cannot run).
+//! pressure, a uniform initial stress (and `k0` on some materials only), a cap on the time
+//! steps, material-point counts Anura3D does not place, more than 99 output points and the
+//! strain-softening law (which Anura3D reads but cannot run).
 //! Prescribed velocities go to `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME` (a physical
 //! volume's elements) and `$$PRESCRIBED_NODAL_VELOCITY_SURFACE` (nodes, a new mid-edge node
 //! taking a set's velocity where both its corners are in the set) under one CPS
@@ -236,6 +238,25 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
                 "Anura3D reads strain_softening_mohr_coulomb but has no stress routine for it (its run stops with a segmentation fault)".into(),
             ));
         }
+        if m.initial_stress.is_some() {
+            return Err(refuse(
+                &format!("{item}.initial_stress"),
+                "Anura3D has no uniform initial stress ($$K0_PROCEDURE sets K0 stresses, $$MP_STRESS_INITIALIZATION_FROMFILE reads them from a results file); use k0 or none".into(),
+            ));
+        }
+        if let Some(k0) = m.k0 {
+            if k0 > 1.0 {
+                return Err(refuse(
+                    &format!("{item}.k0"),
+                    format!("Anura3D accepts K0 in [0, 1] only, got {k0}"),
+                ));
+            }
+        } else if r.materials.iter().flatten().any(|o| o.k0.is_some()) {
+            return Err(refuse(
+                &item,
+                "Anura3D's K0 procedure stresses every material (a material without K0 would start with its vertical stress): give it k0 too".into(),
+            ));
+        }
         if let Some(l) = &m.liquid {
             if l.initial_pore_pressure != 0.0 {
                 return Err(refuse(
@@ -303,6 +324,11 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
             smoothing,
             probes: &probes,
             prescribed_velocity,
+            k0_surface: case
+                .initial_stress
+                .as_ref()
+                .and_then(|i| i.k0.as_ref())
+                .map(|k| k.surface_point[1]),
         },
     );
     Ok(Anura3dCase { gom, cps, notes })
@@ -622,7 +648,7 @@ fn gom_model(r: &Resolved, mesh: Tet10Mesh, loads: Table, notes: &mut Vec<String
             ]),
         }
         block.extend([
-            ("K0_VALUE_SOLID", num(0.0)),
+            ("K0_VALUE_SOLID", num(m.k0.unwrap_or(0.0))),
             ("MATERIAL_MODEL_SOLID", m.law.name().to_string()),
         ]);
         // The law's keys in the order Anura3D reads them.
@@ -666,6 +692,8 @@ struct CpsValues<'a> {
     smoothing: bool,
     probes: &'a [u32],
     prescribed_velocity: &'static str,
+    /// Height of the ground surface when the K0 procedure is on.
+    k0_surface: Option<f64>,
 }
 
 /// The CPS: the scene's controls, every other key at the inert value of Anura3D's template.
@@ -694,7 +722,7 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         v.probes.iter().map(|p| p.to_string()).collect()
     };
     let one = |s: &str| vec![s.to_string()];
-    let entries: Vec<(&str, Vec<String>)> = vec![
+    let mut entries: Vec<(&str, Vec<String>)> = vec![
         ("NUMBER_OF_LOADSTEPS", one(&v.load_steps.to_string())),
         ("TIME_PER_LOADSTEP", one(&r(v.interval))),
         ("TOTAL_TIME", one("0.0")),
@@ -733,7 +761,10 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         ("INITIAL_VELOCITY", one("0")),
         ("RESET_DISPLACEMENTS", one("0")),
         ("REMOVE_FIXITIES", one("0 0 0")),
-        ("K0_PROCEDURE", one("0")),
+        (
+            "K0_PROCEDURE",
+            one(if v.k0_surface.is_some() { "1" } else { "0" }),
+        ),
         ("SUBMERGED_CALCULATION", one("0 1")),
         (
             "APPLY_OBJECTIVE_STRESS",
@@ -753,6 +784,15 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         ),
         ("OUTPUT_MATERIAL_POINTS", probes),
     ];
+    if let Some(y) = v.k0_surface {
+        // Anura3D reads the surface's height as the first number.
+        let at = entries
+            .iter()
+            .position(|e| e.0 == "K0_PROCEDURE")
+            .expect("listed")
+            + 1;
+        entries.insert(at, ("SURFACE_ELEVATION", one(&r(y))));
+    }
     Cps {
         file: String::new(),
         version: VERSION.into(),

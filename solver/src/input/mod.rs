@@ -1,9 +1,10 @@
-//! From input files to a resolved [`case::Case`]: TOML scenes, Anura3D GOM + CPS (with the key table), the critical time step, the pre-flight plan, and scenes written back as Anura3D cases.
+//! From input files to a resolved [`case::Case`]: TOML scenes, Anura3D GOM + CPS (with the key table), the initial stresses, the critical time step, the pre-flight plan, and scenes written back as Anura3D cases.
 
 pub mod anura3d;
 pub mod anura3d_keys;
 pub mod case;
 pub mod export_anura3d;
+pub mod initial_stress;
 pub mod preflight;
 pub mod scene;
 pub mod time_step;

@@ -49,6 +49,12 @@
 //! `law = "strain_softening_mohr_coulomb"` takes `peak_cohesion`, `residual_cohesion`,
 //! `peak_friction_angle`, `residual_friction_angle`, `peak_dilatancy_angle`,
 //! `residual_dilatancy_angle` and `shape_factor` instead; a key of another law is refused.
+//! Initial stresses, per material: `k0 = 0.5` starts its points from Anura3D's K0 procedure
+//! (gravity along -y, no ramp): σ'yy = depth below the ground (`[gravity] k0_surface`, default
+//! the highest node) × the material's *own* unit weight (not the weight of the materials
+//! actually above it), less the hydrostatic pore pressure when saturated, at each element's
+//! centroid, σ'xx = σ'zz = K0 σ'yy; `initial_stress = [sxx, syy, szz, sxy, syz, szx]` (kPa,
+//! tension positive) a uniform effective stress instead ([`crate::input::initial_stress`]).
 
 use std::path::{Path, PathBuf};
 
@@ -59,6 +65,10 @@ use mpm_shared::Model;
 
 use crate::input::case::{Case, Integration, LoadCurve, MaterialSpec};
 use crate::input::case::{ConsolidationSpec, Start, UndrainedState};
+use crate::input::initial_stress::{
+    k0_unit_weights, InitialStress, K0Material, K0Pores, K0Procedure, MaterialStart,
+    DEFAULT_MAX_SUCTION,
+};
 use crate::material::law::LawSpec;
 use crate::material::liquid::LiquidSpec;
 use crate::step::nodal_velocity::{NodalVelocitySet, PrescribedNode};
@@ -147,6 +157,9 @@ struct Gravity {
     vector: [f64; 3],
     #[serde(default)]
     ramp: f64,
+    /// Height (y, m) of the ground surface for the K0 procedure; default: the highest node.
+    #[serde(default)]
+    k0_surface: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -184,6 +197,12 @@ struct Material {
     points_per_element: u32,
     #[serde(default)]
     liquid: Option<Liquid>,
+    /// K0: the points start with Anura3D's K0 stresses.
+    #[serde(default)]
+    k0: Option<f64>,
+    /// A uniform initial effective stress (kPa, tension positive; xx yy zz xy yz zx).
+    #[serde(default)]
+    initial_stress: Option<[f64; 6]>,
 }
 
 fn default_law() -> String {
@@ -436,6 +455,10 @@ pub struct MaterialInput {
     pub points_per_element: u32,
     /// The pore liquid of a saturated material.
     pub liquid: Option<LiquidInput>,
+    /// K0 of the K0 procedure, when the material starts from it.
+    pub k0: Option<f64>,
+    /// A uniform initial effective stress (kPa; xx yy zz xy yz zx).
+    pub initial_stress: Option<[f64; 6]>,
 }
 
 /// A `[material.liquid]` entry as the scene gives it.
@@ -569,6 +592,8 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
                 viscosity: l.viscosity,
                 initial_pore_pressure: l.initial_pore_pressure,
             }),
+            k0: m.k0,
+            initial_stress: m.initial_stress,
         });
     }
     let element_material: Vec<u32> = model
@@ -804,6 +829,8 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         }
         _ => None,
     };
+    let initial_stress = initial_stresses(&scene, &inputs, &model, &consolidation)
+        .map_err(|(item, message)| invalid(item, message))?;
     let precision = match scene.precision.as_deref() {
         None => crate::input::case::Precision::F64,
         Some(s) => crate::input::case::Precision::parse(s).ok_or_else(|| {
@@ -865,6 +892,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         fixed_liquid_mass: false,
         consolidation,
         initial_state,
+        initial_stress,
         probes: scene.probes.clone(),
         prescribed,
         nodal_velocity,
@@ -1022,6 +1050,130 @@ fn velocities(
         });
     }
     Ok((points, nodal, out))
+}
+
+/// The scene's initial stresses: per material `k0` (Anura3D's K0 procedure under gravity
+/// along -y, the ground at `gravity.k0_surface`) or `initial_stress`; `None` when no material
+/// has either. Errors name the item.
+fn initial_stresses(
+    scene: &Scene,
+    inputs: &[Option<MaterialInput>],
+    model: &Model,
+    consolidation: &Option<ConsolidationSpec>,
+) -> Result<Option<InitialStress>, (String, String)> {
+    if inputs
+        .iter()
+        .flatten()
+        .all(|m| m.k0.is_none() && m.initial_stress.is_none())
+    {
+        return Ok(None);
+    }
+    let coupled = inputs.iter().flatten().any(|m| m.liquid.is_some());
+    let mut materials = vec![None; inputs.len()];
+    let mut k0_used = false;
+    for (k, m) in inputs.iter().enumerate() {
+        let Some(m) = m else { continue };
+        let item = format!("material \"{}\"", m.physical);
+        if (m.k0.is_some() || m.initial_stress.is_some())
+            && consolidation
+                .as_ref()
+                .is_some_and(|c| c.start == Start::Undrained)
+        {
+            return Err((
+                item,
+                "k0 and initial_stress cannot be combined with consolidation.start = \"undrained\", which sets the initial stresses itself".into(),
+            ));
+        }
+        materials[k] = match (m.k0, m.initial_stress) {
+            (None, None) => None,
+            (Some(_), Some(_)) => {
+                return Err((
+                    item,
+                    "give k0 or initial_stress, not both: each sets the initial stresses".into(),
+                ))
+            }
+            (None, Some(s)) => {
+                if let Some(v) = s.iter().find(|v| !v.is_finite()) {
+                    return Err((
+                        format!("{item}.initial_stress"),
+                        format!("must be finite, got {v}"),
+                    ));
+                }
+                Some(MaterialStart::Uniform(s))
+            }
+            (Some(k0), None) => {
+                if !(k0 >= 0.0 && k0.is_finite()) {
+                    return Err((
+                        format!("{item}.k0"),
+                        format!("must be finite and at least 0, got {k0}"),
+                    ));
+                }
+                k0_used = true;
+                let g = scene.gravity.as_ref().map_or(0.0, |g| -g.vector[1]);
+                let down = scene
+                    .gravity
+                    .as_ref()
+                    .is_some_and(|g| g.vector[0] == 0.0 && g.vector[2] == 0.0 && g.vector[1] < 0.0);
+                if !down {
+                    return Err((
+                        format!("{item}.k0"),
+                        "the K0 procedure needs gravity along -y ([gravity] vector = [0, -g, 0])"
+                            .into(),
+                    ));
+                }
+                let (unit_weight, liquid_unit_weight) = match &m.liquid {
+                    None => k0_unit_weights(0.0, m.density, 0.0, g, coupled, false, false),
+                    Some(l) => {
+                        k0_unit_weights(l.porosity, m.density, l.density, g, coupled, false, true)
+                    }
+                };
+                Some(MaterialStart::K0(K0Material {
+                    k0,
+                    unit_weight,
+                    liquid_unit_weight,
+                    pores: if m.liquid.is_some() {
+                        K0Pores::Effective
+                    } else {
+                        K0Pores::Dry
+                    },
+                    sets_pore_pressure: m.liquid.is_some(),
+                }))
+            }
+        };
+    }
+    let k0 = if k0_used {
+        let gravity = scene.gravity.as_ref().expect("checked: k0 needs gravity");
+        if gravity.ramp != 0.0 {
+            return Err((
+                "gravity.ramp".into(),
+                format!(
+                    "the K0 stresses carry the full weight from the start; a gravity ramped from 0 (over {} s) would leave them unbalanced: use ramp = 0",
+                    gravity.ramp
+                ),
+            ));
+        }
+        let top = model
+            .coords
+            .chunks_exact(3)
+            .fold(f64::MIN, |h, p| h.max(p[1]));
+        let surface = gravity.k0_surface.unwrap_or(top);
+        if !surface.is_finite() {
+            return Err((
+                "gravity.k0_surface".into(),
+                format!("must be finite, got {surface}"),
+            ));
+        }
+        Some(K0Procedure {
+            surface_point: [0.0, surface],
+            gravity_direction: [0.0, -1.0],
+            gravity_factor: 1.0,
+            surface_load: 0.0,
+            max_suction: DEFAULT_MAX_SUCTION,
+        })
+    } else {
+        None
+    };
+    Ok(Some(InitialStress { k0, materials }))
 }
 
 /// The one saturated material of a consolidation scene, `None` when there are none or several.
