@@ -116,19 +116,24 @@ fn differences(
                 .flat_map(|(_, s)| s.iter().map(|v| v.abs()))
                 .fold(0.0, f64::max);
             let (mut dx, mut ds, mut plastic) = (0.0f64, 0.0f64, 0);
+            let mut worst = (0u32, [0.0; 6], [0.0; 6]);
             for (id, (xa, sa)) in a {
                 let (xb, sb) = b.get(id).unwrap_or_else(|| panic!("point {id} missing"));
                 for k in 0..3 {
                     dx = dx.max((xa[k] - xb[k]).abs());
                 }
                 for k in 0..6 {
-                    ds = ds.max((sa[k] - sb[k]).abs());
+                    if (sa[k] - sb[k]).abs() > ds {
+                        ds = (sa[k] - sb[k]).abs();
+                        worst = (*id, *sa, *sb);
+                    }
                 }
                 // On the surface (to round-off of the stress scale): yielded.
                 if yield_mc(sb, phi, c) > -1e-9 * scale {
                     plastic += 1;
                 }
             }
+            eprintln!("worst stress at point {}: Anura3D {:?}, ours {:?}", worst.0, worst.1, worst.2);
             (dx / length, ds / scale, plastic)
         })
         .collect()

@@ -102,22 +102,30 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     *d -= c;
                 }
             }
-            if objective {
+            // Anura3D's objective update (its "Hill" rate): the co-rotation and the change of
+            // volume, -tr(Δε) σ, of the start-of-step stress, added after the law's update as
+            // Anura3D adds them (for a plastic law the order matters: the return sees the
+            // unrotated trial).
+            let s0 = stress[j];
+            let hill = objective.then(|| {
                 let w = [
                     half * (l[0][1] - l[1][0]) * dt, // ω_xy
                     half * (l[1][2] - l[2][1]) * dt, // ω_yz
                     half * (l[2][0] - l[0][2]) * dt, // ω_zx
                 ];
-                // Anura3D's objective update (its "Hill" rate): the co-rotation and the
-                // change of volume, -tr(Δε) σ, both of the start-of-step stress.
-                let (s0, ev) = (stress[j], de[0] + de[1] + de[2]);
-                rotate(&mut stress[j], &w);
-                for (s, v) in stress[j].iter_mut().zip(s0) {
-                    *s -= ev * v;
+                let ev = de[0] + de[1] + de[2];
+                let mut h = rotation(&s0, &w);
+                for (h, v) in h.iter_mut().zip(s0) {
+                    *h -= ev * v;
+                }
+                h
+            });
+            laws[material[i] as usize].update(&mut stress[j], &de, &mut state[k * j..k * j + k]);
+            if let Some(h) = hill {
+                for (s, h) in stress[j].iter_mut().zip(h) {
+                    *s += h;
                 }
             }
-            let s0 = stress[j];
-            laws[material[i] as usize].update(&mut stress[j], &de, &mut state[k * j..k * j + k]);
             let v0 = volume[j];
             volume[j] *= R::ONE + de[0] + de[1] + de[2];
             for a in 0..3 {
@@ -296,16 +304,27 @@ pub fn update_pore_pressure<E: Element, R: Real>(
 /// (Ω_yx = `-w[0]` etc.): the Jaumann co-rotation of the stress over one step.
 #[inline]
 pub fn rotate<R: Real>(s: &mut [R; 6], w: &[R; 3]) {
+    let r = rotation(s, w);
+    for (s, r) in s.iter_mut().zip(r) {
+        *s += r;
+    }
+}
+
+/// The co-rotation Ω σ - σ Ω of `s` (xx yy zz xy yz zx) for the spin increment `w`
+/// (ω_xy, ω_yz, ω_zx).
+pub fn rotation<R: Real>(s: &[R; 6], w: &[R; 3]) -> [R; 6] {
     let [xx, yy, zz, xy, yz, zx] = *s;
     let (wxy, wyz, wzx) = (w[0], w[1], w[2]);
     let two = R::of(2.0);
     // (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj, written out for the symmetric result.
-    s[0] += two * (wxy * xy - wzx * zx);
-    s[1] += two * (wyz * yz - wxy * xy);
-    s[2] += two * (wzx * zx - wyz * yz);
-    s[3] += wxy * (yy - xx) + wyz * zx - wzx * yz;
-    s[4] += wyz * (zz - yy) + wzx * xy - wxy * zx;
-    s[5] += wzx * (xx - zz) + wxy * yz - wyz * xy;
+    [
+        two * (wxy * xy - wzx * zx),
+        two * (wyz * yz - wxy * xy),
+        two * (wzx * zx - wyz * yz),
+        wxy * (yy - xx) + wyz * zx - wzx * yz,
+        wyz * (zz - yy) + wzx * xy - wxy * zx,
+        wzx * (xx - zz) + wxy * yz - wyz * xy,
+    ]
 }
 
 #[cfg(test)]
