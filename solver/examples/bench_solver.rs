@@ -5,7 +5,8 @@
 //!
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
-//!  --order morton|random|none --precision f64|f32 --guards on|off`
+//!  --order morton|random|none --precision f64|f32 --guards on|off
+//!  --law linear|mc-elastic|mc-plastic`
 //!
 //! `--guards off` skips the per-step guard rails (docs/design.md §4.14), to measure their cost.
 //!
@@ -79,9 +80,33 @@ fn main() {
         )
         .unwrap()
     } else {
-        MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap()
+        // `--law mc-elastic`: Mohr-Coulomb whose points stay elastic (φ = 30°: the column's
+        // K0 = ν/(1-ν) = 0.43 exceeds the active 0.33); `mc-plastic`: φ = 10° (active 0.70),
+        // so every loaded point is on the yield surface and returns each step.
+        use mpm_solve::material::law::LawSpec;
+        let law = match arg(&a, "--law") {
+            Some("mc-elastic") => LawSpec::mohr_coulomb(10000.0, 0.3, 30.0, 0.0, 0.0, 0.0),
+            Some("mc-plastic") => LawSpec::mohr_coulomb(10000.0, 0.3, 10.0, 0.0, 0.0, 0.0),
+            _ => LawSpec::linear_elastic(10000.0, 0.3),
+        }
+        .unwrap();
+        MaterialSpec::with_law("soil", 2000.0, law).unwrap()
     };
     let mut case = Case::single_material("bench", model, soil, 4, fixed);
+    if !saturated {
+        // Every law starts from the same stress, σv = 200, σh = 100 kPa (compression): inside
+        // the φ = 30° surface (ratio 3), beyond the φ = 10° one (ratio 1.42), so under gravity
+        // the `mc-plastic` points return at every step.
+        use mpm_solve::input::initial_stress::{InitialStress, MaterialStart};
+        let mut materials = vec![None; case.materials.len()];
+        materials[1] = Some(MaterialStart::Uniform([
+            -100.0, -200.0, -100.0, 0.0, 0.0, 0.0,
+        ]));
+        case.initial_stress = Some(InitialStress {
+            k0: None,
+            materials,
+        });
+    }
     case.courant = 0.5;
     case.damping = 0.05;
     if saturated {
@@ -137,8 +162,9 @@ fn main() {
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
     println!(
-        "{{\"case\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}}}",
+        "{{\"case\": \"{}\", \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}}}",
         if saturated { "saturated" } else { "dry" },
+        arg(&a, "--law").unwrap_or("linear"),
         info.0,
         case.model.element_count(),
         info.1,

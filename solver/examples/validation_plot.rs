@@ -174,7 +174,25 @@ fn deposits(out: &str, args: &[String]) -> Result<(), Box<dyn Error>> {
     Ok(())
 }
 
+/// Registers a system TrueType font for the text (plotters has none of its own here).
+fn font() -> Result<(), Box<dyn Error>> {
+    let path = [
+        "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+        "/usr/share/fonts/TTF/DejaVuSans.ttf",
+        "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+        "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+    ]
+    .iter()
+    .find(|p| std::path::Path::new(p).exists())
+    .ok_or("no TrueType font found (install fonts-dejavu-core)")?;
+    let bytes: &'static [u8] = Box::leak(std::fs::read(path)?.into_boxed_slice());
+    plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
+        .map_err(|_| format!("{path}: not a usable font"))?;
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn Error>> {
+    font()?;
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.as_slice() {
         [kind, out, rest @ ..] if kind == "curves" => curves(out, rest),
