@@ -24,9 +24,11 @@
 //! differ). Where the trial lies beyond the cut-off this return can differ from Anura3D's,
 //! whose region tests send a few trials to a corner the consistency conditions do not give.
 //!
-//! Cost: an elastic trial is recognised from its invariants (mean stress and J2, a bound that
-//! holds for every Lode angle), without the eigen decomposition, in most elastic states; only
-//! trials near or beyond the surface are decomposed.
+//! Cost: an elastic trial is recognised without the eigen decomposition, from its mean stress
+//! and J2 (a bound for every Lode angle) or, failing that, from bounds on its extreme principal
+//! stresses by Newton's method on the characteristic cubic; only trials at or beyond the surface
+//! are decomposed. A run that stays elastic costs about what a linear elastic one does; a
+//! plastic point-step adds about 240 ns (docs/design.md, "Laws").
 
 use crate::material::linear_elastic::LinearElastic;
 use crate::material::principal::{principal, rebuild};
