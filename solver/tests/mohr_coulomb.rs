@@ -118,7 +118,8 @@ fn an_elastic_mohr_coulomb_run_is_the_linear_elastic_run() {
 #[test]
 fn scenes_refuse_keys_of_another_law_and_unknown_laws() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &dyn Fn(String) -> String, &str); 5] = [
+    type Edit<'a> = &'a dyn Fn(String) -> String;
+    let cases: [(&str, Edit, &str); 5] = [
         (
             "foreign",
             &|t| t.replace("cohesion = 0.0", "cohesion = 0.0\nshape_factor = 3.0"),

@@ -178,7 +178,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
                 &gfile,
                 &item,
                 format!(
-                    "MATERIAL_MODEL_SOLID {model_name} is not supported yet ({} is)",
+                    "MATERIAL_MODEL_SOLID {model_name} is not supported yet ({} are)",
                     crate::material::law::KNOWN.join(", ")
                 ),
             ),

@@ -24,9 +24,11 @@
 //! differ). Where the trial lies beyond the cut-off this return can differ from Anura3D's,
 //! whose region tests send a few trials to a corner the consistency conditions do not give.
 //!
-//! Cost: an elastic trial is recognised from its invariants (mean stress and J2, a bound that
-//! holds for every Lode angle), without the eigen decomposition, in most elastic states; only
-//! trials near or beyond the surface are decomposed.
+//! Cost: an elastic trial is recognised without the eigen decomposition, from its mean stress
+//! and J2 (a bound for every Lode angle) or, failing that, from bounds on its extreme principal
+//! stresses by Newton's method on the characteristic cubic; only trials at or beyond the surface
+//! are decomposed. A run that stays elastic costs about what a linear elastic one does; a
+//! plastic point-step adds about 240 ns (docs/design.md, "Laws").
 
 use crate::material::linear_elastic::LinearElastic;
 use crate::material::principal::{principal, rebuild};
@@ -124,23 +126,60 @@ impl<R: Real> Surface<R> {
         half * (hi - lo) + half * (hi + lo) * self.sin_phi - self.cohesion
     }
 
-    /// Whether `s` is inside both surfaces by a bound from its invariants alone (false means
-    /// "look closer", not "outside").
+    /// Whether `s` is inside both surfaces, from bounds on its principal stresses that need no
+    /// eigen decomposition (false means "look closer", not "outside"): first a bound from the
+    /// mean stress and J2 alone, then bounds on the largest and smallest principal stress by
+    /// Newton's method on the characteristic polynomial from outside the spectrum.
     #[inline]
     fn surely_inside(&self, s: &[R; 6]) -> bool {
         let p = (s[0] + s[1] + s[2]) * R::of(1.0 / 3.0);
         let (d0, d1, d2) = (s[0] - p, s[1] - p, s[2] - p);
-        let j2 =
-            R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + s[3] * s[3] + s[4] * s[4] + s[5] * s[5];
+        let (xy, yz, zx) = (s[3], s[4], s[5]);
+        let j2 = R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + xy * xy + yz * yz + zx * zx;
         // Largest (σ3 - σ1)/2 - σ2' sin φ / 2 over the Lode angle: sqrt(J2 (1 + sin²φ/3)).
         let r = self.cohesion - p * self.sin_phi;
         let pyramid = r >= R::ZERO && j2 * self.bound <= r * r;
-        if !self.cut_off {
-            return pyramid;
-        }
         // Largest principal deviator: 2 sqrt(J2 / 3).
         let t = self.tension - p;
-        pyramid && t >= R::ZERO && j2 * R::of(4.0 / 3.0) <= t * t
+        let cut = !self.cut_off || (t >= R::ZERO && j2 * R::of(4.0 / 3.0) <= t * t);
+        if pyramid && cut {
+            return true;
+        }
+        // The deviator's principal values are the roots of y³ - J2 y - J3. Newton's method
+        // started above the largest root (Gershgorin's bound) decreases to it and stays above
+        // (the cubic is increasing and convex there); started below the smallest it increases
+        // and stays below. Two steps each way suffice for states not close to the surface
+        // (each step halves the distance to a double root, as on a triaxial state).
+        let j3 = d0 * (d1 * d2 - yz * yz) - xy * (xy * d2 - yz * zx) + zx * (xy * yz - d1 * zx);
+        let (rx, ry, rz) = (
+            xy.abs() + zx.abs(),
+            xy.abs() + yz.abs(),
+            yz.abs() + zx.abs(),
+        );
+        let mut hi = (d0 + rx).max(d1 + ry).max(d2 + rz);
+        let mut lo = (d0 - rx).min(d1 - ry).min(d2 - rz);
+        let three = R::of(3.0);
+        // Round-off in a step may cross the root by a few ulps of the stress.
+        let margin = R::of(64.0 * R::EPSILON) * (p.abs() + hi - lo + self.cohesion);
+        for step in 0..3 {
+            let (top, bottom) = (p + hi, p + lo);
+            if self.yield_value(bottom, top) <= -margin
+                && (!self.cut_off || top <= self.tension - margin)
+            {
+                return true;
+            }
+            if step == 2 {
+                break;
+            }
+            for y in [&mut hi, &mut lo] {
+                let slope = three * *y * *y - j2;
+                // Zero slope: already at a (double) root.
+                if slope > R::ZERO {
+                    *y -= (*y * *y * *y - j2 * *y - j3) / slope;
+                }
+            }
+        }
+        false
     }
 
     /// Returns the trial stress `s` to the surface. `None` when the trial is elastic (then `s`
@@ -686,7 +725,6 @@ mod cost {
     use super::*;
     use std::hint::black_box;
     use std::time::Instant;
-
     /// ns per update of `f` over `states` (best of five passes).
     fn time(states: &[[f64; 6]], de: &[f64; 6], f: &dyn Fn(&mut [f64; 6], &[f64; 6])) -> f64 {
         let mut best = f64::INFINITY;
@@ -734,21 +772,82 @@ mod cost {
                 ]
             })
             .collect();
-        // On the pyramid (active state K = 1/3, c added): plastic at every step.
+        // Just beyond the pyramid (the active state K = 1/3 with c, a little less lateral
+        // stress), rotated: plastic, the full return.
         let yielding: Vec<[f64; 6]> = (0..n)
             .map(|_| {
                 let v = -200.0 * rand() - 10.0;
-                let h = (v * 0.5 - 2.0 * 5.0 * 0.75f64.sqrt()) / 1.5;
+                let h = (v * 0.5 + 2.0 * 5.0 * 0.75f64.sqrt()) / 1.5 - 0.01 * v;
+                let (c, s) = (0.8, 0.6);
+                [
+                    c * c * h + s * s * v,
+                    s * s * h + c * c * v,
+                    h,
+                    c * s * (v - h),
+                    0.0,
+                    0.0,
+                ]
+            })
+            .collect();
+        // Near the pyramid but inside (95 % of the active ratio's shear): elastic.
+        let near: Vec<[f64; 6]> = (0..n)
+            .map(|_| {
+                let v = -200.0 * rand() - 10.0;
+                let h = (v * 0.5 + 2.0 * 5.0 * 0.75f64.sqrt()) / 1.5;
+                let h = v + 0.95 * (h - v);
                 [h, v, h, 0.0, 0.0, 0.0]
             })
             .collect();
         let le = l.elastic;
-        for (name, states) in [("at rest", &rest), ("yielding", &yielding)] {
+        let trials: Vec<[f64; 6]> = yielding
+            .iter()
+            .map(|s| {
+                let mut t = *s;
+                le.update(&mut t, &de);
+                t
+            })
+            .collect();
+        let eig = time(&trials, &de, &|s, _| {
+            let p = principal(s);
+            s[0] = p.values[0] + p.vectors[0][0];
+        });
+        println!("principal stresses and directions alone: {eig:.2} ns");
+        let jac = time(&trials, &de, &|s, _| {
+            let p = crate::material::principal::jacobi(s);
+            s[0] = p.values[0] + p.vectors[0][0];
+        });
+        println!("Jacobi alone: {jac:.2} ns");
+        let sorted: Vec<[f64; 6]> = yielding
+            .iter()
+            .map(|s| {
+                let mut t = *s;
+                le.update(&mut t, &de);
+                let p = principal(&t).values;
+                [p[0], p[1], p[2], 0.0, 0.0, 0.0]
+            })
+            .collect();
+        let ret = time(&sorted, &de, &|s, _| {
+            let v = l
+                .surface
+                .principal_return(&l.elastic, &[s[0], s[1], s[2]], 100.0);
+            s[0] = v[0];
+        });
+        println!("principal return alone: {ret:.2} ns");
+        for (name, states) in [("at rest", &rest), ("near", &near), ("yielding", &yielding)] {
             let a = time(states, &de, &|s, d| le.update(s, d));
             let b = time(states, &de, &|s, d| l.update(s, d));
+            let bounded = states
+                .iter()
+                .filter(|s| {
+                    let mut t = **s;
+                    le.update(&mut t, &de);
+                    l.surface.surely_inside(&t)
+                })
+                .count();
             println!(
-                "{name}: linear elastic {a:.2} ns, Mohr-Coulomb {b:.2} ns, ratio {:.2}",
-                b / a
+                "{name}: linear elastic {a:.2} ns, Mohr-Coulomb {b:.2} ns, ratio {:.2}; {:.1} % decided without eigenvalues",
+                b / a,
+                100.0 * bounded as f64 / states.len() as f64
             );
         }
     }

@@ -1,12 +1,19 @@
 //! Principal values and directions of a symmetric 3×3 tensor (stress, strain), generic over the
-//! run's precision: cyclic Jacobi rotations in a fixed order, so the result is deterministic and
-//! exact for repeated eigenvalues (no characteristic cubic, whose roots lose half their digits
-//! when two eigenvalues meet, as they do on the edges of a Mohr–Coulomb pyramid).
+//! run's precision, deterministic and exact for repeated eigenvalues.
+//!
+//! The closed form first: the characteristic cubic of the deviator (trigonometric solution)
+//! gives the eigenvalue farthest from the middle one, whose vector is then a cross product of
+//! two rows of σ - λI (well conditioned: its gap is at least half the spread). The two others
+//! follow from the 2×2 problem in the plane normal to it, solved by one exact rotation, so a
+//! nearly repeated pair, whose cubic roots lose half their digits (the edges of a Mohr–Coulomb
+//! pyramid), never comes from the cubic. A nearly isotropic tensor goes to cyclic Jacobi
+//! rotations in a fixed order instead (about twice the cost of the closed form: 310 against
+//! 157 ns of CPU time per tensor measured on the shared development machine).
 
 use crate::real::Real;
 
-/// Sweeps after which Jacobi stops whatever the remainder (it converges quadratically: four to
-/// six sweeps reach round-off in f64).
+/// Sweeps after which Jacobi stops whatever the remainder (it converges quadratically: two to
+/// four sweeps reach round-off in f64).
 const MAX_SWEEPS: usize = 50;
 
 /// A symmetric tensor's eigen decomposition: `values` ascending, `vectors[i]` the unit vector of
@@ -20,7 +27,139 @@ pub struct Principal<R: Real> {
 }
 
 /// The eigen decomposition of the symmetric tensor `s` (xx yy zz xy yz zx).
+#[inline]
 pub fn principal<R: Real>(s: &[R; 6]) -> Principal<R> {
+    closed_form(s).unwrap_or_else(|| jacobi(s))
+}
+
+#[inline]
+fn dot3<R: Real>(a: &[R; 3], b: &[R; 3]) -> R {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline]
+fn cross<R: Real>(a: &[R; 3], b: &[R; 3]) -> [R; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Sorts three (value, vector) pairs by value.
+fn sorted<R: Real>(values: [R; 3], vectors: [[R; 3]; 3]) -> Principal<R> {
+    let mut order = [0usize, 1, 2];
+    for (i, j) in [(0, 1), (1, 2), (0, 1)] {
+        if values[order[j]] < values[order[i]] {
+            order.swap(i, j);
+        }
+    }
+    Principal {
+        values: order.map(|k| values[k]),
+        vectors: order.map(|k| vectors[k]),
+    }
+}
+
+/// The closed form described in the module's comment; `None` for a tensor isotropic to
+/// round-off, or a non-finite one.
+fn closed_form<R: Real>(s: &[R; 6]) -> Option<Principal<R>> {
+    let p = (s[0] + s[1] + s[2]) * R::of(1.0 / 3.0);
+    let d = [s[0] - p, s[1] - p, s[2] - p];
+    let (xy, yz, zx) = (s[3], s[4], s[5]);
+    let j2 = R::of(0.5) * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + xy * xy + yz * yz + zx * zx;
+    let mut largest = R::ZERO;
+    for x in s {
+        largest = largest.max(x.abs());
+    }
+    let small = R::of(1e3 * R::EPSILON) * largest;
+    if !(j2 > small * small) {
+        return None;
+    }
+    let j3 =
+        d[0] * (d[1] * d[2] - yz * yz) - xy * (xy * d[2] - yz * zx) + zx * (xy * yz - d[1] * zx);
+    // Deviatoric eigenvalues 2 sqrt(J2/3) cos(θ - 2πk/3), cos 3θ = (J3/2)(3/J2)^(3/2).
+    let (j2f, j3f) = (j2.f64(), j3.f64());
+    let q = 3.0 / j2f;
+    let c3 = (0.5 * j3f * q * q.sqrt()).clamp(-1.0, 1.0);
+    let (sn, cs) = (c3.acos() / 3.0).sin_cos();
+    let radius = 2.0 * (j2f / 3.0).sqrt();
+    let top = radius * cs;
+    let bottom = radius * (-0.5 * cs - 0.5 * 3f64.sqrt() * sn);
+    let middle = -(top + bottom);
+    let far = R::of(if top - middle >= middle - bottom {
+        top
+    } else {
+        bottom
+    });
+    let rows = [
+        [d[0] - far, xy, zx],
+        [xy, d[1] - far, yz],
+        [zx, yz, d[2] - far],
+    ];
+    let mut n = cross(&rows[0], &rows[1]);
+    let mut size = dot3(&n, &n);
+    for c in [cross(&rows[0], &rows[2]), cross(&rows[1], &rows[2])] {
+        let cc = dot3(&c, &c);
+        if cc > size {
+            (n, size) = (c, cc);
+        }
+    }
+    // The rows span a plane (rank 2) when the eigenvalue is simple: their cross product is of
+    // the order of J2.
+    if !(size > (R::of(1e-6) * j2) * (R::of(1e-6) * j2)) {
+        return None;
+    }
+    let inv = R::ONE / size.sqrt();
+    n = n.map(|x| x * inv);
+    // A unit vector normal to n: the axis least along n, less its part along n.
+    let k = if n[0].abs() <= n[1].abs() && n[0].abs() <= n[2].abs() {
+        0
+    } else if n[1].abs() <= n[2].abs() {
+        1
+    } else {
+        2
+    };
+    let mut u = [-n[k] * n[0], -n[k] * n[1], -n[k] * n[2]];
+    u[k] += R::ONE;
+    let inv = R::ONE / dot3(&u, &u).sqrt();
+    u = u.map(|x| x * inv);
+    let w = cross(&n, &u);
+    let apply = |v: &[R; 3]| {
+        [
+            d[0] * v[0] + xy * v[1] + zx * v[2],
+            xy * v[0] + d[1] * v[1] + yz * v[2],
+            zx * v[0] + yz * v[1] + d[2] * v[2],
+        ]
+    };
+    let (an, au, aw) = (apply(&n), apply(&u), apply(&w));
+    let ln = dot3(&n, &an);
+    let (a, b, c) = (dot3(&u, &au), dot3(&w, &au), dot3(&w, &aw));
+    // One rotation diagonalises the 2×2 block [[a, b], [b, c]].
+    let (mut lu, mut lw, mut vu, mut vw) = (a, c, u, w);
+    if b != R::ZERO {
+        let half = R::of(0.5);
+        let theta = (c - a) * half / b;
+        let t = if theta.abs() > R::of(1e15) {
+            half / theta
+        } else {
+            let sign = if theta < R::ZERO { -R::ONE } else { R::ONE };
+            sign / (theta.abs() + (R::ONE + theta * theta).sqrt())
+        };
+        let cr = R::ONE / (R::ONE + t * t).sqrt();
+        let sr = t * cr;
+        lu = a - t * b;
+        lw = c + t * b;
+        for i in 0..3 {
+            vu[i] = cr * u[i] - sr * w[i];
+            vw[i] = sr * u[i] + cr * w[i];
+        }
+    }
+    Some(sorted([ln + p, lu + p, lw + p], [n, vu, vw]))
+}
+
+/// Cyclic Jacobi rotations in the fixed order (xy, yz, xz) until the off-diagonal part is at
+/// round-off.
+pub(crate) fn jacobi<R: Real>(s: &[R; 6]) -> Principal<R> {
     let mut a = [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]];
     // Columns of v are the eigenvectors as they form.
     let mut v = [[R::ZERO; 3]; 3];
@@ -31,9 +170,10 @@ pub fn principal<R: Real>(s: &[R; 6]) -> Principal<R> {
     for x in s {
         largest = largest.max(x.abs());
     }
-    // Stop once the off-diagonal part is below round-off squared of the largest entry: the
-    // next rotation would change nothing that can be represented.
-    let tol = R::of(R::EPSILON * R::EPSILON) * largest;
+    // Stop once the off-diagonal part is at round-off of the largest entry: the eigenvalues
+    // then carry an error of that size at most (Weyl), and where a remaining rotation would still
+    // turn the vectors (nearly equal eigenvalues) it would not change Σ λ n ⊗ n beyond it.
+    let tol = R::of(R::EPSILON) * largest;
     let half = R::of(0.5);
     for _ in 0..MAX_SWEEPS {
         let off = a[0][1].abs() + a[1][2].abs() + a[0][2].abs();
@@ -74,18 +214,10 @@ pub fn principal<R: Real>(s: &[R; 6]) -> Principal<R> {
             }
         }
     }
-    let mut order = [0usize, 1, 2];
-    let d = [a[0][0], a[1][1], a[2][2]];
-    // Three compare-swaps sort three values.
-    for (i, j) in [(0, 1), (1, 2), (0, 1)] {
-        if d[order[j]] < d[order[i]] {
-            order.swap(i, j);
-        }
-    }
-    Principal {
-        values: order.map(|k| d[k]),
-        vectors: order.map(|k| [v[0][k], v[1][k], v[2][k]]),
-    }
+    sorted(
+        [a[0][0], a[1][1], a[2][2]],
+        [0, 1, 2].map(|k| [v[0][k], v[1][k], v[2][k]]),
+    )
 }
 
 /// Σ values[i] n_i ⊗ n_i with n_i = `vectors[i]`, as xx yy zz xy yz zx.
@@ -117,7 +249,12 @@ mod tests {
     }
 
     fn check(s: &[f64; 6]) {
-        let p = principal(s);
+        check_with(s, &principal(s));
+        check_with(s, &jacobi(s));
+    }
+
+    fn check_with(s: &[f64; 6], p: &Principal<f64>) {
+        let p = *p;
         let scale = s.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
         assert!(p.values[0] <= p.values[1] && p.values[1] <= p.values[2]);
         for i in 0..3 {
@@ -190,5 +327,54 @@ mod tests {
             }
             check(&s);
         }
+    }
+}
+
+#[cfg(test)]
+mod cost {
+    use super::*;
+    use std::hint::black_box;
+
+    fn states() -> Vec<[f64; 6]> {
+        let mut x = 99u64;
+        let mut rand = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        (0..100_000)
+            .map(|_| {
+                [
+                    -100.0 + 10.0 * rand(),
+                    -60.0 + 10.0 * rand(),
+                    -60.0 + 10.0 * rand(),
+                    10.0 * rand(),
+                    10.0 * rand(),
+                    10.0 * rand(),
+                ]
+            })
+            .collect()
+    }
+
+    /// Cost of each solver alone, for `perf stat`: `PRINCIPAL=jacobi|closed cargo test --release
+    /// -p mpm-solve --lib material::principal::cost -- --ignored`.
+    #[test]
+    #[ignore]
+    fn principal_cost() {
+        let s = states();
+        let which = std::env::var("PRINCIPAL").unwrap_or_default();
+        let mut acc = 0.0;
+        for _ in 0..50 {
+            for t in &s {
+                let p = if which == "jacobi" {
+                    jacobi(black_box(t))
+                } else {
+                    principal(black_box(t))
+                };
+                acc += p.values[0] + p.vectors[2][1];
+            }
+        }
+        black_box(acc);
     }
 }
