@@ -208,6 +208,12 @@ fn scene_keys_are_read_and_refused_by_name() {
             "gravity.ramp: the K0 stresses carry the full weight from the start",
         ),
         (
+            "k0 = 0.5\n[material.liquid]\nporosity = 0.4\ndensity = 1000.0\nbulk_modulus = 2.15e4\n\
+             intrinsic_permeability = 1e-10\nviscosity = 1e-6\ninitial_pore_pressure = -5.0",
+            None,
+            "material \"soil\".k0: the K0 procedure sets the pore pressure",
+        ),
+        (
             "initial_stress = [0, 0, 0, 0, 0, nan]",
             None,
             "material \"soil\".initial_stress: must be finite",
@@ -221,6 +227,14 @@ fn scene_keys_are_read_and_refused_by_name() {
         let e = scene_error(&p);
         assert!(e.contains(expected), "{material}: {e}");
     }
+    // A ground surface without k0 is a mistake.
+    let p = column(d, "surface", "");
+    let text = std::fs::read_to_string(&p)
+        .unwrap()
+        .replace("[gravity]\n", "[gravity]\nk0_surface = 0.5\n");
+    std::fs::write(&p, text).unwrap();
+    let e = scene_error(&p);
+    assert!(e.contains("gravity.k0_surface: no material has k0"), "{e}");
     // The undrained start of a consolidation run sets the stresses itself.
     let text = std::fs::read_to_string(testdata("oedometer.toml"))
         .unwrap()

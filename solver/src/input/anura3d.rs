@@ -489,12 +489,9 @@ fn initial_multiplier(cps: &Cps, key: &str, m: Multiplier, file: &str) -> Result
         Multiplier::Linear { start, .. } | Multiplier::File { start, .. } => start,
         Multiplier::Step { .. } => {
             // The parsed multiplier keeps the final value; the start is the first number.
-            let e = cps
+            let word = cps
                 .get(key)
-                .expect("a step multiplier was read from its key");
-            let word = e
-                .lines
-                .first()
+                .and_then(|e| e.lines.first())
                 .and_then(|l| l.split_whitespace().nth(1))
                 .unwrap_or("");
             word.parse::<f64>().map_err(|_| {

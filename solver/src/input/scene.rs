@@ -1061,6 +1061,13 @@ fn initial_stresses(
     model: &Model,
     consolidation: &Option<ConsolidationSpec>,
 ) -> Result<Option<InitialStress>, (String, String)> {
+    let surface = scene.gravity.as_ref().and_then(|g| g.k0_surface);
+    if surface.is_some() && inputs.iter().flatten().all(|m| m.k0.is_none()) {
+        return Err((
+            "gravity.k0_surface".into(),
+            "no material has k0: the ground surface is only used by the K0 procedure".into(),
+        ));
+    }
     if inputs
         .iter()
         .flatten()
@@ -1106,6 +1113,15 @@ fn initial_stresses(
                     return Err((
                         format!("{item}.k0"),
                         format!("must be finite and at least 0, got {k0}"),
+                    ));
+                }
+                if m.liquid
+                    .as_ref()
+                    .is_some_and(|l| l.initial_pore_pressure != 0.0)
+                {
+                    return Err((
+                        format!("{item}.k0"),
+                        "the K0 procedure sets the pore pressure (hydrostatic below the ground): remove liquid.initial_pore_pressure".into(),
                     ));
                 }
                 k0_used = true;
