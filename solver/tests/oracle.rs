@@ -5,7 +5,6 @@
 //! is unset; a failure when it names no file.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use mpm_shared::anura3d_vtk::{read_step, MaterialPointState};
 use mpm_solve::compare::tolerance::Tolerances;
@@ -13,35 +12,12 @@ use mpm_solve::input::case::Drag;
 use mpm_solve::jobs::consolidation::{ConsolidationSpec, Layer, Start};
 use mpm_solve::jobs::terzaghi;
 
-fn testdata(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../testdata")
-        .join(name)
-}
+mod common;
+use common::{run_oracle, testdata};
 
-/// The Anura3D binary, or `None` (skipped) when `ANURA3D_ORACLE` is unset.
+/// The Anura3D binary, or `None` (skipped, visibly) when `ANURA3D_ORACLE` is unset.
 fn oracle() -> Option<PathBuf> {
-    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let found = mpm_shared::suite::anura3d_oracle(&workspace).unwrap_or_else(|e| panic!("{e}"));
-    if found.is_none() {
-        mpm_shared::suite::skipped("comparison with Anura3D (ANURA3D_ORACLE not set)");
-    }
-    found
-}
-
-/// Runs Anura3D on `dir/NAME.GOM` + `dir/NAME.CPS_001` in `dir`.
-fn run_oracle(bin: &Path, dir: &Path, name: &str) {
-    let out = Command::new(bin)
-        .arg(name)
-        .current_dir(dir)
-        .output()
-        .expect("run Anura3D");
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        text.contains("Calculation finished."),
-        "Anura3D did not finish:\n{}",
-        &text[text.len().saturating_sub(2000)..]
-    );
+    common::oracle("comparison with Anura3D")
 }
 
 /// One load step's pore pressure and height of every material point, for the comparison with

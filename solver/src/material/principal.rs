@@ -220,7 +220,7 @@ pub(crate) fn jacobi<R: Real>(s: &[R; 6]) -> Principal<R> {
     )
 }
 
-/// Σ values[i] n_i ⊗ n_i with n_i = `vectors[i]`, as xx yy zz xy yz zx.
+/// Σ `values[i]` n_i ⊗ n_i with n_i = `vectors[i]`, as xx yy zz xy yz zx.
 #[inline]
 pub fn rebuild<R: Real>(values: &[R; 3], vectors: &[[R; 3]; 3]) -> [R; 6] {
     let mut s = [R::ZERO; 6];

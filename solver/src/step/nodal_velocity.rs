@@ -114,33 +114,11 @@ pub fn read_rows(model: &Model) -> Result<Option<NodalSection>, (String, String)
                 format!("row {}: {what} (expected 'node fx fy fz vx vy vz')", k + 1),
             )
         };
-        if r.len() < 7 {
-            return Err(bad("too few values"));
-        }
-        let node = r[0].as_int().unwrap_or(0);
-        if node < 1 || node as usize > nodes {
-            return Err(bad(&format!(
-                "node {} is not in the mesh (1..={nodes})",
-                r[0].as_f64().unwrap_or(f64::NAN)
-            )));
-        }
-        let mut directions = [false; 3];
-        for (d, flag) in directions.iter_mut().enumerate() {
-            *flag = match r[1 + d].as_int() {
-                Some(0) => false,
-                Some(1) => true,
-                _ => return Err(bad("direction flags must be 0 or 1")),
-            };
-        }
-        let mut velocity = [0.0; 3];
-        for (d, v) in velocity.iter_mut().enumerate() {
-            *v = r[4 + d]
-                .as_f64()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| bad("velocities must be numbers"))?;
-        }
+        let (node, directions, velocity) =
+            crate::step::prescribed::entity_flags_velocity(r, nodes, "node")
+                .map_err(|m| bad(&m))?;
         out.push(PrescribedNode {
-            node: node as u32 - 1,
+            node,
             directions,
             velocity,
         });

@@ -31,6 +31,42 @@ use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 use crate::step::load_curve::LoadCurve;
 
+/// One row `entity fx fy fz vx vy vz` of an Anura3D prescribed-velocity section (material
+/// points or nodes): the 0-based entity (checked against `count`, named `what` in messages),
+/// the direction flags and the velocity. The error says what is wrong with the row.
+pub(crate) fn entity_flags_velocity(
+    r: &[mpm_shared::model::Token],
+    count: usize,
+    what: &str,
+) -> Result<(u32, [bool; 3], [f64; 3]), String> {
+    if r.len() < 7 {
+        return Err("too few values".into());
+    }
+    let entity = r[0].as_int().unwrap_or(0);
+    if entity < 1 || entity as usize > count {
+        return Err(format!(
+            "{what} {} is not in the mesh (1..={count})",
+            r[0].as_f64().unwrap_or(f64::NAN)
+        ));
+    }
+    let mut directions = [false; 3];
+    for (d, flag) in directions.iter_mut().enumerate() {
+        *flag = match r[1 + d].as_int() {
+            Some(0) => false,
+            Some(1) => true,
+            _ => return Err("direction flags must be 0 or 1".into()),
+        };
+    }
+    let mut velocity = [0.0; 3];
+    for (d, v) in velocity.iter_mut().enumerate() {
+        *v = r[4 + d]
+            .as_f64()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| "velocities must be numbers".to_string())?;
+    }
+    Ok((entity as u32 - 1, directions, velocity))
+}
+
 /// One row of a prescribed-velocity section.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PrescribedElement {
@@ -148,33 +184,10 @@ pub fn read_rows(model: &Model) -> Result<Vec<PrescribedElement>, (String, Strin
                 ),
             )
         };
-        if r.len() < 7 {
-            return Err(bad("too few values"));
-        }
-        let element = r[0].as_int().unwrap_or(0);
-        if element < 1 || element as usize > elements {
-            return Err(bad(&format!(
-                "element {} is not in the mesh (1..={elements})",
-                r[0].as_f64().unwrap_or(f64::NAN)
-            )));
-        }
-        let mut directions = [false; 3];
-        for (d, flag) in directions.iter_mut().enumerate() {
-            *flag = match r[1 + d].as_int() {
-                Some(0) => false,
-                Some(1) => true,
-                _ => return Err(bad("direction flags must be 0 or 1")),
-            };
-        }
-        let mut velocity = [0.0; 3];
-        for (d, v) in velocity.iter_mut().enumerate() {
-            *v = r[4 + d]
-                .as_f64()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| bad("velocities must be numbers"))?;
-        }
+        let (element, directions, velocity) =
+            entity_flags_velocity(r, elements, "element").map_err(|m| bad(&m))?;
         out.push(PrescribedElement {
-            element: element as u32 - 1,
+            element,
             directions,
             velocity,
         });

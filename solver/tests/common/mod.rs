@@ -44,3 +44,29 @@ pub fn golden_scene(
     std::fs::write(&p, edit(text)).unwrap();
     p
 }
+
+/// The Anura3D binary `ANURA3D_ORACLE` names, or `None` (the comparison `what` is reported as
+/// skipped) when it is unset.
+pub fn oracle(what: &str) -> Option<PathBuf> {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let found = mpm_shared::suite::anura3d_oracle(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    if found.is_none() {
+        mpm_shared::suite::skipped(&format!("{what} (ANURA3D_ORACLE not set)"));
+    }
+    found
+}
+
+/// Runs Anura3D on `dir/NAME.GOM` + `dir/NAME.CPS_001` in `dir`; fails unless it finishes.
+pub fn run_oracle(bin: &Path, dir: &Path, name: &str) {
+    let out = std::process::Command::new(bin)
+        .arg(name)
+        .current_dir(dir)
+        .output()
+        .expect("run Anura3D");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("Calculation finished."),
+        "Anura3D did not finish:\n{}",
+        &text[text.len().saturating_sub(2000)..]
+    );
+}
