@@ -31,7 +31,7 @@
 //! plastic point-step adds about 240 ns (docs/design.md, "Laws").
 
 use crate::material::linear_elastic::LinearElastic;
-use crate::material::principal::{principal, rebuild};
+use crate::material::principal::split;
 use crate::real::Real;
 
 /// Anura3D's largest sin φ: above it the yield function uses this value (φ ≈ 87.4°).
@@ -68,11 +68,16 @@ pub fn apex(friction_deg: f64, cohesion: f64) -> f64 {
 
 /// The planes the return can make active, as yield gradient a, flow gradient D b and a·σ at
 /// yield. 0: the face F(σ1, σ3); 1: F(σ1, σ2) (with 0: σ2 = σ3, the compression edge);
-/// 2: F(σ2, σ3) (with 0: σ1 = σ2, the extension edge); 3, 4, 5: σ3, σ2, σ1 at σt.
-struct Planes<R: Real> {
+/// 2: F(σ2, σ3) (with 0: σ1 = σ2, the extension edge); 3, 4, 5: σ3, σ2, σ1 at σt. They depend
+/// on the material alone, so a law with fixed strength keeps them (with the products
+/// a_j · D b_l of its multiplier systems) rather than forming them at every return.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Planes<R: Real> {
     a: [[R; 3]; 6],
     db: [[R; 3]; 6],
     k: [R; 6],
+    /// a_j · D b_l for the planes in use (the pyramid's three, or all six with the cut-off).
+    adb: [[R; 6]; 6],
 }
 
 /// Active sets tried in turn without the cut-off: face, extension edge, compression edge; a
@@ -190,12 +195,32 @@ impl<R: Real> Surface<R> {
         if self.surely_inside(s) {
             return None;
         }
-        self.return_decomposed(el, s)
+        self.return_decomposed(el, &self.planes(el), s)
+    }
+
+    /// [`Surface::return_map`] with the planes of [`Surface::planes`] for this elasticity
+    /// formed beforehand.
+    #[inline]
+    pub fn return_map_with(
+        &self,
+        el: &LinearElastic<R>,
+        planes: &Planes<R>,
+        s: &mut [R; 6],
+    ) -> Option<[R; 3]> {
+        if self.surely_inside(s) {
+            return None;
+        }
+        self.return_decomposed(el, planes, s)
     }
 
     /// The part of [`Surface::return_map`] that needs the principal stresses.
-    fn return_decomposed(&self, el: &LinearElastic<R>, s: &mut [R; 6]) -> Option<[R; 3]> {
-        let p = principal(s);
+    fn return_decomposed(
+        &self,
+        el: &LinearElastic<R>,
+        planes: &Planes<R>,
+        s: &mut [R; 6],
+    ) -> Option<[R; 3]> {
+        let p = split(s);
         let sig = p.values;
         let mut scale = sig[0].abs().max(sig[2].abs()).max(self.cohesion);
         if self.cut_off {
@@ -207,12 +232,13 @@ impl<R: Real> Surface<R> {
         if self.yield_value(sig[0], sig[2]) <= tol && inside_tension {
             return None;
         }
-        let back = self.principal_return(el, &sig, scale);
-        *s = rebuild(&back, &p.vectors);
+        let back = self.principal_return(el, planes, &sig, scale);
+        *s = p.rebuild(&back);
         Some([sig[0] - back[0], sig[1] - back[1], sig[2] - back[2]])
     }
 
-    fn planes(&self, el: &LinearElastic<R>) -> Planes<R> {
+    /// The return's planes for the elasticity `el`.
+    pub fn planes(&self, el: &LinearElastic<R>) -> Planes<R> {
         let half = R::of(0.5);
         let (z, one) = (R::ZERO, R::ONE);
         let (mf, pf) = (half * (one - self.sin_phi), half * (one + self.sin_phi));
@@ -239,17 +265,34 @@ impl<R: Real> Surface<R> {
             [l + g2 * b[0], l + g2 * b[1], l + g2 * b[2]]
         });
         let (c, t) = (self.cohesion, self.tension);
+        let used = if self.cut_off { 6 } else { 3 };
+        let mut adb = [[R::ZERO; 6]; 6];
+        for j in 0..used {
+            for l in 0..used {
+                adb[j][l] = dot(&a[j], &db[l]);
+            }
+        }
         Planes {
             a,
             db,
             k: [c, c, c, t, t, t],
+            adb,
         }
     }
 
     /// The returned principal stresses of the sorted trial `sig` (outside the surface).
-    fn principal_return(&self, el: &LinearElastic<R>, sig: &[R; 3], scale: R) -> [R; 3] {
-        let planes = self.planes(el);
-        let f = core::array::from_fn::<R, 6, _>(|j| dot(&planes.a[j], sig) - planes.k[j]);
+    fn principal_return(
+        &self,
+        el: &LinearElastic<R>,
+        planes: &Planes<R>,
+        sig: &[R; 3],
+        scale: R,
+    ) -> [R; 3] {
+        let used = if self.cut_off { 6 } else { 3 };
+        let mut f = [R::ZERO; 6];
+        for (j, f) in f.iter_mut().enumerate().take(used) {
+            *f = dot(&planes.a[j], sig) - planes.k[j];
+        }
         let tol = R::of(64.0 * R::EPSILON) * scale;
         let sets: &[&[usize]] = if self.cut_off {
             &WITH_CUT_OFF
@@ -259,10 +302,22 @@ impl<R: Real> Surface<R> {
         // The first consistent candidate wins. Failing all, the least inconsistent one if only
         // round-off at a region boundary failed it, else the apex (without cut-off).
         let mut best: Option<([R; 3], R)> = None;
-        for set in sets {
-            let Some((back, violation)) = self.candidate(el, &planes, &f, sig, set) else {
+        // On the pyramid, a face return that leaves σ2 above σ3 lies beyond the compression
+        // edge, so that edge is tried before the extension edge (it saves a candidate on the
+        // triaxial compression states that soil under gravity reaches).
+        let mut face_past_compression_edge = false;
+        for (i, set) in sets.iter().enumerate() {
+            let set = if !self.cut_off && i > 0 && face_past_compression_edge {
+                PYRAMID[3 - i]
+            } else {
+                set
+            };
+            let Some((back, violation)) = self.candidate(el, planes, &f, sig, set) else {
                 continue;
             };
+            if i == 0 {
+                face_past_compression_edge = back[1] > back[2];
+            }
             if violation <= tol {
                 return back;
             }
@@ -288,7 +343,7 @@ impl<R: Real> Surface<R> {
         sig: &[R; 3],
         set: &[usize],
     ) -> Option<([R; 3], R)> {
-        let m = |j: usize, l: usize| dot(&planes.a[set[j]], &planes.db[set[l]]);
+        let m = |j: usize, l: usize| planes.adb[set[j]][set[l]];
         let rhs = |j: usize| f[set[j]];
         let mut dl = [R::ZERO; 3];
         let tiny = R::of(R::EPSILON) * el.shear;
@@ -362,6 +417,8 @@ pub struct MohrCoulomb<R: Real> {
     pub elastic: LinearElastic<R>,
     /// The yield surface and flow rule.
     pub surface: Surface<R>,
+    /// The surface's return planes for `elastic`.
+    planes: Planes<R>,
 }
 
 impl<R: Real> MohrCoulomb<R> {
@@ -375,9 +432,12 @@ impl<R: Real> MohrCoulomb<R> {
         dilatancy_deg: f64,
         tension: f64,
     ) -> Self {
+        let elastic = LinearElastic::new(young, poisson);
+        let surface = Surface::new(friction_deg, cohesion, dilatancy_deg, tension);
         MohrCoulomb {
-            elastic: LinearElastic::new(young, poisson),
-            surface: Surface::new(friction_deg, cohesion, dilatancy_deg, tension),
+            elastic,
+            surface,
+            planes: surface.planes(&elastic),
         }
     }
 
@@ -386,13 +446,14 @@ impl<R: Real> MohrCoulomb<R> {
     #[inline]
     pub fn update(&self, s: &mut [R; 6], de: &[R; 6]) {
         self.elastic.update(s, de);
-        self.surface.return_map(&self.elastic, s);
+        self.surface.return_map_with(&self.elastic, &self.planes, s);
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::principal::principal;
     use proptest::prelude::*;
 
     const E: f64 = 10_000.0;
@@ -723,6 +784,7 @@ mod tests {
 #[cfg(test)]
 mod cost {
     use super::*;
+    use crate::material::principal::principal;
     use std::hint::black_box;
     use std::time::Instant;
     /// ns per update of `f` over `states` (best of five passes).
@@ -817,6 +879,11 @@ mod cost {
             s[0] = p.values[0] + p.vectors[0][0];
         });
         println!("Jacobi alone: {jac:.2} ns");
+        let sp = time(&trials, &de, &|s, _| {
+            let p = crate::material::principal::split(s);
+            s[0] = p.values[0] + p.vector[0] + p.plane[3];
+        });
+        println!("split (far eigenpair and the pair's plane) alone: {sp:.2} ns");
         let sorted: Vec<[f64; 6]> = yielding
             .iter()
             .map(|s| {
@@ -829,7 +896,7 @@ mod cost {
         let ret = time(&sorted, &de, &|s, _| {
             let v = l
                 .surface
-                .principal_return(&l.elastic, &[s[0], s[1], s[2]], 100.0);
+                .principal_return(&l.elastic, &l.planes, &[s[0], s[1], s[2]], 100.0);
             s[0] = v[0];
         });
         println!("principal return alone: {ret:.2} ns");

@@ -60,9 +60,12 @@ fn sorted<R: Real>(values: [R; 3], vectors: [[R; 3]; 3]) -> Principal<R> {
     }
 }
 
-/// The closed form described in the module's comment; `None` for a tensor isotropic to
-/// round-off, or a non-finite one.
-fn closed_form<R: Real>(s: &[R; 6]) -> Option<Principal<R>> {
+/// The eigenvalue of `s` farthest from the middle one (from the characteristic cubic, then
+/// refined as the Rayleigh quotient of its vector) less the mean p, its unit vector (a cross
+/// product of two rows of s - λI) and p; `None` for a tensor isotropic to round-off, or a
+/// non-finite one.
+#[inline]
+fn far_pair<R: Real>(s: &[R; 6]) -> Option<(R, [R; 3], R)> {
     let p = (s[0] + s[1] + s[2]) * R::of(1.0 / 3.0);
     let d = [s[0] - p, s[1] - p, s[2] - p];
     let (xy, yz, zx) = (s[3], s[4], s[5]);
@@ -111,6 +114,20 @@ fn closed_form<R: Real>(s: &[R; 6]) -> Option<Principal<R>> {
     }
     let inv = R::ONE / size.sqrt();
     n = n.map(|x| x * inv);
+    let an = [
+        d[0] * n[0] + xy * n[1] + zx * n[2],
+        xy * n[0] + d[1] * n[1] + yz * n[2],
+        zx * n[0] + yz * n[1] + d[2] * n[2],
+    ];
+    Some((dot3(&n, &an), n, p))
+}
+
+/// The closed form described in the module's comment; `None` for a tensor isotropic to
+/// round-off, or a non-finite one.
+fn closed_form<R: Real>(s: &[R; 6]) -> Option<Principal<R>> {
+    let (ln, n, p) = far_pair(s)?;
+    let d = [s[0] - p, s[1] - p, s[2] - p];
+    let (xy, yz, zx) = (s[3], s[4], s[5]);
     // A unit vector normal to n: the axis least along n, less its part along n.
     let k = if n[0].abs() <= n[1].abs() && n[0].abs() <= n[2].abs() {
         0
@@ -131,8 +148,7 @@ fn closed_form<R: Real>(s: &[R; 6]) -> Option<Principal<R>> {
             zx * v[0] + yz * v[1] + d[2] * v[2],
         ]
     };
-    let (an, au, aw) = (apply(&n), apply(&u), apply(&w));
-    let ln = dot3(&n, &an);
+    let (au, aw) = (apply(&u), apply(&w));
     let (a, b, c) = (dot3(&u, &au), dot3(&w, &au), dot3(&w, &aw));
     // One rotation diagonalises the 2×2 block [[a, b], [b, c]].
     let (mut lu, mut lw, mut vu, mut vw) = (a, c, u, w);
@@ -220,6 +236,114 @@ pub(crate) fn jacobi<R: Real>(s: &[R; 6]) -> Principal<R> {
     )
 }
 
+/// A symmetric tensor split along its best separated eigenvalue: that eigenpair, and the rest
+/// as a multiple of the identity on the plane normal to it plus a traceless part there. This
+/// is all a coaxial return needs when it moves the other two eigenvalues: their mean and half
+/// gap carry over, and their vectors never have to be formed (for a nearly repeated pair, the
+/// edges of a Mohr–Coulomb pyramid, they are the ill-conditioned and the costly part).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Split<R: Real> {
+    /// Eigenvalues, smallest first (as [`Principal::values`]).
+    pub values: [R; 3],
+    /// Which of `values` (0 or 2) belongs to `vector`.
+    pub far: usize,
+    /// The unit eigenvector of `values[far]`.
+    pub vector: [R; 3],
+    /// The traceless part of the tensor in the plane normal to `vector` (xx yy zz xy yz zx): half
+    /// the gap of the other two eigenvalues times (w ⊗ w - u ⊗ u), u and w their vectors.
+    pub plane: [R; 6],
+}
+
+/// The [`Split`] of the symmetric tensor `s` (xx yy zz xy yz zx): the closed form's best
+/// separated eigenpair, or the Jacobi decomposition's extreme pair for a nearly isotropic
+/// tensor.
+#[inline]
+pub fn split<R: Real>(s: &[R; 6]) -> Split<R> {
+    let (lambda, n) = match far_pair(s) {
+        Some((l, n, p)) => (l + p, n),
+        None => {
+            let p = jacobi(s);
+            // The extreme eigenvalue farther from the middle one.
+            let k = if p.values[2] - p.values[1] >= p.values[1] - p.values[0] {
+                2
+            } else {
+                0
+            };
+            (p.values[k], p.vectors[k])
+        }
+    };
+    let half = R::of(0.5);
+    let m = half * (s[0] + s[1] + s[2] - lambda);
+    // s - λ n ⊗ n - m (I - n ⊗ n): exact to the round-off of s itself, whatever the gap.
+    let c = m - lambda;
+    let plane = [
+        s[0] - m + c * n[0] * n[0],
+        s[1] - m + c * n[1] * n[1],
+        s[2] - m + c * n[2] * n[2],
+        s[3] + c * n[0] * n[1],
+        s[4] + c * n[1] * n[2],
+        s[5] + c * n[2] * n[0],
+    ];
+    let norm2 = plane[0] * plane[0]
+        + plane[1] * plane[1]
+        + plane[2] * plane[2]
+        + R::of(2.0) * (plane[3] * plane[3] + plane[4] * plane[4] + plane[5] * plane[5]);
+    // |plane| = sqrt(2) g for the half gap g.
+    let g = (half * norm2).sqrt();
+    let (lo, hi) = (m - g, m + g);
+    let (values, far) = if lambda >= hi {
+        ([lo, hi, lambda], 2)
+    } else if lambda <= lo {
+        ([lambda, lo, hi], 0)
+    } else {
+        // Only round-off puts the far value between the others (a tensor isotropic to it).
+        let v = [lambda, lo, hi];
+        let (a, b) = (v[0].min(v[1]), v[0].max(v[1]));
+        (
+            [a, b.min(v[2]), b.max(v[2])],
+            if lambda <= m { 0 } else { 2 },
+        )
+    };
+    Split {
+        values,
+        far,
+        vector: n,
+        plane,
+    }
+}
+
+impl<R: Real> Split<R> {
+    /// The coaxial tensor with eigenvalues `values` (ascending, in the order of
+    /// [`Split::values`]), as xx yy zz xy yz zx.
+    #[inline]
+    pub fn rebuild(&self, values: &[R; 3]) -> [R; 6] {
+        let half = R::of(0.5);
+        let (lambda, lo, hi) = if self.far == 2 {
+            (values[2], values[0], values[1])
+        } else {
+            (values[0], values[1], values[2])
+        };
+        let (m, g) = (half * (lo + hi), half * (hi - lo));
+        let old = half
+            * (self.values[if self.far == 2 { 1 } else { 2 }]
+                - self.values[if self.far == 2 { 0 } else { 1 }]);
+        // The pair's traceless part scales with its half gap; a pair that was exactly repeated
+        // and is split now has no direction to split along: keep it repeated (the returns that
+        // reach here move a repeated pair together).
+        let r = if old > R::ZERO { g / old } else { R::ZERO };
+        let n = self.vector;
+        let c = lambda - m;
+        [
+            m + c * n[0] * n[0] + r * self.plane[0],
+            m + c * n[1] * n[1] + r * self.plane[1],
+            m + c * n[2] * n[2] + r * self.plane[2],
+            c * n[0] * n[1] + r * self.plane[3],
+            c * n[1] * n[2] + r * self.plane[4],
+            c * n[2] * n[0] + r * self.plane[5],
+        ]
+    }
+}
+
 /// Σ `values[i]` n_i ⊗ n_i with n_i = `vectors[i]`, as xx yy zz xy yz zx.
 #[inline]
 pub fn rebuild<R: Real>(values: &[R; 3], vectors: &[[R; 3]; 3]) -> [R; 6] {
@@ -251,6 +375,46 @@ mod tests {
     fn check(s: &[f64; 6]) {
         check_with(s, &principal(s));
         check_with(s, &jacobi(s));
+        check_split(s);
+    }
+
+    /// The split has the decomposition's eigenvalues, rebuilds the tensor, and moving its
+    /// eigenvalues gives what the full decomposition's vectors give (where the moved pair's
+    /// directions are defined: a pair that stays repeated, or one that was distinct).
+    fn check_split(s: &[f64; 6]) {
+        let scale = s.iter().fold(1e-300f64, |m, x| m.max(x.abs()));
+        let sp = split(s);
+        let p = principal(s);
+        for i in 0..3 {
+            assert!(
+                (sp.values[i] - p.values[i]).abs() < 1e-13 * scale,
+                "{s:?}: {:?} against {:?}",
+                sp.values,
+                p.values
+            );
+        }
+        let an = apply(s, &sp.vector);
+        for k in 0..3 {
+            assert!((an[k] - sp.values[sp.far] * sp.vector[k]).abs() < 1e-13 * scale);
+        }
+        let same = sp.rebuild(&sp.values);
+        for c in 0..6 {
+            assert!((same[c] - s[c]).abs() < 1e-13 * scale, "{s:?} -> {same:?}");
+        }
+        // A return-like move: every value shifted, the pair's gap halved.
+        let (a, b) = if sp.far == 2 { (0, 1) } else { (1, 2) };
+        let mut moved = sp.values.map(|v| v - 0.3 * scale);
+        let mid = 0.5 * (moved[a] + moved[b]);
+        moved[a] = 0.5 * (moved[a] + mid);
+        moved[b] = 0.5 * (moved[b] + mid);
+        let got = sp.rebuild(&moved);
+        let want = rebuild(&moved, &p.vectors);
+        for c in 0..6 {
+            assert!(
+                (got[c] - want[c]).abs() < 1e-12 * scale,
+                "{s:?}: {got:?} against {want:?}"
+            );
+        }
     }
 
     fn check_with(s: &[f64; 6], p: &Principal<f64>) {
@@ -287,6 +451,13 @@ mod tests {
         // Two equal eigenvalues (a triaxial state rotated off the axes).
         check(&[-100.0, -100.0, -300.0, 0.0, 0.0, 0.0]);
         check(&[-200.0, -200.0, -100.0, 100.0, 0.0, 0.0]);
+        // A pair split by round-off only (a state on a Mohr–Coulomb edge after a return).
+        check(&[-100.0, -200.0, -100.0 * (1.0 + 1e-15), 1e-14, 0.0, 0.0]);
+        // The split's pair kept together when it was repeated.
+        let sp = split(&[-100.0, -300.0, -100.0, 0.0, 0.0, 0.0]);
+        assert_eq!((sp.far, sp.values), (0, [-300.0, -100.0, -100.0]));
+        let back = sp.rebuild(&[-250.0, -90.0, -90.0]);
+        assert_eq!(back, [-90.0, -250.0, -90.0, 0.0, 0.0, 0.0]);
         // Eigenvalues 1, 2, 4 of a known matrix: [[2,1,0],[1,2,0],[0,0,4]] has 1, 3, 4.
         let p = principal(&[2.0, 2.0, 4.0, 1.0, 0.0, 0.0]);
         for (got, want) in p.values.iter().zip([1.0, 3.0, 4.0]) {
