@@ -119,6 +119,23 @@ struct Args {
     /// For tests of --resume: abort, as a crash would, once this process has taken STEP steps.
     #[arg(long, hide = true, value_name = "STEP")]
     abort_after_step: Option<u64>,
+    /// For tests of a team started again mid-run (as when a core is taken): after step STEP,
+    /// carry on with THREADS unpinned threads.
+    #[arg(long, hide = true, value_name = "STEP:THREADS", value_parser = step_and_threads)]
+    rethread_after_step: Option<(u64, usize)>,
+}
+
+/// `STEP:THREADS` of `--rethread-after-step`.
+fn step_and_threads(s: &str) -> Result<(u64, usize), String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("expected STEP:THREADS, not {s:?}"))?;
+    let step = a.parse().map_err(|e| format!("STEP {a:?}: {e}"))?;
+    let threads: usize = b.parse().map_err(|e| format!("THREADS {b:?}: {e}"))?;
+    if threads == 0 {
+        return Err("THREADS must be at least 1".into());
+    }
+    Ok((step, threads))
 }
 
 use mpm_solve::driver::checkpoint::{self, Every, Holds};
@@ -579,6 +596,7 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         resume: args.resume.is_some(),
         stop: Some(stop),
         abort_after_step: args.abort_after_step,
+        rethread_after_step: args.rethread_after_step,
     };
     let mode = if args.quiet {
         Progress::Off

@@ -197,8 +197,9 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub slots: Slots<R>,
     /// Scratch of the re-sort by element.
     sort_scratch: SortScratch,
-    /// Per thread, from the last locate: first point found outside (index, element), count.
-    locate_outcome: Vec<((usize, u32), u64)>,
+    /// Per thread, from the last locate: first point found outside (index, element), count,
+    /// and whether any of its points changed element.
+    locate_outcome: Vec<((usize, u32), u64, bool)>,
     /// Liquid constants per material index (`None` for dry materials; all `None` in a dry case).
     pub fluids: Vec<Option<Fluid<R>>>,
     /// Fixed liquid components per computational node.
@@ -472,7 +473,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             prescribed,
             nodal_velocity,
             reactions,
-            locate_outcome: vec![((usize::MAX, 0), 0); team.threads],
+            locate_outcome: vec![((usize::MAX, 0), 0, false); team.threads],
             team,
             layout,
             slots,
@@ -573,6 +574,16 @@ impl<R: Real, E: Element> Engine<R, E> {
             );
         }
         out
+    }
+
+    /// Carries on with `team` (between steps): the threads' ranges are laid out again for its
+    /// thread count. The results do not change (they never depend on the threads); the
+    /// points stay where the old team first touched them.
+    pub fn rethread(&mut self, team: Team) {
+        self.layout = Layout::new(&self.mesh, &self.particles, team.threads);
+        self.slots = self.layout.new_slots();
+        self.locate_outcome = vec![((usize::MAX, 0), 0, false); team.threads];
+        self.team = team;
     }
 
     /// Restores a checkpoint into an engine just set up for the same case: the scalars of
@@ -960,12 +971,15 @@ impl<R: Real, E: Element> Engine<R, E> {
             let r = layout.particle_range(t);
             // SAFETY: the particle ranges of the threads are disjoint.
             let (el, active) = unsafe { (elements.range(r.clone()), actives.range(r.clone())) };
-            let (mut first, mut count) = ((usize::MAX, 0u32), 0u64);
+            let (mut first, mut count, mut moved) = ((usize::MAX, 0u32), 0u64, false);
             for (j, i) in r.enumerate() {
                 if !active[j] {
                     continue;
                 }
-                match walk(mesh, el[j], &x[i]) {
+                let found = walk(mesh, el[j], &x[i]);
+                let (Found::In(e) | Found::Outside(e)) = found;
+                moved |= e != el[j];
+                match found {
                     Found::In(e) => el[j] = e,
                     Found::Outside(e) => {
                         el[j] = e;
@@ -981,10 +995,10 @@ impl<R: Real, E: Element> Engine<R, E> {
                 }
             }
             // SAFETY: slot t is this thread's only.
-            unsafe { outcome.write(t, (first, count)) };
+            unsafe { outcome.write(t, (first, count, moved)) };
         });
         if !drop_lost {
-            if let Some(&((i, e), _)) = self.locate_outcome.iter().filter(|o| o.1 > 0).min() {
+            if let Some(&((i, e), _, _)) = self.locate_outcome.iter().filter(|o| o.1 > 0).min() {
                 return Err(Lost {
                     id: p.id[i],
                     step: self.steps,
@@ -999,8 +1013,15 @@ impl<R: Real, E: Element> Engine<R, E> {
         self.lost += self
             .comm
             .sum_count(self.locate_outcome.iter().map(|o| o.1).sum::<u64>());
-        if sort_by_element(p, mesh.elements(), &mut self.sort_scratch) {
+        let moved = self.locate_outcome.iter().any(|o| o.2);
+        let permuted = sort_by_element(p, mesh.elements(), &mut self.sort_scratch);
+        // A point can change element and still be in order (the last point of an element
+        // moving into the next): the elements' point ranges must follow it all the same, or
+        // the passes that walk elements would take it with its old element's nodes.
+        if moved || permuted {
             self.layout.set_particle_elements(&p.element);
+        }
+        if permuted {
             // Point loads and prescribed points follow their points: old index → new index.
             if !self.point_loads.is_empty() || self.prescribed.is_some() {
                 let sc = &mut self.sort_scratch;

@@ -113,6 +113,9 @@ pub struct RunOptions {
     /// For tests of resuming: abort the process, as a crash would, once it has taken this many
     /// steps (counted over the runs of a job, from where a resumed run starts).
     pub abort_after_step: Option<u64>,
+    /// For tests of a team that changes while the run goes on: after this step, start the
+    /// team again with this many threads (unpinned), as a core taken by another process does.
+    pub rethread_after_step: Option<(u64, usize)>,
 }
 
 impl Default for RunOptions {
@@ -125,6 +128,7 @@ impl Default for RunOptions {
             resume: false,
             stop: None,
             abort_after_step: None,
+            rethread_after_step: None,
         }
     }
 }
@@ -381,6 +385,23 @@ fn drive<R: Real>(
                 return Err(e.into());
             }
             d.taken += 1;
+            if let Some(taken) = engine.team.recheck() {
+                let before = engine.team.threads;
+                let team = engine.team.replacement(None, &taken);
+                engine.rethread(team.map_err(crate::driver::engine::SetupError::from)?);
+                log::warn!(
+                    "step {}: other processes took cores {taken:?}, where worker threads were pinned; {before} threads pinned became {} {} (the results do not change)",
+                    engine.steps,
+                    engine.team.threads,
+                    if engine.team.pinned.iter().any(Option::is_some) { "on the free cores" } else { "unpinned" }
+                );
+            }
+            if let Some((at, threads)) = options.rethread_after_step {
+                if engine.steps == at {
+                    let team = engine.team.replacement(Some(threads), &[]);
+                    engine.rethread(team.map_err(crate::driver::engine::SetupError::from)?);
+                }
+            }
             if options.drop_lost && engine.lost > 0 {
                 check_lost(&engine, options.max_lost)?;
             }

@@ -1,7 +1,8 @@
 //! Which cores are free: a short look at the kernel's per-core counters (`/proc/stat`) before
 //! the team starts, so that a run on a shared machine neither pins a thread to a core another
 //! process keeps busy nor waits at every barrier for the thread that shares it (docs/design.md
-//! §5.1). Only the team's start consults it; results never depend on it.
+//! §5.1). The team's start consults it, and a team pinned by [`crate::parallel::team::Pin::Auto`]
+//! looks again every [`RECHECK`] while it runs; results never depend on it.
 
 use std::time::Duration;
 
@@ -10,6 +11,15 @@ pub const WINDOW: Duration = Duration::from_millis(50);
 
 /// A core counts as busy when others used more than this share of it during the window.
 pub const BUSY_SHARE: f64 = 0.5;
+
+/// While the team runs, a core one of its pinned threads keeps busy counts as taken when
+/// others used more than this share of it since the last look: the kernel shares a core about
+/// evenly, so a competitor gets at most about half of it, and far less than that already
+/// stalls the team at its barriers.
+pub const TAKEN_SHARE: f64 = 0.2;
+
+/// How often a pinned team looks at its cores while it runs.
+pub const RECHECK: Duration = Duration::from_secs(1);
 
 /// Per-core (busy, total) jiffies from the text of `/proc/stat`: the `cpuN` lines, busy being
 /// everything but idle and iowait. Lines that do not parse are skipped.
@@ -33,12 +43,13 @@ pub fn parse_stat(text: &str) -> Vec<(usize, u64, u64)> {
 }
 
 /// The cores of `cores` whose busy share between the samples `before` and `after` (from
-/// [`parse_stat`]) exceeds [`BUSY_SHARE`]. A core missing from either sample, or without ticks
-/// in between, is taken as free.
+/// [`parse_stat`]) exceeds `share` ([`BUSY_SHARE`] before the team starts). A core missing from
+/// either sample, or without ticks in between, is taken as free.
 pub fn busy_between(
     cores: &[usize],
     before: &[(usize, u64, u64)],
     after: &[(usize, u64, u64)],
+    share: f64,
 ) -> Vec<usize> {
     let find = |s: &[(usize, u64, u64)], c| s.iter().find(|e| e.0 == c).map(|e| (e.1, e.2));
     cores
@@ -46,7 +57,7 @@ pub fn busy_between(
         .copied()
         .filter(|&c| match (find(before, c), find(after, c)) {
             (Some((b0, t0)), Some((b1, t1))) if t1 > t0 => {
-                b1.saturating_sub(b0) as f64 / (t1 - t0) as f64 > BUSY_SHARE
+                b1.saturating_sub(b0) as f64 / (t1 - t0) as f64 > share
             }
             _ => false,
         })
@@ -106,6 +117,18 @@ impl Look {
         if let Some(rest) = WINDOW.checked_sub(self.at.elapsed()) {
             std::thread::sleep(rest);
         }
+        self.others_above(cores, BUSY_SHARE)
+    }
+
+    /// How long ago the look began.
+    pub fn age(&self) -> Duration {
+        self.at.elapsed()
+    }
+
+    /// Ends the look now, without waiting: the cores of `cores` of which other processes used
+    /// more than `share` since it began, this process's own threads taken off the cores they
+    /// last ran on (a pinned worker always runs on its own).
+    pub fn others_above(self, cores: &[usize], share: f64) -> Option<Vec<usize>> {
         let own = own_threads();
         let mut after = parse_stat(&std::fs::read_to_string("/proc/stat").ok()?);
         for &(tid, ticks, core) in &own {
@@ -114,7 +137,7 @@ impl Look {
                 c.1 = c.1.saturating_sub(ticks.saturating_sub(before));
             }
         }
-        Some(busy_between(cores, &self.cores, &after))
+        Some(busy_between(cores, &self.cores, &after, share))
     }
 }
 
@@ -158,7 +181,14 @@ ctxt 999\n";
         let before = vec![(0, 75, 580), (1, 75, 580), (2, 0, 10)];
         // Core 0: 4 of 5 ticks busy; core 1: 1 of 5; core 2: no ticks; core 3 unknown.
         let after = vec![(0, 79, 585), (1, 76, 585), (2, 0, 10)];
-        assert_eq!(busy_between(&[0, 1, 2, 3], &before, &after), vec![0]);
+        assert_eq!(
+            busy_between(&[0, 1, 2, 3], &before, &after, BUSY_SHARE),
+            vec![0]
+        );
+        // While the team runs, a quarter of a core taken by others is enough.
+        let after = vec![(0, 76, 584), (1, 75, 584), (2, 0, 10)];
+        assert!(busy_between(&[0, 1], &before, &after, BUSY_SHARE).is_empty());
+        assert_eq!(busy_between(&[0, 1], &before, &after, TAKEN_SHARE), vec![0]);
     }
 
     #[test]

@@ -29,8 +29,16 @@ pub struct Team {
     /// The core each thread was pinned to (`None` where pinning was not asked for or refused).
     pub pinned: Vec<Option<usize>>,
     /// Cores available to the process that other processes kept busy when the team started
-    /// (looked at for the automatic thread count and `Pin::Auto` only).
+    /// (looked at for the automatic thread count and `Pin::Auto` only), and those found taken
+    /// while it ran ([`Team::recheck`]).
     pub busy: Vec<usize>,
+    /// Whether the thread count was chosen here (asked for as 0): a team started again after
+    /// a core was taken chooses it again.
+    pub auto_threads: bool,
+    /// Whether [`Team::recheck`] looks at the cores (`Pin::Auto` with pinned threads).
+    watching: bool,
+    /// The look under way while the team runs.
+    look: Option<crate::parallel::machine::Look>,
 }
 
 impl std::fmt::Debug for Team {
@@ -70,6 +78,7 @@ impl Team {
             .copied()
             .filter(|c| !busy.contains(&c.id))
             .collect();
+        let auto_threads = threads == 0;
         let threads = match threads {
             0 if look => free.len().clamp(1, available),
             0 => available,
@@ -102,16 +111,66 @@ impl Team {
             })?;
         // Let every worker run its start handler before the pinning is read.
         pool.broadcast(|_| ());
-        let pinned = granted
+        let pinned: Vec<Option<usize>> = granted
             .iter()
             .map(|m| *m.lock().expect("not poisoned"))
             .collect();
+        let watching = pin == Pin::Auto && pinned.iter().any(Option::is_some);
         Ok(Team {
             pool,
             threads,
             pinned,
             busy,
+            auto_threads,
+            watching,
+            look: None,
         })
+    }
+
+    /// Between steps: a team that `Pin::Auto` pinned looks at its cores every
+    /// [`crate::parallel::machine::RECHECK`]. Returns the cores that another process has
+    /// taken part of (more than [`crate::parallel::machine::TAKEN_SHARE`] since the last look)
+    /// where one of its threads is pinned: that thread now stalls the others at every barrier,
+    /// and the caller starts a new team ([`Team::replacement`]). Costs a clock read per call
+    /// and, once a second, reading the kernel's counters; an unpinned team never looks.
+    pub fn recheck(&mut self) -> Option<Vec<usize>> {
+        use crate::parallel::machine::{Look, RECHECK, TAKEN_SHARE};
+        if !self.watching {
+            return None;
+        }
+        let Some(look) = self.look.take() else {
+            self.look = Look::begin();
+            // Without the counters there is nothing to watch.
+            self.watching = self.look.is_some();
+            return None;
+        };
+        if look.age() < RECHECK {
+            self.look = Some(look);
+            return None;
+        }
+        let cores: Vec<usize> = self.pinned.iter().flatten().copied().collect();
+        let taken = look.others_above(&cores, TAKEN_SHARE).unwrap_or_default();
+        self.look = Look::begin();
+        (!taken.is_empty()).then_some(taken)
+    }
+
+    /// The team to carry on with once [`Team::recheck`] found `taken` cores: with `threads`
+    /// threads unpinned when given (tests), else chosen as at the start when this team's count
+    /// was (one per free core, pinned there), else as many threads as now, unpinned. The cores
+    /// found busy are kept in [`Team::busy`].
+    pub fn replacement(&self, threads: Option<usize>, taken: &[usize]) -> Result<Team, TeamError> {
+        let mut team = match threads {
+            Some(n) => Team::new(n, Pin::None)?,
+            None if self.auto_threads => Team::new(0, Pin::Auto)?,
+            None => Team::new(self.threads, Pin::None)?,
+        };
+        team.auto_threads = self.auto_threads;
+        for &c in self.busy.iter().chain(taken) {
+            if !team.busy.contains(&c) {
+                team.busy.push(c);
+            }
+        }
+        Ok(team)
     }
 
     /// Runs `f(k)` on every thread k = 0..threads, each on its own worker, and waits.
