@@ -249,3 +249,88 @@ fn gom_files_with_mohr_coulomb_laws_are_read_and_exported_with_anura3d_keys() {
         "{e}"
     );
 }
+
+/// The block of `testdata/oracle_mc_block.toml` with `pic_blend` set (mesh path absolute).
+fn block(dir: &Path, pic: &str) -> PathBuf {
+    let text = std::fs::read_to_string(testdata("oracle_mc_block.toml"))
+        .unwrap()
+        .replace(
+            "\"oracle_block_tet4.msh\"",
+            &format!("{:?}", testdata("oracle_block_tet4.msh")),
+        );
+    let p = dir.join(format!("block_{pic}.toml"));
+    std::fs::write(&p, format!("pic_blend = {pic}\n{text}")).unwrap();
+    p
+}
+
+/// Pure FLIP (Anura3D's update, `pic_blend = 0`) lets the slumped block's loose front points
+/// keep sliding on the rough base at about 1 m/s; a little PIC takes that velocity out. The
+/// blend 0 is the default bit for bit.
+#[test]
+fn a_pic_blend_brings_the_slumped_block_to_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |pic: &str| {
+        let case = mpm_solve::input::scene::load(&block(dir.path(), pic)).unwrap();
+        let out = dir.path().join(format!("out_{pic}"));
+        let e = mpm_solve::driver::run::run_observed::<f64>(
+            &case,
+            &out,
+            &Default::default(),
+            &mut |_| {},
+        )
+        .unwrap();
+        let fastest = e
+            .particles
+            .v
+            .iter()
+            .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+            .fold(0.0, f64::max);
+        (fastest, e.particles.x.clone())
+    };
+    let (flip, x_flip) = run("0.0");
+    let (pic, _) = run("0.05");
+    assert!(flip > 0.5, "FLIP's fastest point at the end: {flip} m/s");
+    assert!(
+        pic < 0.05,
+        "with 5 % PIC the fastest point at the end: {pic} m/s"
+    );
+    let default = mpm_solve::input::scene::load(&testdata("oracle_mc_block.toml")).unwrap();
+    let e = mpm_solve::driver::run::run_observed::<f64>(
+        &default,
+        &dir.path().join("out_default"),
+        &Default::default(),
+        &mut |_| {},
+    )
+    .unwrap();
+    assert!(
+        e.particles.x == x_flip,
+        "pic_blend = 0 is not the default run"
+    );
+}
+
+#[test]
+fn scenes_refuse_a_pic_blend_outside_0_1_or_with_prescribed_velocities() {
+    let dir = tempfile::tempdir().unwrap();
+    for bad in ["-0.1", "1.5", "nan"] {
+        let err = mpm_solve::input::scene::load(&block(dir.path(), bad)).unwrap_err();
+        assert!(err.to_string().contains("pic_blend"), "{bad}: {err}");
+    }
+    let p = block(dir.path(), "0.1");
+    let text = std::fs::read_to_string(&p).unwrap()
+        + "\n[[velocity]]\nname = \"push\"\nplane = \"y = 0.35\"\nvelocity = [0.0, -0.01, 0.0]\n";
+    std::fs::write(&p, text).unwrap();
+    let err = mpm_solve::input::scene::load(&p).unwrap_err();
+    assert!(err.to_string().contains("[[velocity]]"), "{err}");
+}
+
+#[test]
+fn the_export_refuses_a_pic_blend() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml = block(dir.path(), "0.02");
+    let e = mpm_solve::input::export_anura3d::export_scene(&toml, &dir.path().join("a3d"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("pic_blend") && e.contains("FLIP"), "{e}");
+    let ok = block(dir.path(), "0.0");
+    mpm_solve::input::export_anura3d::export_scene(&ok, &dir.path().join("a3d0")).unwrap();
+}

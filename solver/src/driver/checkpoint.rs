@@ -162,6 +162,7 @@ impl Fingerprint {
             max_steps,
             quasi_static,
             objective_stress,
+            pic_blend,
             integration,
             anura3d_time_step,
             damping_rule,
@@ -181,7 +182,7 @@ impl Fingerprint {
             precision,
         } = case;
         let version = env!("CARGO_PKG_VERSION");
-        let items: [(&str, &dyn std::fmt::Debug); 44] = [
+        let items: [(&str, &dyn std::fmt::Debug); 45] = [
             ("solver version", &version),
             ("case name", name),
             ("input files", inputs),
@@ -210,6 +211,7 @@ impl Fingerprint {
             ("step limit", max_steps),
             ("quasi-static load steps", quasi_static),
             ("objective stress rate", objective_stress),
+            ("PIC blend", pic_blend),
             ("integration", integration),
             ("Anura3D time step", anura3d_time_step),
             ("damping rule", damping_rule),

@@ -124,6 +124,8 @@ pub struct StepConfig {
     pub smooth_pressure: bool,
     /// Jaumann (objective) stress rate.
     pub objective_stress: bool,
+    /// Share of PIC in the points' velocity update (0: FLIP).
+    pub pic_blend: f64,
 }
 
 impl StepConfig {
@@ -140,6 +142,7 @@ impl StepConfig {
             liquid_load_on_mixture: case.liquid_load_on_mixture,
             smooth_pressure: case.smooth_pressure,
             objective_stress: case.objective_stress,
+            pic_blend: case.pic_blend,
         }
     }
 }
@@ -762,6 +765,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             &mut self.grid,
             &self.fixed,
             R::of(dt),
+            R::of(case.pic_blend),
         );
         grid_to_particle::liquid_to_particles(
             &self.team,

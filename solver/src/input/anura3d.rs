@@ -415,6 +415,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             liquid_force_tolerance: s.tolerated_error_liquid[0],
         }),
         objective_stress: s.objective_stress,
+        pic_blend: 0.0,
         integration,
         anura3d_time_step: true,
         damping_rule: crate::input::case::DampingRule::Anura3d,

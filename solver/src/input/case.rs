@@ -255,6 +255,12 @@ pub struct Case {
     pub quasi_static: Option<QuasiStatic>,
     /// Jaumann (objective) stress rate instead of the plain small-strain update.
     pub objective_stress: bool,
+    /// Share (0–1) of PIC in the points' velocity update: v ← (1 − β) v_FLIP + β v_PIC, v_PIC
+    /// the nodes' updated velocities (fixed components zero) at the point. 0, Anura3D's pure
+    /// FLIP, conserves the points' kinetic energy but lets a point keep a velocity its nodes no
+    /// longer have (beside a fixed rough base, or alone at a free front); a little PIC
+    /// dissipates that.
+    pub pic_blend: f64,
     /// Stress integration.
     pub integration: Integration,
     /// Take Anura3D's two-phase critical time step (explicit drag and consolidation terms)
@@ -595,6 +601,7 @@ impl Case {
             max_steps: None,
             quasi_static: None,
             objective_stress: false,
+            pic_blend: 0.0,
             integration: Integration::MaterialPoints,
             anura3d_time_step: false,
             damping_rule: DampingRule::Phases,

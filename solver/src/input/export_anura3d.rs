@@ -188,6 +188,15 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
     } else {
         multiplier(case.traction_curve, "traction.ramp")?
     };
+    if case.pic_blend > 0.0 {
+        return Err(refuse(
+            "pic_blend",
+            format!(
+                "Anura3D updates the points' velocities by FLIP alone; remove pic_blend = {} (or set it to 0) to export",
+                case.pic_blend
+            ),
+        ));
+    }
     // Anura3D has one multiplier for every prescribed velocity.
     let prescribed_velocity = match r.velocities.first() {
         None => "off  0.0  1.0",

@@ -9,6 +9,7 @@
 //! integration = "points"          # or "mixed" (Anura3D's MPM-MP / MPM-MIXED); optional
 //! objective_stress = false        # Anura3D's objective stress rate, for large rotations
 //! strain_smoothing = false        # Anura3D's strain smoothing (eases volumetric locking)
+//! pic_blend = 0.0                 # share of PIC in the points' velocity update (0: FLIP)
 //! [time]
 //! end = 0.5                       # s
 //! courant = 0.5
@@ -92,6 +93,9 @@ struct Scene {
     /// increment replaced by a nodal average (eases volumetric locking of linear tetrahedra).
     #[serde(default)]
     strain_smoothing: bool,
+    /// Share of PIC in the points' velocity update (0, the default, is Anura3D's FLIP).
+    #[serde(default)]
+    pic_blend: f64,
     time: Time,
     #[serde(default)]
     gravity: Option<Gravity>,
@@ -545,6 +549,19 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
             format!("must be in (0, 1], got {}", t.courant),
         ));
     }
+    if !(0.0..=1.0).contains(&scene.pic_blend) {
+        return Err(invalid(
+            "pic_blend".into(),
+            format!("must be in [0, 1], got {}", scene.pic_blend),
+        ));
+    }
+    if scene.pic_blend > 0.0 && !scene.velocity.is_empty() {
+        // The PIC part would read a prescribed component as a fixed one (zero).
+        return Err(invalid(
+            "pic_blend".into(),
+            "is not modelled together with [[velocity]] prescriptions; leave it 0 (FLIP)".into(),
+        ));
+    }
     // Materials: model material k is the k-th physical volume group by tag (see msh::to_model).
     let names: Vec<String> = model.materials().iter().map(|m| m.name.clone()).collect();
     let mut materials = vec![None; names.len() + 1];
@@ -882,6 +899,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         max_steps: t.max_steps,
         quasi_static: None,
         objective_stress: scene.objective_stress,
+        pic_blend: scene.pic_blend,
         integration,
         anura3d_time_step: false,
         damping_rule,

@@ -10,9 +10,10 @@ use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 
-/// Updates particle velocities from nodal accelerations (FLIP), then re-maps momentum to get
-/// the nodal velocities (fixed components and empty nodes zero) that drive strain, stress,
-/// volume and position (see [`crate::step::stress`]).
+/// Updates particle velocities from nodal accelerations (FLIP; with `pic` > 0 blended with
+/// the nodes' updated velocities, PIC), then re-maps momentum to get the nodal velocities
+/// (fixed components and empty nodes zero) that drive strain, stress, volume and position
+/// (see [`crate::step::stress`]).
 #[allow(clippy::too_many_arguments)]
 pub fn grid_to_particle<E: Element, R: Real>(
     team: &Team,
@@ -23,10 +24,12 @@ pub fn grid_to_particle<E: Element, R: Real>(
     g: &mut Grid<R>,
     fixed: &[[bool; 3]],
     dt: R,
+    pic: R,
 ) {
     let vel = Shared::new(&mut p.v);
     let (x, mass, active) = (&p.x, &p.mass, &p.active);
-    let acc = &g.acc;
+    let (acc, momentum, node_mass, empty) = (&g.acc, &g.momentum, &g.mass, g.empty_below);
+    let flip = R::ONE - pic;
     layout.scatter::<3, _>(team, slots, |e, four| {
         for i in layout.particles_of(e) {
             if !active[i] {
@@ -39,6 +42,25 @@ pub fn grid_to_particle<E: Element, R: Real>(
             let v = unsafe { &mut vel.range(i..i + 1)[0] };
             for c in 0..3 {
                 v[c] += dt * dv[c];
+            }
+            if pic > R::ZERO {
+                // The nodes' velocities after the step, v + a Δt (zero where fixed or empty).
+                let mut grid_v = [R::ZERO; 3];
+                for (k, &nk) in n.iter().enumerate().take(E::NODES) {
+                    let node = mesh.corners[e].as_ref()[k] as usize;
+                    let m = node_mass[node];
+                    if m <= empty {
+                        continue;
+                    }
+                    for c in 0..3 {
+                        if !fixed[node][c] {
+                            grid_v[c] += nk * (momentum[node][c] / m + dt * acc[node][c]);
+                        }
+                    }
+                }
+                for c in 0..3 {
+                    v[c] = flip * v[c] + pic * grid_v[c];
+                }
             }
             for (k, slot) in four.iter_mut().enumerate() {
                 let w = mass[i] * n[k];
