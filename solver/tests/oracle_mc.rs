@@ -1,4 +1,5 @@
-//! Mohr–Coulomb against Anura3D itself (issue 16, validation 2): scenes of our own exported
+//! Mohr–Coulomb against Anura3D itself (issue 16, validation 2): scenes of our own (a block
+//! slumping under its weight, a rough strip footing pushed into the soil) exported
 //! with `--export-anura3d`, run by the Anura3D binary that `ANURA3D_ORACLE` names and by
 //! `mpm-solve` on the same files, every material point compared by id at every load step.
 //! While no point has reached the yield surface the two codes must agree to round-off; once
@@ -127,24 +128,82 @@ fn extent(p: &Points) -> (f64, f64) {
     })
 }
 
-#[test]
-fn mohr_coulomb_block_collapse_matches_anura3d() {
-    let Some(bin) = oracle() else { return };
-    let scene = testdata("oracle_mc_block.toml");
+/// Exports `scene`, runs it in both codes and prints the per-load-step table: Anura3D's and
+/// our points per load step, and the differences (positions over `length`).
+fn both(bin: &Path, scene: &str, length: f64, phi: f64, c: f64) -> Compared {
     let dir = tempfile::tempdir().unwrap();
-    let files = mpm_solve::input::export_anura3d::export_scene(&scene, dir.path()).unwrap();
+    let files =
+        mpm_solve::input::export_anura3d::export_scene(&testdata(scene), dir.path()).unwrap();
     let name = files.gom.file_stem().unwrap().to_string_lossy().to_string();
-    run_oracle(&bin, dir.path(), &name);
+    run_oracle(bin, dir.path(), &name);
     let out = tempfile::tempdir().unwrap();
     let ours = run_ours(&files.gom, &files.cps, out.path());
     let theirs = anura3d_steps(dir.path(), &name, ours.len());
-    let (phi, c) = (20.0, 0.5);
-    let d = differences(&theirs, &ours, 0.3, phi, c);
-    eprintln!("| load step | position / H | stress / max | our points on the yield surface |");
+    let d = differences(&theirs, &ours, length, phi, c);
+    eprintln!("{scene}:");
+    eprintln!(
+        "| load step | position / {length} m | stress / max | our points on the yield surface |"
+    );
     eprintln!("|---:|---:|---:|---:|");
     for (k, (dx, ds, n)) in d.iter().enumerate() {
         eprintln!("| {} | {dx:.1e} | {ds:.1e} | {n} |", k + 1);
     }
+    Compared { theirs, ours, d }
+}
+
+/// Both codes' points per load step and their differences ([`differences`]).
+struct Compared {
+    theirs: Vec<Points>,
+    ours: Vec<Points>,
+    d: Vec<(f64, f64, usize)>,
+}
+
+/// While no point has yielded, the two codes agree to round-off.
+fn elastic_steps_agree(d: &[(f64, f64, usize)]) {
+    for (k, (dx, ds, n)) in d.iter().enumerate() {
+        if *n == 0 {
+            assert!(
+                *dx <= 1e-9 && *ds <= 1e-9,
+                "load step {}: elastic everywhere but position differs by {dx:.1e} and stress by {ds:.1e}",
+                k + 1
+            );
+        }
+    }
+}
+
+#[test]
+fn mohr_coulomb_footing_matches_anura3d() {
+    let Some(bin) = oracle() else { return };
+    let (phi, c) = (20.0, 5.0);
+    // Lengths over the strip's half-width.
+    let Compared { theirs, ours, d } = both(&bin, "oracle_mc_footing.toml", 0.1, phi, c);
+    elastic_steps_agree(&d);
+    let last = d.last().unwrap();
+    assert!(last.2 > 50, "only {} points yielded", last.2);
+    // The footing's settlement is prescribed; the soil beside it heaves: the highest point
+    // and the deepest, in both codes.
+    let top = |p: &Points| p.values().map(|(x, _)| x[1]).fold(f64::MIN, f64::max);
+    let low = |p: &Points| {
+        p.values()
+            .filter(|(x, _)| x[0] < 0.1 && x[1] > 0.3)
+            .map(|(x, _)| x[1])
+            .fold(f64::MAX, f64::min)
+    };
+    let (ta, tb) = (top(theirs.last().unwrap()), top(ours.last().unwrap()));
+    let (la, lb) = (low(theirs.last().unwrap()), low(ours.last().unwrap()));
+    eprintln!("final: heave top Anura3D {ta:.6} ours {tb:.6}; under the footing Anura3D {la:.6} ours {lb:.6}");
+    assert!(
+        last.0 <= 0.01,
+        "final positions differ by {:.2} % of the half-width",
+        100.0 * last.0
+    );
+}
+
+#[test]
+fn mohr_coulomb_block_collapse_matches_anura3d() {
+    let Some(bin) = oracle() else { return };
+    let (phi, c) = (20.0, 0.5);
+    let Compared { theirs, ours, d } = both(&bin, "oracle_mc_block.toml", 0.3, phi, c);
     let (xa, ya) = extent(theirs.last().unwrap());
     let (xb, yb) = extent(ours.last().unwrap());
     eprintln!("final extent: Anura3D x {xa:.5} y {ya:.5}; mpm-solve x {xb:.5} y {yb:.5}");
@@ -155,15 +214,7 @@ fn mohr_coulomb_block_collapse_matches_anura3d() {
         xa > 0.25,
         "the block did not slump: it reaches x = {xa} (from 0.2)"
     );
-    for (k, (dx, ds, n)) in d.iter().enumerate() {
-        if *n == 0 {
-            assert!(
-                *dx <= 1e-9 && *ds <= 1e-9,
-                "load step {}: elastic everywhere but position differs by {dx:.1e} H and stress by {ds:.1e}",
-                k + 1
-            );
-        }
-    }
+    elastic_steps_agree(&d);
     assert!(
         last.0 <= 0.01,
         "final positions differ by {:.2} % of the block height",
