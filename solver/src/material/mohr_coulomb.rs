@@ -53,6 +53,9 @@ pub struct Surface<R: Real> {
     pub cut_off: bool,
     /// 1 + sin²φ / 3: F ≤ p sin φ + sqrt(J2 · this) - c cos φ for every Lode angle.
     bound: R,
+    /// (√3/2 - sin φ / (2√3))²: F ≥ p sin φ + sqrt(J2 · this) - c cos φ for every Lode angle
+    /// (equality on the triaxial compression meridian).
+    inner: R,
 }
 
 /// The pyramid's apex c cos φ / sin φ (kPa) with Anura3D's capped sin φ; +∞ for φ = 0.
@@ -121,6 +124,10 @@ impl<R: Real> Surface<R> {
             // A σt equal to the apex (to the digits it was written with) cuts nothing.
             cut_off: tension < apex(friction_deg, cohesion) * (1.0 - 1e-9),
             bound: R::of(1.0 + sc * sc / 3.0),
+            inner: R::of({
+                let g = 0.5 * 3f64.sqrt() - sc / (2.0 * 3f64.sqrt());
+                g * g
+            }),
         }
     }
 
@@ -143,7 +150,13 @@ impl<R: Real> Surface<R> {
         let j2 = R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + xy * xy + yz * yz + zx * zx;
         // Largest (σ3 - σ1)/2 - σ2' sin φ / 2 over the Lode angle: sqrt(J2 (1 + sin²φ/3)).
         let r = self.cohesion - p * self.sin_phi;
-        let pyramid = r >= R::ZERO && j2 * self.bound <= r * r;
+        // Surely outside the pyramid (F above its smallest value over the Lode angle, reached
+        // on the compression meridian where soil under gravity sits): the Newton bounds below
+        // could not help, so go straight to the decomposition.
+        if r < R::ZERO || j2 * self.inner > r * r {
+            return false;
+        }
+        let pyramid = j2 * self.bound <= r * r;
         // Largest principal deviator: 2 sqrt(J2 / 3).
         let t = self.tension - p;
         let cut = !self.cut_off || (t >= R::ZERO && j2 * R::of(4.0 / 3.0) <= t * t);
@@ -699,6 +712,31 @@ mod tests {
             let t = if top.is_finite() { t * top } else { t * 40.0 };
             (nu, phi, psi * phi, c, t)
         })
+    }
+
+    proptest! {
+        // The invariant bounds of `surely_inside` hold for every Lode angle: F lies between
+        // p sin φ + sqrt(J2 · inner) - c cos φ and p sin φ + sqrt(J2 · bound) - c cos φ.
+        #[test]
+        fn the_invariant_bounds_enclose_the_yield_function(
+            d in prop::array::uniform3(-300.0f64..100.0),
+            o in prop::array::uniform3(-100.0f64..100.0),
+            phi in 0.0f64..60.0,
+            c in 0.0f64..20.0,
+        ) {
+            let sf = Surface::<f64>::new(phi, c, 0.0, 0.0);
+            let s = [d[0], d[1], d[2], o[0], o[1], o[2]];
+            let v = principal(&s).values;
+            let f = sf.yield_value(v[0], v[2]);
+            let p = (s[0] + s[1] + s[2]) / 3.0;
+            let dev = [s[0] - p, s[1] - p, s[2] - p];
+            let j2 = 0.5 * (dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2])
+                + o[0] * o[0] + o[1] * o[1] + o[2] * o[2];
+            let base = p * sf.sin_phi - sf.cohesion;
+            let tol = 1e-9 * (1.0 + v[0].abs() + v[2].abs());
+            prop_assert!(f >= base + (j2 * sf.inner).sqrt() - tol, "F {f} below the inner bound");
+            prop_assert!(f <= base + (j2 * sf.bound).sqrt() + tol, "F {f} above the outer bound");
+        }
     }
 
     proptest! {
