@@ -28,7 +28,7 @@
 //! and J2 (a bound for every Lode angle) or, failing that, from bounds on its extreme principal
 //! stresses by Newton's method on the characteristic cubic; only trials at or beyond the surface
 //! are decomposed. A run that stays elastic costs about what a linear elastic one does; a
-//! plastic point-step adds about 240 ns (docs/design.md, "Laws").
+//! plastic point-step adds about 175 ns (docs/design.md, "Laws").
 
 use crate::material::linear_elastic::LinearElastic;
 use crate::material::principal::split;
