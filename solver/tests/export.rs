@@ -683,6 +683,37 @@ fn prescribed_velocities_export_and_run_the_same() {
         assert_eq!(gom.node(r.node as usize)[1], 1.0);
     }
     assert_eq!(gc.reactions()[0].curve, sc.reactions()[0].curve);
+    // Anura3D's reaction output: the set's faces, each once (corners, then mid-edge nodes),
+    // in an element that has them; their nodes are the set's nodes.
+    let set: std::collections::BTreeSet<i64> = rows.iter().map(|r| int(&r[0])).collect();
+    let faces: Vec<&[Token]> = gom
+        .table("START_OUTPUT_REACTION_FORCES")
+        .unwrap()
+        .rows()
+        .collect();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut covered = std::collections::BTreeSet::new();
+    for f in &faces {
+        assert_eq!(f[0], Token::Text("\"top\"".into()));
+        let nodes: Vec<i64> = f[2..8].iter().map(int).collect();
+        let element = gom.element(int(&f[1]) as usize - 1);
+        assert!(nodes[..3]
+            .iter()
+            .all(|&n| element[..4].contains(&(n as u32 - 1))));
+        for (k, (a, b)) in [(0, 1), (1, 2), (2, 0)].into_iter().enumerate() {
+            let (p, q, m) = (
+                gom.node(nodes[a] as usize - 1),
+                gom.node(nodes[b] as usize - 1),
+                gom.node(nodes[3 + k] as usize - 1),
+            );
+            assert!((0..3).all(|d| (m[d] - 0.5 * (p[d] + q[d])).abs() < 1e-12));
+        }
+        let mut key = nodes[..3].to_vec();
+        key.sort_unstable();
+        assert!(seen.insert(key), "face {nodes:?} twice");
+        covered.extend(nodes);
+    }
+    assert_eq!(covered, set);
     check_runs(&sc, &gc, 1e-9);
 
     // A physical volume: every element's row in the material-point section.

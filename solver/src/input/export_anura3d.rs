@@ -20,7 +20,9 @@
 //! Prescribed velocities go to `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME` (a physical
 //! volume's elements) and `$$PRESCRIBED_NODAL_VELOCITY_SURFACE` (nodes, a new mid-edge node
 //! taking a set's velocity where both its corners are in the set) under one CPS
-//! `$$PRESCRIBED_VELOCITY` multiplier: entries whose ramps differ are refused.
+//! `$$PRESCRIBED_VELOCITY` multiplier: entries whose ramps differ are refused. Each nodal
+//! set's faces also go to `$$START_OUTPUT_REACTION_FORCES`, so that Anura3D writes the set's
+//! reaction every time step (`NAME.RSurf_00k`), to set beside our `reaction.csv`.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -494,6 +496,55 @@ fn load_rows(
     Ok(rows)
 }
 
+/// `$$START_OUTPUT_REACTION_FORCES` rows, so that Anura3D writes each nodal-velocity set's
+/// reaction (`NAME.RSurf_00k`, k the set's place among those with faces; every time step): per
+/// set, every element face whose three corners are in the set (once), as the set's name
+/// (quoted), the element and the face's corners and mid-edge nodes. Anura3D sums its nodes' B^T sigma less
+/// their weight over these faces' nodes; the set's mid-edge nodes are the faces' (see
+/// `gom_model`), so the nodes summed are the set's unless some of its nodes lie on no face.
+fn reaction_rows(
+    mesh: &Tet10Mesh,
+    sets: &[crate::step::nodal_velocity::NodalVelocitySet],
+) -> Table {
+    const FACES: [[usize; 3]; 4] = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
+    let mut t = Table::new();
+    let n_nodes = mesh.coords.len() / 3;
+    for set in sets {
+        let mut inside = vec![false; n_nodes];
+        for p in &set.rows {
+            inside[p.node as usize] = true;
+        }
+        let label = Token::Text(format!("\"{}\"", safe_name(&set.name)).into());
+        // A face inside the mesh (the footing under an empty layer) once, in its first element.
+        let mut seen = std::collections::HashSet::new();
+        for (e, c) in mesh.connectivity.chunks_exact(10).enumerate() {
+            for f in FACES {
+                let k = f.map(|i| c[i]);
+                let mut key = k;
+                key.sort_unstable();
+                if !k.iter().all(|&n| inside[n as usize]) || !seen.insert(key) {
+                    continue;
+                }
+                let mid = |a: u32, b: u32| mesh.mid[&(a.min(b), a.max(b))];
+                let ids = [
+                    k[0],
+                    k[1],
+                    k[2],
+                    mid(k[0], k[1]),
+                    mid(k[1], k[2]),
+                    mid(k[2], k[0]),
+                ];
+                t.push_row(
+                    [label.clone(), Token::Int(e as i64 + 1)]
+                        .into_iter()
+                        .chain(ids.map(|n| Token::Int(n as i64 + 1))),
+                );
+            }
+        }
+    }
+    t
+}
+
 fn text(keyword: &str, lines: &[&str]) -> Section {
     Section {
         keyword: keyword.into(),
@@ -619,6 +670,11 @@ fn gom_model(r: &Resolved, mesh: Tet10Mesh, loads: Table, notes: &mut Vec<String
             "PRESCRIBED_NODAL_VELOCITY_SURFACE",
             Refs::Nodes(1),
             t,
+        ));
+        sections.push(counted(
+            "START_OUTPUT_REACTION_FORCES",
+            Refs::LabelElementNodes(6),
+            reaction_rows(&mesh, &case.nodal_velocity),
         ));
     }
     sections.push(counted("START_CONTACT_VOLUME", Refs::Element, Table::new()));
