@@ -78,6 +78,38 @@ fn a_normal_run_completes_and_reports_its_energy_balance() {
     assert!(csv.starts_with("time,kinetic,external_work,strain,dissipated,balance_error\n"));
 }
 
+/// Two-phase: the liquid's kinetic energy, the energy its compression holds and the drag
+/// are counted, so the balance closes at every output and the checks apply.
+#[test]
+fn a_saturated_run_balances_its_energy_with_the_liquid() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    solve(&testdata("golden/column_saturated.toml"), &out, &[]).success();
+    let e = &run_json(&out)["energy"];
+    // Without the liquid's terms this column's balance was off by 0.75.
+    assert!(e["balance_error"].as_f64().unwrap() < 0.01, "{e}");
+    let liquid = e["liquid_compression"].as_f64().unwrap();
+    assert!(
+        liquid > 0.0 && liquid < e["strain"].as_f64().unwrap(),
+        "{e}"
+    );
+    assert!(e["dissipated"].as_f64().unwrap() > 0.0, "{e}");
+    let csv = std::fs::read_to_string(out.join("energy.csv")).unwrap();
+    for row in csv.lines().skip(1) {
+        let balance: f64 = row.rsplit(',').next().unwrap().parse().unwrap();
+        assert!(balance < 0.01, "{row}");
+    }
+    // The balance is checked in two-phase runs: a tolerance no run meets trips it.
+    let out = dir.path().join("p");
+    solve(
+        &testdata("golden/column_saturated.toml"),
+        &out,
+        &["--energy-tolerance", "1e-9"],
+    )
+    .code(3);
+    assert_eq!(run_json(&out)["diagnosis"]["check"], "energy_balance");
+}
+
 #[test]
 fn a_courant_number_above_one_is_refused_without_force() {
     let dir = tempfile::tempdir().unwrap();

@@ -22,7 +22,7 @@ use crate::state::particles::{Field, FieldReader, FieldVisitor, Particles, Value
 /// The first bytes of a checkpoint.
 pub const MAGIC: &[u8; 8] = b"MPMCKPT\0";
 /// Version of the layout: raised whenever a section changes.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// The checkpoint's folder inside the output folder.
 pub const FOLDER: &str = "checkpoint";
 /// The checkpoint's file name in [`FOLDER`].

@@ -162,9 +162,9 @@ impl Output {
             s.history.push('\n');
         }
         s.energy.push_str(&real_to_string(engine.time));
-        csv_real(&mut s.energy, engine.kinetic_energy());
+        csv_real(&mut s.energy, engine.total_kinetic_energy());
         csv_real(&mut s.energy, engine.external_work);
-        csv_real(&mut s.energy, engine.strain_energy);
+        csv_real(&mut s.energy, engine.internal_energy());
         csv_real(&mut s.energy, engine.dissipated);
         csv_real(&mut s.energy, engine.balance_error());
         s.energy.push('\n');
@@ -308,8 +308,9 @@ pub fn write_summary<R: Real>(
             "completed"
         },
         "energy": {
-            "kinetic": engine.kinetic_energy(),
-            "strain": engine.strain_energy,
+            "kinetic": engine.total_kinetic_energy(),
+            "strain": engine.internal_energy(),
+            "liquid_compression": engine.internal_energy() - engine.strain_energy,
             "dissipated": engine.dissipated,
             "external_work": engine.external_work,
             "balance_work": engine.balance_work,

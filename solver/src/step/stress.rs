@@ -18,8 +18,8 @@ use crate::step::smoothing::StrainSmoothing;
 /// increment ([`crate::step::smoothing`]). Each thread updates the particles of its elements.
 ///
 /// With `guard`, each element's [`GuardSums`] of its active points are written to its slot
-/// (strain-energy increment, kinetic energy, smallest volume check): the guard rails' sums,
-/// formed here so that they cost no extra pass over the points.
+/// (strain-energy increment, kinetic and liquid energies, smallest volume check): the guard
+/// rails' sums, formed here so that they cost no extra pass over the points.
 #[allow(clippy::too_many_arguments)]
 pub fn update_stress_and_move<E: Element, R: Real>(
     team: &Team,
@@ -35,12 +35,13 @@ pub fn update_stress_and_move<E: Element, R: Real>(
 ) {
     let half = R::of(0.5);
     let third = R::ONE / R::of(3.0);
-    let (guard_slots, initial_density) = match guard {
-        Some(g) => (Some(Shared::new(g.slots)), g.initial_density),
-        None => (None, &[][..]),
+    let (guard_slots, initial_density, fluids) = match guard {
+        Some(g) => (Some(Shared::new(g.slots)), g.initial_density, g.fluids),
+        None => (None, &[][..], &[][..]),
     };
     let (velocity, mass) = (&p.v, &p.mass);
-    let pore = p.liquid.as_ref().map(|l| &l.p[..]);
+    let liquid = p.liquid.as_ref();
+    let pore = liquid.map(|l| &l.p[..]);
     let xs = Shared::new(&mut p.x);
     let us = Shared::new(&mut p.u);
     let stresses = Shared::new(&mut p.stress);
@@ -150,7 +151,18 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 let ratio = volume[j] * initial_density[material[i] as usize] / mass[i] + finite;
                 let slot = &mut sums[e - er.start];
                 slot.strain += half.f64() * (w * v0).f64();
-                slot.kinetic += half.f64() * (mass[i] * vv).f64();
+                let mut kinetic = mass[i] * vv;
+                // A saturated point's liquid: its kinetic energy n ρw V_w |w|² / 2 (V_w the
+                // volume its liquid mass is taken on) and the energy its compression holds,
+                // n V p² / 2 K_w, the work of the pore pressure on Δp = (K_w/n) Δε_mix.
+                if let (Some(l), Some(f)) = (liquid, fluids[material[i] as usize].as_ref()) {
+                    let w = l.w[i];
+                    let ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+                    let vw = l.volume0.as_ref().map_or(volume[j], |v0| v0[i]);
+                    kinetic += f.n * f.rho_w * vw * ww;
+                    slot.liquid += half.f64() * (volume[j] * p * p / f.kw_over_n).f64();
+                }
+                slot.kinetic += half.f64() * kinetic.f64();
                 // NaN wins (`!(a >= b)` is true for a NaN).
                 if !(ratio.f64() >= slot.volume_ratio) {
                     slot.volume_ratio = ratio.f64();
@@ -165,8 +177,12 @@ pub fn update_stress_and_move<E: Element, R: Real>(
 pub struct GuardSums {
     /// Σ V0 (σ0 + σ1)/2 : Δε, the strain energy taken up in the step (kJ).
     pub strain: f64,
-    /// Σ m |v|² / 2 (kJ), with the step's new point velocities.
+    /// Σ m |v|² / 2 (kJ), with the step's new point velocities; for saturated points the
+    /// liquid's n ρw V_w |w|² / 2 too.
     pub kinetic: f64,
+    /// Σ n V p² / 2 K_w over saturated points (kJ): the energy the liquid's compression holds
+    /// after the step.
+    pub liquid: f64,
     /// Smallest V / V0 of the points; NaN when a position or pore pressure is not finite.
     pub volume_ratio: f64,
 }
@@ -176,16 +192,19 @@ impl GuardSums {
     pub const EMPTY: GuardSums = GuardSums {
         strain: 0.0,
         kinetic: 0.0,
+        liquid: 0.0,
         volume_ratio: f64::INFINITY,
     };
 }
 
 /// What [`update_stress_and_move`] needs to form the guard rails' sums.
-pub struct Guard<'a, R> {
+pub struct Guard<'a, R: Real> {
     /// One slot per element.
     pub slots: &'a mut [GuardSums],
     /// Per material index, mass per initial volume of its points (ρ0, t/m³; 0 for none).
     pub initial_density: &'a [R],
+    /// Per material index, its liquid (saturated materials).
+    pub fluids: &'a [Option<Fluid<R>>],
 }
 
 /// Pore-pressure update of saturated points (docs/design.md §4): Δp = (K_w / n) (n Δε_vol,w +
