@@ -783,6 +783,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             &self.fixed,
             R::of(dt),
             R::of(case.pic_blend),
+            self.guards.enabled.then_some(&mut self.guard_slots[..]),
         );
         grid_to_particle::liquid_to_particles(
             &self.team,
@@ -794,6 +795,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             &self.fluids,
             &self.liquid_fixed,
             R::of(dt),
+            self.guards.enabled.then_some(&mut self.guard_slots[..]),
         );
         if let Some(pr) = &mut self.prescribed {
             pr.after_remap(&self.mesh, &mut self.grid, &mut self.particles, pm);
@@ -839,6 +841,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                 slots: &mut self.guard_slots,
                 initial_density: &self.initial_density,
                 fluids: &self.fluids,
+                min_volume_ratio: R::of(self.guards.min_volume_ratio),
             }),
         );
         if let Some(m) = &self.mixed {
@@ -883,19 +886,19 @@ impl<R: Real, E: Element> Engine<R, E> {
         w: f64,
         forces: &grid_update::ForceSums,
     ) -> Result<(), StepError> {
-        let (mut strain, mut kinetic, mut liquid, mut ratio) = (0.0, 0.0, 0.0, f64::INFINITY);
+        let (mut strain, mut kinetic, mut liquid, mut margin) = (0.0, 0.0, 0.0, f64::INFINITY);
         for s in &self.guard_slots {
             strain += s.strain;
             kinetic += s.kinetic;
             liquid += s.liquid;
-            if !(s.volume_ratio >= ratio) {
-                ratio = s.volume_ratio;
+            if !(s.volume_margin >= margin) {
+                margin = s.volume_margin;
             }
         }
         let strain = self.comm.sum(strain);
         let kinetic = self.comm.sum(kinetic);
         let liquid = self.comm.sum(liquid);
-        let ratio = self.comm.min(ratio);
+        let margin = self.comm.min(margin);
         let previous = self.step_kinetic;
         self.strain_energy += strain;
         self.liquid_energy = liquid;
@@ -905,11 +908,11 @@ impl<R: Real, E: Element> Engine<R, E> {
         let nodal = w * dt + forces.work + forces.dissipated + forces.unbalanced;
         let fail = |check| Err(StepError::Diverged(Box::new(self.diagnose(check))));
         // A non-finite stress or velocity makes the energies NaN or infinite; a non-finite
-        // position or pore pressure the volume ratio NaN; nodal values the nodal sums.
-        if !(strain + kinetic + liquid).is_finite() || ratio.is_nan() || !nodal.is_finite() {
+        // position or pore pressure the volume margin NaN; nodal values the nodal sums.
+        if !(strain + kinetic + liquid).is_finite() || margin.is_nan() || !nodal.is_finite() {
             return fail(Check::NonFinite);
         }
-        if ratio <= self.guards.min_volume_ratio {
+        if margin <= 0.0 {
             return fail(Check::Volume);
         }
         // Both energy checks compare energies: over the first steps they are near zero and

@@ -124,6 +124,8 @@ pub struct Fluid<R: Real> {
     pub drag: R,
     /// K_w / n.
     pub kw_over_n: R,
+    /// n / K_w (the liquid's compression energy, without a division per point).
+    pub n_over_kw: R,
 }
 
 impl<R: Real> Fluid<R> {
@@ -134,6 +136,7 @@ impl<R: Real> Fluid<R> {
             rho_w: R::of(spec.density),
             drag: R::of(spec.porosity * spec.density * G / spec.conductivity()),
             kw_over_n: R::of(spec.bulk_modulus / spec.porosity),
+            n_over_kw: R::of(spec.porosity / spec.bulk_modulus),
         }
     }
 }

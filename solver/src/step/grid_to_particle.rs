@@ -9,11 +9,13 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::step::stress::GuardSums;
 
 /// Updates particle velocities from nodal accelerations (FLIP; with `pic` > 0 blended with
 /// the nodes' updated velocities, PIC), then re-maps momentum to get the nodal velocities
 /// (fixed components and empty nodes zero) that drive strain, stress, volume and position
-/// (see [`crate::step::stress`]).
+/// (see [`crate::step::stress`]). With `guard` (one slot per element), each element's slot is
+/// begun anew with its points' kinetic energy Σ m |v|² / 2, the velocities at hand.
 #[allow(clippy::too_many_arguments)]
 pub fn grid_to_particle<E: Element, R: Real>(
     team: &Team,
@@ -25,12 +27,17 @@ pub fn grid_to_particle<E: Element, R: Real>(
     fixed: &[[bool; 3]],
     dt: R,
     pic: R,
+    guard: Option<&mut [GuardSums]>,
 ) {
+    let guard = guard.map(Shared::new);
     let vel = Shared::new(&mut p.v);
     let (x, mass, active) = (&p.x, &p.mass, &p.active);
     let (acc, momentum, node_mass, empty) = (&g.acc, &g.momentum, &g.mass, g.empty_below);
     let flip = R::ONE - pic;
-    layout.scatter::<3, _>(team, slots, |e, four| {
+    // One element's points; with `want`, their kinetic energy. Two scatters below, each with
+    // `want` fixed, so that the run without guards keeps the loop it had without them.
+    let element = |e: usize, four: &mut [[R; crate::parallel::gather::WIDTH]], want: bool| {
+        let mut kinetic = 0.0;
         for i in layout.particles_of(e) {
             if !active[i] {
                 continue;
@@ -68,8 +75,27 @@ pub fn grid_to_particle<E: Element, R: Real>(
                     slot[c] += w * v[c];
                 }
             }
+            if want {
+                kinetic += 0.5 * (mass[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])).f64();
+            }
         }
-    });
+        kinetic
+    };
+    match &guard {
+        None => layout.scatter::<3, _>(team, slots, |e, four| {
+            element(e, four, false);
+        }),
+        Some(guard) => layout.scatter::<3, _>(team, slots, |e, four| {
+            let kinetic = element(e, four, true);
+            // SAFETY: the scatter hands element e to one thread only, once.
+            unsafe {
+                guard.range(e..e + 1)[0] = GuardSums {
+                    kinetic,
+                    ..GuardSums::EMPTY
+                }
+            };
+        }),
+    }
     nodal_velocity(
         team,
         layout,
@@ -127,7 +153,9 @@ fn nodal_velocity<E: Element, R: Real>(
 
 /// The liquid's share of grid to particle: liquid velocities of the points updated from the
 /// nodal liquid accelerations (FLIP), then the liquid momentum re-mapped to nodal liquid
-/// velocities (zero in fixed components and at nodes without liquid).
+/// velocities (zero in fixed components and at nodes without liquid). With `guard`, the
+/// liquid's kinetic energy n ρw V_w |w|² / 2 is added to each element's slot, which
+/// [`grid_to_particle`] began.
 #[allow(clippy::too_many_arguments)]
 pub fn liquid_to_particles<E: Element, R: Real>(
     team: &Team,
@@ -139,14 +167,17 @@ pub fn liquid_to_particles<E: Element, R: Real>(
     fluids: &[Option<Fluid<R>>],
     liquid_fixed: &[[bool; 3]],
     dt: R,
+    guard: Option<&mut [GuardSums]>,
 ) {
     let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
         return;
     };
+    let guard = guard.map(Shared::new);
     let w_out = Shared::new(&mut lp.w);
     let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
     let acc = &gl.acc;
     layout.scatter::<3, _>(team, slots, |e, four| {
+        let mut kinetic = 0.0;
         for i in layout.particles_of(e) {
             let Some(f) = fluids[material[i] as usize] else {
                 continue;
@@ -169,6 +200,13 @@ pub fn liquid_to_particles<E: Element, R: Real>(
                     slot[c] += mw * n[k] * w[c];
                 }
             }
+            if guard.is_some() {
+                kinetic += 0.5 * (f.n * mw * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2])).f64();
+            }
+        }
+        if let Some(guard) = &guard {
+            // SAFETY: the scatter hands element e to one thread only, once.
+            unsafe { guard.range(e..e + 1)[0].kinetic += kinetic };
         }
     });
     nodal_velocity(

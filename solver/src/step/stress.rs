@@ -17,9 +17,10 @@ use crate::step::smoothing::StrainSmoothing;
 /// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
 /// increment ([`crate::step::smoothing`]). Each thread updates the particles of its elements.
 ///
-/// With `guard`, each element's [`GuardSums`] of its active points are written to its slot
-/// (strain-energy increment, kinetic and liquid energies, smallest volume check): the guard
-/// rails' sums, formed here so that they cost no extra pass over the points.
+/// With `guard`, each element's [`GuardSums`] of its active points are completed in its slot
+/// (strain-energy increment, the liquid's compression energy, the volume check; grid to
+/// particle began it with the kinetic energy): the guard rails' sums, formed in passes that
+/// read the points anyway so that they cost no pass of their own.
 #[allow(clippy::too_many_arguments)]
 pub fn update_stress_and_move<E: Element, R: Real>(
     team: &Team,
@@ -35,13 +36,17 @@ pub fn update_stress_and_move<E: Element, R: Real>(
 ) {
     let half = R::of(0.5);
     let third = R::ONE / R::of(3.0);
-    let (guard_slots, initial_density, fluids) = match guard {
-        Some(g) => (Some(Shared::new(g.slots)), g.initial_density, g.fluids),
-        None => (None, &[][..], &[][..]),
+    let (guard_slots, initial_density, fluids, min_ratio) = match guard {
+        Some(g) => (
+            Some(Shared::new(g.slots)),
+            g.initial_density,
+            g.fluids,
+            g.min_volume_ratio,
+        ),
+        None => (None, &[][..], &[][..], R::ZERO),
     };
-    let (velocity, mass) = (&p.v, &p.mass);
-    let liquid = p.liquid.as_ref();
-    let pore = liquid.map(|l| &l.p[..]);
+    let mass = &p.mass;
+    let pore = p.liquid.as_ref().map(|l| &l.p[..]);
     let xs = Shared::new(&mut p.x);
     let us = Shared::new(&mut p.u);
     let stresses = Shared::new(&mut p.stress);
@@ -66,9 +71,6 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         // SAFETY: the element ranges of the threads are disjoint; this thread's points lie in
         // its own elements.
         let mut sums = guard_slots.as_ref().map(|g| unsafe { g.range(er.clone()) });
-        if let Some(s) = sums.as_mut() {
-            s.fill(GuardSums::EMPTY);
-        }
         for (j, i) in r.enumerate() {
             if !active[i] {
                 continue;
@@ -142,30 +144,24 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     let twice = if c < 3 { R::ONE } else { R::of(2.0) };
                     w += twice * (s0[c] + s1[c]) * de[c];
                 }
-                let v = velocity[i];
-                let vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-                // V/V0 (mass is constant, m = ρ0 V0), made NaN by any non-finite position or
-                // pore pressure: one comparison catches both.
+                // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no division
+                // per point. Made NaN by any non-finite position or pore pressure: one
+                // comparison catches both.
                 let p = pore.map_or(R::ZERO, |p| p[i]);
                 let finite = R::ZERO * (x[j][0] + x[j][1] + x[j][2] + p);
-                let ratio = volume[j] * initial_density[material[i] as usize] / mass[i] + finite;
+                let margin = volume[j] * initial_density[material[i] as usize]
+                    - min_ratio * mass[i]
+                    + finite;
                 let slot = &mut sums[e - er.start];
                 slot.strain += half.f64() * (w * v0).f64();
-                let mut kinetic = mass[i] * vv;
-                // A saturated point's liquid: its kinetic energy n ρw V_w |w|² / 2 (V_w the
-                // volume its liquid mass is taken on) and the energy its compression holds,
-                // n V p² / 2 K_w, the work of the pore pressure on Δp = (K_w/n) Δε_mix.
-                if let (Some(l), Some(f)) = (liquid, fluids[material[i] as usize].as_ref()) {
-                    let w = l.w[i];
-                    let ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-                    let vw = l.volume0.as_ref().map_or(volume[j], |v0| v0[i]);
-                    kinetic += f.n * f.rho_w * vw * ww;
-                    slot.liquid += half.f64() * (volume[j] * p * p / f.kw_over_n).f64();
+                // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work on
+                // Δp = (K_w/n) Δε_mix.
+                if let Some(f) = fluids[material[i] as usize].as_ref() {
+                    slot.liquid += half.f64() * (volume[j] * p * p * f.n_over_kw).f64();
                 }
-                slot.kinetic += half.f64() * kinetic.f64();
                 // NaN wins (`!(a >= b)` is true for a NaN).
-                if !(ratio.f64() >= slot.volume_ratio) {
-                    slot.volume_ratio = ratio.f64();
+                if !(margin.f64() >= slot.volume_margin) {
+                    slot.volume_margin = margin.f64();
                 }
             }
         }
@@ -177,14 +173,15 @@ pub fn update_stress_and_move<E: Element, R: Real>(
 pub struct GuardSums {
     /// Σ V0 (σ0 + σ1)/2 : Δε, the strain energy taken up in the step (kJ).
     pub strain: f64,
-    /// Σ m |v|² / 2 (kJ), with the step's new point velocities; for saturated points the
-    /// liquid's n ρw V_w |w|² / 2 too.
+    /// Σ m |v|² / 2 (kJ), with the step's new point velocities (written by grid to particle);
+    /// for saturated points the liquid's n ρw V_w |w|² / 2 too.
     pub kinetic: f64,
     /// Σ n V p² / 2 K_w over saturated points (kJ): the energy the liquid's compression holds
     /// after the step.
     pub liquid: f64,
-    /// Smallest V / V0 of the points; NaN when a position or pore pressure is not finite.
-    pub volume_ratio: f64,
+    /// Smallest V ρ0 - r m of the points (t), r the guard's smallest volume ratio: ≤ 0 when a
+    /// point's V / V0 has fallen to r; NaN when a position or pore pressure is not finite.
+    pub volume_margin: f64,
 }
 
 impl GuardSums {
@@ -193,7 +190,7 @@ impl GuardSums {
         strain: 0.0,
         kinetic: 0.0,
         liquid: 0.0,
-        volume_ratio: f64::INFINITY,
+        volume_margin: f64::INFINITY,
     };
 }
 
@@ -205,6 +202,8 @@ pub struct Guard<'a, R: Real> {
     pub initial_density: &'a [R],
     /// Per material index, its liquid (saturated materials).
     pub fluids: &'a [Option<Fluid<R>>],
+    /// The smallest V / V0 allowed.
+    pub min_volume_ratio: R,
 }
 
 /// Pore-pressure update of saturated points (docs/design.md §4): Δp = (K_w / n) (n Δε_vol,w +
