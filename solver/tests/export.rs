@@ -757,3 +757,63 @@ fn prescribed_velocities_export_and_run_the_same() {
             .stderr(predicate::str::contains(item));
     }
 }
+
+/// `pressure = p` on a flat face is the traction -p n: the oedometer's top load given as a
+/// pressure resolves to the same nodal forces and exports as the same Anura3D face loads (to
+/// round-off); giving both (or neither) is refused by name.
+#[test]
+fn a_pressure_loads_as_the_traction_along_the_inward_normal() {
+    let dir = tempfile::tempdir().unwrap();
+    let load = "traction = [0.0, -10.0, 0.0]     # kPa, sudden";
+    let short = |t: String| short_oedometer(rest(t), 0.01);
+    let a = scene(dir.path(), "oedometer.toml", "vector", &short);
+    let b = scene(dir.path(), "oedometer.toml", "pressure", &|t| {
+        short(t).replace(load, "pressure = 10.0")
+    });
+    let (ca, cb) = (
+        mpm_solve::input::scene::load(&a).unwrap(),
+        mpm_solve::input::scene::load(&b).unwrap(),
+    );
+    assert!(ca.traction.iter().any(|f| f[1] != 0.0));
+    // The same to round-off (the unit normal is the cross product times 1 / its length).
+    let close = |x: f64, y: f64| (x - y).abs() <= 1e-14 * x.abs().max(y.abs()).max(1e-300);
+    assert_eq!(ca.traction.len(), cb.traction.len());
+    for (fa, fb) in ca.traction.iter().zip(&cb.traction) {
+        assert!((0..3).all(|d| close(fa[d], fb[d])), "{fa:?} {fb:?}");
+    }
+    let (ga, _) = export(&a, &dir.path().join("a"));
+    let (gb, _) = export(&b, &dir.path().join("b"));
+    let table = |g: &Path| {
+        mpm_shared::read_gom_file(g)
+            .unwrap()
+            .table("START_LOAD_ON_NODES_SOLID")
+            .unwrap()
+            .rows()
+            .map(|r| r.to_vec())
+            .collect::<Vec<_>>()
+    };
+    let (ta, tb) = (table(&ga), table(&gb));
+    assert_eq!(ta.len(), tb.len());
+    for (ra, rb) in ta.iter().zip(&tb) {
+        assert_eq!(ra[..6], rb[..6]);
+        for (x, y) in ra[6..].iter().zip(&rb[6..]) {
+            assert!(
+                close(x.as_f64().unwrap(), y.as_f64().unwrap()),
+                "{ra:?} {rb:?}"
+            );
+        }
+    }
+    for (name, text) in [
+        ("both", load.replace("# kPa, sudden", "\npressure = 10.0")),
+        ("neither", String::new()),
+    ] {
+        let s = scene(dir.path(), "oedometer.toml", name, &|t| {
+            short(t).replace(load, &text)
+        });
+        let err = mpm_solve::input::scene::load(&s).unwrap_err().to_string();
+        assert!(
+            err.contains("traction \"top\"") && err.contains("either traction"),
+            "{name}: {err}"
+        );
+    }
+}

@@ -57,7 +57,12 @@ fn loaded_column(ny: usize) -> mpm_solve::input::case::Case {
         }
     }
     let mut traction = vec![[0.0; 3]; n];
-    scene::add_face_loads(&model, &top, [0.0, -10.0, 0.0], &mut traction);
+    scene::add_face_loads(
+        &model,
+        &top,
+        &vec![[0.0, -10.0, 0.0]; top.len()],
+        &mut traction,
+    );
     let total: f64 = traction.iter().map(|t| t[1]).sum();
     assert!((total + 10.0 * 0.01).abs() < 1e-9, "top load {total}");
     let soil = MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap();

@@ -178,7 +178,7 @@ impl<E: Element, R: Real> Mesh<E, R> {
     }
 
     /// Shape-function values of element `e`'s nodes at `p`.
-    #[inline]
+    #[inline(always)]
     pub fn shape(&self, e: usize, p: &V3<R>) -> E::Nodes<R> {
         let first = &self.x[self.corners[e].as_ref()[0] as usize];
         E::shape(&self.map[e], first, p)

@@ -844,7 +844,10 @@ fn add_nodal_face_loads(
 
 /// Outward unit normals of boundary faces given by their corner nodes: each face is found in
 /// the element that has it, and oriented away from that element's fourth corner.
-fn outward_normals(model: &Model, faces: &[[usize; 3]]) -> Result<Vec<[f64; 3]>, String> {
+pub(crate) fn outward_normals(
+    model: &Model,
+    faces: &[[usize; 3]],
+) -> Result<Vec<[f64; 3]>, String> {
     let key = |f: [usize; 3]| {
         let mut k = f;
         k.sort_unstable();

@@ -176,7 +176,10 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
     let loaded: Vec<&scene::TractionInput> = r
         .tractions
         .iter()
-        .filter(|t| !t.faces.is_empty() && t.traction.iter().any(|&v| v != 0.0))
+        .filter(|t| {
+            !t.faces.is_empty()
+                && (t.traction.iter().any(|&v| v != 0.0) || t.pressure.is_some_and(|p| p != 0.0))
+        })
         .collect();
     // The case ramps every traction over the longest ramp given; each must fit Anura3D's.
     for t in &r.tractions {
@@ -484,12 +487,21 @@ fn load_rows(
             ];
             let inward: f64 = (0..3).map(|d| n[d] * (o[d] - p[d])).sum();
             let c = if inward < 0.0 { [f[0], f[2], f[1]] } else { f };
+            // A pressure pushes along the face's inward normal.
+            let traction = match t.pressure {
+                Some(pressure) => {
+                    let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                    let s = pressure * inward.signum() / length;
+                    n.map(|c| s * c)
+                }
+                None => t.traction,
+            };
             let mid = |i: usize, j: usize| mesh.mid[&(c[i].min(c[j]), c[i].max(c[j]))];
             let ids = [c[0], c[1], c[2], mid(0, 1), mid(1, 2), mid(2, 0)];
             rows.push_row(
                 ids.iter()
                     .map(|&i| Token::Int(i as i64 + 1))
-                    .chain((0..6).flat_map(|_| t.traction.map(Token::Real))),
+                    .chain((0..6).flat_map(|_| traction.map(Token::Real))),
             );
         }
     }
@@ -838,7 +850,7 @@ fn cps_file(case: &crate::input::case::Case, v: CpsValues) -> Cps {
         (
             "DEGREE_OF_FILLING",
             one(&match case.integration {
-                Integration::Mixed { filling } => r(filling),
+                Integration::Mixed { filling, .. } => r(filling),
                 Integration::MaterialPoints => "0.9".into(),
             }),
         ),

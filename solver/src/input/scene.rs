@@ -37,7 +37,8 @@
 //! fixed = [true, false, false]
 //! [[traction]]
 //! physical = "top"
-//! traction = [0.0, -10.0, 0.0]    # kPa
+//! traction = [0.0, -10.0, 0.0]    # kPa; or pressure = 10.0 (kPa, normal to each face,
+//!                                 # pushing into the body: a tunnel's or a pile's wall)
 //! ramp = 0.0                      # s to reach full load (0: sudden)
 //! [[velocity]]                    # a rough rigid platen pushed down (nodes of a surface)
 //! physical = "top"                # or plane = "y = 1.0"; a physical volume: its points
@@ -314,7 +315,12 @@ struct Fixity {
 #[serde(deny_unknown_fields)]
 struct Traction {
     physical: String,
-    traction: [f64; 3],
+    /// A uniform traction vector (kPa).
+    #[serde(default)]
+    traction: Option<[f64; 3]>,
+    /// Or a pressure (kPa) normal to each face, pushing into the body.
+    #[serde(default)]
+    pressure: Option<f64>,
     #[serde(default)]
     ramp: f64,
 }
@@ -489,10 +495,23 @@ pub struct TractionInput {
     pub physical: String,
     /// Its triangles: model node ids (0-based) of their corners, in the mesh file's order.
     pub faces: Vec<[u32; 3]>,
-    /// Traction vector (kPa).
+    /// Traction vector (kPa; zero for a pressure).
     pub traction: [f64; 3],
+    /// Pressure normal to each face, pushing into the body (kPa), instead of `traction`.
+    pub pressure: Option<f64>,
     /// Seconds to full load (0: sudden).
     pub ramp: f64,
+}
+
+impl TractionInput {
+    /// The traction on each face (kPa): the vector, or the pressure along the face's inward
+    /// normal (`outward`: the faces' outward unit normals).
+    pub fn on_faces(&self, outward: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        match self.pressure {
+            Some(p) => outward.iter().map(|n| n.map(|c| -p * c)).collect(),
+            None => vec![self.traction; self.faces.len()],
+        }
+    }
 }
 
 /// A scene resolved against its mesh: the case it runs, plus the scene's own values that the
@@ -717,14 +736,33 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
                 ),
             ));
         }
-        add_face_loads(&model, &faces, tr.traction, &mut traction);
-        traction_ramp = traction_ramp.max(tr.ramp);
-        tractions.push(TractionInput {
+        let item = || format!("traction \"{}\"", tr.physical);
+        let input = TractionInput {
             physical: tr.physical.clone(),
             faces,
-            traction: tr.traction,
+            traction: match (tr.traction, tr.pressure) {
+                (Some(t), None) => t,
+                (None, Some(_)) => [0.0; 3],
+                _ => return Err(invalid(
+                    item(),
+                    "give either traction = [tx, ty, tz] (kPa) or pressure = p (kPa, normal to each face, pushing into the body)".into(),
+                )),
+            },
+            pressure: tr.pressure,
             ramp: tr.ramp,
-        });
+        };
+        let per_face = if input.pressure.is_some() {
+            let corners: Vec<[usize; 3]> =
+                input.faces.iter().map(|f| f.map(|n| n as usize)).collect();
+            let outward = crate::input::anura3d::outward_normals(&model, &corners)
+                .map_err(|m| invalid(item(), format!("{m} in {mesh_name}")))?;
+            input.on_faces(&outward)
+        } else {
+            vec![input.traction; input.faces.len()]
+        };
+        add_face_loads(&model, &input.faces, &per_face, &mut traction);
+        traction_ramp = traction_ramp.max(tr.ramp);
+        tractions.push(input);
     }
     let gravity = scene.gravity.as_ref().map_or([0.0; 3], |g| g.vector);
     let gravity_ramp = scene.gravity.as_ref().map_or(0.0, |g| g.ramp);
@@ -1219,10 +1257,11 @@ fn the_saturated(materials: &[Option<MaterialSpec>]) -> Option<&MaterialSpec> {
     }
 }
 
-/// Adds the nodal forces of a uniform traction `t` (kPa) on triangles `faces` (model node ids of
-/// their corners): each corner takes a third of the face's area times `t`.
-pub fn add_face_loads(model: &Model, faces: &[[u32; 3]], t: [f64; 3], out: &mut [[f64; 3]]) {
-    for f in faces {
+/// Adds the nodal forces of tractions `t` (kPa, one per face, uniform on it) on triangles
+/// `faces` (model node ids of their corners): each corner takes a third of the face's area
+/// times its face's traction.
+pub fn add_face_loads(model: &Model, faces: &[[u32; 3]], t: &[[f64; 3]], out: &mut [[f64; 3]]) {
+    for (f, t) in faces.iter().zip(t) {
         let area = triangle_area(model, [f[0] as usize, f[1] as usize, f[2] as usize]);
         for &n in f {
             for d in 0..3 {

@@ -15,7 +15,7 @@ use crate::step::stress::GuardSums;
 /// the nodes' updated velocities, PIC), then re-maps momentum to get the nodal velocities
 /// (fixed components and empty nodes zero) that drive strain, stress, volume and position
 /// (see [`crate::step::stress`]). With `guard` (one slot per element), each element's slot is
-/// begun anew with its points' kinetic energy Σ m |v|² / 2, the velocities at hand.
+/// begun anew with its points' Σ m |v|² (twice their kinetic energy), the velocities at hand.
 #[allow(clippy::too_many_arguments)]
 pub fn grid_to_particle<E: Element, R: Real>(
     team: &Team,
@@ -76,7 +76,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
                 }
             }
             if want {
-                kinetic += 0.5 * (mass[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])).f64();
+                kinetic += (mass[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])).f64();
             }
         }
         kinetic
@@ -154,7 +154,7 @@ fn nodal_velocity<E: Element, R: Real>(
 /// The liquid's share of grid to particle: liquid velocities of the points updated from the
 /// nodal liquid accelerations (FLIP), then the liquid momentum re-mapped to nodal liquid
 /// velocities (zero in fixed components and at nodes without liquid). With `guard`, the
-/// liquid's kinetic energy n ρw V_w |w|² / 2 is added to each element's slot, which
+/// liquid's n ρw V_w |w|² (twice its kinetic energy) is added to each element's slot, which
 /// [`grid_to_particle`] began.
 #[allow(clippy::too_many_arguments)]
 pub fn liquid_to_particles<E: Element, R: Real>(
@@ -201,7 +201,7 @@ pub fn liquid_to_particles<E: Element, R: Real>(
                 }
             }
             if guard.is_some() {
-                kinetic += 0.5 * (f.n * mw * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2])).f64();
+                kinetic += (f.n * mw * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2])).f64();
             }
         }
         if let Some(guard) = &guard {

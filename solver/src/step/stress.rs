@@ -153,11 +153,14 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     - min_ratio * mass[i]
                     + finite;
                 let slot = &mut sums[e - er.start];
-                slot.strain += half.f64() * (w * v0).f64();
+                // Twice the energies: the engine halves the sums (exactly, a power of two).
+                slot.strain += (w * v0).f64();
                 // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work on
                 // Δp = (K_w/n) Δε_mix.
-                if let Some(f) = fluids[material[i] as usize].as_ref() {
-                    slot.liquid += half.f64() * (volume[j] * p * p * f.n_over_kw).f64();
+                if pore.is_some() {
+                    if let Some(f) = fluids[material[i] as usize].as_ref() {
+                        slot.liquid += (volume[j] * p * p * f.n_over_kw).f64();
+                    }
                 }
                 // NaN wins (`!(a >= b)` is true for a NaN).
                 if !(margin.f64() >= slot.volume_margin) {
@@ -171,13 +174,14 @@ pub fn update_stress_and_move<E: Element, R: Real>(
 /// Per element, the guard rails' sums over its active points after the stress update.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GuardSums {
-    /// Σ V0 (σ0 + σ1)/2 : Δε, the strain energy taken up in the step (kJ).
+    /// Σ V0 (σ0 + σ1) : Δε, twice the strain energy taken up in the step (kJ; the energies are
+    /// summed doubled and halved once, by the engine).
     pub strain: f64,
-    /// Σ m |v|² / 2 (kJ), with the step's new point velocities (written by grid to particle);
-    /// for saturated points the liquid's n ρw V_w |w|² / 2 too.
+    /// Σ m |v|² (kJ), twice the kinetic energy with the step's new point velocities (written by
+    /// grid to particle); for saturated points with the liquid's n ρw V_w |w|².
     pub kinetic: f64,
-    /// Σ n V p² / 2 K_w over saturated points (kJ): the energy the liquid's compression holds
-    /// after the step.
+    /// Σ n V p² / K_w over saturated points (kJ): twice the energy the liquid's compression
+    /// holds after the step.
     pub liquid: f64,
     /// Smallest V ρ0 - r m of the points (t), r the guard's smallest volume ratio: ≤ 0 when a
     /// point's V / V0 has fallen to r; NaN when a position or pore pressure is not finite.
