@@ -303,14 +303,19 @@ fn mohr_coulomb_footing_matches_anura3d() {
         Some(|x| (x[1] - 0.4).abs() < 1e-9 && x[0] <= 0.1 + 1e-9),
     );
     let theirs_force = theirs_force.expect("Anura3D wrote no oracle_mc_footing.RSurf_001");
-    // Points and stresses agree to round-off through load step 7 (636 points yielded); in
-    // load step 8 a point enters an element that holds points of another stress, and the codes
-    // part (see docs/validation-mc.md).
+    // Points and stresses agree to round-off at every load step (over 1,000 points yielded,
+    // points crossing into partly filled elements): the GOM route reads MPM-MIXED as Anura3D
+    // does (docs/design.md §4.8). Under the scenes' reading the codes parted at load step 8.
     let parted = d
         .iter()
         .position(|&(dx, ds, _)| dx > 1e-12 || ds > 1e-12)
         .unwrap_or(d.len());
-    assert!(parted >= 7, "the codes part at load step {}", parted + 1);
+    assert_eq!(
+        parted,
+        d.len(),
+        "the codes part at load step {}",
+        parted + 1
+    );
     // The footing's reaction. Anura3D's row n is its reaction after time step n: the nodes'
     // B^T sigma less their weight, from the state step n left, which our step n + 1 starts
     // from (and reports less the weight as the grid takes it). Anura3D takes less weight off
@@ -358,10 +363,10 @@ fn mohr_coulomb_footing_matches_anura3d() {
         b[1],
         100.0 * (b[1] - a[1]) / a[1]
     );
-    // Once the codes part, the force follows the stresses under the footing: at the end it
-    // is 7.4 % below Anura3D's (both within the positions' 1 %).
+    // At the end too, to Anura3D's print (under the scenes' reading of MPM-MIXED ours was
+    // 7.4 % below).
     assert!(
-        (b[1] - a[1]).abs() <= 0.1 * a[1].abs(),
+        (b[1] - a[1]).abs() <= 5.001e-4 * a[1].abs(),
         "final footing force {} kN against Anura3D's {} kN",
         b[1],
         a[1]
@@ -382,9 +387,9 @@ fn mohr_coulomb_footing_matches_anura3d() {
     let (la, lb) = (low(theirs.last().unwrap()), low(ours.last().unwrap()));
     eprintln!("final: heave top Anura3D {ta:.6} ours {tb:.6}; under the footing Anura3D {la:.6} ours {lb:.6}");
     assert!(
-        last.0 <= 0.01,
-        "final positions differ by {:.2} % of the half-width",
-        100.0 * last.0
+        last.0 <= 1e-12,
+        "final positions differ by {:.2e} of the half-width",
+        last.0
     );
 }
 

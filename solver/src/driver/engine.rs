@@ -6,7 +6,7 @@ use crate::element::locate::{walk, Found};
 use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::Element;
-use crate::input::case::{Case, Guards, Integration};
+use crate::input::case::{Case, Guards, Integration, MixedRule};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::comm::{Communicator, SingleProcess};
@@ -314,6 +314,14 @@ impl<R: Real, E: Element> Engine<R, E> {
         if particles.is_empty() {
             return Err(SetupError::NoPoints);
         }
+        // Anura3D's boundary points are found as placed, before the points are reordered.
+        let boundary = match case.integration {
+            Integration::Mixed {
+                rule: MixedRule::Anura3d,
+                ..
+            } => crate::step::mixed::boundary_points(&mesh, &particles),
+            _ => Vec::new(),
+        };
         // The laws' state slab: as many values per point as the most demanding law keeps.
         particles.state_len = case
             .materials
@@ -407,9 +415,12 @@ impl<R: Real, E: Element> Engine<R, E> {
         let slots = layout.new_slots();
         let mixed = match case.integration {
             Integration::MaterialPoints => None,
-            Integration::Mixed { filling } => {
-                Some(crate::step::mixed::Mixed::new(mesh.elements(), filling))
-            }
+            Integration::Mixed { filling, rule } => Some(crate::step::mixed::Mixed::new(
+                mesh.elements(),
+                filling,
+                rule,
+                boundary,
+            )),
         };
         let weight_ratio: Vec<f64> = case
             .materials
@@ -845,7 +856,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             }),
         );
         if let Some(m) = &self.mixed {
-            m.smooth_stresses(&self.team, &self.layout, &mut self.particles);
+            m.after_stress(&self.team, &self.layout, &mut self.particles);
         }
         // External work of gravity and face loads over the step, with the new nodal velocities.
         let mut w = 0.0;
@@ -867,6 +878,9 @@ impl<R: Real, E: Element> Engine<R, E> {
         }
         let t4 = Instant::now();
         self.locate()?;
+        if let Some(m) = &self.mixed {
+            m.after_locate(&self.team, &self.layout, &mut self.particles);
+        }
         let t5 = Instant::now();
         for (k, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5)]
             .into_iter()

@@ -114,6 +114,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             }
             Integration::Mixed {
                 filling: s.degree_of_filling,
+                rule: crate::input::case::MixedRule::Anura3d,
             }
         }
         Method::Other(m) => {

@@ -182,12 +182,31 @@ pub struct QuasiStatic {
 pub enum Integration {
     /// At the material points everywhere (`MPM-MP`).
     MaterialPoints,
-    /// At the element's Gauss point in elements whose points fill at least this fraction of
-    /// the element volume, at material points elsewhere (`MPM-MIXED`).
+    /// At the element's Gauss point in full elements, at material points elsewhere
+    /// (`MPM-MIXED`).
     Mixed {
         /// Degree of filling from which an element counts as full.
         filling: f64,
+        /// Which elements count as full, and which points take their element's mean stress.
+        rule: MixedRule,
     },
+}
+
+/// The two readings of MPM-MIXED (docs/design.md §4.9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MixedRule {
+    /// Anura3D's, for GOM input: an element is partly filled (integrated at its points) when
+    /// it holds points of two materials, or holds a boundary point (one placed beside a face
+    /// shared with an element that started empty) and its points fill at most the degree of
+    /// filling; every other element is full. After the points are located each step, every
+    /// point of an element holding one material takes the element's volume-weighted mean
+    /// stress, pore pressure and state, full or not.
+    Anura3d,
+    /// The scenes' rule: an element is full when its points fill at least the degree of
+    /// filling, and the points of the elements that were full at the start of a step take their
+    /// mean after the stress update, before they move (a partly filled element at a free
+    /// surface keeps its points' own stresses).
+    FullAtStart,
 }
 
 /// Everything a run needs.

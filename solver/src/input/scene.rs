@@ -898,7 +898,10 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
     let integration = match scene.integration.as_deref() {
         None | Some("points") => Integration::MaterialPoints,
         // Anura3D's default degree of filling (CPS `DEGREE_OF_FILLING`).
-        Some("mixed") => Integration::Mixed { filling: 0.9 },
+        Some("mixed") => Integration::Mixed {
+            filling: 0.9,
+            rule: crate::input::case::MixedRule::FullAtStart,
+        },
         Some(s) => {
             return Err(invalid(
                 "integration".into(),

@@ -44,6 +44,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
             Shared::new(&mut m.full),
             filling,
             Shared::new(&mut m.pressure),
+            (m.rule, &m.boundary[..]),
         )
     });
     layout.scatter::<10, _>(team, slots, |e, four| {
@@ -51,7 +52,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
         let range = layout.particles_of(e);
         // Mixed integration: is the element full, and its mean stress.
         let mut full = false;
-        if let Some((stress, flags, filling, pressure)) = &mixed_sums {
+        if let Some((stress, flags, filling, pressure, (rule, boundary))) = &mixed_sums {
             let (mut v, mut s, mut pm) = (R::ZERO, [R::ZERO; 6], R::ZERO);
             for i in range.clone() {
                 if p.active[i] {
@@ -64,7 +65,15 @@ pub fn particle_to_grid<E: Element, R: Real>(
                     }
                 }
             }
-            full = v > R::ZERO && v >= *filling * mesh.volume[e];
+            full = crate::step::mixed::is_full(
+                *rule,
+                boundary,
+                *filling,
+                p,
+                range.clone(),
+                v,
+                mesh.volume[e],
+            );
             if full {
                 for c in s.iter_mut() {
                     *c /= v;
