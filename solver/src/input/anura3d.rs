@@ -792,7 +792,7 @@ fn face_loads_on_points(model: &Model, rows: &mpm_shared::model::Table) -> Vec<F
     rows.rows()
         .map(|r| {
             let corners = [0, 1, 2].map(|i| r[i].as_int().unwrap_or(1) as usize - 1);
-            let area = crate::input::scene::triangle_area(model, corners);
+            let area = crate::input::faces::triangle_area(model, corners);
             let mut force = [0.0; 3];
             for c in 0..3 {
                 for (d, f) in force.iter_mut().enumerate() {
@@ -821,7 +821,7 @@ fn add_nodal_face_loads(
         .map(|r| [0, 1, 2].map(|i| r[i].as_int().unwrap_or(1) as usize - 1))
         .collect();
     let normals = if normal {
-        outward_normals(model, &faces)?
+        crate::input::faces::outward_normals(model, &faces)?
     } else {
         vec![[1.0; 3]; faces.len()]
     };
@@ -832,7 +832,7 @@ fn add_nodal_face_loads(
                     .map(|d| n[d] * r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0))
             })
             .collect();
-        let area = crate::input::scene::triangle_area(model, *ids);
+        let area = crate::input::faces::triangle_area(model, *ids);
         for i in 0..3 {
             let (j, l) = ((i + 1) % 3, (i + 2) % 3);
             for d in 0..3 {
@@ -841,66 +841,4 @@ fn add_nodal_face_loads(
         }
     }
     Ok(())
-}
-
-/// Outward unit normals of boundary faces given by their corner nodes: each face is found in
-/// the element that has it, and oriented away from that element's fourth corner.
-pub(crate) fn outward_normals(
-    model: &Model,
-    faces: &[[usize; 3]],
-) -> Result<Vec<[f64; 3]>, String> {
-    let key = |f: [usize; 3]| {
-        let mut k = f;
-        k.sort_unstable();
-        k
-    };
-    let mut opposite: std::collections::HashMap<[usize; 3], Option<usize>> =
-        faces.iter().map(|&f| (key(f), None)).collect();
-    for e in 0..model.element_count() {
-        let c = &model.element(e)[..4];
-        for skip in 0..4 {
-            let mut f = [0usize; 3];
-            let mut j = 0;
-            for (i, &n) in c.iter().enumerate() {
-                if i != skip {
-                    f[j] = n as usize;
-                    j += 1;
-                }
-            }
-            if let Some(slot) = opposite.get_mut(&key(f)) {
-                *slot = Some(c[skip] as usize);
-            }
-        }
-    }
-    faces
-        .iter()
-        .map(|&f| {
-            let inner = opposite[&key(f)].ok_or_else(|| {
-                format!(
-                    "the loaded face with corner nodes {} {} {} is not a face of any element",
-                    f[0] + 1,
-                    f[1] + 1,
-                    f[2] + 1
-                )
-            })?;
-            let p = f.map(|n| model.node(n));
-            let q = model.node(inner);
-            let (a, b) = (
-                [0, 1, 2].map(|d| p[1][d] - p[0][d]),
-                [0, 1, 2].map(|d| p[2][d] - p[0][d]),
-            );
-            let mut n = [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ];
-            let len = n.iter().map(|v| v * v).sum::<f64>().sqrt();
-            let towards_inner: f64 = (0..3).map(|d| n[d] * (q[d] - p[0][d])).sum();
-            let sign = if towards_inner > 0.0 { -1.0 } else { 1.0 };
-            for v in n.iter_mut() {
-                *v *= sign / len;
-            }
-            Ok(n)
-        })
-        .collect()
 }

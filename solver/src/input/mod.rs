@@ -4,6 +4,7 @@ pub mod anura3d;
 pub mod anura3d_keys;
 pub mod case;
 pub mod export_anura3d;
+pub mod faces;
 pub mod initial_stress;
 pub mod preflight;
 pub mod scene;

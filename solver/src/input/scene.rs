@@ -754,7 +754,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         let per_face = if input.pressure.is_some() {
             let corners: Vec<[usize; 3]> =
                 input.faces.iter().map(|f| f.map(|n| n as usize)).collect();
-            let outward = crate::input::anura3d::outward_normals(&model, &corners)
+            let outward = crate::input::faces::outward_normals(&model, &corners)
                 .map_err(|m| invalid(item(), format!("{m} in {mesh_name}")))?;
             input.on_faces(&outward)
         } else {
@@ -1265,24 +1265,14 @@ fn the_saturated(materials: &[Option<MaterialSpec>]) -> Option<&MaterialSpec> {
 /// times its face's traction.
 pub fn add_face_loads(model: &Model, faces: &[[u32; 3]], t: &[[f64; 3]], out: &mut [[f64; 3]]) {
     for (f, t) in faces.iter().zip(t) {
-        let area = triangle_area(model, [f[0] as usize, f[1] as usize, f[2] as usize]);
+        let area = crate::input::faces::triangle_area(
+            model,
+            [f[0] as usize, f[1] as usize, f[2] as usize],
+        );
         for &n in f {
             for d in 0..3 {
                 out[n as usize][d] += area / 3.0 * t[d];
             }
         }
     }
-}
-
-/// Area of the triangle with corners at model nodes `n` (0-based).
-pub fn triangle_area(model: &Model, n: [usize; 3]) -> f64 {
-    let p = n.map(|i| model.node(i));
-    let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
-    let b = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
-    let c = [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ];
-    0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
 }
