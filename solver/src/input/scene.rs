@@ -751,16 +751,21 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
             pressure: tr.pressure,
             ramp: tr.ramp,
         };
-        let per_face = if input.pressure.is_some() {
+        // Only a pressure needs the faces' normals.
+        let outward = if input.pressure.is_some() {
             let corners: Vec<[usize; 3]> =
                 input.faces.iter().map(|f| f.map(|n| n as usize)).collect();
-            let outward = crate::input::faces::outward_normals(&model, &corners)
-                .map_err(|m| invalid(item(), format!("{m} in {mesh_name}")))?;
-            input.on_faces(&outward)
+            crate::input::faces::outward_normals(&model, &corners)
+                .map_err(|m| invalid(item(), format!("{m} in {mesh_name}")))?
         } else {
-            vec![input.traction; input.faces.len()]
+            Vec::new()
         };
-        add_face_loads(&model, &input.faces, &per_face, &mut traction);
+        add_face_loads(
+            &model,
+            &input.faces,
+            &input.on_faces(&outward),
+            &mut traction,
+        );
         traction_ramp = traction_ramp.max(tr.ramp);
         tractions.push(input);
     }

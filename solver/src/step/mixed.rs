@@ -101,18 +101,19 @@ pub fn is_full<R: Real>(
     match rule {
         MixedRule::FullAtStart => filled >= limit,
         MixedRule::Anura3d => {
-            let mut active = points.filter(|&i| p.active[i]);
-            let Some(first) = active.next() else {
-                return false;
-            };
-            let (mut one_material, mut beside) = (true, boundary[p.id[first] as usize]);
-            for i in active {
-                one_material &= p.material[i] == p.material[first];
-                beside |= boundary[p.id[i] as usize];
-            }
-            one_material && !(beside && filled <= limit)
+            let beside = points
+                .clone()
+                .any(|i| p.active[i] && boundary[p.id[i] as usize]);
+            one_material(&p.active, &p.material, points) && !(beside && filled <= limit)
         }
     }
+}
+
+/// Whether the active points among `points` are all of one material.
+fn one_material(active: &[bool], material: &[u32], points: std::ops::Range<usize>) -> bool {
+    let mut m = points.filter(|&i| active[i]).map(|i| material[i]);
+    let first = m.next();
+    m.all(|x| Some(x) == first)
 }
 
 /// The elements whose points take their means.
@@ -134,11 +135,7 @@ fn average_all<E: Element, R: Real>(
     let (active, volume, material) = (&p.active, &p.volume, &p.material);
     let include = |e: usize, range: std::ops::Range<usize>| match select {
         Select::Full(full) => full[e],
-        Select::OneMaterial => {
-            let mut m = range.filter(|&i| active[i]).map(|i| material[i]);
-            let first = m.next();
-            m.all(|x| Some(x) == first)
-        }
+        Select::OneMaterial => one_material(active, material, range),
     };
     if let Some(l) = &mut p.liquid {
         let add = |m: &mut [R; 1], w: R, v: &[R]| m[0] += w * v[0];

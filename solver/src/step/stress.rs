@@ -157,10 +157,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 slot.strain += (w * v0).f64();
                 // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work on
                 // Δp = (K_w/n) Δε_mix.
-                if pore.is_some() {
-                    if let Some(f) = fluids[material[i] as usize].as_ref() {
-                        slot.liquid += (volume[j] * p * p * f.n_over_kw).f64();
-                    }
+                if let (Some(_), Some(f)) = (pore, fluids[material[i] as usize].as_ref()) {
+                    slot.liquid += (volume[j] * p * p * f.n_over_kw).f64();
                 }
                 // NaN wins (`!(a >= b)` is true for a NaN).
                 if !(margin.f64() >= slot.volume_margin) {
