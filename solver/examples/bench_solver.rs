@@ -6,7 +6,11 @@
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
 //!  --order morton|random|none --precision f64|f32 --guards on|off
-//!  --law linear|mc-elastic|mc-plastic`
+//!  --law linear|mc-elastic|mc-plastic|mc-flowing`
+//!
+//! The Mohr-Coulomb laws print, beside the timing, the share of point-steps that end on the
+//! yield surface and the share that end there with a stress that moved (returned points), from
+//! one more run of the same steps.
 //!
 //! `--guards off` skips the per-step guard rails (docs/design.md §4.14), to measure their cost.
 //!
@@ -82,11 +86,16 @@ fn main() {
     } else {
         // `--law mc-elastic`: Mohr-Coulomb whose points stay elastic (φ = 30°: the column's
         // K0 = ν/(1-ν) = 0.43 exceeds the active 0.33); `mc-plastic`: φ = 10° (active 0.70),
-        // so every loaded point is on the yield surface and returns each step.
+        // so every point returns at the first step and then sits on the yield surface, most of
+        // the column moving as a rigid body under gravity (strain increments of round-off
+        // size); `mc-flowing`: the same law under uniform oedometric compression (below), so
+        // that every point returns at every step.
         use mpm_solve::material::law::LawSpec;
         let law = match arg(&a, "--law") {
             Some("mc-elastic") => LawSpec::mohr_coulomb(10000.0, 0.3, 30.0, 0.0, 0.0, 0.0),
-            Some("mc-plastic") => LawSpec::mohr_coulomb(10000.0, 0.3, 10.0, 0.0, 0.0, 0.0),
+            Some("mc-plastic" | "mc-flowing") => {
+                LawSpec::mohr_coulomb(10000.0, 0.3, 10.0, 0.0, 0.0, 0.0)
+            }
             _ => LawSpec::linear_elastic(10000.0, 0.3),
         }
         .unwrap();
@@ -136,10 +145,22 @@ fn main() {
         first_touch,
     };
     let f32 = arg(&a, "--precision") == Some("f32");
+    let law = arg(&a, "--law").unwrap_or("linear");
+    // Vertical velocity -rate·(y - y_bottom): compression at a strain of about 1e-5 per step,
+    // its elastic ratio of lateral to vertical increment (ν/(1-ν) = 0.43) below the active
+    // ratio, so every trial lies beyond the surface.
+    let flow = (law == "mc-flowing").then_some(0.2);
     let result = if f32 {
-        measure::<f32>(&case, steps, reps)
+        measure::<f32>(&case, steps, reps, flow)
     } else {
-        measure::<f64>(&case, steps, reps)
+        measure::<f64>(&case, steps, reps, flow)
+    };
+    let surface = if law.starts_with("mc-") {
+        let friction = if law == "mc-elastic" { 30.0 } else { 10.0 };
+        let (on, moved) = on_surface(&case, steps, flow, friction);
+        format!(", \"on_surface\": {on:.4}, \"returned\": {moved:.4}")
+    } else {
+        String::new()
     };
     let Measured {
         rates,
@@ -162,7 +183,7 @@ fn main() {
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
     println!(
-        "{{\"case\": \"{}\", \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}}}",
+        "{{\"case\": \"{}\", \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}{}}}",
         if saturated { "saturated" } else { "dry" },
         arg(&a, "--law").unwrap_or("linear"),
         info.0,
@@ -178,7 +199,8 @@ fn main() {
         bytes_per_point,
         rates,
         median,
-        per_phase.join(", ")
+        per_phase.join(", "),
+        surface
     );
 }
 
@@ -191,7 +213,12 @@ struct Measured {
 }
 
 /// Times `reps` runs of `steps` steps of `case` in precision `R`.
-fn measure<R: mpm_solve::real::Real>(case: &Case, steps: usize, reps: usize) -> Measured {
+fn measure<R: mpm_solve::real::Real>(
+    case: &Case,
+    steps: usize,
+    reps: usize,
+    flow: Option<f64>,
+) -> Measured {
     let mut m = Measured {
         rates: Vec::new(),
         phases: Vec::new(),
@@ -200,6 +227,9 @@ fn measure<R: mpm_solve::real::Real>(case: &Case, steps: usize, reps: usize) -> 
     };
     for _ in 0..reps {
         let mut engine = Engine::<R>::new(case, false).unwrap();
+        if let Some(rate) = flow {
+            compress(&mut engine, rate);
+        }
         let np = engine.particles.len();
         let t = Instant::now();
         for _ in 0..steps {
@@ -212,4 +242,46 @@ fn measure<R: mpm_solve::real::Real>(case: &Case, steps: usize, reps: usize) -> 
         m.bytes_per_point = engine.particles.bytes_per_point();
     }
     m
+}
+
+/// Sets every point's velocity to uniform vertical compression at `rate` (1/s).
+fn compress<R: mpm_solve::real::Real>(engine: &mut Engine<R>, rate: f64) {
+    let p = &mut engine.particles;
+    let bottom = p.x.iter().fold(f64::MAX, |m, x| m.min(x[1].f64()));
+    for (v, x) in p.v.iter_mut().zip(&p.x) {
+        *v = [R::ZERO, R::of(-rate * (x[1].f64() - bottom)), R::ZERO];
+    }
+}
+
+/// Shares of the point-steps of a run of `steps` steps that end on the Mohr-Coulomb surface
+/// (φ = `friction`, c = 0: |F| within 1e-9 of the largest principal stress), and that end there
+/// with a stress moved by more than 1e-9 of it (returned, not resting on the surface).
+fn on_surface(case: &Case, steps: usize, flow: Option<f64>, friction: f64) -> (f64, f64) {
+    use mpm_solve::material::mohr_coulomb::Surface;
+    use mpm_solve::material::principal::principal;
+    let surface = Surface::<f64>::new(friction, 0.0, 0.0, 0.0);
+    let mut engine = Engine::<f64>::new(case, false).unwrap();
+    if let Some(rate) = flow {
+        compress(&mut engine, rate);
+    }
+    let (mut on, mut moved, mut all) = (0usize, 0usize, 0usize);
+    for _ in 0..steps {
+        let before = engine.particles.stress.clone();
+        engine.step(engine.dt, None).unwrap();
+        let p = &engine.particles;
+        for i in (0..p.len()).filter(|&i| p.active[i]) {
+            let s = &p.stress[i];
+            let v = principal(s).values;
+            let scale = v[0].abs().max(v[2].abs());
+            all += 1;
+            if surface.yield_value(v[0], v[2]).abs() <= 1e-9 * scale {
+                on += 1;
+                let change = (0..6).fold(0.0f64, |m, k| m.max((s[k] - before[i][k]).abs()));
+                if change > 1e-9 * scale {
+                    moved += 1;
+                }
+            }
+        }
+    }
+    (on as f64 / all as f64, moved as f64 / all as f64)
 }

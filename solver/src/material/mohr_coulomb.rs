@@ -28,7 +28,8 @@
 //! and J2 (a bound for every Lode angle) or, failing that, from bounds on its extreme principal
 //! stresses by Newton's method on the characteristic cubic; only trials at or beyond the surface
 //! are decomposed. A run that stays elastic costs about what a linear elastic one does; a
-//! plastic point-step adds about 175 ns (docs/design.md, "Laws").
+//! plastic point-step adds about 140 ns, one resting on the surface about 85 ns (docs/design.md,
+//! "Laws").
 
 use crate::material::linear_elastic::LinearElastic;
 use crate::material::principal::split;
@@ -81,12 +82,23 @@ pub struct Planes<R: Real> {
     k: [R; 6],
     /// a_j · D b_l for the planes in use (the pyramid's three, or all six with the cut-off).
     adb: [[R; 6]; 6],
+    /// For each active set of [`WITH_CUT_OFF`] (by position), the inverse of its multiplier
+    /// system (padded with zeros to 3×3), `None` where it is singular; formed once for a law
+    /// of fixed strength ([`Planes::with_inverses`]), so that a return multiplies instead of
+    /// dividing. Without it (a softening law's planes change with its state) each candidate
+    /// solves its system by Cramer's rule.
+    inverse: [[[R; 3]; 3]; 12],
+    /// Which sets' systems are singular (their `inverse` is zero).
+    singular: [bool; 12],
+    /// Whether `inverse` and `singular` are formed.
+    inverted: bool,
 }
 
-/// Active sets tried in turn without the cut-off: face, extension edge, compression edge; a
-/// trial none of them takes goes to the apex (whose planes' flow directions are dependent for
-/// ψ = 0, so no multiplier system describes it).
-const PYRAMID: [&[usize]; 3] = [&[0], &[0, 2], &[0, 1]];
+/// Active sets tried in turn without the cut-off, as positions in [`WITH_CUT_OFF`]: the face
+/// [0], the extension edge [0, 2], the compression edge [0, 1]; a trial none of them takes goes
+/// to the apex (whose planes' flow directions are dependent for ψ = 0, so no multiplier system
+/// describes it).
+const PYRAMID_SETS: [usize; 3] = [0, 2, 3];
 
 /// Active sets tried in turn with the cut-off: faces, edges, the face–cut-off line, the corners
 /// (σa, σa, σt), (σa, σt, σt) (four planes meet there: each triple spans part of its cone) and
@@ -154,6 +166,14 @@ impl<R: Real> Surface<R> {
         // on the compression meridian where soil under gravity sits): the Newton bounds below
         // could not help, so go straight to the decomposition.
         if r < R::ZERO || j2 * self.inner > r * r {
+            return false;
+        }
+        // Nor can they when that smallest value is within their margin (below) of 0, as on the
+        // compression meridian after a return there: the state is on the surface to round-off
+        // and the decomposition decides. (Either way the stress is left as it is when the
+        // decomposition finds it inside, so this changes the cost alone.)
+        let edge = r - R::of(32.0 * R::EPSILON) * (p.abs() + self.cohesion);
+        if edge < R::ZERO || j2 * self.inner > edge * edge {
             return false;
         }
         let pyramid = j2 * self.bound <= r * r;
@@ -290,9 +310,96 @@ impl<R: Real> Surface<R> {
             db,
             k: [c, c, c, t, t, t],
             adb,
+            inverse: [[[R::ZERO; 3]; 3]; 12],
+            singular: [true; 12],
+            inverted: false,
         }
     }
 
+    /// The system of the planes `set` as a 3×3 matrix (zero-padded), `None` when it is singular
+    /// (to round-off relative to the shear modulus `shear`).
+    fn system(planes: &Planes<R>, set: &[usize], shear: R) -> Option<([[R; 3]; 3], R)> {
+        let mut k = [[R::ZERO; 3]; 3];
+        for (j, &pj) in set.iter().enumerate() {
+            for (l, &pl) in set.iter().enumerate() {
+                k[j][l] = planes.adb[pj][pl];
+            }
+        }
+        let tiny = R::of(R::EPSILON) * shear;
+        let det = match set.len() {
+            1 => k[0][0],
+            2 => k[0][0] * k[1][1] - k[0][1] * k[1][0],
+            _ => det3(&k),
+        };
+        let size = match set.len() {
+            1 => R::ONE,
+            2 => k[0][0].abs() + k[1][1].abs(),
+            _ => {
+                let s = k[0][0].abs() + k[1][1].abs() + k[2][2].abs();
+                s * s
+            }
+        };
+        if !(det.abs() > tiny * size) {
+            return None;
+        }
+        Some((k, det))
+    }
+}
+
+impl<R: Real> Planes<R> {
+    /// These planes with the inverse of every active set's system formed (for a law whose
+    /// strength does not change).
+    pub fn with_inverses(mut self, surface: &Surface<R>, el: &LinearElastic<R>) -> Self {
+        let used: &[usize] = if surface.cut_off {
+            &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]
+        } else {
+            &PYRAMID_SETS
+        };
+        for &i in used {
+            let set = WITH_CUT_OFF[i];
+            let Some((k, det)) = Surface::system(&self, set, el.shear) else {
+                continue;
+            };
+            let inv = &mut self.inverse[i];
+            match set.len() {
+                1 => inv[0][0] = R::ONE / det,
+                2 => {
+                    inv[0][0] = k[1][1] / det;
+                    inv[0][1] = -k[0][1] / det;
+                    inv[1][0] = -k[1][0] / det;
+                    inv[1][1] = k[0][0] / det;
+                }
+                _ => {
+                    // Cramer's rule: column l of the inverse solves K x = e_l.
+                    for l in 0..3 {
+                        let mut e = [R::ZERO; 3];
+                        e[l] = R::ONE;
+                        for j in 0..3 {
+                            let mut c = k;
+                            for (row, &v) in c.iter_mut().zip(&e) {
+                                row[j] = v;
+                            }
+                            inv[j][l] = det3(&c) / det;
+                        }
+                    }
+                }
+            }
+            self.singular[i] = false;
+        }
+        self.inverted = true;
+        self
+    }
+}
+
+/// The determinant of a 3×3 matrix.
+#[inline]
+fn det3<R: Real>(c: &[[R; 3]; 3]) -> R {
+    c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
+        - c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0])
+        + c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0])
+}
+
+impl<R: Real> Surface<R> {
     /// The returned principal stresses of the sorted trial `sig` (outside the surface).
     fn principal_return(
         &self,
@@ -307,10 +414,10 @@ impl<R: Real> Surface<R> {
             *f = dot(&planes.a[j], sig) - planes.k[j];
         }
         let tol = R::of(64.0 * R::EPSILON) * scale;
-        let sets: &[&[usize]] = if self.cut_off {
-            &WITH_CUT_OFF
+        let sets: &[usize] = if self.cut_off {
+            &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]
         } else {
-            &PYRAMID
+            &PYRAMID_SETS
         };
         // The first consistent candidate wins. Failing all, the least inconsistent one if only
         // round-off at a region boundary failed it, else the apex (without cut-off).
@@ -319,9 +426,9 @@ impl<R: Real> Surface<R> {
         // edge, so that edge is tried before the extension edge (it saves a candidate on the
         // triaxial compression states that soil under gravity reaches).
         let mut face_past_compression_edge = false;
-        for (i, set) in sets.iter().enumerate() {
+        for (i, &set) in sets.iter().enumerate() {
             let set = if !self.cut_off && i > 0 && face_past_compression_edge {
-                PYRAMID[3 - i]
+                PYRAMID_SETS[3 - i]
             } else {
                 set
             };
@@ -345,62 +452,51 @@ impl<R: Real> Surface<R> {
         near.or(best).map_or(*sig, |(b, _)| b)
     }
 
-    /// The return with the planes `set` active: the stress, and how far it is from consistent
-    /// (a negative multiplier as 2G Δλ, a yield function above 0), in kPa. `None` when the
-    /// planes' system is singular.
+    /// The return with the planes of [`WITH_CUT_OFF`]`[which]` active: the stress, and how far
+    /// it is from consistent (a negative multiplier as 2G Δλ, a yield function above 0), in
+    /// kPa. `None` when the planes' system is singular.
+    #[inline]
     fn candidate(
         &self,
         el: &LinearElastic<R>,
         planes: &Planes<R>,
         f: &[R; 6],
         sig: &[R; 3],
-        set: &[usize],
+        which: usize,
     ) -> Option<([R; 3], R)> {
-        let m = |j: usize, l: usize| planes.adb[set[j]][set[l]];
-        let rhs = |j: usize| f[set[j]];
+        let set = WITH_CUT_OFF[which];
+        let n = set.len();
+        let r = [
+            f[set[0]],
+            if n > 1 { f[set[1]] } else { R::ZERO },
+            if n > 2 { f[set[2]] } else { R::ZERO },
+        ];
         let mut dl = [R::ZERO; 3];
-        let tiny = R::of(R::EPSILON) * el.shear;
-        match set.len() {
-            1 => {
-                let d = m(0, 0);
-                if !(d.abs() > tiny) {
-                    return None;
-                }
-                dl[0] = rhs(0) / d;
+        if planes.inverted {
+            if planes.singular[which] {
+                return None;
             }
-            2 => {
-                let (a, b, c, d) = (m(0, 0), m(0, 1), m(1, 0), m(1, 1));
-                let det = a * d - b * c;
-                if !(det.abs() > tiny * (a.abs() + d.abs())) {
-                    return None;
-                }
-                dl[0] = (rhs(0) * d - b * rhs(1)) / det;
-                dl[1] = (a * rhs(1) - c * rhs(0)) / det;
+            let inv = &planes.inverse[which];
+            for (x, row) in dl.iter_mut().zip(inv) {
+                *x = row[0] * r[0] + row[1] * r[1] + row[2] * r[2];
             }
-            _ => {
-                let k = [
-                    [m(0, 0), m(0, 1), m(0, 2)],
-                    [m(1, 0), m(1, 1), m(1, 2)],
-                    [m(2, 0), m(2, 1), m(2, 2)],
-                ];
-                let r = [rhs(0), rhs(1), rhs(2)];
-                let det3 = |c: &[[R; 3]; 3]| {
-                    c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
-                        - c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0])
-                        + c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0])
-                };
-                let det = det3(&k);
-                let size = k[0][0].abs() + k[1][1].abs() + k[2][2].abs();
-                if !(det.abs() > tiny * size * size) {
-                    return None;
+        } else {
+            let (k, det) = Surface::system(planes, set, el.shear)?;
+            match set.len() {
+                1 => dl[0] = r[0] / det,
+                2 => {
+                    dl[0] = (r[0] * k[1][1] - k[0][1] * r[1]) / det;
+                    dl[1] = (k[0][0] * r[1] - k[1][0] * r[0]) / det;
                 }
-                // Cramer's rule: column l replaced by the right-hand side.
-                for (l, x) in dl.iter_mut().enumerate() {
-                    let mut c = k;
-                    for (row, &v) in c.iter_mut().zip(&r) {
-                        row[l] = v;
+                _ => {
+                    // Cramer's rule: column l replaced by the right-hand side.
+                    for (l, x) in dl.iter_mut().enumerate() {
+                        let mut c = k;
+                        for (row, &v) in c.iter_mut().zip(&r) {
+                            row[l] = v;
+                        }
+                        *x = det3(&c) / det;
                     }
-                    *x = det3(&c) / det;
                 }
             }
         }
@@ -450,7 +546,7 @@ impl<R: Real> MohrCoulomb<R> {
         MohrCoulomb {
             elastic,
             surface,
-            planes: surface.planes(&elastic),
+            planes: surface.planes(&elastic).with_inverses(&surface, &elastic),
         }
     }
 
@@ -919,7 +1015,7 @@ mod cost {
         println!("Jacobi alone: {jac:.2} ns");
         let sp = time(&trials, &de, &|s, _| {
             let p = crate::material::principal::split(s);
-            s[0] = p.values[0] + p.vector[0] + p.plane[3];
+            s[0] = p.values[0] + p.outer[0] + p.plane[3];
         });
         println!("split (far eigenpair and the pair's plane) alone: {sp:.2} ns");
         let sorted: Vec<[f64; 6]> = yielding
@@ -938,14 +1034,30 @@ mod cost {
             s[0] = v[0];
         });
         println!("principal return alone: {ret:.2} ns");
-        for (name, states) in [("at rest", &rest), ("near", &near), ("yielding", &yielding)] {
-            let a = time(states, &de, &|s, d| le.update(s, d));
-            let b = time(states, &de, &|s, d| l.update(s, d));
+        // Returned states, then a strain increment of round-off size (a block moving rigidly
+        // while on the yield surface): on the surface to round-off, decomposed to find so.
+        let on_surface: Vec<[f64; 6]> = yielding
+            .iter()
+            .map(|s| {
+                let mut t = *s;
+                l.update(&mut t, &de);
+                t
+            })
+            .collect();
+        let tiny = de.map(|x| x * 1e-12);
+        for (name, states, de) in [
+            ("at rest", &rest, &de),
+            ("near", &near, &de),
+            ("yielding", &yielding, &de),
+            ("on the surface", &on_surface, &tiny),
+        ] {
+            let a = time(states, de, &|s, d| le.update(s, d));
+            let b = time(states, de, &|s, d| l.update(s, d));
             let bounded = states
                 .iter()
                 .filter(|s| {
                     let mut t = **s;
-                    le.update(&mut t, &de);
+                    le.update(&mut t, de);
                     l.surface.surely_inside(&t)
                 })
                 .count();
