@@ -231,7 +231,8 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     input_node: Vec<u32>,
     /// The guard rails' settings.
     pub guards: Guards,
-    /// The guard rails' per-element sums of the last step (empty when the guards are off).
+    /// The guard rails' sums of the last step per block of elements (empty when the guards are
+    /// off).
     guard_slots: Vec<GuardSums>,
     /// Per material index: mass per initial volume of its points (t/m³).
     initial_density: Vec<R>,
@@ -434,7 +435,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             )
         });
         let guard_slots = if case.guards.enabled {
-            vec![GuardSums::EMPTY; mesh.elements()]
+            vec![GuardSums::EMPTY; layout.blocks()]
         } else {
             Vec::new()
         };
@@ -891,8 +892,8 @@ impl<R: Real, E: Element> Engine<R, E> {
         Ok(())
     }
 
-    /// The guard rails after a step: sums the per-element slots in element order (so the
-    /// result does not depend on the threads), updates the energy terms and checks them. `w`:
+    /// The guard rails after a step: sums the per-block slots in block order (so the result
+    /// does not depend on the threads), updates the energy terms and checks them. `w`:
     /// the external power summed over the nodes this step; `forces`: the grid update's sums.
     fn check_step(
         &mut self,
@@ -905,9 +906,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             strain += s.strain;
             kinetic += s.kinetic;
             liquid += s.liquid;
-            if !(s.volume_margin >= margin) {
-                margin = s.volume_margin;
-            }
+            margin = margin.min(s.volume_margin);
         }
         // The slots hold twice each energy (see `GuardSums`).
         let strain = 0.5 * self.comm.sum(strain);
@@ -922,8 +921,9 @@ impl<R: Real, E: Element> Engine<R, E> {
         self.balance_work += forces.work;
         let nodal = w * dt + forces.work + forces.dissipated + forces.unbalanced;
         let fail = |check| Err(StepError::Diverged(Box::new(self.diagnose(check))));
-        // A non-finite stress or velocity makes the energies NaN or infinite; a non-finite
-        // position or pore pressure the volume margin NaN; nodal values the nodal sums.
+        // A non-finite stress, velocity, position, volume or pore pressure makes the energies'
+        // sums NaN or infinite (the passes fold the last three in); nodal values the nodal
+        // sums.
         if !(strain + kinetic + liquid).is_finite() || margin.is_nan() || !nodal.is_finite() {
             return fail(Check::NonFinite);
         }

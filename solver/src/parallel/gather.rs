@@ -21,6 +21,12 @@ use crate::state::particles::{Field, FieldVisitor, Particles, Value};
 /// Widest slot (values per element node) a pass uses.
 pub const WIDTH: usize = 12;
 
+/// The threads' element ranges start at multiples of this many elements (the last ends with
+/// the mesh), so that a sum over a block of consecutive elements is formed by one thread in
+/// element order: per-block partial sums (the guard rails') are the same for any thread count,
+/// and there are 64 times fewer of them to write and add than per-element ones.
+pub const ELEMENT_BLOCK: usize = 64;
+
 /// Layout and scratch of the parallel step.
 #[derive(Debug)]
 ///
@@ -49,9 +55,12 @@ impl<R: Real, E: Element> Layout<R, E> {
     pub fn new(mesh: &Mesh<E, R>, p: &Particles<R>, threads: usize) -> Self {
         let (ne, nn) = (mesh.elements(), mesh.nodes());
         let elem_start = element_starts(&p.element, ne);
-        let element_ranges = balanced_ranges(
-            (0..ne).map(|e| E::NODES as u64 * u64::from(elem_start[e + 1] - elem_start[e])),
-            threads,
+        let element_ranges = aligned(
+            balanced_ranges(
+                (0..ne).map(|e| E::NODES as u64 * u64::from(elem_start[e + 1] - elem_start[e])),
+                threads,
+            ),
+            ne,
         );
         let mut node_start = vec![0u32; nn + 1];
         for c in &mesh.corners {
@@ -97,6 +106,10 @@ impl<R: Real, E: Element> Layout<R, E> {
                     r.start == next && r.end >= r.start,
                     "element ranges not contiguous"
                 );
+                assert!(
+                    r.start % ELEMENT_BLOCK == 0,
+                    "element range does not start a block"
+                );
                 next = r.end;
             }
             assert_eq!(next, ne, "element ranges do not cover the mesh");
@@ -125,6 +138,18 @@ impl<R: Real, E: Element> Layout<R, E> {
     /// Elements of thread `k`.
     pub fn element_range(&self, k: usize) -> Range<usize> {
         self.element_ranges[k].clone()
+    }
+
+    /// The element blocks ([`ELEMENT_BLOCK`]) of thread `k`: its elements' blocks, which no
+    /// other thread's elements share.
+    pub fn block_range(&self, k: usize) -> Range<usize> {
+        let r = &self.element_ranges[k];
+        r.start / ELEMENT_BLOCK..r.end.div_ceil(ELEMENT_BLOCK)
+    }
+
+    /// Number of element blocks of the mesh.
+    pub fn blocks(&self) -> usize {
+        (self.elem_start.len() - 1).div_ceil(ELEMENT_BLOCK)
     }
 
     /// Zeroed slots for this layout (allocated zeroed, so pages are placed by the threads that
@@ -188,6 +213,25 @@ impl<R: Real, E: Element> Layout<R, E> {
             }
         });
     }
+}
+
+/// `ranges` (contiguous, covering `0..elements`) with every boundary between two moved to the
+/// nearest multiple of [`ELEMENT_BLOCK`] (at most `elements`): a change of balance of at most
+/// half a block per thread.
+fn aligned(ranges: Vec<Range<usize>>, elements: usize) -> Vec<Range<usize>> {
+    let round = |b: usize| ((b + ELEMENT_BLOCK / 2) / ELEMENT_BLOCK * ELEMENT_BLOCK).min(elements);
+    let last = ranges.len() - 1;
+    let mut start = 0;
+    ranges
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let end = if k == last { elements } else { round(r.end) };
+            let out = start..end;
+            start = end;
+            out
+        })
+        .collect()
 }
 
 /// First particle of each element for particles sorted by `element`.

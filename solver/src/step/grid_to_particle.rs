@@ -4,7 +4,7 @@
 use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::material::liquid::Fluid;
-use crate::parallel::gather::{Layout, Slots};
+use crate::parallel::gather::{Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
@@ -14,8 +14,10 @@ use crate::step::stress::GuardSums;
 /// Updates particle velocities from nodal accelerations (FLIP; with `pic` > 0 blended with
 /// the nodes' updated velocities, PIC), then re-maps momentum to get the nodal velocities
 /// (fixed components and empty nodes zero) that drive strain, stress, volume and position
-/// (see [`crate::step::stress`]). With `guard` (one slot per element), each element's slot is
-/// begun anew with its points' Σ m |v|² (twice their kinetic energy), the velocities at hand.
+/// (see [`crate::step::stress`]). With `guard` (one slot per block of
+/// [`crate::parallel::gather::ELEMENT_BLOCK`] elements), each block's slot is begun anew at its
+/// first element and summed over its elements in order with their points' Σ m |v|² (twice
+/// their kinetic energy), the velocities at hand.
 #[allow(clippy::too_many_arguments)]
 pub fn grid_to_particle<E: Element, R: Real>(
     team: &Team,
@@ -87,13 +89,19 @@ pub fn grid_to_particle<E: Element, R: Real>(
         }),
         Some(guard) => layout.scatter::<3, _>(team, slots, |e, four| {
             let kinetic = element(e, four, true);
-            // SAFETY: the scatter hands element e to one thread only, once.
-            unsafe {
-                guard.range(e..e + 1)[0] = GuardSums {
+            let b = e / ELEMENT_BLOCK;
+            // SAFETY: the scatter hands element e to one thread only, once, in element order,
+            // and the thread's elements hold whole blocks (aligned ranges): no other thread
+            // touches block b, and its first element comes first.
+            let slot = unsafe { &mut guard.range(b..b + 1)[0] };
+            if e % ELEMENT_BLOCK == 0 {
+                *slot = GuardSums {
                     kinetic,
                     ..GuardSums::EMPTY
-                }
-            };
+                };
+            } else {
+                slot.kinetic += kinetic;
+            }
         }),
     }
     nodal_velocity(
@@ -154,8 +162,8 @@ fn nodal_velocity<E: Element, R: Real>(
 /// The liquid's share of grid to particle: liquid velocities of the points updated from the
 /// nodal liquid accelerations (FLIP), then the liquid momentum re-mapped to nodal liquid
 /// velocities (zero in fixed components and at nodes without liquid). With `guard`, the
-/// liquid's n ρw V_w |w|² (twice its kinetic energy) is added to each element's slot, which
-/// [`grid_to_particle`] began.
+/// liquid's n ρw V_w |w|² (twice its kinetic energy) is added, element by element, to each
+/// block's slot, which [`grid_to_particle`] began.
 #[allow(clippy::too_many_arguments)]
 pub fn liquid_to_particles<E: Element, R: Real>(
     team: &Team,
@@ -205,8 +213,9 @@ pub fn liquid_to_particles<E: Element, R: Real>(
             }
         }
         if let Some(guard) = &guard {
-            // SAFETY: the scatter hands element e to one thread only, once.
-            unsafe { guard.range(e..e + 1)[0].kinetic += kinetic };
+            let b = e / ELEMENT_BLOCK;
+            // SAFETY: as in `grid_to_particle`: block b belongs to this thread alone.
+            unsafe { guard.range(b..b + 1)[0].kinetic += kinetic };
         }
     });
     nodal_velocity(

@@ -5,7 +5,7 @@ use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
-use crate::parallel::gather::{Layout, Slots};
+use crate::parallel::gather::{Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
 use crate::state::grid::Grid;
@@ -17,10 +17,11 @@ use crate::step::smoothing::StrainSmoothing;
 /// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
 /// increment ([`crate::step::smoothing`]). Each thread updates the particles of its elements.
 ///
-/// With `guard`, each element's [`GuardSums`] of its active points are completed in its slot
-/// (strain-energy increment, the liquid's compression energy, the volume check; grid to
-/// particle began it with the kinetic energy): the guard rails' sums, formed in passes that
-/// read the points anyway so that they cost no pass of their own.
+/// With `guard`, the [`GuardSums`] of the active points of each block of
+/// [`ELEMENT_BLOCK`] elements are completed in its slot, point by point in order (strain-energy
+/// increment, the liquid's compression energy, the volume check; grid to particle began it with
+/// the kinetic energy): the guard rails' sums, formed in passes that read the points anyway so
+/// that they cost no pass of their own.
 #[allow(clippy::too_many_arguments)]
 pub fn update_stress_and_move<E: Element, R: Real>(
     team: &Team,
@@ -67,10 +68,18 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         };
         // SAFETY: as above; each point's state is its own `k` values.
         let state = unsafe { states.range(k * r.start..k * r.end) };
-        let er = layout.element_range(t);
-        // SAFETY: the element ranges of the threads are disjoint; this thread's points lie in
-        // its own elements.
-        let mut sums = guard_slots.as_ref().map(|g| unsafe { g.range(er.clone()) });
+        let blocks = layout.block_range(t);
+        // SAFETY: the threads' element ranges are disjoint and hold whole blocks; this thread's
+        // points lie in its own elements.
+        let mut sums = guard_slots
+            .as_ref()
+            .map(|g| unsafe { g.range(blocks.clone()) });
+        // The current block's sums, kept in registers and written to its slot when the points
+        // pass to the next block (adding to the slot point by point would chain every point's
+        // sum through memory). Points come sorted by element, so blocks come in order; the
+        // slot's own strain and liquid terms start at 0 (grid to particle began it), so the
+        // sums are those of adding in place, point by point.
+        let mut open = Open::new(blocks.start);
         for (j, i) in r.enumerate() {
             if !active[i] {
                 continue;
@@ -144,50 +153,93 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     let twice = if c < 3 { R::ONE } else { R::of(2.0) };
                     w += twice * (s0[c] + s1[c]) * de[c];
                 }
+                // 0, or NaN for a non-finite position or new volume: added to the strain sum,
+                // which a non-finite stress makes non-finite too, so one test of the sums
+                // catches them all.
+                let finite = R::ZERO * (x[j][0] + x[j][1] + x[j][2] + volume[j]);
                 // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no division
-                // per point. Made NaN by any non-finite position or pore pressure: one
-                // comparison catches both.
-                let p = pore.map_or(R::ZERO, |p| p[i]);
-                let finite = R::ZERO * (x[j][0] + x[j][1] + x[j][2] + p);
-                let margin = volume[j] * initial_density[material[i] as usize]
-                    - min_ratio * mass[i]
-                    + finite;
-                let slot = &mut sums[e - er.start];
+                // per point.
+                let margin =
+                    volume[j] * initial_density[material[i] as usize] - min_ratio * mass[i];
+                let b = e / ELEMENT_BLOCK;
+                if b != open.block {
+                    open.close(&mut sums[open.block - blocks.start..]);
+                    open = Open::new(b);
+                }
                 // Twice the energies: the engine halves the sums (exactly, a power of two).
-                slot.strain += (w * v0).f64();
-                // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work on
-                // Δp = (K_w/n) Δε_mix.
-                if let (Some(_), Some(f)) = (pore, fluids[material[i] as usize].as_ref()) {
-                    slot.liquid += (volume[j] * p * p * f.n_over_kw).f64();
+                open.strain += (w * v0 + finite).f64();
+                if let Some(pore) = pore {
+                    // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work
+                    // on Δp = (K_w/n) Δε_mix. A non-finite pore pressure makes the sum NaN.
+                    let p = pore[i];
+                    let c = fluids[material[i] as usize]
+                        .as_ref()
+                        .map_or(R::ZERO, |f| f.n_over_kw);
+                    open.liquid += (volume[j] * p * p * c + R::ZERO * p).f64();
                 }
-                // NaN wins (`!(a >= b)` is true for a NaN).
-                if !(margin.f64() >= slot.volume_margin) {
-                    slot.volume_margin = margin.f64();
+                // A plain comparison (one instruction): NaN is caught by the strain sum.
+                let m = margin.f64();
+                if m < open.volume_margin {
+                    open.volume_margin = m;
                 }
+            }
+        }
+        if let Some(sums) = sums.as_mut() {
+            if open.block < blocks.end {
+                open.close(&mut sums[open.block - blocks.start..]);
             }
         }
     });
 }
 
-/// Per element, the guard rails' sums over its active points after the stress update.
+/// The guard sums of the block the stress loop is in.
+struct Open {
+    block: usize,
+    strain: f64,
+    liquid: f64,
+    volume_margin: f64,
+}
+
+impl Open {
+    fn new(block: usize) -> Self {
+        Open {
+            block,
+            strain: 0.0,
+            liquid: 0.0,
+            volume_margin: f64::INFINITY,
+        }
+    }
+
+    /// Adds these sums to the block's slot, `slots[0]`.
+    fn close(&self, slots: &mut [GuardSums]) {
+        let slot = &mut slots[0];
+        slot.strain += self.strain;
+        slot.liquid += self.liquid;
+        slot.volume_margin = slot.volume_margin.min(self.volume_margin);
+    }
+}
+
+/// Per block of [`ELEMENT_BLOCK`] elements, the guard rails' sums over its active points after
+/// the stress update.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GuardSums {
     /// Σ V0 (σ0 + σ1) : Δε, twice the strain energy taken up in the step (kJ; the energies are
-    /// summed doubled and halved once, by the engine).
+    /// summed doubled and halved once, by the engine); NaN when a position or volume is not
+    /// finite.
     pub strain: f64,
     /// Σ m |v|² (kJ), twice the kinetic energy with the step's new point velocities (written by
     /// grid to particle); for saturated points with the liquid's n ρw V_w |w|².
     pub kinetic: f64,
     /// Σ n V p² / K_w over saturated points (kJ): twice the energy the liquid's compression
-    /// holds after the step.
+    /// holds after the step; NaN when a pore pressure is not finite.
     pub liquid: f64,
     /// Smallest V ρ0 - r m of the points (t), r the guard's smallest volume ratio: ≤ 0 when a
-    /// point's V / V0 has fallen to r; NaN when a position or pore pressure is not finite.
+    /// point's V / V0 has fallen to r.
     pub volume_margin: f64,
 }
 
 impl GuardSums {
-    /// An element without points.
+    /// A block without points.
     pub const EMPTY: GuardSums = GuardSums {
         strain: 0.0,
         kinetic: 0.0,
