@@ -80,11 +80,23 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         // slot's own strain and liquid terms start at 0 (grid to particle began it), so the
         // sums are those of adding in place, point by point.
         let mut open = Open::new(blocks.start);
-        for (j, i) in r.enumerate() {
-            if !active[i] {
+        // The point arrays sliced to this thread's range, all of one length, and indexed by
+        // the position in it: the compiler then drops the bounds checks in the loop.
+        let n = x.len();
+        let (u, stress, volume) = (&mut u[..n], &mut stress[..n], &mut volume[..n]);
+        let (active, element, material) = (
+            &active[r.clone()],
+            &element[r.clone()],
+            &material[r.clone()],
+        );
+        let (active, element, material) = (&active[..n], &element[..n], &material[..n]);
+        let mass = &mass[r.clone()][..n];
+        let pore = pore.map(|p| &p[r][..n]);
+        for j in 0..n {
+            if !active[j] {
                 continue;
             }
-            let e = element[i] as usize;
+            let e = element[j] as usize;
             let n = mesh.shape(e, &x[j]);
             let n = n.as_ref();
             let grad = mesh.grad[e].as_ref();
@@ -108,7 +120,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 half * (l[2][0] + l[0][2]) * dt,
             ];
             if let Some(sm) = smoothing {
-                let [es, _] = sm.element_mean(mesh, e, material[i]);
+                let [es, _] = sm.element_mean(mesh, e, material[j]);
                 let c = (de[0] + de[1] + de[2] - es) * third;
                 for d in de.iter_mut().take(3) {
                     *d -= c;
@@ -132,7 +144,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 }
                 h
             });
-            laws[material[i] as usize].update(&mut stress[j], &de, &mut state[k * j..k * j + k]);
+            laws[material[j] as usize].update(&mut stress[j], &de, &mut state[k * j..k * j + k]);
             if let Some(h) = hill {
                 for (s, h) in stress[j].iter_mut().zip(h) {
                     *s += h;
@@ -160,7 +172,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no division
                 // per point.
                 let margin =
-                    volume[j] * initial_density[material[i] as usize] - min_ratio * mass[i];
+                    volume[j] * initial_density[material[j] as usize] - min_ratio * mass[j];
                 let b = e / ELEMENT_BLOCK;
                 if b != open.block {
                     open.close(&mut sums[open.block - blocks.start..]);
@@ -171,8 +183,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 if let Some(pore) = pore {
                     // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work
                     // on Δp = (K_w/n) Δε_mix. A non-finite pore pressure makes the sum NaN.
-                    let p = pore[i];
-                    let c = fluids[material[i] as usize]
+                    let p = pore[j];
+                    let c = fluids[material[j] as usize]
                         .as_ref()
                         .map_or(R::ZERO, |f| f.n_over_kw);
                     open.liquid += (volume[j] * p * p * c + R::ZERO * p).f64();
