@@ -103,18 +103,33 @@ pub fn particle_to_grid<E: Element, R: Real>(
                 }
             }
         }
-        for i in range {
-            if !p.active[i] {
+        // The element's points, every array sliced to them once (one length), so that the loop
+        // indexes without bounds checks.
+        let count = range.len();
+        let active = &p.active[range.clone()][..count];
+        let (x, mass, vel) = (
+            &p.x[range.clone()][..count],
+            &p.mass[range.clone()][..count],
+            &p.v[range.clone()][..count],
+        );
+        let (material, volume, stress) = (
+            &p.material[range.clone()][..count],
+            &p.volume[range.clone()][..count],
+            &p.stress[range.clone()][..count],
+        );
+        let pore = p.liquid.as_ref().map(|l| &l.p[range][..count]);
+        for i in 0..count {
+            if !active[i] {
                 continue;
             }
-            let n = mesh.shape(e, &p.x[i]);
+            let n = mesh.shape(e, &x[i]);
             let n = n.as_ref();
-            let (m, v) = (p.mass[i], p.v[i]);
-            let gravity = &gravity[p.material[i] as usize];
-            let vol = if full { R::ZERO } else { p.volume[i] };
-            let mut s = p.stress[i].map(|c| vol * c);
-            if let Some(l) = &p.liquid {
-                let vp = vol * l.p[i];
+            let (m, v) = (mass[i], vel[i]);
+            let gravity = &gravity[material[i] as usize];
+            let vol = if full { R::ZERO } else { volume[i] };
+            let mut s = stress[i].map(|c| vol * c);
+            if let Some(pore) = pore {
+                let vp = vol * pore[i];
                 s[0] += vp;
                 s[1] += vp;
                 s[2] += vp;
