@@ -40,15 +40,25 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // `want` fixed, so that the run without guards keeps the loop it had without them.
     let element = |e: usize, four: &mut [[R; crate::parallel::gather::WIDTH]], want: bool| {
         let mut kinetic = 0.0;
-        for i in layout.particles_of(e) {
+        // The element's points, each array sliced to them once (one length): the loop then
+        // indexes without bounds checks.
+        let range = layout.particles_of(e);
+        let count = range.len();
+        let (x, mass, active) = (
+            &x[range.clone()][..count],
+            &mass[range.clone()][..count],
+            &active[range.clone()][..count],
+        );
+        // SAFETY: the points of element e belong to this thread only.
+        let vel = unsafe { &mut vel.range(range)[..count] };
+        for i in 0..count {
             if !active[i] {
                 continue;
             }
             let n = mesh.shape(e, &x[i]);
             let n = n.as_ref();
             let dv = interpolate(mesh, e, n, acc);
-            // SAFETY: particle i (of element e) belongs to this thread only.
-            let v = unsafe { &mut vel.range(i..i + 1)[0] };
+            let v = &mut vel[i];
             for c in 0..3 {
                 v[c] += dt * dv[c];
             }
