@@ -995,14 +995,18 @@ mod cost {
             })
             .collect();
         let le = l.elastic;
-        let trials: Vec<[f64; 6]> = yielding
-            .iter()
-            .map(|s| {
-                let mut t = *s;
-                le.update(&mut t, &de);
-                t
-            })
-            .collect();
+        // Each state after `f`.
+        let after = |states: &[[f64; 6]], f: &dyn Fn(&mut [f64; 6])| -> Vec<[f64; 6]> {
+            states
+                .iter()
+                .map(|s| {
+                    let mut t = *s;
+                    f(&mut t);
+                    t
+                })
+                .collect()
+        };
+        let trials = after(&yielding, &|t| le.update(t, &de));
         let eig = time(&trials, &de, &|s, _| {
             let p = principal(s);
             s[0] = p.values[0] + p.vectors[0][0];
@@ -1036,14 +1040,7 @@ mod cost {
         println!("principal return alone: {ret:.2} ns");
         // Returned states, then a strain increment of round-off size (a block moving rigidly
         // while on the yield surface): on the surface to round-off, decomposed to find so.
-        let on_surface: Vec<[f64; 6]> = yielding
-            .iter()
-            .map(|s| {
-                let mut t = *s;
-                l.update(&mut t, &de);
-                t
-            })
-            .collect();
+        let on_surface = after(&yielding, &|t| l.update(t, &de));
         let tiny = de.map(|x| x * 1e-12);
         for (name, states, de) in [
             ("at rest", &rest, &de),
