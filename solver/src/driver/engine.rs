@@ -924,7 +924,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         // A non-finite stress, velocity, position, volume or pore pressure makes the energies'
         // sums NaN or infinite (the passes fold the last three in); nodal values the nodal
         // sums.
-        if !(strain + kinetic + liquid).is_finite() || margin.is_nan() || !nodal.is_finite() {
+        if !(strain + kinetic + liquid).is_finite() || !nodal.is_finite() {
             return fail(Check::NonFinite);
         }
         if margin <= 0.0 {

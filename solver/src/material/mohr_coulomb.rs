@@ -100,6 +100,9 @@ pub struct Planes<R: Real> {
 /// describes it).
 const PYRAMID_SETS: [usize; 3] = [0, 2, 3];
 
+/// Every position in [`WITH_CUT_OFF`], in its order.
+const ALL_SETS: [usize; 12] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11];
+
 /// Active sets tried in turn with the cut-off: faces, edges, the face–cut-off line, the corners
 /// (σa, σa, σt), (σa, σt, σt) (four planes meet there: each triple spans part of its cone) and
 /// (σt, σt, σt).
@@ -351,7 +354,7 @@ impl<R: Real> Planes<R> {
     /// strength does not change).
     pub fn with_inverses(mut self, surface: &Surface<R>, el: &LinearElastic<R>) -> Self {
         let used: &[usize] = if surface.cut_off {
-            &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]
+            &ALL_SETS
         } else {
             &PYRAMID_SETS
         };
@@ -360,28 +363,13 @@ impl<R: Real> Planes<R> {
             let Some((k, det)) = Surface::system(&self, set, el.shear) else {
                 continue;
             };
-            let inv = &mut self.inverse[i];
-            match set.len() {
-                1 => inv[0][0] = R::ONE / det,
-                2 => {
-                    inv[0][0] = k[1][1] / det;
-                    inv[0][1] = -k[0][1] / det;
-                    inv[1][0] = -k[1][0] / det;
-                    inv[1][1] = k[0][0] / det;
-                }
-                _ => {
-                    // Cramer's rule: column l of the inverse solves K x = e_l.
-                    for l in 0..3 {
-                        let mut e = [R::ZERO; 3];
-                        e[l] = R::ONE;
-                        for j in 0..3 {
-                            let mut c = k;
-                            for (row, &v) in c.iter_mut().zip(&e) {
-                                row[j] = v;
-                            }
-                            inv[j][l] = det3(&c) / det;
-                        }
-                    }
+            // Column l of the inverse solves K x = e_l.
+            for l in 0..set.len() {
+                let mut e = [R::ZERO; 3];
+                e[l] = R::ONE;
+                let x = solve(&k, det, set.len(), &e);
+                for (row, v) in self.inverse[i].iter_mut().zip(x) {
+                    row[l] = v;
                 }
             }
             self.singular[i] = false;
@@ -389,6 +377,30 @@ impl<R: Real> Planes<R> {
         self.inverted = true;
         self
     }
+}
+
+/// The solution of the leading `n` × `n` block of `k` x = `r` by Cramer's rule (`det` that
+/// block's determinant); the other entries 0.
+fn solve<R: Real>(k: &[[R; 3]; 3], det: R, n: usize, r: &[R; 3]) -> [R; 3] {
+    let mut x = [R::ZERO; 3];
+    match n {
+        1 => x[0] = r[0] / det,
+        2 => {
+            x[0] = (r[0] * k[1][1] - k[0][1] * r[1]) / det;
+            x[1] = (k[0][0] * r[1] - k[1][0] * r[0]) / det;
+        }
+        _ => {
+            // Column l replaced by the right-hand side.
+            for (l, x) in x.iter_mut().enumerate() {
+                let mut c = *k;
+                for (row, &v) in c.iter_mut().zip(r) {
+                    row[l] = v;
+                }
+                *x = det3(&c) / det;
+            }
+        }
+    }
+    x
 }
 
 /// The determinant of a 3×3 matrix.
@@ -415,7 +427,7 @@ impl<R: Real> Surface<R> {
         }
         let tol = R::of(64.0 * R::EPSILON) * scale;
         let sets: &[usize] = if self.cut_off {
-            &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]
+            &ALL_SETS
         } else {
             &PYRAMID_SETS
         };
@@ -482,23 +494,7 @@ impl<R: Real> Surface<R> {
             }
         } else {
             let (k, det) = Surface::system(planes, set, el.shear)?;
-            match set.len() {
-                1 => dl[0] = r[0] / det,
-                2 => {
-                    dl[0] = (r[0] * k[1][1] - k[0][1] * r[1]) / det;
-                    dl[1] = (k[0][0] * r[1] - k[1][0] * r[0]) / det;
-                }
-                _ => {
-                    // Cramer's rule: column l replaced by the right-hand side.
-                    for (l, x) in dl.iter_mut().enumerate() {
-                        let mut c = k;
-                        for (row, &v) in c.iter_mut().zip(&r) {
-                            row[l] = v;
-                        }
-                        *x = det3(&c) / det;
-                    }
-                }
-            }
+            dl = solve(&k, det, set.len(), &r);
         }
         let mut back = *sig;
         let mut violation = R::ZERO;

@@ -300,6 +300,13 @@ pub struct Split<R: Real> {
     inv_gap: R,
 }
 
+/// w n ⊗ n (xx yy zz xy yz zx).
+#[inline]
+fn outer<R: Real>(n: &[R; 3], w: R) -> [R; 6] {
+    let (a, b, c) = (n[0] * w, n[1] * w, n[2] * w);
+    [a * n[0], b * n[1], c * n[2], a * n[1], b * n[2], c * n[0]]
+}
+
 /// The [`Split`] of the symmetric tensor `s` (xx yy zz xy yz zx): the closed form's best
 /// separated eigenvalue (from the cubic) and its projector (a cross product over its squared
 /// length: no square root), or the Jacobi decomposition's extreme pair for a nearly isotropic
@@ -307,14 +314,7 @@ pub struct Split<R: Real> {
 #[inline]
 pub fn split<R: Real>(s: &[R; 6]) -> Split<R> {
     let (lambda, outer) = match far_root(s) {
-        Some((l, n, size, p)) => {
-            let w = R::ONE / size;
-            let (a, b, c) = (n[0] * w, n[1] * w, n[2] * w);
-            (
-                l + p,
-                [a * n[0], b * n[1], c * n[2], a * n[1], b * n[2], c * n[0]],
-            )
-        }
+        Some((l, n, size, p)) => (l + p, outer(&n, R::ONE / size)),
         None => {
             let p = jacobi(s);
             // The extreme eigenvalue farther from the middle one.
@@ -323,18 +323,7 @@ pub fn split<R: Real>(s: &[R; 6]) -> Split<R> {
             } else {
                 0
             };
-            let n = p.vectors[k];
-            (
-                p.values[k],
-                [
-                    n[0] * n[0],
-                    n[1] * n[1],
-                    n[2] * n[2],
-                    n[0] * n[1],
-                    n[1] * n[2],
-                    n[2] * n[0],
-                ],
-            )
+            (p.values[k], outer(&p.vectors[k], R::ONE))
         }
     };
     let half = R::of(0.5);
