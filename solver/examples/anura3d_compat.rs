@@ -21,11 +21,16 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
+use mpm_shared::bms::Bms;
 use mpm_shared::cps::{Cps, Method};
 use mpm_shared::model::is_material_key;
+use mpm_solve::driver::dispatch::{dispatch, Generic};
+use mpm_solve::driver::run::{run, RunError};
+use mpm_solve::element::Element;
 use mpm_solve::input::anura3d::CaseError;
 use mpm_solve::input::anura3d_keys::{self, KeyKind};
 use mpm_solve::jobs::anura3d_compare::{compare, Comparison};
+use mpm_solve::real::Real;
 
 /// Largest deviation for "reproduced" (1 %).
 const TOLERANCE: f64 = 0.01;
@@ -435,10 +440,31 @@ fn evaluate(
             return row;
         }
     };
+    // The run, with the case's own element type; the comparison while the engine is at hand.
+    struct RunAndCompare<'a> {
+        case: &'a mpm_solve::input::case::Case,
+        dir: &'a Path,
+        expected: Option<&'a Bms>,
+    }
+    impl Generic for RunAndCompare<'_> {
+        type Output = Result<(u64, f64, Option<Comparison>), RunError>;
+        fn call<R: Real, E: Element>(self) -> Self::Output {
+            let engine = run::<R, E>(self.case, self.dir, &Default::default())?;
+            let c = self.expected.map(|bms| compare(&engine, bms));
+            Ok((engine.steps, engine.time, c))
+        }
+    }
     let ran = catch_unwind(AssertUnwindSafe(|| {
-        mpm_solve::driver::run::run::<f64>(&case, tmp.path(), &Default::default())
+        dispatch(
+            &case,
+            RunAndCompare {
+                case: &case,
+                dir: tmp.path(),
+                expected: expected.as_ref(),
+            },
+        )
     }));
-    let engine = match ran {
+    let (steps, time, comparison) = match ran {
         Err(p) => {
             row.status = Status::Failed(cell(&format!("panic: {}", panic_message(p))));
             return row;
@@ -447,14 +473,17 @@ fn evaluate(
             row.status = Status::Failed(clean(&e.to_string(), root, &input.dir));
             return row;
         }
-        Ok(Ok(engine)) => engine,
+        Ok(Ok(Err(e))) => {
+            row.status = Status::Failed(clean(&e.to_string(), root, &input.dir));
+            return row;
+        }
+        Ok(Ok(Ok(r))) => r,
     };
-    row.status = match expected {
+    row.status = match comparison {
         None => Status::Ran(format!(
-            "{} steps to t = {:.4e} s; no expected material points to compare",
-            engine.steps, engine.time
+            "{steps} steps to t = {time:.4e} s; no expected material points to compare"
         )),
-        Some(bms) => judge(&compare(&engine, &bms)),
+        Some(c) => judge(&c),
     };
     row
 }

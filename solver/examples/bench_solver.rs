@@ -17,6 +17,7 @@
 //! `--order random` renumbers elements and nodes by a fixed pseudo-random permutation (the
 //! locality a mesh generator's worst case gives); `morton` applies the solver's curve ordering.
 
+use mpm_solve::element::tet4::Tet4;
 use std::time::Instant;
 
 use mpm_shared::{generate, ElementType};
@@ -226,7 +227,7 @@ fn measure<R: mpm_solve::real::Real>(
         bytes_per_point: 0,
     };
     for _ in 0..reps {
-        let mut engine = Engine::<R>::new(case, false).unwrap();
+        let mut engine = Engine::<R, Tet4>::new(case, false).unwrap();
         if let Some(rate) = flow {
             compress(&mut engine, rate);
         }
@@ -260,7 +261,7 @@ fn on_surface(case: &Case, steps: usize, flow: Option<f64>, friction: f64) -> (f
     use mpm_solve::material::mohr_coulomb::Surface;
     use mpm_solve::material::principal::principal;
     let surface = Surface::<f64>::new(friction, 0.0, 0.0, 0.0);
-    let mut engine = Engine::<f64>::new(case, false).unwrap();
+    let mut engine = Engine::<f64, Tet4>::new(case, false).unwrap();
     if let Some(rate) = flow {
         compress(&mut engine, rate);
     }

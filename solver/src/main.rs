@@ -12,7 +12,9 @@ use anyhow::{bail, Context};
 use clap::Parser;
 mod progress;
 
+use mpm_solve::driver::dispatch::{dispatch, Generic};
 use mpm_solve::driver::units;
+use mpm_solve::element::Element;
 use mpm_solve::input::case::Precision;
 use mpm_solve::real::Real;
 use progress::{Progress, Reporter};
@@ -556,17 +558,23 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         }
         plan.check(&limits, None)?;
         // Probes are checked against the points the run would place.
-        mpm_solve::driver::engine::Engine::<f64>::with_options(
-            &case,
-            false,
-            mpm_solve::driver::engine::Options {
-                threads: 1,
-                pin: mpm_solve::parallel::team::Pin::None,
-                first_touch: false,
-            },
-        )
-        .map_err(anyhow::Error::msg)
-        .and_then(|e| Ok(mpm_solve::driver::run::check_probes(&case, &e)?))?;
+        struct Probes<'a>(&'a mpm_solve::input::case::Case);
+        impl Generic for Probes<'_> {
+            type Output = anyhow::Result<()>;
+            fn call<R: Real, E: Element>(self) -> anyhow::Result<()> {
+                let engine = mpm_solve::driver::engine::Engine::<R, E>::with_options(
+                    self.0,
+                    false,
+                    mpm_solve::driver::engine::Options {
+                        threads: 1,
+                        pin: mpm_solve::parallel::team::Pin::None,
+                        first_touch: false,
+                    },
+                )?;
+                Ok(mpm_solve::driver::run::check_probes(self.0, &engine)?)
+            }
+        }
+        dispatch(&case, Probes(&case))??;
         return Ok(());
     };
     plan.check(&limits, Some(out))?;
@@ -608,11 +616,18 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         }
     };
     let reporter = Reporter::new(mode, plan.steps.min(u64::MAX as f64) as u64, case.end_time);
-    // One code path, compiled once per precision.
-    let result = match case.precision {
-        Precision::F64 => execute::<f64>(&case, out, &options, reporter),
-        Precision::F32 => execute::<f32>(&case, out, &options, reporter),
-    };
+    // One code path, compiled once per precision and element type.
+    let result = dispatch(
+        &case,
+        Execute {
+            case: &case,
+            out,
+            options: &options,
+            reporter,
+        },
+    )
+    .map_err(anyhow::Error::from)
+    .and_then(|r| r);
     // A run refused at set-up (before its first output) leaves no folder it created.
     if result.is_err() && created {
         let only_lock = std::fs::read_dir(out)
@@ -691,16 +706,36 @@ fn take_folder(
     Ok(lock)
 }
 
-/// Runs `case` (or its consolidation job) in precision `R`.
-fn execute<R: Real>(
+/// A run of `case` (or its consolidation job), in the precision and element type
+/// [`dispatch`] chooses.
+struct Execute<'a> {
+    case: &'a mpm_solve::input::case::Case,
+    out: &'a std::path::Path,
+    options: &'a mpm_solve::driver::run::RunOptions,
+    reporter: Reporter,
+}
+
+impl Generic for Execute<'_> {
+    type Output = anyhow::Result<()>;
+    fn call<R: Real, E: Element>(self) -> anyhow::Result<()> {
+        execute::<R, E>(self.case, self.out, self.options, self.reporter)
+    }
+}
+
+/// Runs `case` (or its consolidation job) in precision `R` with elements `E`.
+fn execute<R: Real, E: Element>(
     case: &mpm_solve::input::case::Case,
     out: &std::path::Path,
     options: &mpm_solve::driver::run::RunOptions,
     mut reporter: Reporter,
 ) -> anyhow::Result<()> {
     if case.consolidation.is_some() {
-        let (engine, t, w) =
-            mpm_solve::jobs::consolidation::run_job_with::<R>(case, out, options, &mut reporter)?;
+        let (engine, t, w) = mpm_solve::jobs::consolidation::run_job_with::<R, E>(
+            case,
+            out,
+            options,
+            &mut reporter,
+        )?;
         done(&engine, out);
         for (name, tr) in
             std::iter::once(("default", &t)).chain(w.as_ref().map(|w| ("workshop", w)))
@@ -717,13 +752,16 @@ fn execute<R: Real>(
         );
         return Ok(());
     }
-    let engine = mpm_solve::driver::run::run_with::<R>(case, out, options, &mut reporter)?;
+    let engine = mpm_solve::driver::run::run_with::<R, E>(case, out, options, &mut reporter)?;
     done(&engine, out);
     Ok(())
 }
 
 /// The closing line of a run.
-fn done<R: Real>(engine: &mpm_solve::driver::engine::Engine<R>, out: &std::path::Path) {
+fn done<R: Real, E: Element>(
+    engine: &mpm_solve::driver::engine::Engine<R, E>,
+    out: &std::path::Path,
+) {
     let lost = if engine.lost > 0 {
         format!(", {} left the mesh", units::count(engine.lost as f64))
     } else {

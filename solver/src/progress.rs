@@ -7,6 +7,7 @@ use std::time::Instant;
 use mpm_solve::driver::engine::Engine;
 use mpm_solve::driver::run::{Observer, RunError};
 use mpm_solve::driver::units;
+use mpm_solve::element::Element;
 use mpm_solve::real::Real;
 
 /// How a run reports its progress on standard error.
@@ -50,9 +51,9 @@ impl Reporter {
     }
 }
 
-impl<R: Real> Observer<R> for Reporter {
+impl<R: Real, E: Element> Observer<R, E> for Reporter {
     /// Each run (a consolidation job makes two) starts its own count and bar.
-    fn on_start(&mut self, _engine: &Engine<R>) -> Result<(), RunError> {
+    fn on_start(&mut self, _engine: &Engine<R, E>) -> Result<(), RunError> {
         let now = Instant::now();
         (self.start, self.last, self.steps) = (now, now, 0);
         self.bar = (self.mode == Progress::Bar).then(|| {
@@ -68,7 +69,7 @@ impl<R: Real> Observer<R> for Reporter {
         Ok(())
     }
 
-    fn on_step(&mut self, engine: &Engine<R>) {
+    fn on_step(&mut self, engine: &Engine<R, E>) {
         let points = engine.particles.len();
         self.steps += 1;
         match self.mode {
@@ -105,7 +106,7 @@ impl<R: Real> Observer<R> for Reporter {
         }
     }
 
-    fn on_end(&mut self, _engine: &Engine<R>) {
+    fn on_end(&mut self, _engine: &Engine<R, E>) {
         if let Some(b) = self.bar.take() {
             b.finish_and_clear();
         }

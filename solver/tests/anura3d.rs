@@ -3,6 +3,7 @@
 //! and pore pressures its expected `.BMS` files report, reproduced at the reported time.
 //! Skipped, visibly, when the variable is unset; a failure when it names no benchmark folder.
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 
 use mpm_solve::jobs::anura3d_compare::compare;
@@ -166,7 +167,8 @@ fn benchmarks_reproduce_the_expected_material_points() {
         let (case, _) = mpm_solve::input::anura3d::load(&gom, &cps).unwrap();
         let out = tempfile::tempdir().unwrap();
         let engine =
-            mpm_solve::driver::run::run::<f64>(&case, out.path(), &Default::default()).unwrap();
+            mpm_solve::driver::run::run::<f64, Tet4>(&case, out.path(), &Default::default())
+                .unwrap();
         let c = compare(&engine, &expected);
         assert!(
             c.time_matches(),

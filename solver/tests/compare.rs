@@ -2,6 +2,7 @@
 //! an f32 run against an f64 run, folders that cannot be compared, and a run of ours against
 //! Anura3D's run folder of the same case (skipped, visibly, without `ANURA3D_ORACLE`).
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -22,7 +23,7 @@ fn column<R: mpm_solve::real::Real>(dir: &Path) {
     case.end_time = 0.1;
     case.output_times = vec![0.05, 0.1];
     case.probes = vec![1, 40];
-    mpm_solve::driver::run::run::<R>(&case, dir, &Default::default()).unwrap();
+    mpm_solve::driver::run::run::<R, Tet4>(&case, dir, &Default::default()).unwrap();
 }
 
 /// `mpm-solve INPUT --out OUT -q`, expected to succeed.

@@ -2,6 +2,7 @@
 //! where Anura3D cannot reproduce them, and (with `ANURA3D_ORACLE` naming an Anura3D binary)
 //! run by Anura3D itself.
 
+use mpm_solve::element::tet4::Tet4;
 use std::collections::HashMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -162,16 +163,18 @@ fn check_mesh(scene: &Case, gom: &Model) {
 /// and stresses within `tol` of the largest.
 fn check_runs(a: &Case, b: &Case, tol: f64) {
     let start = |c: &Case| {
-        let e = Engine::<f64>::new(c, false).unwrap();
+        let e = Engine::<f64, Tet4>::new(c, false).unwrap();
         (e.particles.id.clone(), e.particles.x.clone())
     };
     let (ids, x0) = start(a);
     assert_eq!((ids.clone(), x0), start(b));
     let dir = tempfile::tempdir().unwrap();
     let ra =
-        mpm_solve::driver::run::run::<f64>(a, &dir.path().join("a"), &Default::default()).unwrap();
+        mpm_solve::driver::run::run::<f64, Tet4>(a, &dir.path().join("a"), &Default::default())
+            .unwrap();
     let rb =
-        mpm_solve::driver::run::run::<f64>(b, &dir.path().join("b"), &Default::default()).unwrap();
+        mpm_solve::driver::run::run::<f64, Tet4>(b, &dir.path().join("b"), &Default::default())
+            .unwrap();
     let (pa, pb) = (&ra.particles, &rb.particles);
     assert_eq!(pa.id, pb.id);
     let big_u = pa.u.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -574,9 +577,12 @@ fn anura3d_runs_the_exports() {
         let theirs = anura3d_displacements(&work, &stem);
         assert!(!theirs.is_empty());
         let (case, _) = mpm_solve::input::anura3d::load(&gom, &cps).unwrap();
-        let ours =
-            mpm_solve::driver::run::run::<f64>(&case, &dir.path().join(&stem), &Default::default())
-                .unwrap();
+        let ours = mpm_solve::driver::run::run::<f64, Tet4>(
+            &case,
+            &dir.path().join(&stem),
+            &Default::default(),
+        )
+        .unwrap();
         let p = &ours.particles;
         let u = |id: u32| p.u[p.id.iter().position(|&i| i == id).unwrap()];
         let big = theirs

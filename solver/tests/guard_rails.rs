@@ -3,6 +3,7 @@
 
 mod common;
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
@@ -240,7 +241,7 @@ fn a_collapsing_material_trips_the_volume_check() {
 fn a_non_finite_stress_is_named() {
     use mpm_solve::driver::engine::{Check, Engine, StepError};
     let case = mpm_solve::input::scene::load(&testdata("golden/column_dry.toml")).unwrap();
-    let mut engine = Engine::<f64>::new(&case, false).unwrap();
+    let mut engine = Engine::<f64, Tet4>::new(&case, false).unwrap();
     engine.step(engine.dt, None).unwrap();
     let i = 100;
     engine.particles.stress[i][1] = f64::NAN;

@@ -5,6 +5,7 @@
 
 mod common;
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 
 use common::testdata;
@@ -56,7 +57,7 @@ fn scene_error(scene: &Path) -> String {
 /// Runs `case` to its end (guard rails on, their defaults) into a temporary folder.
 fn run_to_end(case: &Case) -> Engine<f64> {
     let out = tempfile::tempdir().unwrap();
-    run::<f64>(case, out.path(), &RunOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+    run::<f64, Tet4>(case, out.path(), &RunOptions::default()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn largest_displacement(e: &Engine<f64>) -> f64 {
@@ -75,7 +76,7 @@ fn a_k0_column_under_gravity_starts_in_equilibrium() {
     let stressed = load(&column(dir.path(), "k0", &format!("k0 = {k0}")));
     let free = load(&column(dir.path(), "free", ""));
     // The initial state: σ'yy = -ρ g d at the element's centroid, σ'xx = σ'zz = K0 σ'yy.
-    let e0 = Engine::<f64>::new(&stressed, false).unwrap();
+    let e0 = Engine::<f64, Tet4>::new(&stressed, false).unwrap();
     let (mut deepest, mut checked) = (0.0f64, 0);
     for s in &e0.particles.stress {
         assert!(s[1] < 0.0 && s[1] >= -2.0 * 9.81 * 1.0, "{s:?}");
@@ -166,7 +167,7 @@ fn scene_keys_are_read_and_refused_by_name() {
         .unwrap()
         .replace("[gravity]\n", "[gravity]\nk0_surface = 0.5\n");
     std::fs::write(&lower, text).unwrap();
-    let e = Engine::<f64>::new(&load(&lower), false).unwrap();
+    let e = Engine::<f64, Tet4>::new(&load(&lower), false).unwrap();
     // Points above y = 0.5 start unstressed, those below carry the weight of depth - 0.5.
     for (x, s) in e.particles.x.iter().zip(&e.particles.stress) {
         let y = e.mesh.global(x)[1];
@@ -177,7 +178,7 @@ fn scene_keys_are_read_and_refused_by_name() {
         }
     }
     let uniform = load(&column(d, "uniform", "initial_stress = [1, 2, 3, 4, 5, 6]"));
-    let e = Engine::<f64>::new(&uniform, false).unwrap();
+    let e = Engine::<f64, Tet4>::new(&uniform, false).unwrap();
     assert!(e
         .particles
         .stress
@@ -267,8 +268,8 @@ fn the_exporter_writes_k0_and_refuses_what_anura3d_cannot_start_from() {
     // Read back, the GOM/CPS starts from the scene's stresses exactly.
     let (back, _) = mpm_solve::input::anura3d::load(&files.gom, &files.cps).unwrap();
     let scene = load(&testdata("layered_k0.toml"));
-    let a = Engine::<f64>::new(&back, false).unwrap();
-    let b = Engine::<f64>::new(&scene, false).unwrap();
+    let a = Engine::<f64, Tet4>::new(&back, false).unwrap();
+    let b = Engine::<f64, Tet4>::new(&scene, false).unwrap();
     assert_eq!(a.particles.id, b.particles.id);
     assert_eq!(a.particles.stress, b.particles.stress);
     let refused = |name: &str, material: &str, expected: &str| {
@@ -328,7 +329,7 @@ fn gom_case(
 
 /// σ'yy of the first point (id 1).
 fn first_vertical(case: &Case) -> f64 {
-    let e = Engine::<f64>::new(case, false).unwrap();
+    let e = Engine::<f64, Tet4>::new(case, false).unwrap();
     let i = e.particles.id.iter().position(|&id| id == 1).unwrap();
     e.particles.stress[i][1]
 }

@@ -4,6 +4,7 @@
 //! files with `mohr_coulomb` and `strain_softening_mohr_coulomb` are read, and the export writes
 //! Anura3D's keys.
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 
 use mpm_solve::input::case::Case;
@@ -32,9 +33,13 @@ fn scene(dir: &Path, stem: &str, edit: &dyn Fn(String) -> String) -> PathBuf {
 
 /// Runs `case` to its end: the final stresses, and the particles' state values per point.
 fn run(case: &Case, out: &Path) -> (Vec<[f64; 6]>, usize) {
-    let engine =
-        mpm_solve::driver::run::run_observed::<f64>(case, out, &Default::default(), &mut |_| {})
-            .unwrap();
+    let engine = mpm_solve::driver::run::run_observed::<f64, Tet4>(
+        case,
+        out,
+        &Default::default(),
+        &mut |_| {},
+    )
+    .unwrap();
     (engine.particles.stress.clone(), engine.particles.state_len)
 }
 
@@ -272,7 +277,7 @@ fn a_pic_blend_brings_the_slumped_block_to_rest() {
     let run = |pic: &str| {
         let case = mpm_solve::input::scene::load(&block(dir.path(), pic)).unwrap();
         let out = dir.path().join(format!("out_{pic}"));
-        let e = mpm_solve::driver::run::run_observed::<f64>(
+        let e = mpm_solve::driver::run::run_observed::<f64, Tet4>(
             &case,
             &out,
             &Default::default(),
@@ -295,7 +300,7 @@ fn a_pic_blend_brings_the_slumped_block_to_rest() {
         "with 5 % PIC the fastest point at the end: {pic} m/s"
     );
     let default = mpm_solve::input::scene::load(&testdata("oracle_mc_block.toml")).unwrap();
-    let e = mpm_solve::driver::run::run_observed::<f64>(
+    let e = mpm_solve::driver::run::run_observed::<f64, Tet4>(
         &default,
         &dir.path().join("out_default"),
         &Default::default(),

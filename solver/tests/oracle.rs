@@ -4,6 +4,7 @@
 //! point is compared (by id) at the end of every load step. Skipped, visibly, when the variable
 //! is unset; a failure when it names no file.
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 
 use mpm_shared::anura3d_vtk::{read_step, MaterialPointState};
@@ -44,7 +45,7 @@ fn run_ours(gom: &Path, cps: &Path, drag: Drag, out: &Path) -> Vec<Step> {
     let (mut case, _) = mpm_solve::input::anura3d::load(gom, cps).unwrap();
     case.drag = drag;
     let mut steps = Vec::new();
-    mpm_solve::driver::run::run_observed::<f64>(&case, out, &Default::default(), &mut |e| {
+    mpm_solve::driver::run::run_observed::<f64, Tet4>(&case, out, &Default::default(), &mut |e| {
         let p = &e.particles;
         let l = p.liquid.as_ref();
         steps.push(Step {
@@ -292,7 +293,7 @@ fn workshop_set_up_no_worse_than_anura3d_against_terzaghi() {
     let job = mpm_solve::input::scene::load(&testdata("oedometer.toml")).unwrap();
     let out = tempfile::tempdir().unwrap();
     let (_, _, workshop) =
-        mpm_solve::jobs::consolidation::run_job::<f64>(&job, out.path(), &Default::default())
+        mpm_solve::jobs::consolidation::run_job::<f64, Tet4>(&job, out.path(), &Default::default())
             .unwrap();
     let ours = workshop.expect("the default job runs the workshop set-up too");
     eprintln!("| T_v | Anura3D RMS / u0 | mpm-solve workshop column RMS / u0 |\n|---:|---:|---:|");
@@ -454,7 +455,7 @@ fn initial_state_difference(dir: &Path, name: &str) -> (f64, f64) {
         &dir.join(format!("{name}.CPS_001")),
     )
     .unwrap();
-    let engine = mpm_solve::driver::engine::Engine::<f64>::new(&case, false).unwrap();
+    let engine = mpm_solve::driver::engine::Engine::<f64, Tet4>::new(&case, false).unwrap();
     let p = &engine.particles;
     assert_eq!(p.len(), anura.len(), "different numbers of points");
     let mut index = vec![usize::MAX; p.len() + 1];

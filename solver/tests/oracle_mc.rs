@@ -7,6 +7,7 @@
 //! through the collapse, and the final geometry must agree within 1 %. Skipped, visibly, when
 //! the variable is unset.
 
+use mpm_solve::element::tet4::Tet4;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -122,7 +123,7 @@ fn run_ours(gom: &Path, cps: &Path, out: &Path, surface: Option<fn([f64; 3]) -> 
         surface,
         weight_gap: Vec::new(),
     };
-    run_with::<f64>(&case, out, &Default::default(), &mut ours).unwrap();
+    run_with::<f64, Tet4>(&case, out, &Default::default(), &mut ours).unwrap();
     ours
 }
 

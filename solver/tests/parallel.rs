@@ -1,6 +1,7 @@
 //! The parallel engine's promise: every output file but `run.json` (which holds timings) is
 //! byte-identical for any thread count and both pin modes.
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
@@ -279,7 +280,7 @@ fn element_point_ranges_follow_every_point_at_every_step() {
         last: Vec::new(),
     };
     let options = RunOptions::default();
-    mpm_solve::driver::run::run_with::<f64>(&case, dir.path(), &options, &mut check).unwrap();
+    mpm_solve::driver::run::run_with::<f64, Tet4>(&case, dir.path(), &options, &mut check).unwrap();
     assert!(
         check.steps > 1000 && check.crossings > 100,
         "{} steps, {} crossings",

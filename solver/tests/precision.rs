@@ -3,6 +3,7 @@
 
 mod common;
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::Path;
 
 use assert_cmd::Command;
@@ -65,8 +66,8 @@ fn translated(case: &Case, shift: [f64; 3]) -> (Case, Case) {
 fn both<R: Real>(case: &Case, shift: [f64; 3], dir: &Path) -> [f64; 4] {
     let opts = RunOptions::default();
     let (here, there) = translated(case, shift);
-    let a = run::<R>(&here, &dir.join(format!("{}-here", R::NAME)), &opts).unwrap();
-    let b = run::<R>(&there, &dir.join(format!("{}-utm", R::NAME)), &opts).unwrap();
+    let a = run::<R, Tet4>(&here, &dir.join(format!("{}-here", R::NAME)), &opts).unwrap();
+    let b = run::<R, Tet4>(&there, &dir.join(format!("{}-utm", R::NAME)), &opts).unwrap();
     differences(&a, &b, shift)
 }
 

@@ -3,6 +3,7 @@
 
 use mpm_shared::{generate, ElementType, Model};
 use mpm_solve::driver::engine::Engine;
+use mpm_solve::element::tet4::Tet4;
 use mpm_solve::input::case::{Case, LoadCurve, MaterialSpec, Reorder};
 use mpm_solve::step::prescribed::{PrescribedElement, PrescribedVelocity};
 
@@ -173,7 +174,7 @@ fn run(
 ) {
     let dir = tempfile::tempdir().unwrap();
     let mut frames = Vec::new();
-    let engine = mpm_solve::driver::run::run_observed::<f64>(
+    let engine = mpm_solve::driver::run::run_observed::<f64, Tet4>(
         case,
         dir.path(),
         &Default::default(),
@@ -203,7 +204,7 @@ fn pushed_points_and_nodes_move_exactly_with_the_prescribed_velocity() {
         .iter()
         .map(|r| r.element)
         .collect();
-    let start = Engine::<f64>::new(&case, false).unwrap();
+    let start = Engine::<f64, Tet4>::new(&case, false).unwrap();
     let marked: Vec<u32> = (0..start.particles.len())
         .filter(|&i| listed.contains(&start.particles.element[i]))
         .map(|i| start.particles.id[i])

@@ -5,6 +5,7 @@
 
 mod common;
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 
 use mpm_solve::driver::run::{run, RunOptions};
@@ -97,7 +98,7 @@ fn read_reaction(dir: &Path) -> Vec<Row> {
 fn run_scene(path: &Path, out: &Path, threads: usize) -> Vec<Row> {
     let mut case = scene::load(path).unwrap();
     case.engine.threads = threads;
-    run::<f64>(&case, out, &RunOptions::default()).unwrap();
+    run::<f64, Tet4>(&case, out, &RunOptions::default()).unwrap();
     read_reaction(out)
 }
 
@@ -235,7 +236,7 @@ fn pushed_points() -> Case {
 #[test]
 fn a_material_point_set_has_a_reaction_too() {
     let dir = tempfile::tempdir().unwrap();
-    run::<f64>(&pushed_points(), dir.path(), &RunOptions::default()).unwrap();
+    run::<f64, Tet4>(&pushed_points(), dir.path(), &RunOptions::default()).unwrap();
     let rows = read_reaction(dir.path());
     assert_eq!(rows.len(), 2);
     let r = &rows[1];

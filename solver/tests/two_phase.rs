@@ -1,6 +1,7 @@
 //! Two-phase (saturated) runs: Terzaghi consolidation against Anura3D's figures, the
 //! permeability sweep at the Courant step, and what a dry scene does not allocate.
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 
 use mpm_solve::driver::engine::Engine;
@@ -28,7 +29,7 @@ fn default_job_beats_anura3d_and_matches_terzaghi() {
     let case = scene::load(&testdata("oedometer.toml")).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let (_, default, workshop) =
-        consolidation::run_job::<f64>(&case, dir.path(), &Default::default()).unwrap();
+        consolidation::run_job::<f64, Tet4>(&case, dir.path(), &Default::default()).unwrap();
     let workshop = workshop.expect("the job also runs the workshop set-up");
     let at = |t: &consolidation::Tracker, tv: f64| {
         *t.records
@@ -99,7 +100,7 @@ fn permeability_sweep_is_stable_at_the_courant_step_and_undrained_at_the_low_end
     for kappa in [1e-6, 1e-8, 1e-10, 1e-12, 1e-14, 1e-16] {
         let case = sweep_case(kappa, 0.03);
         let dir = tempfile::tempdir().unwrap();
-        let (engine, tracker) = mpm_solve::jobs::consolidation::run_tracked::<f64>(
+        let (engine, tracker) = mpm_solve::jobs::consolidation::run_tracked::<f64, Tet4>(
             &case,
             dir.path(),
             &Default::default(),
@@ -151,8 +152,8 @@ fn dry_scenes_allocate_no_liquid_and_use_fewer_bytes_per_point() {
     let dry = scene::load(&testdata("column_gravity.toml")).unwrap();
     let wet = scene::load(&testdata("oedometer.toml")).unwrap();
     assert!(!dry.has_liquid() && wet.has_liquid());
-    let d = Engine::<f64>::new(&dry, false).unwrap();
-    let w = Engine::<f64>::new(&wet, false).unwrap();
+    let d = Engine::<f64, Tet4>::new(&dry, false).unwrap();
+    let w = Engine::<f64, Tet4>::new(&wet, false).unwrap();
     assert!(d.particles.liquid.is_none() && d.grid.liquid.is_none());
     assert!(w.particles.liquid.is_some() && w.grid.liquid.is_some());
     assert!(d.particles.bytes_per_point() < w.particles.bytes_per_point());
@@ -172,7 +173,7 @@ fn a_load_on_the_liquid_raises_the_pore_pressure_and_not_the_effective_stress() 
     case.output_times = vec![0.75];
     let dir = tempfile::tempdir().unwrap();
     let engine =
-        mpm_solve::driver::run::run::<f64>(&case, dir.path(), &Default::default()).unwrap();
+        mpm_solve::driver::run::run::<f64, Tet4>(&case, dir.path(), &Default::default()).unwrap();
     let p = &engine.particles;
     let l = p.liquid.as_ref().unwrap();
     let n = p.len() as f64;

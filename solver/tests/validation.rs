@@ -1,5 +1,6 @@
 //! Validation against analytical solutions (docs/design.md §6). Run in release mode: each takes seconds.
 
+use mpm_solve::element::tet4::Tet4;
 use std::path::{Path, PathBuf};
 
 use mpm_solve::driver::engine::Engine;
@@ -17,7 +18,7 @@ fn column_under_self_weight_matches_rho_g_depth() {
     let case = scene::load(&testdata("column_gravity.toml")).unwrap();
     assert!(case.model.element_count() >= 1000);
     let engine =
-        mpm_solve::driver::run::run::<f64>(&case, dir.path(), &Default::default()).unwrap();
+        mpm_solve::driver::run::run::<f64, Tet4>(&case, dir.path(), &Default::default()).unwrap();
     let p = &engine.particles;
     let rho_g = 2.0 * 9.81;
     let (mut num, mut den, mut count) = (0.0, 0.0, 0);
@@ -76,7 +77,7 @@ fn loaded_column(ny: usize) -> mpm_solve::input::case::Case {
 #[test]
 fn compression_wave_arrives_at_mid_height_on_time() {
     let case = loaded_column(80);
-    let mut engine = Engine::<f64>::new(&case, false).unwrap();
+    let mut engine = Engine::<f64, Tet4>::new(&case, false).unwrap();
     let c = case.materials[1].as_ref().unwrap().wave_speed();
     let expected = 0.5 / c;
     // Points in a slab at mid-height; arrival = first time their mean sigma_yy reaches half the load.
@@ -210,9 +211,12 @@ fn anura3d_oedometer_settles_by_q_h_over_e_oed() {
     let gom = write_oedometer_case(dir.path(), q, "MPM-MP");
     let (case, _) =
         mpm_solve::input::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
-    let engine =
-        mpm_solve::driver::run::run::<f64>(&case, &dir.path().join("out"), &Default::default())
-            .unwrap();
+    let engine = mpm_solve::driver::run::run::<f64, Tet4>(
+        &case,
+        &dir.path().join("out"),
+        &Default::default(),
+    )
+    .unwrap();
     let eoed = mpm_solve::material::linear_elastic::LinearElastic::<f64>::oedometric(1000.0, 0.3);
     let p = &engine.particles;
     // Uniform strain -q/E_oed: every point's vertical displacement is -q y0 / E_oed.
@@ -258,8 +262,8 @@ fn unsupported_anura3d_features_are_named() {
 #[test]
 fn single_precision_runs_the_same_code_and_agrees() {
     let case = loaded_column(20);
-    let mut a = Engine::<f64>::new(&case, false).unwrap();
-    let mut b = Engine::<f32>::new(&case, false).unwrap();
+    let mut a = Engine::<f64, Tet4>::new(&case, false).unwrap();
+    let mut b = Engine::<f32, Tet4>::new(&case, false).unwrap();
     for _ in 0..200 {
         a.step(a.dt, None).unwrap();
         b.step(a.dt, None).unwrap();
@@ -282,9 +286,12 @@ fn mixed_integration_settles_like_material_points_with_one_stress_per_element() 
     let gom = write_oedometer_case(dir.path(), q, "MPM-MIXED");
     let (case, _) =
         mpm_solve::input::anura3d::load(&gom, &dir.path().join("oedo.CPS_001")).unwrap();
-    let engine =
-        mpm_solve::driver::run::run::<f64>(&case, &dir.path().join("out"), &Default::default())
-            .unwrap();
+    let engine = mpm_solve::driver::run::run::<f64, Tet4>(
+        &case,
+        &dir.path().join("out"),
+        &Default::default(),
+    )
+    .unwrap();
     let p = &engine.particles;
     let mut by_element: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
     for i in 0..p.len() {

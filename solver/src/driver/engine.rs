@@ -71,10 +71,10 @@ pub enum SetupError {
     #[error(transparent)]
     TimeStep(#[from] crate::input::time_step::TimeStepError),
     /// A load on material points has no points to carry it.
-    #[error("the load on material points of the face with corner nodes {} {} {} has no filled element next to it", .nodes[0], .nodes[1], .nodes[2])]
+    #[error("the load on material points of the face with corner nodes {} has no filled element next to it", crate::driver::units::list(.nodes))]
     UnloadedFace {
         /// Input numbers of the face's corner nodes.
-        nodes: [u32; 3],
+        nodes: Vec<u32>,
     },
     /// More than one process: the nodal sums at shared nodes are not exchanged yet.
     #[error("a run over {ranks} processes needs the exchange of nodal sums at shared nodes, which this build does not have; run on one process")]
@@ -360,7 +360,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             }
         }
         if let Some(init) = &case.initial_stress {
-            apply_initial_stress(init, case, &partition, &mut particles);
+            apply_initial_stress::<E, R>(init, case, &partition, &mut particles);
         }
         let fluids: Vec<Option<Fluid<R>>> = case
             .materials
@@ -1156,7 +1156,7 @@ fn stored_energy<R: Real>(case: &Case, particles: &Particles<R>) -> f64 {
 /// Sets the initial stresses (and, for saturated points of a K0 material, pore pressures) of
 /// the points just placed. The K0 procedure reads the element's corners from the case's model
 /// (global coordinates, as the input gives them), not from the computational mesh.
-fn apply_initial_stress<R: Real>(
+fn apply_initial_stress<E: Element, R: Real>(
     init: &crate::input::initial_stress::InitialStress,
     case: &Case,
     partition: &Partition,
@@ -1164,13 +1164,12 @@ fn apply_initial_stress<R: Real>(
 ) {
     for i in 0..particles.len() {
         let e = partition.global_element(particles.element[i] as usize);
-        let nodes = case.model.element(e);
-        let corner = |k: usize| {
+        let nodes = &case.model.element(e)[..E::NODES];
+        let corners: E::Nodes<[f64; 3]> = E::nodes(|k| {
             let p = case.model.node(nodes[k] as usize);
-            [p[0], p[1], p[2]]
-        };
-        let corners = [corner(0), corner(1), corner(2), corner(3)];
-        let Some(s) = init.at(particles.material[i] as usize, corners) else {
+            [0, 1, 2].map(|d| p.get(d).copied().unwrap_or(0.0))
+        });
+        let Some(s) = init.at(particles.material[i] as usize, corners.as_ref()) else {
             continue;
         };
         particles.stress[i] = s.stress.map(R::of);
@@ -1203,7 +1202,11 @@ fn resolve_point_loads<E: Element, R: Real>(
     }
     let mut out = Vec::new();
     for load in &case.point_loads {
-        let c = load.corners.map(|m| mesh.node_of_model[m]);
+        let c: Vec<u32> = load
+            .corners
+            .iter()
+            .map(|&m| mesh.node_of_model[m])
+            .collect();
         let mut carriers = Vec::new();
         for e in 0..mesh.elements() {
             let corners = mesh.corners[e].as_ref();
@@ -1219,7 +1222,7 @@ fn resolve_point_loads<E: Element, R: Real>(
         // Another process may carry the load: only no carrier anywhere is an error.
         if comm.sum_count(carriers.len() as u64) == 0 {
             return Err(SetupError::UnloadedFace {
-                nodes: load.corners.map(|m| case.node_number(m)),
+                nodes: load.corners.iter().map(|&m| case.node_number(m)).collect(),
             });
         }
         let share = load.force.map(|f| R::of(f / carriers.len() as f64));

@@ -1,6 +1,7 @@
 //! Running a case: the engine (state and buffers, one step), the loop over output times with its observers, the output files, and numbers in words for people.
 
 pub mod checkpoint;
+pub mod dispatch;
 pub mod engine;
 pub mod guard;
 pub mod output;

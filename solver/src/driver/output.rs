@@ -11,6 +11,7 @@ use mpm_shared::vtu::{self, Cells, DataArray, Encoding, Piece, Values};
 
 use crate::driver::checkpoint::Series;
 use crate::driver::engine::Engine;
+use crate::element::Element;
 use crate::input::case::Case;
 use crate::real::Real;
 use crate::state::particles::{Field, FieldReader, Value, Written};
@@ -40,7 +41,11 @@ fn csv_text(s: &mut String, t: &str) {
 
 impl Output {
     /// Prepares `dir` (created if missing) and writes `mesh.vtu`.
-    pub fn new<R: Real>(dir: &Path, case: &Case, engine: &Engine<R>) -> mpm_shared::Result<Self> {
+    pub fn new<R: Real, E: Element>(
+        dir: &Path,
+        case: &Case,
+        engine: &Engine<R, E>,
+    ) -> mpm_shared::Result<Self> {
         std::fs::create_dir_all(dir).map_err(|e| mpm_shared::Error::io(dir, e))?;
         write_output_with(&dir.join("mesh.vtu"), |w| {
             vtu::write_model(w, &case.model, None, Encoding::Appended)
@@ -109,7 +114,7 @@ impl Output {
     }
 
     /// Writes the state at the current time: a particle file and the updated series.
-    pub fn write<R: Real>(&mut self, engine: &Engine<R>) -> mpm_shared::Result<()> {
+    pub fn write<R: Real, E: Element>(&mut self, engine: &Engine<R, E>) -> mpm_shared::Result<()> {
         let p = &engine.particles;
         let active: Vec<usize> = (0..p.len()).filter(|&i| p.active[i]).collect();
         // The particle file holds what the field list marks as written, in its order.
@@ -252,10 +257,10 @@ pub fn peak_rss_bytes() -> u64 {
 pub const RUN_JSON_SCHEMA: u32 = 1;
 
 /// Writes `run.json` (strict JSON: a non-finite number is written as null).
-pub fn write_summary<R: Real>(
+pub fn write_summary<R: Real, E: Element>(
     dir: &Path,
     case: &Case,
-    engine: &Engine<R>,
+    engine: &Engine<R, E>,
     wall: f64,
     stepping: f64,
     diverged: Option<&crate::driver::guard::Divergence>,

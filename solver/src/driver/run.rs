@@ -10,6 +10,7 @@ use crate::driver::checkpoint::{self, CheckpointError, Driver, Every, Fingerprin
 use crate::driver::engine::Engine;
 use crate::driver::output::{self, Output};
 use crate::driver::units;
+use crate::element::Element;
 use crate::input::case::Case;
 use crate::real::Real;
 
@@ -68,7 +69,7 @@ pub enum RunError {
         time: f64,
     },
     /// Probe ids that name no material point.
-    #[error("no material point has id {} (probes; ids run from 1 to {last}, those of empty elements excepted); remove them or check the numbering", list(.unknown))]
+    #[error("no material point has id {} (probes; ids run from 1 to {last}, those of empty elements excepted); remove them or check the numbering", units::list(.unknown))]
     UnknownProbes {
         /// The ids not found.
         unknown: Vec<u32>,
@@ -84,14 +85,6 @@ impl From<crate::driver::engine::StepError> for RunError {
             crate::driver::engine::StepError::Diverged(d) => RunError::Diverged(d),
         }
     }
-}
-
-fn list(ids: &[u32]) -> String {
-    let mut s: Vec<String> = ids.iter().take(20).map(|i| i.to_string()).collect();
-    if ids.len() > 20 {
-        s.push(format!("and {} more", ids.len() - 20));
-    }
-    s.join(", ")
 }
 
 /// How a run treats lost points, checkpoints and signals.
@@ -136,20 +129,20 @@ impl Default for RunOptions {
 /// What watches a run from outside the engine (a job such as the consolidation comparison,
 /// or a test comparing with another code): told when the engine is set up and after each
 /// output is written.
-pub trait Observer<R: Real> {
+pub trait Observer<R: Real, E: Element = crate::element::tet4::Tet4> {
     /// The engine is set up, no step taken yet.
-    fn on_start(&mut self, _engine: &Engine<R>) -> Result<(), RunError> {
+    fn on_start(&mut self, _engine: &Engine<R, E>) -> Result<(), RunError> {
         Ok(())
     }
 
     /// A step was taken (called every step: keep it cheap).
-    fn on_step(&mut self, _engine: &Engine<R>) {}
+    fn on_step(&mut self, _engine: &Engine<R, E>) {}
 
     /// An output was written at the engine's current time.
-    fn on_output(&mut self, _engine: &Engine<R>) {}
+    fn on_output(&mut self, _engine: &Engine<R, E>) {}
 
     /// The run reached its end time.
-    fn on_end(&mut self, _engine: &Engine<R>) {}
+    fn on_end(&mut self, _engine: &Engine<R, E>) {}
 
     /// The observer's state that a resumed run needs (for a checkpoint; empty when none).
     fn save(&self) -> Vec<u8> {
@@ -163,25 +156,28 @@ pub trait Observer<R: Real> {
 }
 
 /// Two observers, told in turn.
-pub struct Both<'a, R: Real>(pub &'a mut dyn Observer<R>, pub &'a mut dyn Observer<R>);
+pub struct Both<'a, R: Real, E: Element>(
+    pub &'a mut dyn Observer<R, E>,
+    pub &'a mut dyn Observer<R, E>,
+);
 
-impl<R: Real> Observer<R> for Both<'_, R> {
-    fn on_start(&mut self, engine: &Engine<R>) -> Result<(), RunError> {
+impl<R: Real, E: Element> Observer<R, E> for Both<'_, R, E> {
+    fn on_start(&mut self, engine: &Engine<R, E>) -> Result<(), RunError> {
         self.0.on_start(engine)?;
         self.1.on_start(engine)
     }
 
-    fn on_step(&mut self, engine: &Engine<R>) {
+    fn on_step(&mut self, engine: &Engine<R, E>) {
         self.0.on_step(engine);
         self.1.on_step(engine);
     }
 
-    fn on_output(&mut self, engine: &Engine<R>) {
+    fn on_output(&mut self, engine: &Engine<R, E>) {
         self.0.on_output(engine);
         self.1.on_output(engine);
     }
 
-    fn on_end(&mut self, engine: &Engine<R>) {
+    fn on_end(&mut self, engine: &Engine<R, E>) {
         self.0.on_end(engine);
         self.1.on_end(engine);
     }
@@ -209,8 +205,8 @@ impl<R: Real> Observer<R> for Both<'_, R> {
 /// An observer that only looks at outputs.
 struct OnOutput<F>(F);
 
-impl<R: Real, F: FnMut(&Engine<R>)> Observer<R> for OnOutput<F> {
-    fn on_output(&mut self, engine: &Engine<R>) {
+impl<R: Real, E: Element, F: FnMut(&Engine<R, E>)> Observer<R, E> for OnOutput<F> {
+    fn on_output(&mut self, engine: &Engine<R, E>) {
         (self.0)(engine)
     }
 }
@@ -218,43 +214,47 @@ impl<R: Real, F: FnMut(&Engine<R>)> Observer<R> for OnOutput<F> {
 /// No observer.
 pub struct Unobserved;
 
-impl<R: Real> Observer<R> for Unobserved {}
+impl<R: Real, E: Element> Observer<R, E> for Unobserved {}
 
 /// Runs `case` to its end time, writing into `dir`. Returns the engine's final state.
-pub fn run<R: Real>(case: &Case, dir: &Path, options: &RunOptions) -> Result<Engine<R>, RunError> {
+pub fn run<R: Real, E: Element>(
+    case: &Case,
+    dir: &Path,
+    options: &RunOptions,
+) -> Result<Engine<R, E>, RunError> {
     drive(case, dir, options, &mut Unobserved)
 }
 
 /// [`run`], handing the engine to `observe` after each output is written (e.g. to compare the
 /// material points with another code's at every load step).
-pub fn run_observed<R: Real>(
+pub fn run_observed<R: Real, E: Element>(
     case: &Case,
     dir: &Path,
     options: &RunOptions,
-    observe: &mut dyn FnMut(&Engine<R>),
-) -> Result<Engine<R>, RunError> {
+    observe: &mut dyn FnMut(&Engine<R, E>),
+) -> Result<Engine<R, E>, RunError> {
     drive(case, dir, options, &mut OnOutput(observe))
 }
 
 /// [`run`] with an [`Observer`].
-pub fn run_with<R: Real>(
+pub fn run_with<R: Real, E: Element>(
     case: &Case,
     dir: &Path,
     options: &RunOptions,
-    observer: &mut dyn Observer<R>,
-) -> Result<Engine<R>, RunError> {
+    observer: &mut dyn Observer<R, E>,
+) -> Result<Engine<R, E>, RunError> {
     drive(case, dir, options, observer)
 }
 
 /// Steps taken by this process, for [`RunOptions::abort_after_step`].
 static PROCESS_STEPS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
-fn drive<R: Real>(
+fn drive<R: Real, E: Element>(
     case: &Case,
     dir: &Path,
     options: &RunOptions,
-    observer: &mut dyn Observer<R>,
-) -> Result<Engine<R>, RunError> {
+    observer: &mut dyn Observer<R, E>,
+) -> Result<Engine<R, E>, RunError> {
     let wall = Instant::now();
     case.check_courant(options.force)?;
     let fingerprint = Fingerprint::of(case, options.drop_lost);
@@ -272,7 +272,7 @@ fn drive<R: Real>(
             .into());
         }
     }
-    let mut engine = Engine::<R>::new(case, options.drop_lost)?;
+    let mut engine = Engine::<R, E>::new(case, options.drop_lost)?;
     check_probes(case, &engine)?;
     observer.on_start(&engine)?;
     let mut out = Output::new(dir, case, &engine)?;
@@ -290,7 +290,7 @@ fn drive<R: Real>(
     let wall_before = d.wall;
     let elapsed = || wall_before + wall.elapsed().as_secs_f64();
     // run.json, written at the end, where a guard rail stops the run, or at a signal.
-    let summary = |engine: &Engine<R>, d: &Driver, diverged, interrupted| {
+    let summary = |engine: &Engine<R, E>, d: &Driver, diverged, interrupted| {
         output::write_summary(
             dir,
             case,
@@ -301,28 +301,29 @@ fn drive<R: Real>(
             interrupted,
         )
     };
-    let save = |engine: &Engine<R>, out: &Output, d: &mut Driver, observer: &dyn Observer<R>| {
-        d.wall = elapsed();
-        let scalars = engine.checkpoint_scalars();
-        let observed = observer.save();
-        checkpoint::write(
-            dir,
-            &checkpoint::State {
-                fingerprint: &fingerprint,
-                driver: *d,
-                scalars: &scalars,
-                particles: &engine.particles,
-                series: out.series(),
-                observer: &observed,
-            },
-        )
-    };
+    let save =
+        |engine: &Engine<R, E>, out: &Output, d: &mut Driver, observer: &dyn Observer<R, E>| {
+            d.wall = elapsed();
+            let scalars = engine.checkpoint_scalars();
+            let observed = observer.save();
+            checkpoint::write(
+                dir,
+                &checkpoint::State {
+                    fingerprint: &fingerprint,
+                    driver: *d,
+                    scalars: &scalars,
+                    particles: &engine.particles,
+                    series: out.series(),
+                    observer: &observed,
+                },
+            )
+        };
     let mut last_checkpoint = Instant::now();
     if options.checkpoint.is_some() && engine.steps == 0 && d.next_output == 0 {
         // A run killed before its first output resumes from here, not from nothing.
         save(&engine, &out, &mut d, &*observer)?;
     }
-    let stopped = |engine: &Engine<R>| {
+    let stopped = |engine: &Engine<R, E>| {
         options
             .stop
             .as_ref()
@@ -459,7 +460,10 @@ fn drive<R: Real>(
 }
 
 /// Refuses probe ids that name no material point of the case (before any step is taken).
-pub fn check_probes<R: Real>(case: &Case, engine: &Engine<R>) -> Result<(), RunError> {
+pub fn check_probes<R: Real, E: Element>(
+    case: &Case,
+    engine: &Engine<R, E>,
+) -> Result<(), RunError> {
     if case.probes.is_empty() {
         return Ok(());
     }
@@ -482,7 +486,7 @@ pub fn check_probes<R: Real>(case: &Case, engine: &Engine<R>) -> Result<(), RunE
 }
 
 /// Stops a `--drop-lost` run once more than `max_lost` of its points (or all) have left.
-fn check_lost<R: Real>(engine: &Engine<R>, max_lost: f64) -> Result<(), RunError> {
+fn check_lost<R: Real, E: Element>(engine: &Engine<R, E>, max_lost: f64) -> Result<(), RunError> {
     let points = engine.particles.len();
     let share = engine.lost as f64 / points.max(1) as f64;
     if engine.lost as usize >= points || share > max_lost {

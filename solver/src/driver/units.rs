@@ -115,6 +115,15 @@ fn sig(v: f64, digits: i32) -> String {
     format!("{v:.decimals$}")
 }
 
+/// Ids in a message: "3, 17, 42", the first 20 and how many more.
+pub fn list(ids: &[u32]) -> String {
+    let mut s: Vec<String> = ids.iter().take(20).map(|i| i.to_string()).collect();
+    if ids.len() > 20 {
+        s.push(format!("and {} more", ids.len() - 20));
+    }
+    s.join(", ")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -43,12 +43,14 @@ pub type TetMesh<R> = Mesh<Tet4, R>;
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
     /// The model's elements are not of the solver's element type.
-    #[error("the solver computes meshes of {wanted}; this one has {found}")]
+    #[error("this engine computes meshes of {wanted}; this one has {found} ({dimension})")]
     WrongElement {
-        /// The solver's element.
+        /// The engine's element.
         wanted: &'static str,
         /// The model's elements.
         found: &'static str,
+        /// The model's dimension (Anura3D's keyword).
+        dimension: &'static str,
     },
     /// No elements.
     #[error("the mesh has no elements")]
@@ -69,10 +71,11 @@ const MAX_FACE_NODES: usize = 4;
 impl<E: Element, R: Real> Mesh<E, R> {
     /// Builds the computational mesh of `model` (geometry in f64, stored in `R`).
     pub fn new(model: &Model) -> Result<Self, MeshError> {
-        if !E::computes(model.element_type) {
+        if !E::computes(model.dimension, model.element_type) {
             return Err(MeshError::WrongElement {
                 wanted: E::NAME,
                 found: model.element_type.describe(),
+                dimension: model.dimension.keyword(),
             });
         }
         let n_el = model.element_count();
@@ -103,8 +106,9 @@ impl<E: Element, R: Real> Mesh<E, R> {
         let xf: Vec<[f64; 3]> = model_node
             .iter()
             .map(|&m| {
+                // 2D models have two coordinates: they lie in z = 0.
                 let p = model.node(m as usize);
-                [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]]
+                [0, 1, 2].map(|a| p.get(a).copied().unwrap_or(0.0) - origin[a])
             })
             .collect();
         let mut map = Vec::with_capacity(n_el);

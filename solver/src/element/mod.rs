@@ -1,21 +1,26 @@
-//! Elements: the interface every element type implements ([`Element`]), the one type there is
-//! today ([`tet4::Tet4`]), the mesh built from it ([`mesh::Mesh`]) and point location
+//! Elements: the interface every element type implements ([`Element`]), the types there are
+//! ([`tet4::Tet4`] for 3D models, [`tri3::Tri3`] and [`tri3::Tri3Axi`] for plane-strain and
+//! axisymmetric 2D sections), the mesh built from them ([`mesh::Mesh`]) and point location
 //! ([`locate`]).
 //!
-//! The phases of the step are generic over the element type, so a new element (Tri3 for plane
-//! strain, next) is a new file here, not a change to the kernels. Element data live in 3-vectors
-//! whatever the element's dimension: a 2D element lies in z = 0 with zero z-gradients, so the
-//! kernels' 3D strain and stress give plane strain unchanged (docs/design.md §7.7).
+//! The phases of the step are generic over the element type, so a new element is a new file
+//! here, not a change to the kernels. Element data live in 3-vectors whatever the element's
+//! dimension: a 2D element lies in z = 0 with zero z-gradients, so the kernels' 3D strain and
+//! stress give plane strain unchanged; axisymmetry adds its hoop terms where the kernels ask
+//! [`Element::AXISYMMETRIC`] (docs/design.md §7.7).
 
 pub mod locate;
 pub mod mesh;
 pub mod tet4;
+pub mod tri3;
 
 use std::fmt::Debug;
 
-use mpm_shared::ElementType;
+use mpm_shared::{Dimension, ElementType};
 
 use crate::real::{Real, V3};
+use tet4::Tet4;
+use tri3::{Tri3, Tri3Axi};
 
 /// Values per element node or per element face: `[T; N]` for the element's N.
 pub trait PerNode<T>: Copy + Debug + Send + Sync + AsRef<[T]> + AsMut<[T]> + 'static {}
@@ -47,6 +52,10 @@ pub trait Element: Copy + Debug + Default + Send + Sync + 'static {
     const NODES: usize;
     /// Faces per element.
     const FACES: usize;
+    /// An axisymmetric section (x the radius): the kernels add the hoop strain u_r/r and its
+    /// force, and points carry their mass and volume per radian. Constant, so the terms cost
+    /// nothing where it is false.
+    const AXISYMMETRIC: bool = false;
     /// `[T; NODES]`.
     type Nodes<T: Copy + Debug + Send + Sync + 'static>: PerNode<T>;
     /// `[T; FACES]`.
@@ -54,9 +63,9 @@ pub trait Element: Copy + Debug + Default + Send + Sync + 'static {
     /// The per-element data [`Element::shape`] needs besides the first node's position.
     type Map<R: Real>: Copy + Debug + Send + Sync + 'static;
 
-    /// Whether a model of this element type is computed with this element (its first
-    /// [`Element::NODES`] nodes being the element's nodes in this element's order).
-    fn computes(model: ElementType) -> bool;
+    /// Whether a model of this dimension and element type is computed with this element (its
+    /// first [`Element::NODES`] nodes being the element's nodes in this element's order).
+    fn computes(dimension: Dimension, element: ElementType) -> bool;
     /// Per-node values from a function of the local node index.
     fn nodes<T: Copy + Debug + Send + Sync + 'static>(f: impl FnMut(usize) -> T) -> Self::Nodes<T>;
     /// Per-face values from a function of the face index.
@@ -79,4 +88,42 @@ pub trait Element: Copy + Debug + Default + Send + Sync + 'static {
     fn face_load_points(n: usize, face: usize) -> Vec<usize>;
     /// Point counts [`Element::point_placement`] supports, for messages ("1, 4 or 10").
     fn supported_point_counts() -> &'static str;
+}
+
+/// The element type a model is computed with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ElementKind {
+    /// 4-node tetrahedra (10-node models computed with their corners), 3D.
+    Tet4,
+    /// 3-node triangles in plane strain.
+    Tri3,
+    /// 3-node triangles of an axisymmetric section.
+    Tri3Axi,
+}
+
+impl ElementKind {
+    /// The element for a model's dimension and element type; `None` for a combination no
+    /// engine computes (3D triangles, 2D tetrahedra, cylindrical coordinates).
+    pub fn of(dimension: Dimension, element: ElementType) -> Option<Self> {
+        [ElementKind::Tet4, ElementKind::Tri3, ElementKind::Tri3Axi]
+            .into_iter()
+            .find(|k| k.computes(dimension, element))
+    }
+
+    fn computes(self, dimension: Dimension, element: ElementType) -> bool {
+        match self {
+            ElementKind::Tet4 => Tet4::computes(dimension, element),
+            ElementKind::Tri3 => Tri3::computes(dimension, element),
+            ElementKind::Tri3Axi => Tri3Axi::computes(dimension, element),
+        }
+    }
+
+    /// The element's name in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            ElementKind::Tet4 => Tet4::NAME,
+            ElementKind::Tri3 => Tri3::NAME,
+            ElementKind::Tri3Axi => Tri3Axi::NAME,
+        }
+    }
 }

@@ -1,7 +1,7 @@
 //! The 4-node linear tetrahedron in Anura3D's corner order: N1 = 1 - ξ - η - ζ, N2 = ζ, N3 = ξ,
 //! N4 = η, which are the barycentric coordinates of corners 1-4.
 
-use mpm_shared::ElementType;
+use mpm_shared::{Dimension, ElementType};
 
 use crate::element::{Element, Geometry};
 use crate::real::{Real, V3};
@@ -44,8 +44,9 @@ impl Element for Tet4 {
     /// Rows 2-4 of the barycentric map: `λ(k+2) = map[k] · (x - x1)`, and `λ1 = 1 - λ2 - λ3 - λ4`.
     type Map<R: Real> = [V3<R>; 3];
 
-    fn computes(model: ElementType) -> bool {
-        matches!(model, ElementType::Tet4 | ElementType::Tet10)
+    fn computes(dimension: Dimension, element: ElementType) -> bool {
+        dimension == Dimension::Cartesian3D
+            && matches!(element, ElementType::Tet4 | ElementType::Tet10)
     }
 
     fn nodes<T: Copy + std::fmt::Debug + Send + Sync + 'static>(

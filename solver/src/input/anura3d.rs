@@ -10,7 +10,7 @@ use std::path::Path;
 
 use mpm_shared::cps::{Cps, Method, Multiplier, Settings};
 use mpm_shared::model::{Body, Token};
-use mpm_shared::{ElementType, Model};
+use mpm_shared::{Dimension, Model};
 
 use crate::input::case::{Case, FaceLoad, Integration, LoadCurve, MaterialSpec, QuasiStatic};
 use crate::input::initial_stress::{
@@ -95,11 +95,15 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         log::warn!("{w}");
     }
     let s = cps.settings()?;
-    if model.element_type == ElementType::Tri3 {
+    if crate::element::ElementKind::of(model.dimension, model.element_type).is_none() {
         return Err(unsupported(
             &gfile,
-            "$$ELEMENTTYPE",
-            "2D cases are not supported; the solver computes 3D tetrahedra",
+            "$$DIMENSION",
+            format!(
+                "{} models of {} are not computed (3D-cartesian tetrahedra, 2D-plane_strain and 2D-axisymmetric triangles are)",
+                model.dimension.keyword(),
+                model.element_type.describe()
+            ),
         ));
     }
     let integration = match &s.method {
@@ -784,59 +788,138 @@ fn nodal_velocity(
     }])
 }
 
-/// The loads of `$$START_LOAD_ON_MATERIAL_POINTS_SOLID` rows (3 corners first, then a traction
-/// vector per node): Anura3D takes the traction at the face centroid, the mean of the corner
-/// values, times the face area as the face's total force.
-fn face_loads_on_points(model: &Model, rows: &mpm_shared::model::Table) -> Vec<FaceLoad> {
+/// One row of a face-load table: the loaded face's corner nodes (0-based; three of a
+/// tetrahedron's face, two of a triangle's edge) and the traction (kPa) given at each corner
+/// (z = 0 in 2D). A row lists all the face's nodes (six of a 10-node tetrahedron's face), then a
+/// vector per node; the corners come first.
+struct LoadedFace {
+    corners: Vec<usize>,
+    traction: Vec<[f64; 3]>,
+}
+
+fn loaded_faces(model: &Model, rows: &mpm_shared::model::Table) -> Vec<LoadedFace> {
     let k = model.element_type.face_nodes();
+    let dim = model.dimension.coords();
     rows.rows()
         .map(|r| {
-            let corners = [0, 1, 2].map(|i| r[i].as_int().unwrap_or(1) as usize - 1);
-            let area = crate::input::faces::triangle_area(model, corners);
-            let mut force = [0.0; 3];
-            for c in 0..3 {
-                for (d, f) in force.iter_mut().enumerate() {
-                    *f += area / 3.0 * r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0);
-                }
-            }
-            FaceLoad { corners, force }
+            let corners = (0..dim)
+                .map(|i| r[i].as_int().unwrap_or(1) as usize - 1)
+                .collect();
+            let traction = (0..dim)
+                .map(|c| {
+                    let mut t = [0.0; 3];
+                    for (d, v) in t.iter_mut().enumerate().take(dim) {
+                        *v = r
+                            .get(k + dim * c + d)
+                            .and_then(Token::as_f64)
+                            .unwrap_or(0.0);
+                    }
+                    t
+                })
+                .collect();
+            LoadedFace { corners, traction }
         })
         .collect()
 }
 
-/// Adds the nodal forces of `$$START_LOAD_ON_NODES_SOLID` (or `_LIQUID`) rows: per loaded face
-/// the node ids (3 corners first) and a traction vector per node; the corner tractions are
-/// interpolated linearly over the face and integrated exactly: F_a = A/12 (2 t_a + t_b + t_c).
-/// For the liquid (`normal`), Anura3D applies the load normal to the face: each component is
-/// multiplied by that of the face's outward unit normal, so negative values push into the body.
+/// The radius of model node `n` in an axisymmetric model (its x), 1 otherwise: Anura3D's loads
+/// on an axisymmetric section are per radian.
+fn radius(model: &Model, n: usize) -> f64 {
+    if model.dimension == Dimension::Axisymmetric {
+        model.node(n)[0]
+    } else {
+        1.0
+    }
+}
+
+/// The loads of `$$START_LOAD_ON_MATERIAL_POINTS_SOLID` rows: Anura3D takes the traction at the
+/// face's centroid (one Gauss point), the mean of the corner values (times the radius in an
+/// axisymmetric section), times the face's area (an edge's length in 2D) as the face's total
+/// force.
+fn face_loads_on_points(model: &Model, rows: &mpm_shared::model::Table) -> Vec<FaceLoad> {
+    loaded_faces(model, rows)
+        .into_iter()
+        .map(|f| {
+            let size = crate::input::faces::size(model, &f.corners);
+            let n = f.corners.len() as f64;
+            let mut force = [0.0; 3];
+            for (&c, t) in f.corners.iter().zip(&f.traction) {
+                for (d, v) in force.iter_mut().enumerate() {
+                    *v += size / n * t[d] * radius(model, c);
+                }
+            }
+            FaceLoad {
+                corners: f.corners,
+                force,
+            }
+        })
+        .collect()
+}
+
+/// Adds the nodal forces of `$$START_LOAD_ON_NODES_SOLID` (or `_LIQUID`) rows.
+///
+/// 3D: the corner tractions are interpolated linearly over the face and integrated exactly:
+/// F_a = A/12 (2 t_a + t_b + t_c). For the liquid (`normal`), Anura3D applies the load normal
+/// to the face: each component is multiplied by that of the face's outward unit normal, so
+/// negative values push into the body.
+///
+/// 2D: Anura3D integrates an edge with one Gauss point at its middle, so each of its two nodes
+/// takes half the edge's force, L/2 (t_a + t_b)/2 (in an axisymmetric section the traction
+/// times the node's radius, and when a node lies on the axis 7/8 of that half moves to the other
+/// node, as Anura3D does). For the liquid the first component of each node's value is a
+/// pressure, applied along the edge's outward normal.
 fn add_nodal_face_loads(
     model: &Model,
     rows: &mpm_shared::model::Table,
     normal: bool,
     out: &mut [[f64; 3]],
 ) -> Result<(), String> {
-    let k = model.element_type.face_nodes();
-    let faces: Vec<[usize; 3]> = rows
-        .rows()
-        .map(|r| [0, 1, 2].map(|i| r[i].as_int().unwrap_or(1) as usize - 1))
-        .collect();
+    let faces = loaded_faces(model, rows);
+    let corners: Vec<Vec<usize>> = faces.iter().map(|f| f.corners.clone()).collect();
     let normals = if normal {
-        crate::input::faces::outward_normals(model, &faces)?
+        crate::input::faces::outward_normals(model, &corners)?
     } else {
         vec![[1.0; 3]; faces.len()]
     };
-    for ((r, ids), n) in rows.rows().zip(&faces).zip(&normals) {
-        let t: Vec<[f64; 3]> = (0..3)
-            .map(|c| {
-                [0, 1, 2]
-                    .map(|d| n[d] * r.get(k + 3 * c + d).and_then(Token::as_f64).unwrap_or(0.0))
-            })
+    for (f, n) in faces.iter().zip(&normals) {
+        let size = crate::input::faces::size(model, &f.corners);
+        if let [a, b] = f.corners[..] {
+            let t: Vec<[f64; 3]> = f
+                .traction
+                .iter()
+                .map(|t| if normal { n.map(|c| c * t[0]) } else { *t })
+                .collect();
+            let (ra, rb) = (radius(model, a), radius(model, b));
+            let mut half = [0.0; 3];
+            for (d, h) in half.iter_mut().enumerate() {
+                *h = size / 2.0 * (t[0][d] * ra + t[1][d] * rb) / 2.0;
+            }
+            let on_axis = model.dimension == Dimension::Axisymmetric
+                && (ra < f64::MIN_POSITIVE || rb < f64::MIN_POSITIVE);
+            for (node, r) in [(a, ra), (b, rb)] {
+                for d in 0..3 {
+                    let shift = if !on_axis {
+                        0.0
+                    } else if r < f64::MIN_POSITIVE {
+                        -7.0 / 8.0 * half[d]
+                    } else {
+                        7.0 / 8.0 * half[d]
+                    };
+                    out[node][d] += half[d] + shift;
+                }
+            }
+            continue;
+        }
+        let t: Vec<[f64; 3]> = f
+            .traction
+            .iter()
+            .map(|t| [0, 1, 2].map(|d| n[d] * t[d]))
             .collect();
-        let area = crate::input::faces::triangle_area(model, *ids);
+        let ids = &f.corners;
         for i in 0..3 {
             let (j, l) = ((i + 1) % 3, (i + 2) % 3);
             for d in 0..3 {
-                out[ids[i]][d] += area / 12.0 * (2.0 * t[i][d] + t[j][d] + t[l][d]);
+                out[ids[i]][d] += size / 12.0 * (2.0 * t[i][d] + t[j][d] + t[l][d]);
             }
         }
     }

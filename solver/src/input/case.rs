@@ -155,8 +155,9 @@ fn check_porosity(n: f64) -> Result<(), MaterialError> {
 /// points of the adjacent filled element(s) that lie nearest the face, and moves with them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FaceLoad {
-    /// Corner nodes of the face (0-based model node ids).
-    pub corners: [usize; 3],
+    /// Corner nodes of the face (0-based model node ids): three for a tetrahedron's face, two
+    /// for a triangle's edge.
+    pub corners: Vec<usize>,
     /// Total force on the face (kN) at multiplier 1.
     pub force: [f64; 3],
 }
@@ -517,7 +518,9 @@ impl Case {
         self.traction = by_node(&self.traction, &o.node_new);
         self.liquid_traction = by_node(&self.liquid_traction, &o.node_new);
         for load in &mut self.point_loads {
-            load.corners = load.corners.map(|n| o.node_new[n] as usize);
+            for n in load.corners.iter_mut() {
+                *n = o.node_new[*n] as usize;
+            }
         }
         if let Some(pv) = self.prescribed.take() {
             let mut new_of_old = vec![0u32; o.order.len()];

@@ -1,5 +1,5 @@
-//! Geometry of a model's boundary faces (triangles given by their corner nodes), shared by
-//! both input routes' face loads.
+//! Geometry of a model's boundary faces (triangles given by their corner nodes in 3D, edges
+//! by their two end nodes in 2D), shared by both input routes' face loads.
 
 use mpm_shared::Model;
 
@@ -16,9 +16,75 @@ pub fn triangle_area(model: &Model, n: [usize; 3]) -> f64 {
     0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
 }
 
-/// Outward unit normals of boundary faces given by their corner nodes: each face is found in
-/// the element that has it, and oriented away from that element's fourth corner.
-pub fn outward_normals(model: &Model, faces: &[[usize; 3]]) -> Result<Vec<[f64; 3]>, String> {
+/// Length of the edge between model nodes `a` and `b` (0-based) of a 2D model.
+pub fn edge_length(model: &Model, a: usize, b: usize) -> f64 {
+    let (p, q) = (model.node(a), model.node(b));
+    ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt()
+}
+
+/// Area of a 3D face (three corners) or length of a 2D edge (two ends).
+pub fn size(model: &Model, corners: &[usize]) -> f64 {
+    match *corners {
+        [a, b] => edge_length(model, a, b),
+        [a, b, c] => triangle_area(model, [a, b, c]),
+        _ => 0.0,
+    }
+}
+
+/// Outward unit normals of boundary faces given by their corner nodes (three in 3D, two in
+/// 2D): each face is found in the element that has it, and oriented away from that element's
+/// other corner (z = 0 in 2D).
+pub fn outward_normals(model: &Model, faces: &[Vec<usize>]) -> Result<Vec<[f64; 3]>, String> {
+    if model.dimension.coords() == 2 {
+        let edges: Vec<[usize; 2]> = faces.iter().map(|f| [f[0], f[1]]).collect();
+        return outward_edge_normals(model, &edges);
+    }
+    let faces: Vec<[usize; 3]> = faces.iter().map(|f| [f[0], f[1], f[2]]).collect();
+    outward_face_normals(model, &faces)
+}
+
+/// Outward unit normals of the boundary edges of a 2D model, each oriented away from the
+/// third corner of the (first) triangle that has it.
+fn outward_edge_normals(model: &Model, edges: &[[usize; 2]]) -> Result<Vec<[f64; 3]>, String> {
+    let key = |e: [usize; 2]| [e[0].min(e[1]), e[0].max(e[1])];
+    let mut opposite: std::collections::HashMap<[usize; 2], Option<usize>> =
+        edges.iter().map(|&e| (key(e), None)).collect();
+    for e in 0..model.element_count() {
+        let c = &model.element(e)[..3];
+        for skip in 0..3 {
+            let (a, b) = (c[(skip + 1) % 3] as usize, c[(skip + 2) % 3] as usize);
+            // An edge between two elements takes the first's side, as Anura3D does (checked
+            // against it on an edge inside a filled column).
+            if let Some(slot @ None) = opposite.get_mut(&key([a, b])) {
+                *slot = Some(c[skip] as usize);
+            }
+        }
+    }
+    edges
+        .iter()
+        .map(|&[a, b]| {
+            let inner = opposite[&key([a, b])].ok_or_else(|| {
+                format!(
+                    "the loaded edge between nodes {} and {} is not an edge of any element",
+                    a + 1,
+                    b + 1
+                )
+            })?;
+            let (p, q, o) = (model.node(a), model.node(b), model.node(inner));
+            let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+            let len = (dx * dx + dy * dy).sqrt();
+            let mut n = [dy / len, -dx / len, 0.0];
+            if n[0] * (o[0] - p[0]) + n[1] * (o[1] - p[1]) > 0.0 {
+                n = [-n[0], -n[1], 0.0];
+            }
+            Ok(n)
+        })
+        .collect()
+}
+
+/// Outward unit normals of the boundary faces of a 3D model, each oriented away from the
+/// fourth corner of the tetrahedron that has it.
+fn outward_face_normals(model: &Model, faces: &[[usize; 3]]) -> Result<Vec<[f64; 3]>, String> {
     let key = |f: [usize; 3]| {
         let mut k = f;
         k.sort_unstable();

@@ -140,8 +140,9 @@ impl K0Procedure {
 
 impl InitialStress {
     /// The initial state of a point of material `material` whose element has the corner
-    /// coordinates `corners` (`None`: the material starts unstressed).
-    pub fn at(&self, material: usize, corners: [[f64; 3]; 4]) -> Option<PointStart> {
+    /// coordinates `corners` (four of a tetrahedron, three of a triangle; `None`: the material
+    /// starts unstressed).
+    pub fn at(&self, material: usize, corners: &[[f64; 3]]) -> Option<PointStart> {
         match self.materials.get(material)?.as_ref()? {
             MaterialStart::Uniform(s) => Some(PointStart {
                 stress: *s,
@@ -161,13 +162,20 @@ impl InitialStress {
     }
 }
 
-/// The Gauss point of a linear tetrahedron (its centroid), summed corner by corner as Anura3D
-/// does.
-pub fn gauss_point(corners: [[f64; 3]; 4]) -> [f64; 3] {
+/// The Gauss point of a linear tetrahedron or triangle (its centroid), summed corner by corner
+/// with Anura3D's shape values there (for a triangle its local coordinates 0.33333333333333, as
+/// its source writes them).
+pub fn gauss_point(corners: &[[f64; 3]]) -> [f64; 3] {
+    const THIRD: f64 = 0.333_333_333_333_33;
+    let weight = |k: usize| match corners.len() {
+        3 if k == 0 => 1.0 - THIRD - THIRD,
+        3 => THIRD,
+        n => 1.0 / n as f64,
+    };
     let mut c = [0.0; 3];
-    for p in corners {
+    for (k, p) in corners.iter().enumerate() {
         for d in 0..3 {
-            c[d] += 0.25 * p[d];
+            c[d] += weight(k) * p[d];
         }
     }
     c
@@ -332,12 +340,12 @@ mod tests {
             [0.0, 1.0, 0.0],
             [0.0, 0.0, 1.0],
         ];
-        assert_eq!(gauss_point(tet), [0.25, 0.25, 0.25]);
+        assert_eq!(gauss_point(&tet), [0.25, 0.25, 0.25]);
         // Centroid 0.75 below the surface: σ'yy = -15.
-        assert_eq!(init.at(1, tet).unwrap().stress[1], -15.0);
-        assert_eq!(init.at(2, tet).unwrap().stress[0], -100.0);
-        assert_eq!(init.at(3, tet), None);
-        assert_eq!(init.at(9, tet), None);
+        assert_eq!(init.at(1, &tet).unwrap().stress[1], -15.0);
+        assert_eq!(init.at(2, &tet).unwrap().stress[0], -100.0);
+        assert_eq!(init.at(3, &tet), None);
+        assert_eq!(init.at(9, &tet), None);
         assert!(!init.is_empty());
     }
 }

@@ -158,8 +158,20 @@ pub enum PlanError {
 /// Predicts what running `case` on `threads` threads will cost. Errors where the mesh or time
 /// step is unusable (inverted elements, no stiffness).
 pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
-    let mesh = case.mesh::<crate::element::tet4::Tet4, f64>()?;
-    let dt = crate::input::time_step::critical(case, 0..mesh.elements(), |e| mesh.min_altitude[e])?;
+    use crate::element::{tet4::Tet4, tri3::Tri3, tri3::Tri3Axi, ElementKind};
+    // What the plan needs of the mesh: its computational nodes and the elements' altitudes.
+    fn sizes<E: crate::element::Element>(
+        case: &Case,
+    ) -> Result<(usize, Vec<f64>), crate::element::mesh::MeshError> {
+        let mesh = case.mesh::<E, f64>()?;
+        Ok((mesh.nodes(), mesh.min_altitude))
+    }
+    let (nodes, altitude) = match ElementKind::of(case.model.dimension, case.model.element_type) {
+        Some(ElementKind::Tri3) => sizes::<Tri3>(case)?,
+        Some(ElementKind::Tri3Axi) => sizes::<Tri3Axi>(case)?,
+        _ => sizes::<Tet4>(case)?,
+    };
+    let dt = crate::input::time_step::critical(case, 0..altitude.len(), |e| altitude[e])?;
     let points: u64 = case
         .points_per_element
         .iter()
@@ -189,7 +201,7 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
     let per_output =
         points as f64 * per_point + VTU_FILE_BYTES + case.probes.len() as f64 * HISTORY_ROW_BYTES;
     let corners = case.model.element_type.nodes() as f64;
-    let mesh_file = mesh.nodes() as f64 * 24.0
+    let mesh_file = nodes as f64 * 24.0
         + case.model.element_count() as f64 * (corners * 8.0 + 9.0)
         + VTU_FILE_BYTES;
     let output_bytes = outputs as f64 * per_output + mesh_file;
@@ -198,8 +210,8 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
     let node_bytes = if two_phase { 32.0 } else { 16.0 } * real + 24.0 + 6.0;
     let element_bytes = (3.0 * 3.0 + 4.0 * 3.0 + 2.0) * real + 4.0 * 4.0 * 2.0;
     let memory_bytes = points as f64 * point_bytes
-        + mesh.nodes() as f64 * node_bytes
-        + mesh.elements() as f64 * element_bytes;
+        + nodes as f64 * node_bytes
+        + altitude.len() as f64 * element_bytes;
     let threads = threads.max(1);
     let rate = rate(threads, two_phase, case.precision);
     let wall_seconds = steps * (points as f64 / rate + STEP_OVERHEAD);

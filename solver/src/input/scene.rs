@@ -753,8 +753,11 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         };
         // Only a pressure needs the faces' normals.
         let outward = if input.pressure.is_some() {
-            let corners: Vec<[usize; 3]> =
-                input.faces.iter().map(|f| f.map(|n| n as usize)).collect();
+            let corners: Vec<Vec<usize>> = input
+                .faces
+                .iter()
+                .map(|f| f.iter().map(|&n| n as usize).collect())
+                .collect();
             crate::input::faces::outward_normals(&model, &corners)
                 .map_err(|m| invalid(item(), format!("{m} in {mesh_name}")))?
         } else {

@@ -10,6 +10,7 @@
 use mpm_shared::bms::{Bms, MaterialPointRecord};
 
 use crate::driver::engine::Engine;
+use crate::element::Element;
 use crate::real::Real;
 
 /// The compared columns of the `.BMS`, in the order of [`values_of`].
@@ -87,7 +88,7 @@ impl Comparison {
 
 /// Compares the final state of `engine` with the points `expected` reports at its last load
 /// step.
-pub fn compare<R: Real>(engine: &Engine<R>, expected: &Bms) -> Comparison {
+pub fn compare<R: Real, E: Element>(engine: &Engine<R, E>, expected: &Bms) -> Comparison {
     let records = expected.records();
     let last = records.iter().map(|r| r.load_step).max().unwrap_or(0);
     let rows: Vec<&MaterialPointRecord> = records.iter().filter(|r| r.load_step == last).collect();

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use crate::driver::engine::Engine;
 use crate::driver::run::{run_with, Both, RunError, RunOptions, Unobserved};
+use crate::element::Element;
 use crate::input::case::Case;
 use crate::jobs::terzaghi;
 use crate::material::liquid::LiquidSpec;
@@ -156,7 +157,7 @@ pub const ISOCHRONES: [f64; 5] = [0.05, 0.1, 0.2, 0.5, 1.0];
 
 impl Tracker {
     /// Starts tracking `engine` (call after any initial state is applied).
-    pub fn new<R: Real>(engine: &Engine<R>, layer: Layer, start: Start) -> Self {
+    pub fn new<R: Real, E: Element>(engine: &Engine<R, E>, layer: Layer, start: Start) -> Self {
         let p = &engine.particles;
         let volume0 = (0..p.len())
             .filter(|&i| engine.fluids[p.material[i] as usize].is_some())
@@ -176,7 +177,7 @@ impl Tracker {
     }
 
     /// Records the state at the engine's current time.
-    pub fn record<R: Real>(&mut self, engine: &Engine<R>) {
+    pub fn record<R: Real, E: Element>(&mut self, engine: &Engine<R, E>) {
         let l = &self.layer;
         let p = &engine.particles;
         let tv = l.tv(engine.time);
@@ -265,13 +266,13 @@ struct Observer {
     tracker: Option<Tracker>,
 }
 
-impl<R: Real> crate::driver::run::Observer<R> for Observer {
-    fn on_start(&mut self, engine: &Engine<R>) -> Result<(), RunError> {
+impl<R: Real, E: Element> crate::driver::run::Observer<R, E> for Observer {
+    fn on_start(&mut self, engine: &Engine<R, E>) -> Result<(), RunError> {
         self.tracker = Some(Tracker::new(engine, self.layer, self.start));
         Ok(())
     }
 
-    fn on_output(&mut self, engine: &Engine<R>) {
+    fn on_output(&mut self, engine: &Engine<R, E>) {
         if let Some(t) = &mut self.tracker {
             t.record(engine);
         }
@@ -342,21 +343,21 @@ impl<R: Real> crate::driver::run::Observer<R> for Observer {
 
 /// Runs the consolidation case `case` into `dir`: its final engine and the record of every
 /// output time against Terzaghi.
-pub fn run_tracked<R: Real>(
+pub fn run_tracked<R: Real, E: Element>(
     case: &Case,
     dir: &Path,
     options: &RunOptions,
-) -> Result<(Engine<R>, Tracker), RunError> {
+) -> Result<(Engine<R, E>, Tracker), RunError> {
     run_tracked_with(case, dir, options, &mut Unobserved)
 }
 
 /// [`run_tracked`], telling `watch` too (e.g. a progress reporter).
-pub fn run_tracked_with<R: Real>(
+pub fn run_tracked_with<R: Real, E: Element>(
     case: &Case,
     dir: &Path,
     options: &RunOptions,
-    watch: &mut dyn crate::driver::run::Observer<R>,
-) -> Result<(Engine<R>, Tracker), RunError> {
+    watch: &mut dyn crate::driver::run::Observer<R, E>,
+) -> Result<(Engine<R, E>, Tracker), RunError> {
     let spec = case
         .consolidation
         .ok_or_else(|| RunError::Job(Box::new(LayerError::NoTable)))?;
@@ -370,28 +371,32 @@ pub fn run_tracked_with<R: Real>(
     Ok((engine, tracker))
 }
 
+/// What a consolidation job leaves: the engine at the end, the default run's tracker and the
+/// workshop twin's, when it has one.
+pub type JobOutcome<R, E> = (Engine<R, E>, Tracker, Option<Tracker>);
+
 /// Runs a consolidation case into `dir` (and, with `compare_rest`, its workshop-style twin
 /// into `dir/workshop`), then writes `consolidation.csv` and `consolidation.png` into `dir`.
 /// Returns the default run's engine and both records.
-pub fn run_job<R: Real>(
+pub fn run_job<R: Real, E: Element>(
     case: &Case,
     dir: &Path,
     options: &RunOptions,
-) -> Result<(Engine<R>, Tracker, Option<Tracker>), RunError> {
+) -> Result<JobOutcome<R, E>, RunError> {
     run_job_with(case, dir, options, &mut Unobserved)
 }
 
 /// [`run_job`], telling `watch` about both runs.
-pub fn run_job_with<R: Real>(
+pub fn run_job_with<R: Real, E: Element>(
     case: &Case,
     dir: &Path,
     options: &RunOptions,
-    watch: &mut dyn crate::driver::run::Observer<R>,
-) -> Result<(Engine<R>, Tracker, Option<Tracker>), RunError> {
+    watch: &mut dyn crate::driver::run::Observer<R, E>,
+) -> Result<JobOutcome<R, E>, RunError> {
     let spec = case
         .consolidation
         .ok_or_else(|| RunError::Job(Box::new(LayerError::NoTable)))?;
-    let (engine, tracker) = run_tracked_with::<R>(case, dir, options, watch)?;
+    let (engine, tracker) = run_tracked_with::<R, E>(case, dir, options, watch)?;
     let workshop = if spec.compare_rest && spec.start != Start::Rest {
         let mut twin = case.clone();
         twin.consolidation = Some(ConsolidationSpec {
@@ -400,7 +405,7 @@ pub fn run_job_with<R: Real>(
             ..spec
         });
         twin.initial_state = None;
-        let (_, t) = run_tracked_with::<R>(&twin, &dir.join("workshop"), options, watch)?;
+        let (_, t) = run_tracked_with::<R, E>(&twin, &dir.join("workshop"), options, watch)?;
         Some(t)
     } else {
         None
