@@ -29,6 +29,7 @@ use mpm_solve::driver::run::{run, RunError};
 use mpm_solve::element::Element;
 use mpm_solve::input::anura3d::CaseError;
 use mpm_solve::input::anura3d_keys::{self, KeyKind};
+use mpm_solve::input::case::Drag;
 use mpm_solve::jobs::anura3d_compare::{compare, Comparison};
 use mpm_solve::real::Real;
 
@@ -432,14 +433,6 @@ fn evaluate(
         }
         Ok(Ok((case, _))) => case,
     };
-    // The run.
-    let tmp = match tempfile::tempdir() {
-        Ok(t) => t,
-        Err(e) => {
-            row.status = Status::Failed(cell(&format!("temporary folder: {e}")));
-            return row;
-        }
-    };
     // The run, with the case's own element type; the comparison while the engine is at hand.
     struct RunAndCompare<'a> {
         case: &'a mpm_solve::input::case::Case,
@@ -454,30 +447,38 @@ fn evaluate(
             Ok((engine.steps, engine.time, c))
         }
     }
-    let ran = catch_unwind(AssertUnwindSafe(|| {
-        dispatch(
-            &case,
-            RunAndCompare {
-                case: &case,
-                dir: tmp.path(),
-                expected: expected.as_ref(),
-            },
-        )
-    }));
-    let (steps, time, comparison) = match ran {
-        Err(p) => {
-            row.status = Status::Failed(cell(&format!("panic: {}", panic_message(p))));
+    let run_with = |case: &mpm_solve::input::case::Case| {
+        let tmp = tempfile::tempdir().map_err(|e| cell(&format!("temporary folder: {e}")))?;
+        let ran = catch_unwind(AssertUnwindSafe(|| {
+            dispatch(
+                case,
+                RunAndCompare {
+                    case,
+                    dir: tmp.path(),
+                    expected: expected.as_ref(),
+                },
+            )
+        }));
+        match ran {
+            Err(p) => Err(cell(&format!("panic: {}", panic_message(p)))),
+            Ok(Err(e)) => Err(clean(&e.to_string(), root, &input.dir)),
+            Ok(Ok(Err(e))) => Err(clean(&e.to_string(), root, &input.dir)),
+            Ok(Ok(Ok(r))) => Ok(r),
+        }
+    };
+    // Two-phase cases are judged with Anura3D's own drag discretisation (explicit); the
+    // default implicit drag's deviation is noted beside it.
+    let two_phase = case.has_liquid();
+    let mut judged = case.clone();
+    if two_phase {
+        judged.drag = Drag::Explicit;
+    }
+    let (steps, time, comparison) = match run_with(&judged) {
+        Ok(r) => r,
+        Err(message) => {
+            row.status = Status::Failed(message);
             return row;
         }
-        Ok(Err(e)) => {
-            row.status = Status::Failed(clean(&e.to_string(), root, &input.dir));
-            return row;
-        }
-        Ok(Ok(Err(e))) => {
-            row.status = Status::Failed(clean(&e.to_string(), root, &input.dir));
-            return row;
-        }
-        Ok(Ok(Ok(r))) => r,
     };
     row.status = match comparison {
         None => Status::Ran(format!(
@@ -485,6 +486,17 @@ fn evaluate(
         )),
         Some(c) => judge(&c),
     };
+    if let (true, Status::Reproduced(s) | Status::Differs(s)) = (two_phase, &mut row.status) {
+        let implicit = match run_with(&case) {
+            Ok((_, _, Some(c))) => format!("{:.3} %", 100.0 * c.worst),
+            Ok(_) => "not compared".into(),
+            Err(m) => format!("failed: {m}"),
+        };
+        let _ = write!(
+            s,
+            "; with --drag explicit (the default implicit drag: worst {implicit})"
+        );
+    }
     row
 }
 

@@ -170,6 +170,7 @@ impl Fingerprint {
             initial_step,
             smooth_pressure,
             fixed_liquid_mass,
+            hoop_in_volume,
             strain_smoothing,
             consolidation,
             initial_state,
@@ -182,7 +183,7 @@ impl Fingerprint {
             precision,
         } = case;
         let version = env!("CARGO_PKG_VERSION");
-        let items: [(&str, &dyn std::fmt::Debug); 45] = [
+        let items: [(&str, &dyn std::fmt::Debug); 46] = [
             ("solver version", &version),
             ("case name", name),
             ("input files", inputs),
@@ -219,6 +220,7 @@ impl Fingerprint {
             ("initial step", initial_step),
             ("pore-pressure smoothing", smooth_pressure),
             ("fixed liquid mass", fixed_liquid_mass),
+            ("hoop strain in the volume", hoop_in_volume),
             ("strain smoothing", strain_smoothing),
             ("consolidation job", consolidation),
             ("initial state", initial_state),

@@ -67,6 +67,9 @@ pub enum SetupError {
     /// Every element is empty.
     #[error("the case has no material points (every element is empty)")]
     NoPoints,
+    /// A feature that axisymmetric sections do not model.
+    #[error("{0} is not modelled for axisymmetric sections; they run with material-point integration (MPM-MP) and without strain smoothing")]
+    Axisymmetric(&'static str),
     /// The critical time step is not usable.
     #[error(transparent)]
     TimeStep(#[from] crate::input::time_step::TimeStepError),
@@ -130,6 +133,8 @@ pub struct StepConfig {
     pub objective_stress: bool,
     /// Share of PIC in the points' velocity update (0: FLIP).
     pub pic_blend: f64,
+    /// Axisymmetric sections: the hoop strain changes the points' volume.
+    pub hoop_in_volume: bool,
 }
 
 impl StepConfig {
@@ -147,6 +152,7 @@ impl StepConfig {
             smooth_pressure: case.smooth_pressure,
             objective_stress: case.objective_stress,
             pic_blend: case.pic_blend,
+            hoop_in_volume: case.hoop_in_volume,
         }
     }
 }
@@ -286,6 +292,19 @@ impl<R: Real, E: Element> Engine<R, E> {
         options: Options,
         comm: Box<dyn Communicator>,
     ) -> Result<Self, SetupError> {
+        if E::AXISYMMETRIC {
+            // Both average over an element, where the radius weighting of an axisymmetric
+            // section would enter (Anura3D's own MPM-MIXED integrates such an element at its
+            // first point): not modelled.
+            if matches!(case.integration, Integration::Mixed { .. }) {
+                return Err(SetupError::Axisymmetric(
+                    "mixed integration (MPM-MIXED, Gauss points in full elements)",
+                ));
+            }
+            if case.strain_smoothing {
+                return Err(SetupError::Axisymmetric("strain smoothing"));
+            }
+        }
         let team = Team::new(options.threads, options.pin)?;
         let global = case.mesh::<E, R>()?;
         if comm.ranks() > 1 {
@@ -847,6 +866,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             &self.grid,
             &self.laws,
             case.objective_stress,
+            case.hoop_in_volume,
             self.smoothing.as_ref(),
             R::of(dt),
             self.guards.enabled.then_some(Guard {

@@ -55,6 +55,14 @@ pub enum MeshError {
     /// No elements.
     #[error("the mesh has no elements")]
     Empty,
+    /// A node of an axisymmetric section on the negative side of the axis (x < 0).
+    #[error("node {node} lies at x = {x}: an axisymmetric section has its axis at x = 0 and its nodes at x ≥ 0")]
+    NegativeRadius {
+        /// 1-based model node id.
+        node: usize,
+        /// Its x coordinate.
+        x: f64,
+    },
     /// A degenerate or inverted element.
     #[error("element {element} is inverted or flat (volume {volume:e})")]
     BadElement {
@@ -102,6 +110,20 @@ impl<E: Element, R: Real> Mesh<E, R> {
             for a in 0..3 {
                 origin[a] = origin[a].min(p.get(a).copied().unwrap_or(0.0));
             }
+        }
+        if E::AXISYMMETRIC {
+            // The kernels divide by the radius: it stays the coordinate itself (the axis at
+            // x = 0), and no node may lie on the other side of the axis.
+            if let Some(&m) = model_node
+                .iter()
+                .find(|&&m| model.node(m as usize)[0] < 0.0)
+            {
+                return Err(MeshError::NegativeRadius {
+                    node: m as usize + 1,
+                    x: model.node(m as usize)[0],
+                });
+            }
+            origin[0] = 0.0;
         }
         let xf: Vec<[f64; 3]> = model_node
             .iter()

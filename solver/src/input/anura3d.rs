@@ -428,6 +428,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         initial_step: Some(ANURA3D_FIRST_STEP),
         smooth_pressure: false,
         fixed_liquid_mass: true,
+        hoop_in_volume: false,
         strain_smoothing: cps.get("STRAIN_SMOOTHING").is_some_and(|e| {
             e.lines
                 .first()

@@ -300,6 +300,11 @@ pub struct Case {
     /// Keep each point's liquid mass (and its weight and drag) at that of its initial volume,
     /// as Anura3D does; otherwise it follows the point's volume (n ρw V at constant porosity).
     pub fixed_liquid_mass: bool,
+    /// In an axisymmetric section, whether the hoop strain changes the points' volume. It does
+    /// (scenes); Anura3D's weight update sums only the in-plane normal strains (its loop runs
+    /// over the two vector components though its comment asks for three), so GOM input leaves
+    /// the hoop strain out of the volume as Anura3D does. No effect in plane strain and 3D.
+    pub hoop_in_volume: bool,
     /// Anura3D's strain smoothing (`$$STRAIN_SMOOTHING 1`): the volumetric strain increments of
     /// both phases averaged element → node → element, material by material
     /// ([`crate::step::smoothing`]); it replaces `smooth_pressure` when on.
@@ -632,6 +637,7 @@ impl Case {
             smooth_pressure: true,
             strain_smoothing: false,
             fixed_liquid_mass: false,
+            hoop_in_volume: true,
             consolidation: None,
             initial_state: None,
             initial_stress: None,

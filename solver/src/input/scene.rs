@@ -957,6 +957,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         smooth_pressure: true,
         strain_smoothing: scene.strain_smoothing,
         fixed_liquid_mass: false,
+        hoop_in_volume: true,
         consolidation,
         initial_state,
         initial_stress,

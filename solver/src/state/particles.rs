@@ -352,7 +352,10 @@ pub fn place<E: Element, R: Real>(
                     x[a] += R::of(l) * xk[a];
                 }
             }
-            let vol = mesh.volume[e].f64() / n as f64;
+            // An axisymmetric section's points hold their volume and mass per radian: the
+            // area's share times the radius (the axis is at x = 0), as Anura3D does.
+            let per_radian = if E::AXISYMMETRIC { x[0].f64() } else { 1.0 };
+            let vol = mesh.volume[e].f64() / n as f64 * per_radian;
             p.x.push(x);
             p.u.push([R::ZERO; 3]);
             p.v.push([R::ZERO; 3]);

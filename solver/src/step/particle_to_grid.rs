@@ -134,6 +134,13 @@ pub fn particle_to_grid<E: Element, R: Real>(
                 s[1] += vp;
                 s[2] += vp;
             }
+            // An axisymmetric section's hoop stress pulls each node towards the axis:
+            // f_r -= V σ_θθ N / r (x the radius; V per radian).
+            let hoop = if E::AXISYMMETRIC {
+                s[2] / x[i][0]
+            } else {
+                R::ZERO
+            };
             for (k, slot) in four.iter_mut().enumerate() {
                 let w = m * n[k];
                 let f = traction(&s, &grad[k]);
@@ -142,6 +149,9 @@ pub fn particle_to_grid<E: Element, R: Real>(
                     slot[1 + a] += w * v[a];
                     slot[4 + a] -= f[a];
                     slot[7 + a] += w * gravity[a];
+                }
+                if E::AXISYMMETRIC {
+                    slot[4] -= hoop * n[k];
                 }
             }
         }
@@ -236,6 +246,12 @@ pub fn liquid_to_grid<E: Element, R: Real>(
             let mw = f.rho_w * vw;
             let pw = if full { R::ZERO } else { lp.p[i] * vol };
             let w = lp.w[i];
+            // The pore pressure's hoop force, as the solid's (axisymmetric sections).
+            let hoop = if E::AXISYMMETRIC {
+                pw / p.x[i][0]
+            } else {
+                R::ZERO
+            };
             for (k, slot) in four.iter_mut().enumerate() {
                 let nk = n[k];
                 slot[0] += mw * nk;
@@ -245,6 +261,9 @@ pub fn liquid_to_grid<E: Element, R: Real>(
                     slot[3 + a] += mw * nk * w[a];
                     slot[6 + a] += mw * nk * gravity[a] - pw * grad[k][a];
                     slot[9 + a] += f.n * mw * nk * gravity[a];
+                }
+                if E::AXISYMMETRIC {
+                    slot[6] -= hoop * nk;
                 }
             }
         }

@@ -15,7 +15,8 @@ use crate::step::smoothing::StrainSmoothing;
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
 /// the rotation Δω σ - σ Δω with Δω = skew(L) Δt and -tr(Δε) σ); V *= 1 + tr Δε; x += Δt Σ N_n v_n. With `smoothing`, the
 /// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
-/// increment ([`crate::step::smoothing`]). Each thread updates the particles of its elements.
+/// increment ([`crate::step::smoothing`]). In an axisymmetric section (x the radius) Δε_zz is
+/// the hoop increment Δt Σ N_n v_n,x / x, and `hoop_in_volume` says whether it changes V. Each thread updates the particles of its elements.
 ///
 /// With `guard`, the [`GuardSums`] of the active points of each block of
 /// [`ELEMENT_BLOCK`] elements are completed in its slot, point by point in order (strain-energy
@@ -31,6 +32,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     g: &Grid<R>,
     laws: &[Law<R>],
     objective: bool,
+    hoop_in_volume: bool,
     smoothing: Option<&StrainSmoothing<R>>,
     dt: R,
     guard: Option<Guard<'_, R>>,
@@ -111,10 +113,16 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     }
                 }
             }
+            // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the radius).
+            let hoop = if E::AXISYMMETRIC {
+                dx[0] / x[j][0]
+            } else {
+                l[2][2]
+            };
             let mut de = [
                 l[0][0] * dt,
                 l[1][1] * dt,
-                l[2][2] * dt,
+                hoop * dt,
                 half * (l[0][1] + l[1][0]) * dt,
                 half * (l[1][2] + l[2][1]) * dt,
                 half * (l[2][0] + l[0][2]) * dt,
@@ -151,7 +159,14 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 }
             }
             let v0 = volume[j];
-            volume[j] *= R::ONE + de[0] + de[1] + de[2];
+            // The hoop strain changes an axisymmetric point's volume unless the case follows
+            // Anura3D, which leaves it out ([`crate::input::case::Case::hoop_in_volume`]).
+            let de_zz = if E::AXISYMMETRIC && !hoop_in_volume {
+                R::ZERO
+            } else {
+                de[2]
+            };
+            volume[j] *= R::ONE + de[0] + de[1] + de_zz;
             for a in 0..3 {
                 x[j][a] += dt * dx[a];
                 u[j][a] += dt * dx[a];
@@ -318,8 +333,9 @@ pub fn update_pore_pressure<E: Element, R: Real>(
     }
     let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
     let (vel, wvel) = (&g.vel, &gl.vel);
-    // The rate of element e's points (one per element: linear tets).
-    let rate_in = |e: usize, f: &Fluid<R>| {
+    // The rate of point i in element e: one per element for linear elements, plus, in an
+    // axisymmetric section, each phase's hoop rate u_r / r at the point.
+    let rate_in = |e: usize, i: usize, f: &Fluid<R>| {
         let grad = mesh.grad[e].as_ref();
         let (mut div_v, mut div_w) = (R::ZERO, R::ZERO);
         for k in 0..E::NODES {
@@ -330,6 +346,15 @@ pub fn update_pore_pressure<E: Element, R: Real>(
                 div_w += w[a] * grad[k][a];
             }
         }
+        if E::AXISYMMETRIC {
+            let n = mesh.shape(e, &x[i]);
+            let r = x[i][0];
+            for (k, &nk) in n.as_ref().iter().enumerate() {
+                let node = mesh.corners[e].as_ref()[k] as usize;
+                div_v += nk * vel[node][0] / r;
+                div_w += nk * wvel[node][0] / r;
+            }
+        }
         f.kw_over_n * (f.n * div_w + (R::ONE - f.n) * div_v)
     };
     let pressure = Shared::new(&mut lp.p);
@@ -337,7 +362,7 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         team.run(|t| {
             for i in layout.particle_range(t) {
                 if let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) {
-                    let rate = rate_in(p.element[i] as usize, f);
+                    let rate = rate_in(p.element[i] as usize, i, f);
                     // SAFETY: particle i belongs to this thread only.
                     unsafe { pressure.range(i..i + 1)[0] += rate * dt };
                 }
@@ -350,7 +375,7 @@ pub fn update_pore_pressure<E: Element, R: Real>(
             let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) else {
                 continue;
             };
-            let rate = rate_in(e, f);
+            let rate = rate_in(e, i, f);
             let n = mesh.shape(e, &x[i]);
             let n = n.as_ref();
             for (k, slot) in four.iter_mut().enumerate() {
