@@ -1,6 +1,7 @@
-//! Where tests and tools find Anura3D's benchmark suite and an Anura3D binary: the environment
-//! variables `ANURA3D_BENCHMARKS` (a folder holding `Benchmarks/`) and `ANURA3D_ORACLE` (the
-//! binary). A relative value is taken from the workspace root, whatever folder the caller runs
+//! Where tests and tools find Anura3D's benchmark suite and the Anura3D binaries: the
+//! environment variables `ANURA3D_BENCHMARKS` (a folder holding `Benchmarks/`),
+//! `ANURA3D_ORACLE` (the 3D binary) and `ANURA3D_ORACLE_2D` (the 2D one, built by
+//! `scripts/build-oracle-2d`). A relative value is taken from the workspace root, whatever folder the caller runs
 //! in (cargo runs each package's tests in that package's folder). Unset or empty: `Ok(None)`,
 //! and the caller says it skipped; set but wrong: an error, never a silent skip.
 
@@ -8,8 +9,10 @@ use std::path::{Path, PathBuf};
 
 /// The variable naming the benchmark folder.
 pub const BENCHMARKS_VAR: &str = "ANURA3D_BENCHMARKS";
-/// The variable naming the Anura3D binary.
+/// The variable naming the Anura3D binary (3D models).
 pub const ORACLE_VAR: &str = "ANURA3D_ORACLE";
+/// The variable naming the 2D Anura3D binary (plane strain and axisymmetric models).
+pub const ORACLE_2D_VAR: &str = "ANURA3D_ORACLE_2D";
 
 /// Says on the terminal that a test skipped its check and why. Written to the process's
 /// standard error directly, past the test harness's capture, so that a skip shows in a plain
@@ -60,14 +63,28 @@ fn benchmarks_at(p: Option<PathBuf>, workspace_root: &Path) -> Result<Option<Pat
 /// The Anura3D binary, `None` when `ANURA3D_ORACLE` is unset; an error when it is set to
 /// something that is not a file.
 pub fn anura3d_oracle(workspace_root: &Path) -> Result<Option<PathBuf>, String> {
-    let Some(p) = resolve(ORACLE_VAR, workspace_root) else {
+    binary(
+        ORACLE_VAR,
+        workspace_root,
+        "../shared/anura3d-oracle/build.sh DIR",
+    )
+}
+
+/// The 2D Anura3D binary, `None` when `ANURA3D_ORACLE_2D` is unset; an error when it is set to
+/// something that is not a file.
+pub fn anura3d_oracle_2d(workspace_root: &Path) -> Result<Option<PathBuf>, String> {
+    binary(ORACLE_2D_VAR, workspace_root, "scripts/build-oracle-2d DIR")
+}
+
+fn binary(var: &str, workspace_root: &Path, build: &str) -> Result<Option<PathBuf>, String> {
+    let Some(p) = resolve(var, workspace_root) else {
         return Ok(None);
     };
     if p.is_file() {
         Ok(Some(p))
     } else {
         Err(format!(
-            "{ORACLE_VAR} is set, but {} is not a file (build Anura3D with ../shared/anura3d-oracle/build.sh DIR)",
+            "{var} is set, but {} is not a file (build Anura3D with {build})",
             p.display()
         ))
     }

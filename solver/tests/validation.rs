@@ -53,7 +53,7 @@ fn loaded_column(ny: usize) -> mpm_solve::input::case::Case {
         for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
             let face = f.map(|k| el[k]);
             if face.iter().all(|&v| near(model.node(v as usize)[1], 1.0)) {
-                top.push(face);
+                top.push(face.to_vec());
             }
         }
     }

@@ -442,7 +442,7 @@ fn load_rows(
     // The corner opposite each loaded face in an element that has it.
     let mut opposite: HashMap<[u32; 3], Option<u32>> = tractions
         .iter()
-        .flat_map(|t| t.faces.iter().map(|&f| (sorted(f), None)))
+        .flat_map(|t| t.faces.iter().map(|f| (sorted([f[0], f[1], f[2]]), None)))
         .collect();
     for c in mesh.connectivity.chunks_exact(10) {
         for skip in 0..4 {
@@ -461,7 +461,9 @@ fn load_rows(
     }
     let mut rows = Table::with_capacity(tractions.iter().map(|t| t.faces.len()).sum(), 24);
     for t in tractions {
-        for &f in &t.faces {
+        for f in &t.faces {
+            // A 3D scene's faces are triangles (2D scenes are refused before this).
+            let f = [f[0], f[1], f[2]];
             let item = || format!("traction \"{}\"", t.physical);
             let inner = opposite[&sorted(f)].ok_or_else(|| {
                 (

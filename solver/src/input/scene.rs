@@ -87,6 +87,10 @@ struct Scene {
     /// "points" (default; Anura3D's MPM-MP) or "mixed" (MPM-MIXED).
     #[serde(default)]
     integration: Option<String>,
+    /// A 2D (triangle) mesh's section: "plane_strain" (default) or "axisymmetric" (x the
+    /// radius, y the axis).
+    #[serde(default)]
+    section: Option<String>,
     /// Anura3D's objective stress rate (`APPLY_OBJECTIVE_STRESS`): on for large rotations.
     #[serde(default)]
     objective_stress: bool,
@@ -198,8 +202,9 @@ struct Material {
     peak_dilatancy_angle: Option<f64>,
     residual_dilatancy_angle: Option<f64>,
     shape_factor: Option<f64>,
-    #[serde(default = "default_points")]
-    points_per_element: u32,
+    /// Points per element; default 4 in tetrahedra, 3 in triangles.
+    #[serde(default)]
+    points_per_element: Option<u32>,
     #[serde(default)]
     liquid: Option<Liquid>,
     /// K0: the points start with Anura3D's K0 stresses.
@@ -294,8 +299,14 @@ struct Liquid {
     initial_pore_pressure: f64,
 }
 
-fn default_points() -> u32 {
-    4
+/// Points per element when a material does not say: the 4-point rule of tetrahedra, the
+/// 3-point rule of triangles (Anura3D's usual choices).
+fn default_points(model: &Model) -> u32 {
+    if model.dimension.coords() == 2 {
+        3
+    } else {
+        4
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -393,16 +404,48 @@ pub enum SceneError {
     Mesh(#[from] mpm_shared::Error),
 }
 
-/// The node lists (`.msh` node indices, corners first) of the surface elements in the physical
-/// surface group `name`, or `None` if the mesh has no such group.
-fn physical_surface<'m>(mesh: &'m MshMesh, name: &str) -> Option<Vec<&'m [u32]>> {
+/// What a mesh's physical groups are called: materials fill groups of the elements' own
+/// dimension (volumes in 3D, surfaces in 2D), loads and fixities sit on groups one below
+/// (surfaces in 3D, curves in 2D).
+#[derive(Debug, Clone, Copy)]
+struct Groups {
+    /// The boundary groups' dimension.
+    dim: usize,
+    /// Name of a material group in messages.
+    material: &'static str,
+    /// Name of a boundary group in messages.
+    boundary: &'static str,
+}
+
+impl Groups {
+    fn of(model: &Model) -> Self {
+        if model.dimension.coords() == 2 {
+            Groups {
+                dim: 1,
+                material: "physical surface",
+                boundary: "physical curve",
+            }
+        } else {
+            Groups {
+                dim: 2,
+                material: "physical volume",
+                boundary: "physical surface",
+            }
+        }
+    }
+}
+
+/// The node lists (`.msh` node indices, corners first) of the boundary elements (triangles in
+/// 3D, lines in 2D) in the physical group `name` of dimension `dim`, or `None` if the mesh has
+/// no such group.
+fn physical_boundary<'m>(mesh: &'m MshMesh, name: &str, dim: usize) -> Option<Vec<&'m [u32]>> {
     let tag = mesh
         .physical_names
         .iter()
-        .find(|p| p.dim == 2 && p.name == name)?
+        .find(|p| p.dim == dim && p.name == name)?
         .tag;
     let mut out = Vec::new();
-    for set in mesh.sets.iter().filter(|s| s.dim() == 2) {
+    for set in mesh.sets.iter().filter(|s| s.dim() == dim) {
         for (e, &phys) in set.physical.iter().enumerate() {
             if phys == tag {
                 out.push(&set.nodes[e * set.nodes_per..(e + 1) * set.nodes_per]);
@@ -412,21 +455,31 @@ fn physical_surface<'m>(mesh: &'m MshMesh, name: &str) -> Option<Vec<&'m [u32]>>
     Some(out)
 }
 
-/// The triangles (model node ids of their corners; `u32::MAX` for a corner no volume element
-/// uses) of the physical surface group `name`.
-fn physical_faces(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<[u32; 3]>> {
-    let faces = physical_surface(mesh, name)?;
+/// The faces (model node ids of their corners: three of a triangle in 3D, two of a line in 2D;
+/// `u32::MAX` for a corner no element uses) of the boundary group `name`.
+fn physical_faces(
+    mesh: &MshMesh,
+    node_map: &[u32],
+    name: &str,
+    groups: Groups,
+) -> Option<Vec<Vec<u32>>> {
+    let faces = physical_boundary(mesh, name, groups.dim)?;
     Some(
         faces
             .iter()
-            .map(|f| [0, 1, 2].map(|k| node_map[f[k] as usize]))
+            .map(|f| (0..=groups.dim).map(|k| node_map[f[k] as usize]).collect())
             .collect(),
     )
 }
 
-/// All nodes (model numbering, corner and mid-edge) of the physical surface group `name`.
-fn physical_nodes(mesh: &MshMesh, node_map: &[u32], name: &str) -> Option<Vec<u32>> {
-    let mut out: Vec<u32> = physical_surface(mesh, name)?
+/// All nodes (model numbering, corner and mid-edge) of the boundary group `name`.
+fn physical_nodes(
+    mesh: &MshMesh,
+    node_map: &[u32],
+    name: &str,
+    groups: Groups,
+) -> Option<Vec<u32>> {
+    let mut out: Vec<u32> = physical_boundary(mesh, name, groups.dim)?
         .iter()
         .flat_map(|f| f.iter().map(|&n| node_map[n as usize]))
         .filter(|&n| n != u32::MAX)
@@ -493,8 +546,9 @@ pub struct LiquidInput {
 pub struct TractionInput {
     /// The physical surface.
     pub physical: String,
-    /// Its triangles: model node ids (0-based) of their corners, in the mesh file's order.
-    pub faces: Vec<[u32; 3]>,
+    /// Its faces: model node ids (0-based) of their corners (three of a triangle in 3D, two of
+    /// an edge in 2D), in the mesh file's order.
+    pub faces: Vec<Vec<u32>>,
     /// Traction vector (kPa; zero for a pressure).
     pub traction: [f64; 3],
     /// Pressure normal to each face, pushing into the body (kPa), instead of `traction`.
@@ -553,11 +607,38 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
     let data = mpm_shared::io::read_input(&mesh_path)?;
     let mesh_name = mesh_path.display().to_string();
     let msh_mesh = msh::read(&data, &mesh_name)?;
-    let (model, node_map) = msh::to_model_with_map(&msh_mesh, &mesh_name)?;
-    if model.dimension.coords() != 3 {
+    let (mut model, node_map) = msh::to_model_with_map(&msh_mesh, &mesh_name)?;
+    // Triangles make a 2D section, plane strain unless the scene says axisymmetric.
+    match (scene.section.as_deref(), model.dimension.coords()) {
+        (None | Some("plane_strain"), 2) => {}
+        (Some("axisymmetric"), 2) => model.dimension = mpm_shared::Dimension::Axisymmetric,
+        (None, _) => {}
+        (Some(s @ ("plane_strain" | "axisymmetric")), _) => {
+            return Err(invalid(
+                "section".into(),
+                format!("\"{s}\" is for 2D (triangle) meshes; {mesh_name} is 3D"),
+            ))
+        }
+        (Some(other), _) => {
+            return Err(invalid(
+                "section".into(),
+                format!("expected \"plane_strain\" or \"axisymmetric\", got \"{other}\""),
+            ))
+        }
+    }
+    let groups = Groups::of(&model);
+    let dim = model.dimension.coords();
+    if let Some(g) = scene
+        .gravity
+        .as_ref()
+        .filter(|g| dim == 2 && g.vector[2] != 0.0)
+    {
         return Err(invalid(
-            "mesh".into(),
-            "scenes need a 3D tetrahedral mesh".into(),
+            "gravity.vector".into(),
+            format!(
+                "a 2D section lies in the x-y plane: its z component must be 0, got {}",
+                g.vector[2]
+            ),
         ));
     }
     let t = &scene.time;
@@ -591,7 +672,10 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         let k = names.iter().position(|n| *n == m.physical).ok_or_else(|| {
             invalid(
                 item.clone(),
-                format!("no physical volume of that name in {mesh_name} (it has {names:?})"),
+                format!(
+                    "no {} of that name in {mesh_name} (it has {names:?})",
+                    groups.material
+                ),
             )
         })? + 1;
         let law = m.law().map_err(|e| invalid(item.clone(), e))?;
@@ -612,14 +696,15 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         }
         .map_err(|e| invalid(item.clone(), e.to_string()))?;
         materials[k] = Some(spec);
-        points[k] = m.points_per_element;
+        let count = m.points_per_element.unwrap_or(default_points(&model));
+        points[k] = count;
         inputs[k] = Some(MaterialInput {
             physical: m.physical.clone(),
             density: m.density,
             young: m.young,
             poisson: m.poisson,
             law,
-            points_per_element: m.points_per_element,
+            points_per_element: count,
             liquid: m.liquid.as_ref().map(|l| LiquidInput {
                 porosity: l.porosity,
                 density: l.density,
@@ -641,7 +726,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
     for (k, m) in materials.iter().enumerate().skip(1) {
         if m.is_none() && element_material.contains(&(k as u32)) {
             return Err(invalid(
-                format!("physical volume \"{}\"", names[k - 1]),
+                format!("{} \"{}\"", groups.material, names[k - 1]),
                 "has elements but no [[material]] entry".into(),
             ));
         }
@@ -656,19 +741,22 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         .map(|a| {
             let (lo, hi) = model
                 .coords
-                .chunks_exact(3)
-                .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p[a]), h.max(p[a])));
+                .chunks_exact(dim)
+                .filter_map(|p| p.get(a))
+                .fold((f64::MAX, f64::MIN), |(l, h), &v| (l.min(v), h.max(v)));
             hi - lo
         })
         .fold(0.0, f64::max);
     for f in &scene.fixity {
         let nodes: Vec<u32> = match (&f.physical, &f.plane) {
-            (Some(name), None) => physical_nodes(&msh_mesh, &node_map, name).ok_or_else(|| {
-                invalid(
-                    format!("fixity \"{name}\""),
-                    format!("no physical surface of that name in {mesh_name}"),
-                )
-            })?,
+            (Some(name), None) => {
+                physical_nodes(&msh_mesh, &node_map, name, groups).ok_or_else(|| {
+                    invalid(
+                        format!("fixity \"{name}\""),
+                        format!("no {} of that name in {mesh_name}", groups.boundary),
+                    )
+                })?
+            }
             (None, Some(plane)) => {
                 let (axis, value) = parse_plane(plane).ok_or_else(|| {
                     invalid(
@@ -678,7 +766,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
                 })?;
                 let tol = 1e-9 * size.max(1e-300);
                 let found: Vec<u32> = (0..model.node_count() as u32)
-                    .filter(|&n| (model.node(n as usize)[axis] - value).abs() <= tol)
+                    .filter(|&n| (coordinate(&model, n, axis) - value).abs() <= tol)
                     .collect();
                 if found.is_empty() {
                     return Err(invalid(
@@ -713,6 +801,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         &materials,
         size,
         &mesh_name,
+        groups,
     )
     .map_err(|(item, message)| invalid(item, message))?;
     let nodes = model.node_count();
@@ -720,19 +809,22 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
     let mut traction_ramp = 0.0f64;
     let mut tractions = Vec::with_capacity(scene.traction.len());
     for tr in &scene.traction {
-        let faces = physical_faces(&msh_mesh, &node_map, &tr.physical).ok_or_else(|| {
-            invalid(
-                format!("traction \"{}\"", tr.physical),
-                format!("no physical surface of that name in {mesh_name}"),
-            )
-        })?;
+        let faces =
+            physical_faces(&msh_mesh, &node_map, &tr.physical, groups).ok_or_else(|| {
+                invalid(
+                    format!("traction \"{}\"", tr.physical),
+                    format!("no {} of that name in {mesh_name}", groups.boundary),
+                )
+            })?;
         // A face corner that no volume element uses has no model node to load.
         if let Some(k) = faces.iter().position(|f| f.contains(&u32::MAX)) {
             return Err(invalid(
                 format!("traction \"{}\"", tr.physical),
                 format!(
-                    "face {} of the surface in {mesh_name} has a node that no tetrahedron uses (the surface must lie on the meshed volume)",
-                    k + 1
+                    "face {} of the {} in {mesh_name} has a node that no element uses (it must lie on the meshed {})",
+                    k + 1,
+                    groups.boundary,
+                    if dim == 2 { "surface" } else { "volume" }
                 ),
             ));
         }
@@ -989,6 +1081,7 @@ fn velocities(
     materials: &[Option<MaterialSpec>],
     size: f64,
     mesh_name: &str,
+    groups: Groups,
 ) -> Result<
     (
         Option<PrescribedVelocity>,
@@ -1033,16 +1126,23 @@ fn velocities(
         let curve = LoadCurve::ramp(v.ramp);
         let target = match (&v.physical, &v.plane) {
             (Some(p), None) => {
-                let surface = physical_nodes(msh_mesh, node_map, p);
+                let surface = physical_nodes(msh_mesh, node_map, p, groups);
                 let volume = volumes.iter().position(|n| n == p);
+                let (b, m) = (groups.boundary, groups.material);
                 match (surface, volume) {
                     (Some(_), Some(_)) => {
-                        return Err((item, format!("\"{p}\" names both a physical surface and a physical volume; rename one")))
+                        return Err((
+                            item,
+                            format!("\"{p}\" names both a {b} and a {m}; rename one"),
+                        ))
                     }
                     (Some(nodes), None) => VelocityTarget::Nodes(nodes),
                     (None, Some(_)) => VelocityTarget::Volume(p.clone()),
                     (None, None) => {
-                        return Err((item, format!("no physical surface or volume \"{p}\" in {mesh_name} (volumes: {volumes:?})")))
+                        return Err((
+                            item,
+                            format!("no {b} or {m} \"{p}\" in {mesh_name} ({m}s: {volumes:?})"),
+                        ))
                     }
                 }
             }
@@ -1057,7 +1157,7 @@ fn velocities(
                 })?;
                 let tol = 1e-9 * size.max(1e-300);
                 let found: Vec<u32> = (0..model.node_count() as u32)
-                    .filter(|&n| (model.node(n as usize)[axis] - value).abs() <= tol)
+                    .filter(|&n| (coordinate(model, n, axis) - value).abs() <= tol)
                     .collect();
                 if found.is_empty() {
                     return Err((item, format!("plane \"{plane}\" selects no node")));
@@ -1087,7 +1187,7 @@ fn velocities(
             }),
             VelocityTarget::Volume(p) => {
                 if let Some(first) = &points {
-                    return Err((item, format!("a second material-point velocity (after \"{}\"); give one physical volume per scene, or prescribe nodes", first.name)));
+                    return Err((item, format!("a second material-point velocity (after \"{}\"); give one {} per scene, or prescribe nodes", first.name, groups.material)));
                 }
                 let k = volumes.iter().position(|n| n == p).expect("found above") as u32 + 1;
                 let rows: Vec<PrescribedElement> = (0..element_material.len() as u32)
@@ -1099,7 +1199,7 @@ fn velocities(
                     })
                     .collect();
                 if rows.is_empty() {
-                    return Err((item, format!("physical volume \"{p}\" has no elements")));
+                    return Err((item, format!("{} \"{p}\" has no elements", groups.material)));
                 }
                 points = Some(PrescribedVelocity {
                     name: name.clone(),
@@ -1238,7 +1338,7 @@ fn initial_stresses(
         }
         let top = model
             .coords
-            .chunks_exact(3)
+            .chunks_exact(model.dimension.coords())
             .fold(f64::MIN, |h, p| h.max(p[1]));
         let surface = gravity.k0_surface.unwrap_or(top);
         if !surface.is_finite() {
@@ -1269,19 +1369,31 @@ fn the_saturated(materials: &[Option<MaterialSpec>]) -> Option<&MaterialSpec> {
     }
 }
 
-/// Adds the nodal forces of tractions `t` (kPa, one per face, uniform on it) on triangles
-/// `faces` (model node ids of their corners): each corner takes a third of the face's area
-/// times its face's traction.
-pub fn add_face_loads(model: &Model, faces: &[[u32; 3]], t: &[[f64; 3]], out: &mut [[f64; 3]]) {
+/// Adds the nodal forces of tractions `t` (kPa, one per face, uniform on it) on `faces`
+/// (model node ids of their corners), integrated exactly: each corner of a triangle (3D) takes
+/// a third of its area times the traction, each end of an edge (2D) half its length; in an
+/// axisymmetric section the edge's load is per radian, ∫ N_a t r ds = t L (2 r_a + r_b) / 6.
+pub fn add_face_loads(model: &Model, faces: &[Vec<u32>], t: &[[f64; 3]], out: &mut [[f64; 3]]) {
+    let axisymmetric = model.dimension == mpm_shared::Dimension::Axisymmetric;
     for (f, t) in faces.iter().zip(t) {
-        let area = crate::input::faces::triangle_area(
-            model,
-            [f[0] as usize, f[1] as usize, f[2] as usize],
-        );
-        for &n in f {
+        let corners: Vec<usize> = f.iter().map(|&n| n as usize).collect();
+        let size = crate::input::faces::size(model, &corners);
+        for (i, &n) in corners.iter().enumerate() {
+            let share = match corners.len() {
+                2 if axisymmetric => {
+                    let (ra, rb) = (model.node(n)[0], model.node(corners[1 - i])[0]);
+                    size * (2.0 * ra + rb) / 6.0
+                }
+                k => size / k as f64,
+            };
             for d in 0..3 {
-                out[n as usize][d] += area / 3.0 * t[d];
+                out[n][d] += share * t[d];
             }
         }
     }
+}
+
+/// Coordinate `axis` of model node `n` (0 for z in a 2D model).
+fn coordinate(model: &Model, n: u32, axis: usize) -> f64 {
+    model.node(n as usize).get(axis).copied().unwrap_or(0.0)
 }

@@ -60,14 +60,18 @@ impl Layer {
         };
         let l: &LiquidSpec = m.liquid.as_ref().expect("saturated");
         let (mut lo, mut hi) = (f64::MAX, f64::MIN);
-        for p in case.model.coords.chunks_exact(3) {
+        for p in case
+            .model
+            .coords
+            .chunks_exact(case.model.dimension.coords())
+        {
             lo = lo.min(p[1]);
             hi = hi.max(p[1]);
         }
         let height = hi - lo;
         let volume: f64 = (0..case.model.element_count())
             .filter(|&e| case.element_material[e] != 0)
-            .map(|e| tet_volume(&case.model, e))
+            .map(|e| element_volume(&case.model, e))
             .sum();
         let e_oed = m.oedometric();
         let kw_over_n = l.bulk_modulus / l.porosity;
@@ -107,8 +111,22 @@ impl Layer {
     }
 }
 
-fn tet_volume(model: &mpm_shared::Model, e: usize) -> f64 {
+/// Volume of element `e` as the points measure theirs: a tetrahedron's, a triangle's area (per
+/// unit thickness in plane strain), or its area times its centroid's radius (per radian in an
+/// axisymmetric section).
+fn element_volume(model: &mpm_shared::Model, e: usize) -> f64 {
     let c = model.element(e);
+    if model.dimension.coords() == 2 {
+        let p: Vec<&[f64]> = c[..3].iter().map(|&n| model.node(n as usize)).collect();
+        let area = 0.5
+            * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+                - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]))
+                .abs();
+        return match model.dimension {
+            mpm_shared::Dimension::Axisymmetric => area * (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+            _ => area,
+        };
+    }
     let p: Vec<&[f64]> = c[..4].iter().map(|&n| model.node(n as usize)).collect();
     let d = |a: usize| [p[a][0] - p[0][0], p[a][1] - p[0][1], p[a][2] - p[0][2]];
     let (a, b, c) = (d(1), d(2), d(3));

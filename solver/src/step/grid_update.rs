@@ -85,6 +85,7 @@ pub fn grid_update<R: Real>(
             g.acc[n] = [R::ZERO; 3];
             continue;
         }
+        let (mut out2, mut ext2) = (0.0, 0.0);
         for a in 0..3 {
             if fixed[n][a] {
                 g.acc[n][a] = R::ZERO;
@@ -92,8 +93,8 @@ pub fn grid_update<R: Real>(
             }
             let ext = g.f_ext[n][a] + scale * traction[n][a];
             let f = g.f_int[n][a] + ext;
-            unbalanced += f.f64() * f.f64();
-            external += ext.f64() * ext.f64();
+            out2 += f.f64() * f.f64();
+            ext2 += ext.f64() * ext.f64();
             let fd = damp(rule, alpha, f, g.momentum[n][a]);
             let acc = fd / m;
             g.acc[n][a] = acc;
@@ -101,6 +102,8 @@ pub fn grid_update<R: Real>(
             work += ext.f64() * v_mid;
             damping += (f - fd).f64() * v_mid;
         }
+        unbalanced += out2.sqrt();
+        external += ext2.sqrt();
     }
     ForceSums {
         unbalanced,
@@ -110,12 +113,13 @@ pub fn grid_update<R: Real>(
     }
 }
 
-/// Squared norms of the out-of-balance and the external force over the free components.
+/// Norms of the out-of-balance and the external force over the free components, Anura3D's
+/// (its `Norm`): the sum over the nodes of each node's Euclidean norm.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ForceSums {
-    /// Σ |f_int + f_ext|².
+    /// Σ_nodes |f_int + f_ext|.
     pub unbalanced: f64,
-    /// Σ |f_ext|².
+    /// Σ_nodes |f_ext|.
     pub external: f64,
     /// Work of the external force over the step at the mid-step velocities (kJ; the energy
     /// balance's work term).
@@ -138,7 +142,7 @@ impl ForceSums {
     /// |out-of-balance| / |external| (0 without external force).
     pub fn ratio(self) -> f64 {
         if self.external > 0.0 {
-            (self.unbalanced / self.external).sqrt()
+            self.unbalanced / self.external
         } else {
             0.0
         }
@@ -208,6 +212,7 @@ pub fn grid_update_two_phase<R: Real>(
         }
         let (mw, mwn, q) = (gl.mass[n], gl.mass_n[n], gl.drag[n]);
         let wet = mw > eps;
+        let (mut out2, mut ext2, mut out2_w, mut ext2_w) = (0.0, 0.0, 0.0, 0.0);
         for a in 0..3 {
             let lt = liquid_scale * liquid_traction[n][a];
             let ext = if liquid_load_on_mixture {
@@ -217,8 +222,8 @@ pub fn grid_update_two_phase<R: Real>(
             };
             let f_mix = g.f_int[n][a] + ext;
             if !fixed[n][a] {
-                unbalanced += f_mix.f64() * f_mix.f64();
-                external += ext.f64() * ext.f64();
+                out2 += f_mix.f64() * f_mix.f64();
+                ext2 += ext.f64() * ext.f64();
             }
             if !wet {
                 g.acc[n][a] = if fixed[n][a] {
@@ -249,8 +254,8 @@ pub fn grid_update_two_phase<R: Real>(
             if !liquid_fixed[n][a] {
                 let qvw = q * (v - w);
                 let (out, ext) = (f_w + qvw, mw * gravity[a] + lt + qvw);
-                unbalanced_w += out.f64() * out.f64();
-                external_w += ext.f64() * ext.f64();
+                out2_w += out.f64() * out.f64();
+                ext2_w += ext.f64() * ext.f64();
             }
             let fw = match rule {
                 DampingRule::Phases => f_w,
@@ -323,6 +328,10 @@ pub fn grid_update_two_phase<R: Real>(
             work += external;
             dissipated += power - kinetic;
         }
+        unbalanced += out2.sqrt();
+        external += ext2.sqrt();
+        unbalanced_w += out2_w.sqrt();
+        external_w += ext2_w.sqrt();
     }
     (
         ForceSums {

@@ -208,10 +208,10 @@ fn average<E: Element, R: Real, const N: usize>(
 
 /// Anura3D's boundary particles, by point id: in every element that has points, the points
 /// placed beside a face whose neighbour has none (not a face on the mesh's boundary). With one
-/// point an element's point; with four (point k nearest corner k) the three of the face's
-/// corners; with ten also the three on the face's edges (edges in Anura3D's order 0–1, 0–2,
-/// 0–3, 1–2, 1–3, 2–3). `p` must be as placed: each element's points together, in placement
-/// order.
+/// point an element's point; with three in a triangle or four in a tetrahedron (point k nearest
+/// corner k) those of the face's corners; with ten also the three on the face's edges (edges in
+/// Anura3D's order 0–1, 0–2, 0–3, 1–2, 1–3, 2–3). `p` must be as placed: each element's points
+/// together, in placement order.
 pub fn boundary_points<E: Element, R: Real>(mesh: &Mesh<E, R>, p: &Particles<R>) -> Vec<bool> {
     const EDGES: [[usize; 2]; 6] = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]];
     let mut filled = vec![false; mesh.elements()];
@@ -236,7 +236,9 @@ pub fn boundary_points<E: Element, R: Real>(mesh: &Mesh<E, R>, p: &Particles<R>)
             for k in 0..n {
                 let beside = match n {
                     1 => true,
-                    4 => k != f,
+                    // Anura3D's side tables of triangles (DetermineAdjacentParticlesTRI_MP3)
+                    // and tetrahedra name the points of the face's corners.
+                    3 | 4 => k != f,
                     10 => match k {
                         0..=3 => k != f,
                         _ => !EDGES[k - 4].contains(&f),
