@@ -1,7 +1,9 @@
-//! Structured tetrahedral meshes of a box, for benchmarks and analytical tests where a Gmsh mesh
-//! of a given size is not at hand. Each hexahedral cell is cut into the 6 tetrahedra of its Kuhn
-//! subdivision (every tetrahedron spans the cell's main diagonal), which is conforming across
-//! cells. Mid-edge nodes of 10-node meshes are shared between neighbours.
+//! Structured meshes of a box (tetrahedra) or a rectangle (triangles), for benchmarks and
+//! analytical tests where a Gmsh mesh of a given size is not at hand. Each hexahedral cell is cut
+//! into the 6 tetrahedra of its Kuhn subdivision (every tetrahedron spans the cell's main
+//! diagonal), which is conforming across cells; mid-edge nodes of 10-node meshes are shared
+//! between neighbours. Each rectangular cell is cut along its main diagonal into 2 triangles, the
+//! 2D analogue.
 
 use crate::geometry::tet_det;
 use crate::model::{Body, Dimension, ElementType, Model, Section, Table, Token};
@@ -96,6 +98,51 @@ pub fn box_mesh(n: [usize; 3], size: [f64; 3], element_type: ElementType) -> Mod
     model
 }
 
+/// Builds a plane-strain rectangle `[0, size[0]] × [0, size[1]]` with `n[0] × n[1]` cells (2
+/// counter-clockwise 3-node triangles each, cut along the diagonal from the cell's lower-left to
+/// its upper-right corner), one material, empty fixity sections, and 3 material points per element
+/// in `$$START_NUMBER_OF_MATERIAL_POINTS`: [`box_mesh`]'s layout in 2D, with 2 coordinates per
+/// node. Setting the model's `dimension` to [`Dimension::Axisymmetric`] gives the same mesh as an
+/// axisymmetric section (x the radius), the layout being identical.
+pub fn rect_mesh(n: [usize; 2], size: [f64; 2]) -> Model {
+    let dims = [n[0] + 1, n[1] + 1];
+    let id = |i: usize, j: usize| (i + dims[0] * j) as u32;
+    let mut coords = Vec::with_capacity(dims[0] * dims[1] * 2);
+    for j in 0..dims[1] {
+        for i in 0..dims[0] {
+            coords.push(size[0] * i as f64 / n[0] as f64);
+            coords.push(size[1] * j as f64 / n[1] as f64);
+        }
+    }
+    let n_el = n[0] * n[1] * 2;
+    let mut conn = Vec::with_capacity(n_el * 3);
+    for j in 0..n[1] {
+        for i in 0..n[0] {
+            // Lower-left, lower-right, upper-right, upper-left: both halves listed in this
+            // circular order are counter-clockwise, as the solver's triangles must be.
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            conn.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    let mut model = Model::from_mesh(
+        Dimension::PlaneStrain,
+        ElementType::Tri3,
+        coords,
+        conn,
+        &["soil".to_string()],
+        &vec![1; n_el],
+    );
+    let mut mps = Table::with_capacity(n_el, 2);
+    for _ in 0..n_el {
+        mps.push_row([Token::Int(3), Token::Int(0)]);
+    }
+    model.sections.push(Section {
+        keyword: "START_NUMBER_OF_MATERIAL_POINTS".into(),
+        body: Body::PerElement(mps),
+    });
+    model
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -128,5 +175,42 @@ mod tests {
             // 2 triangles per boundary square: 2 * 2 * (3*2 + 3*2 + 2*2).
             assert_eq!(boundary, 64);
         }
+    }
+
+    #[test]
+    fn rectangle_is_conforming_counter_clockwise_and_fills_the_area() {
+        let m = rect_mesh([3, 2], [1.5, 0.5]);
+        assert_eq!(m.dimension, Dimension::PlaneStrain);
+        assert_eq!(m.element_type, ElementType::Tri3);
+        assert_eq!((m.node_count(), m.element_count()), (12, 12));
+        assert_eq!(m.coords.len(), 24);
+        assert_eq!(m.node(11), &[1.5, 0.5]);
+        assert_eq!(m.material_points_per_element().unwrap(), vec![3; 12]);
+        m.check_shapes(1e-12).unwrap();
+        let mut area = 0.0;
+        for e in 0..m.element_count() {
+            let el = m.element(e);
+            let (a, b, c) = (
+                m.node(el[0] as usize),
+                m.node(el[1] as usize),
+                m.node(el[2] as usize),
+            );
+            let twice = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+            assert!(twice > 0.0, "element {e} is not counter-clockwise");
+            area += twice / 2.0;
+        }
+        assert!((area - 0.75).abs() < 1e-14);
+        // Conforming: every interior edge is shared by exactly two triangles, and the boundary
+        // edges are the 2 * (3 + 2) cell sides of the rectangle's perimeter.
+        let mut edges = std::collections::HashMap::new();
+        for e in 0..m.element_count() {
+            let el = m.element(e);
+            for (u, v) in [(0, 1), (1, 2), (0, 2)] {
+                let key = (el[u].min(el[v]), el[u].max(el[v]));
+                *edges.entry(key).or_insert(0) += 1;
+            }
+        }
+        assert!(edges.values().all(|&c| c == 1 || c == 2));
+        assert_eq!(edges.values().filter(|&&c| c == 1).count(), 10);
     }
 }

@@ -6,7 +6,12 @@
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
 //!  --order morton|random|none --precision f64|f32 --guards on|off
-//!  --law linear|mc-elastic|mc-plastic|mc-flowing`
+//!  --law linear|mc-elastic|mc-plastic|mc-flowing --dim 3|2`
+//!
+//! `--dim 2` runs the plane-strain twin: a rectangle of `--cells NX NY` square cells of 1 cm
+//! (the 3D column's cell size at NY = 100, so the time step and the motion per step compare),
+//! 2 triangles per cell and 3 material points per triangle, the same materials, loads and
+//! fixities (sides fixed normally, bottom fixed), computed by the engine built for `Tri3`.
 //!
 //! The Mohr-Coulomb laws print, beside the timing, the share of point-steps that end on the
 //! yield surface and the share that end there with a stress that moved (returned points), from
@@ -17,12 +22,15 @@
 //! `--order random` renumbers elements and nodes by a fixed pseudo-random permutation (the
 //! locality a mesh generator's worst case gives); `morton` applies the solver's curve ordering.
 
-use mpm_solve::element::tet4::Tet4;
 use std::time::Instant;
 
-use mpm_shared::{generate, ElementType};
+use mpm_shared::{generate, ElementType, Model};
+use mpm_solve::driver::dispatch::{dispatch, Generic};
 use mpm_solve::driver::engine::{Engine, Options, PHASES};
-use mpm_solve::input::case::{Case, MaterialSpec, Reorder};
+use mpm_solve::element::tet4::Tet4;
+use mpm_solve::element::tri3::Tri3;
+use mpm_solve::element::Element;
+use mpm_solve::input::case::{Case, MaterialSpec, Precision, Reorder};
 use mpm_solve::material::liquid::LiquidSpec;
 use mpm_solve::parallel::team::Pin;
 
@@ -48,6 +56,28 @@ fn shuffle(n: usize, seed: u64) -> Vec<u32> {
     keys.into_iter().map(|(_, i)| i).collect()
 }
 
+/// Fixities of a rectangle confined like the 3D column (`confined_box`, which reads a third
+/// coordinate 2D models do not have): the bottom fixed, the sides fixed in x. The z component is
+/// left free as a 2D GOM's two-column fixities leave it; nothing drives it in a plane section.
+fn confined_rect(model: &Model) -> Vec<[bool; 3]> {
+    let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+    for p in model.coords.chunks_exact(2) {
+        for a in 0..2 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let tol = 1e-9 * (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    let on = |v: f64, w: f64| (v - w).abs() <= tol;
+    (0..model.node_count())
+        .map(|i| {
+            let p = model.node(i);
+            let bottom = on(p[1], lo[1]);
+            [bottom || on(p[0], lo[0]) || on(p[0], hi[0]), bottom, false]
+        })
+        .collect()
+}
+
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();
     let saturated = arg(&a, "--case") == Some("saturated");
@@ -65,16 +95,25 @@ fn main() {
     };
     let first_touch = arg(&a, "--first-touch") != Some("off");
     let order = arg(&a, "--order").unwrap_or("morton").to_string();
+    let plane = arg(&a, "--dim") == Some("2");
 
     let (nxz, ny) = (cells[0], cells[1]);
     let width = 0.1 * nxz as f64 / 10.0;
-    let mut model = generate::box_mesh([nxz, ny, nxz], [width, 1.0, width], ElementType::Tet4);
+    let mut model = if plane {
+        generate::rect_mesh([nxz, ny], [width, 0.01 * ny as f64])
+    } else {
+        generate::box_mesh([nxz, ny, nxz], [width, 1.0, width], ElementType::Tet4)
+    };
     if order == "random" {
         let e_order = shuffle(model.element_count(), 0x9e37_79b9_7f4a_7c15);
         let n_perm = shuffle(model.node_count(), 0xd1b5_4a32_d192_ed03);
         model = model.reordered(&e_order, &n_perm).unwrap();
     }
-    let fixed = mpm_solve::input::case::confined_box(&model);
+    let fixed = if plane {
+        confined_rect(&model)
+    } else {
+        mpm_solve::input::case::confined_box(&model)
+    };
     let soil = if saturated {
         let liquid = LiquidSpec::new(0.4, 1000.0, 2.15e4, 1.0214e-9, 1e-6).unwrap();
         MaterialSpec::saturated(
@@ -102,7 +141,8 @@ fn main() {
         .unwrap();
         MaterialSpec::with_law("soil", 2000.0, law).unwrap()
     };
-    let mut case = Case::single_material("bench", model, soil, 4, fixed);
+    let points = if plane { 3 } else { 4 };
+    let mut case = Case::single_material("bench", model, soil, points, fixed);
     if !saturated {
         // Every law starts from the same stress, σv = 200, σh = 100 kPa (compression): inside
         // the φ = 30° surface (ratio 3), beyond the φ = 10° one (ratio 1.42), so under gravity
@@ -120,16 +160,15 @@ fn main() {
     case.courant = 0.5;
     case.damping = 0.05;
     if saturated {
-        // Sudden 10 kPa on the top face (nodal loads of the top triangles of the box).
-        let top = case
-            .model
-            .coords
-            .chunks_exact(3)
-            .fold(f64::MIN, |m, p| m.max(p[1]));
-        let on_top: Vec<usize> = (0..case.model.node_count())
-            .filter(|&n| (case.model.node(n)[1] - top).abs() < 1e-9)
+        // Sudden 10 kPa on the top face (nodal loads of the top triangles of the box; of the
+        // top edges of the rectangle, per unit thickness).
+        let m = &case.model;
+        let top = (0..m.node_count()).fold(f64::MIN, |t, n| t.max(m.node(n)[1]));
+        let on_top: Vec<usize> = (0..m.node_count())
+            .filter(|&n| (m.node(n)[1] - top).abs() < 1e-9)
             .collect();
-        let area = width * width / on_top.len() as f64;
+        let face = if plane { width } else { width * width };
+        let area = face / on_top.len() as f64;
         for n in on_top {
             case.traction[n] = [0.0, -10.0 * area, 0.0];
         }
@@ -146,19 +185,31 @@ fn main() {
         first_touch,
     };
     let f32 = arg(&a, "--precision") == Some("f32");
+    case.precision = if f32 { Precision::F32 } else { Precision::F64 };
     let law = arg(&a, "--law").unwrap_or("linear");
     // Vertical velocity -rate·(y - y_bottom): compression at a strain of about 1e-5 per step,
     // its elastic ratio of lateral to vertical increment (ν/(1-ν) = 0.43) below the active
     // ratio, so every trial lies beyond the surface.
     let flow = (law == "mc-flowing").then_some(0.2);
-    let result = if f32 {
-        measure::<f32>(&case, steps, reps, flow)
-    } else {
-        measure::<f64>(&case, steps, reps, flow)
-    };
+    // The solver's own choice of precision and element (the case's model picks `Tri3` or
+    // `Tet4`), so that the bench times the engine a run of this model would get.
+    let result = dispatch(
+        &case,
+        Measure {
+            case: &case,
+            steps,
+            reps,
+            flow,
+        },
+    )
+    .unwrap();
     let surface = if law.starts_with("mc-") {
         let friction = if law == "mc-elastic" { 30.0 } else { 10.0 };
-        let (on, moved) = on_surface(&case, steps, flow, friction);
+        let (on, moved) = if plane {
+            on_surface::<Tri3>(&case, steps, flow, friction)
+        } else {
+            on_surface::<Tet4>(&case, steps, flow, friction)
+        };
         format!(", \"on_surface\": {on:.4}, \"returned\": {moved:.4}")
     } else {
         String::new()
@@ -184,11 +235,13 @@ fn main() {
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
     println!(
-        "{{\"case\": \"{}\", \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}{}}}",
+        "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}{}}}",
         if saturated { "saturated" } else { "dry" },
+        if plane { 2 } else { 3 },
         arg(&a, "--law").unwrap_or("linear"),
         info.0,
         case.model.element_count(),
+        case.model.node_count(),
         info.1,
         pinned.join(", "),
         if pin == Pin::Cores { "cores" } else { "none" },
@@ -213,8 +266,24 @@ struct Measured {
     bytes_per_point: usize,
 }
 
-/// Times `reps` runs of `steps` steps of `case` in precision `R`.
-fn measure<R: mpm_solve::real::Real>(
+/// [`measure`] with the precision and element [`dispatch`] picks for the case.
+struct Measure<'a> {
+    case: &'a Case,
+    steps: usize,
+    reps: usize,
+    flow: Option<f64>,
+}
+
+impl Generic for Measure<'_> {
+    type Output = Measured;
+
+    fn call<R: mpm_solve::real::Real, E: Element>(self) -> Measured {
+        measure::<R, E>(self.case, self.steps, self.reps, self.flow)
+    }
+}
+
+/// Times `reps` runs of `steps` steps of `case` in precision `R` with elements `E`.
+fn measure<R: mpm_solve::real::Real, E: Element>(
     case: &Case,
     steps: usize,
     reps: usize,
@@ -227,7 +296,7 @@ fn measure<R: mpm_solve::real::Real>(
         bytes_per_point: 0,
     };
     for _ in 0..reps {
-        let mut engine = Engine::<R, Tet4>::new(case, false).unwrap();
+        let mut engine = Engine::<R, E>::new(case, false).unwrap();
         if let Some(rate) = flow {
             compress(&mut engine, rate);
         }
@@ -246,7 +315,7 @@ fn measure<R: mpm_solve::real::Real>(
 }
 
 /// Sets every point's velocity to uniform vertical compression at `rate` (1/s).
-fn compress<R: mpm_solve::real::Real>(engine: &mut Engine<R>, rate: f64) {
+fn compress<R: mpm_solve::real::Real, E: Element>(engine: &mut Engine<R, E>, rate: f64) {
     let p = &mut engine.particles;
     let bottom = p.x.iter().fold(f64::MAX, |m, x| m.min(x[1].f64()));
     for (v, x) in p.v.iter_mut().zip(&p.x) {
@@ -257,11 +326,16 @@ fn compress<R: mpm_solve::real::Real>(engine: &mut Engine<R>, rate: f64) {
 /// Shares of the point-steps of a run of `steps` steps that end on the Mohr-Coulomb surface
 /// (φ = `friction`, c = 0: |F| within 1e-9 of the largest principal stress), and that end there
 /// with a stress moved by more than 1e-9 of it (returned, not resting on the surface).
-fn on_surface(case: &Case, steps: usize, flow: Option<f64>, friction: f64) -> (f64, f64) {
+fn on_surface<E: Element>(
+    case: &Case,
+    steps: usize,
+    flow: Option<f64>,
+    friction: f64,
+) -> (f64, f64) {
     use mpm_solve::material::mohr_coulomb::Surface;
     use mpm_solve::material::principal::principal;
     let surface = Surface::<f64>::new(friction, 0.0, 0.0, 0.0);
-    let mut engine = Engine::<f64, Tet4>::new(case, false).unwrap();
+    let mut engine = Engine::<f64, E>::new(case, false).unwrap();
     if let Some(rate) = flow {
         compress(&mut engine, rate);
     }

@@ -291,7 +291,7 @@ fn velocity_entries_are_resolved_and_bad_ones_refused() {
     };
     refused(
         "[[velocity]]\nphysical = \"lid\"\nvelocity = [0.0, -1.0, 0.0]",
-        &["velocity \"lid\"", "no physical surface or volume"],
+        &["velocity \"lid\"", "no physical surface or physical volume"],
     );
     refused(
         "[[velocity]]\nphysical = \"top\"\nplane = \"y = 1\"\nvelocity = [0.0, -1.0, 0.0]",
