@@ -78,9 +78,20 @@ pub fn box_mesh(n: [usize; 3], size: [f64; 3], element_type: ElementType) -> Mod
             }
         }
     }
-    let n_el = cells * 6;
+    soil_model(Dimension::Cartesian3D, element_type, coords, conn, 4)
+}
+
+/// A model of one material, "soil", filling every element with `points` material points each.
+fn soil_model(
+    dimension: Dimension,
+    element_type: ElementType,
+    coords: Vec<f64>,
+    conn: Vec<u32>,
+    points: i64,
+) -> Model {
+    let n_el = conn.len() / element_type.nodes();
     let mut model = Model::from_mesh(
-        Dimension::Cartesian3D,
+        dimension,
         element_type,
         coords,
         conn,
@@ -89,7 +100,7 @@ pub fn box_mesh(n: [usize; 3], size: [f64; 3], element_type: ElementType) -> Mod
     );
     let mut mps = Table::with_capacity(n_el, 2);
     for _ in 0..n_el {
-        mps.push_row([Token::Int(4), Token::Int(0)]);
+        mps.push_row([Token::Int(points), Token::Int(0)]);
     }
     model.sections.push(Section {
         keyword: "START_NUMBER_OF_MATERIAL_POINTS".into(),
@@ -124,23 +135,7 @@ pub fn rect_mesh(n: [usize; 2], size: [f64; 2]) -> Model {
             conn.extend_from_slice(&[a, b, c, a, c, d]);
         }
     }
-    let mut model = Model::from_mesh(
-        Dimension::PlaneStrain,
-        ElementType::Tri3,
-        coords,
-        conn,
-        &["soil".to_string()],
-        &vec![1; n_el],
-    );
-    let mut mps = Table::with_capacity(n_el, 2);
-    for _ in 0..n_el {
-        mps.push_row([Token::Int(3), Token::Int(0)]);
-    }
-    model.sections.push(Section {
-        keyword: "START_NUMBER_OF_MATERIAL_POINTS".into(),
-        body: Body::PerElement(mps),
-    });
-    model
+    soil_model(Dimension::PlaneStrain, ElementType::Tri3, coords, conn, 3)
 }
 
 #[cfg(test)]
