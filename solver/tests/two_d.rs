@@ -124,20 +124,7 @@ fn terzaghi_in_plane_strain_meets_the_default_jobs_thresholds() {
     let (_, default, workshop) =
         consolidation::run_job::<f64, Tri3>(&case, dir.path(), &Default::default()).unwrap();
     let workshop = workshop.expect("the job also runs the workshop set-up");
-    for r in default.records.iter().filter(|r| r.tv >= 0.05 - 1e-9) {
-        assert!(r.rms <= 0.05, "default at T_v {}: {}", r.tv, r.rms);
-    }
-    for t in [&default, &workshop] {
-        let last = t.records.last().unwrap();
-        let err = last.settlement / last.terzaghi - 1.0;
-        eprintln!(
-            "2D: final settlement {:.4e} m, {:+.3}% off Terzaghi, RMS {:.4}",
-            last.settlement,
-            100.0 * err,
-            last.rms
-        );
-        assert!(err.abs() <= 0.005, "settlement {err}");
-    }
+    common::assert_terzaghi_thresholds(&default, &workshop);
 }
 
 #[test]

@@ -8,6 +8,8 @@ use mpm_solve::driver::engine::Engine;
 use mpm_solve::input::scene;
 use mpm_solve::jobs::consolidation::{self, Start};
 
+mod common;
+
 fn testdata(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../testdata")
@@ -50,19 +52,7 @@ fn default_job_beats_anura3d_and_matches_terzaghi() {
         );
         assert!(d.rms <= 0.05, "default at T_v {tv}: {}", d.rms);
     }
-    for r in default.records.iter().filter(|r| r.tv >= 0.05 - 1e-9) {
-        assert!(r.rms <= 0.05, "default at T_v {}: {}", r.tv, r.rms);
-    }
-    for t in [&default, &workshop] {
-        let last = t.records.last().unwrap();
-        let err = last.settlement / last.terzaghi - 1.0;
-        eprintln!(
-            "final settlement {:.4e} m, {:+.3}% off Terzaghi",
-            last.settlement,
-            100.0 * err
-        );
-        assert!(err.abs() <= 0.005, "settlement {err}");
-    }
+    common::assert_terzaghi_thresholds(&default, &workshop);
     let csv = std::fs::read_to_string(dir.path().join("consolidation.csv")).unwrap();
     assert_eq!(csv.lines().count(), 21);
     assert!(csv.starts_with("tv,time,settlement,terzaghi_settlement,rms_error,max_error,workshop_"));

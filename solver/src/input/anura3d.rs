@@ -833,6 +833,30 @@ fn radius(model: &Model, n: usize) -> f64 {
     }
 }
 
+/// The nodal forces of edge `[a, b]` of length `size` with tractions `t` at its ends, by
+/// Anura3D's one Gauss point: each end takes L/2 (t_a r_a + t_b r_b)/2 (r the radius in an
+/// axisymmetric section, else 1), and an end on the axis gives 7/8 of it to the other end.
+fn edge_forces(
+    model: &Model,
+    [a, b]: [usize; 2],
+    size: f64,
+    t: [[f64; 3]; 2],
+) -> [(usize, [f64; 3]); 2] {
+    let (ra, rb) = (radius(model, a), radius(model, b));
+    let half = [0, 1, 2].map(|d| size / 2.0 * (t[0][d] * ra + t[1][d] * rb) / 2.0);
+    let on_axis = |r: f64| model.dimension == Dimension::Axisymmetric && r < f64::MIN_POSITIVE;
+    // The share each end gives or takes: 0 unless one end is on the axis.
+    let shift = match (on_axis(ra), on_axis(rb)) {
+        (true, false) => -7.0 / 8.0,
+        (false, true) => 7.0 / 8.0,
+        _ => 0.0,
+    };
+    [
+        (a, half.map(|h| h * (1.0 + shift))),
+        (b, half.map(|h| h * (1.0 - shift))),
+    ]
+}
+
 /// The loads of `$$START_LOAD_ON_MATERIAL_POINTS_SOLID` rows: Anura3D takes the traction at the
 /// face's centroid (one Gauss point), the mean of the corner values (times the radius in an
 /// axisymmetric section), times the face's area (an edge's length in 2D) as the face's total
@@ -885,28 +909,18 @@ fn add_nodal_face_loads(
     for (f, n) in faces.iter().zip(&normals) {
         let size = crate::input::faces::size(model, &f.corners);
         if let [a, b] = f.corners[..] {
-            let t: Vec<[f64; 3]> = f
-                .traction
-                .iter()
-                .map(|t| if normal { n.map(|c| c * t[0]) } else { *t })
-                .collect();
-            let (ra, rb) = (radius(model, a), radius(model, b));
-            let mut half = [0.0; 3];
-            for (d, h) in half.iter_mut().enumerate() {
-                *h = size / 2.0 * (t[0][d] * ra + t[1][d] * rb) / 2.0;
-            }
-            let on_axis = model.dimension == Dimension::Axisymmetric
-                && (ra < f64::MIN_POSITIVE || rb < f64::MIN_POSITIVE);
-            for (node, r) in [(a, ra), (b, rb)] {
+            // A liquid row's first value is a pressure along the normal.
+            let t = [0, 1].map(|c| {
+                let t = f.traction[c];
+                if normal {
+                    n.map(|v| v * t[0])
+                } else {
+                    t
+                }
+            });
+            for (node, force) in edge_forces(model, [a, b], size, t) {
                 for d in 0..3 {
-                    let shift = if !on_axis {
-                        0.0
-                    } else if r < f64::MIN_POSITIVE {
-                        -7.0 / 8.0 * half[d]
-                    } else {
-                        7.0 / 8.0 * half[d]
-                    };
-                    out[node][d] += half[d] + shift;
+                    out[node][d] += force[d];
                 }
             }
             continue;

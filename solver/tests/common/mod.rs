@@ -45,6 +45,29 @@ pub fn golden_scene(
     p
 }
 
+/// The default job's thresholds against Terzaghi, for any of its twins: from T_v = 0.05 on, the
+/// default run's RMS pore-pressure error at most 0.05 of u0, and both runs' final settlement
+/// within 0.5 % of Terzaghi's.
+pub fn assert_terzaghi_thresholds(
+    default: &mpm_solve::jobs::consolidation::Tracker,
+    workshop: &mpm_solve::jobs::consolidation::Tracker,
+) {
+    for r in default.records.iter().filter(|r| r.tv >= 0.05 - 1e-9) {
+        assert!(r.rms <= 0.05, "default at T_v {}: {}", r.tv, r.rms);
+    }
+    for t in [default, workshop] {
+        let last = t.records.last().unwrap();
+        let err = last.settlement / last.terzaghi - 1.0;
+        eprintln!(
+            "final settlement {:.4e} m, {:+.3}% off Terzaghi, RMS {:.4}",
+            last.settlement,
+            100.0 * err,
+            last.rms
+        );
+        assert!(err.abs() <= 0.005, "settlement {err}");
+    }
+}
+
 /// The Anura3D binary `ANURA3D_ORACLE` names, or `None` (the comparison `what` is reported as
 /// skipped) when it is unset.
 pub fn oracle(what: &str) -> Option<PathBuf> {
