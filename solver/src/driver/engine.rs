@@ -244,6 +244,8 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     /// The guard rails' sums of the last step per block of elements (empty when the guards are
     /// off).
     guard_slots: Vec<GuardSums>,
+    /// The grid update's per-block sums.
+    grid_scratch: grid_update::GridScratch<R>,
     /// Per material index: mass per initial volume of its points (t/m³).
     initial_density: Vec<R>,
     /// Strain energy taken up so far, Σ V σ:Δε over the steps (kJ).
@@ -476,6 +478,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             input_node,
             guards: case.guards,
             guard_slots,
+            grid_scratch: grid_update::GridScratch::new(mesh.nodes()),
             initial_density,
             strain_energy: 0.0,
             dissipated: 0.0,
@@ -568,6 +571,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             input_node: _,
             guards: _,
             guard_slots: _,
+            grid_scratch: _,
             initial_density: _,
             courant: _,
             energy_checked: _,
@@ -761,6 +765,8 @@ impl<R: Real, E: Element> Engine<R, E> {
         let t1 = Instant::now();
         let (forces, liquid_forces) = if self.grid.liquid.is_some() {
             grid_update::grid_update_two_phase(
+                &self.team,
+                &mut self.grid_scratch,
                 &mut self.grid,
                 &self.traction,
                 tm,
@@ -777,6 +783,8 @@ impl<R: Real, E: Element> Engine<R, E> {
             )
         } else {
             let f = grid_update::grid_update(
+                &self.team,
+                &mut self.grid_scratch,
                 &mut self.grid,
                 &self.traction,
                 tm,

@@ -47,8 +47,25 @@ pub struct Layout<R: Real, E: Element = Tet4> {
     _types: std::marker::PhantomData<(R, E)>,
 }
 
-/// Per-node partial sums, `NODES × elements` slots of [`WIDTH`] values.
-pub type Slots<R> = Vec<[R; WIDTH]>;
+/// Per-node partial sums: room for `NODES × elements` slots of up to [`WIDTH`] values. A pass
+/// of width W packs its slots W values apart, so that it writes and reads W values per slot,
+/// not [`WIDTH`] (a 2-wide pass moves a sixth of the bytes of a 12-wide one).
+pub type Slots<R> = Vec<R>;
+
+/// The slots of one element's nodes in a scatter's closure, `width` values each: `width` must
+/// be the scatter's W (checked in debug builds).
+#[inline(always)]
+pub fn node_slots<E: Element, R>(
+    four: &mut [R],
+    width: usize,
+) -> std::slice::ChunksExactMut<'_, R> {
+    debug_assert_eq!(
+        four.len(),
+        E::NODES * width,
+        "a slot width other than the scatter's"
+    );
+    four.chunks_exact_mut(width)
+}
 
 impl<R: Real, E: Element> Layout<R, E> {
     /// The layout of `mesh` for `threads` threads, with particles `p` (sorted by element).
@@ -155,7 +172,7 @@ impl<R: Real, E: Element> Layout<R, E> {
     /// Zeroed slots for this layout (allocated zeroed, so pages are placed by the threads that
     /// first write them).
     pub fn new_slots(&self) -> Slots<R> {
-        vec![[R::ZERO; WIDTH]; E::NODES * (self.elem_start.len() - 1)]
+        vec![R::ZERO; WIDTH * E::NODES * (self.elem_start.len() - 1)]
     }
 
     /// Particles of thread `k`.
@@ -171,22 +188,22 @@ impl<R: Real, E: Element> Layout<R, E> {
     }
 
     /// Pass 1: on every thread, for each of its elements, zeroes the slots of the element's
-    /// nodes (the first `W` values, [`Element::NODES`] slots) and calls `element(e, slots)`.
+    /// nodes ([`Element::NODES`] slots of `W` values, one after the other) and calls
+    /// `element(e, slots)`; [`node_slots`] splits them by node.
     pub fn scatter<const W: usize, F>(&self, team: &Team, slots: &mut Slots<R>, element: F)
     where
-        F: Fn(usize, &mut [[R; WIDTH]]) + Sync,
+        F: Fn(usize, &mut [R]) + Sync,
     {
+        const { assert!(W <= WIDTH) };
+        let per_element = E::NODES * W;
         let slots = Shared::new(slots);
         let ranges = &self.element_ranges;
         team.run(|k| {
             let r = ranges[k].clone();
             // SAFETY: the element ranges are disjoint, so are their slots.
-            let mine = unsafe { slots.range(E::NODES * r.start..E::NODES * r.end) };
-            for (j, e) in r.enumerate() {
-                let own = &mut mine[E::NODES * j..E::NODES * (j + 1)];
-                for s in own.iter_mut() {
-                    s[..W].fill(R::ZERO);
-                }
+            let mine = unsafe { slots.range(per_element * r.start..per_element * r.end) };
+            for (own, e) in mine.chunks_exact_mut(per_element).zip(r) {
+                own.fill(R::ZERO);
                 element(e, own);
             }
         });
@@ -204,7 +221,7 @@ impl<R: Real, E: Element> Layout<R, E> {
                 for &s in
                     &self.node_slot[self.node_start[n] as usize..self.node_start[n + 1] as usize]
                 {
-                    let v = &slots[s as usize];
+                    let v = &slots[W * s as usize..W * s as usize + W];
                     for c in 0..W {
                         sum[c] += v[c];
                     }

@@ -182,18 +182,34 @@ impl Team {
     /// order: the same bits for any thread count.
     pub fn sum_blocks<F: Fn(Range<usize>) -> f64 + Sync>(&self, n: usize, f: F) -> f64 {
         const BLOCK: usize = 4096;
-        let blocks = n.div_ceil(BLOCK);
-        let mut partial = vec![0.0; blocks];
-        let out = Shared::new(&mut partial);
+        let mut partial = vec![0.0; n.div_ceil(BLOCK)];
+        self.for_blocks(n, BLOCK, &mut partial, f);
+        partial.iter().sum()
+    }
+
+    /// `out[b] = f(block b)` for the fixed blocks `b·block..(b+1)·block` of `0..n` (the last
+    /// shorter), each thread taking a contiguous run of blocks: a per-block result (a partial
+    /// sum formed in item order) is then the same for any thread count, and `f` may write
+    /// per-item data of its block, which no other call touches. `out` holds at least
+    /// `n.div_ceil(block)` values (preallocated, so that a step allocates nothing).
+    pub fn for_blocks<T: Send, F: Fn(Range<usize>) -> T + Sync>(
+        &self,
+        n: usize,
+        block: usize,
+        out: &mut [T],
+        f: F,
+    ) {
+        let blocks = n.div_ceil(block);
+        assert!(out.len() >= blocks, "fewer result slots than blocks");
+        let out = Shared::new(out);
         let per = blocks.div_ceil(self.threads.max(1));
         self.run(|k| {
             for b in k * per..((k + 1) * per).min(blocks) {
-                let v = f(b * BLOCK..((b + 1) * BLOCK).min(n));
+                let v = f(b * block..((b + 1) * block).min(n));
                 // SAFETY: block b belongs to thread k only.
                 unsafe { out.write(b, v) };
             }
         });
-        partial.iter().sum()
     }
 }
 

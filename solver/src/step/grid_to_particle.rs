@@ -4,7 +4,7 @@
 use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::material::liquid::Fluid;
-use crate::parallel::gather::{Layout, Slots, ELEMENT_BLOCK};
+use crate::parallel::gather::{node_slots, Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
@@ -38,7 +38,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
     let flip = R::ONE - pic;
     // One element's points; with `want`, their kinetic energy. Two scatters below, each with
     // `want` fixed, so that the run without guards keeps the loop it had without them.
-    let element = |e: usize, four: &mut [[R; crate::parallel::gather::WIDTH]], want: bool| {
+    let element = |e: usize, four: &mut [R], want: bool| {
         let mut kinetic = 0.0;
         // The element's points, each array sliced to them once (one length): the loop then
         // indexes without bounds checks.
@@ -59,7 +59,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
             let n = n.as_ref();
             let dv = interpolate(mesh, e, n, acc);
             let v = &mut vel[i];
-            for c in 0..3 {
+            for c in 0..E::DIM {
                 v[c] += dt * dv[c];
             }
             if pic > R::ZERO {
@@ -71,33 +71,33 @@ pub fn grid_to_particle<E: Element, R: Real>(
                     if m <= empty {
                         continue;
                     }
-                    for c in 0..3 {
+                    for c in 0..E::DIM {
                         if !fixed[node][c] {
                             grid_v[c] += nk * (momentum[node][c] / m + dt * acc[node][c]);
                         }
                     }
                 }
-                for c in 0..3 {
+                for c in 0..E::DIM {
                     v[c] = flip * v[c] + pic * grid_v[c];
                 }
             }
-            for (k, slot) in four.iter_mut().enumerate() {
+            for (k, slot) in node_slots::<E, R>(four, E::DIM).enumerate() {
                 let w = mass[i] * n[k];
-                for c in 0..3 {
+                for c in 0..E::DIM {
                     slot[c] += w * v[c];
                 }
             }
             if want {
-                kinetic += (mass[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])).f64();
+                kinetic += (mass[i] * dot::<E, R>(v, v)).f64();
             }
         }
         kinetic
     };
     match &guard {
-        None => layout.scatter::<3, _>(team, slots, |e, four| {
+        None => scatter::<E, R>(layout, team, slots, |e, four| {
             element(e, four, false);
         }),
-        Some(guard) => layout.scatter::<3, _>(team, slots, |e, four| {
+        Some(guard) => scatter::<E, R>(layout, team, slots, |e, four| {
             let kinetic = element(e, four, true);
             let b = e / ELEMENT_BLOCK;
             // SAFETY: the scatter hands element e to one thread only, once, in element order,
@@ -125,7 +125,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
     );
 }
 
-/// Σ N_k a_k over the nodes of element `e`.
+/// Σ N_k a_k over the nodes of element `e` (the in-plane components of a 2D element, z 0).
 #[inline]
 fn interpolate<E: Element, R: Real>(
     mesh: &Mesh<E, R>,
@@ -136,11 +136,35 @@ fn interpolate<E: Element, R: Real>(
     let mut out = [R::ZERO; 3];
     for k in 0..E::NODES {
         let a = nodal[mesh.corners[e].as_ref()[k] as usize];
-        for c in 0..3 {
+        for c in 0..E::DIM {
             out[c] += n[k] * a[c];
         }
     }
     out
+}
+
+/// v · w over the element's dimensions.
+#[inline(always)]
+fn dot<E: Element, R: Real>(v: &V3<R>, w: &V3<R>) -> R {
+    let mut s = R::ZERO;
+    for c in 0..E::DIM {
+        s += v[c] * w[c];
+    }
+    s
+}
+
+/// A scatter of one vector per node, as wide as the element's dimension.
+fn scatter<E: Element, R: Real>(
+    layout: &Layout<R, E>,
+    team: &Team,
+    slots: &mut Slots<R>,
+    element: impl Fn(usize, &mut [R]) + Sync,
+) {
+    if E::DIM == 2 {
+        layout.scatter::<2, _>(team, slots, element);
+    } else {
+        layout.scatter::<3, _>(team, slots, element);
+    }
 }
 
 /// Nodal velocities from the re-mapped momentum in `slots`: zero at empty nodes and in fixed
@@ -155,10 +179,10 @@ fn nodal_velocity<E: Element, R: Real>(
     vel: &mut [V3<R>],
 ) {
     let out = Shared::new(vel);
-    layout.gather::<3, _>(team, slots, |n, momentum| {
+    let node = |n: usize, momentum: &[R]| {
         let mut v = [R::ZERO; 3];
         if mass[n] > empty_below {
-            for c in 0..3 {
+            for c in 0..E::DIM {
                 if !fixed[n][c] {
                     v[c] = momentum[c] / mass[n];
                 }
@@ -166,7 +190,12 @@ fn nodal_velocity<E: Element, R: Real>(
         }
         // SAFETY: node n is this thread's only.
         unsafe { out.write(n, v) };
-    });
+    };
+    if E::DIM == 2 {
+        layout.gather::<2, _>(team, slots, |n, m| node(n, &m));
+    } else {
+        layout.gather::<3, _>(team, slots, |n, m| node(n, &m));
+    }
 }
 
 /// The liquid's share of grid to particle: liquid velocities of the points updated from the
@@ -194,7 +223,7 @@ pub fn liquid_to_particles<E: Element, R: Real>(
     let w_out = Shared::new(&mut lp.w);
     let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
     let acc = &gl.acc;
-    layout.scatter::<3, _>(team, slots, |e, four| {
+    scatter::<E, R>(layout, team, slots, |e, four| {
         let mut kinetic = 0.0;
         for i in layout.particles_of(e) {
             let Some(f) = fluids[material[i] as usize] else {
@@ -208,18 +237,18 @@ pub fn liquid_to_particles<E: Element, R: Real>(
             let dw = interpolate(mesh, e, n, acc);
             // SAFETY: particle i (of element e) belongs to this thread only.
             let w = unsafe { &mut w_out.range(i..i + 1)[0] };
-            for c in 0..3 {
+            for c in 0..E::DIM {
                 w[c] += dt * dw[c];
             }
             // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
             let mw = f.rho_w * lp.volume0.as_ref().map_or(volume[i], |v0| v0[i]);
-            for (k, slot) in four.iter_mut().enumerate() {
-                for c in 0..3 {
+            for (k, slot) in node_slots::<E, R>(four, E::DIM).enumerate() {
+                for c in 0..E::DIM {
                     slot[c] += mw * n[k] * w[c];
                 }
             }
             if guard.is_some() {
-                kinetic += (f.n * mw * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2])).f64();
+                kinetic += (f.n * mw * dot::<E, R>(w, w)).f64();
             }
         }
         if let Some(guard) = &guard {

@@ -1,7 +1,58 @@
 //! Grid update: nodal accelerations with local damping and fixities (docs/design.md §4, step 2).
 
+use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
+
+/// Nodes per block of the grid update: each block's force and energy sums are formed in node
+/// order by one thread and the blocks added in order, so the sums are the same for any thread
+/// count.
+pub const NODE_BLOCK: usize = 1024;
+
+/// The grid update's per-block results, preallocated for a mesh's nodes (a step allocates
+/// nothing).
+#[derive(Debug, Clone)]
+pub struct GridScratch<R> {
+    heaviest: Vec<R>,
+    sums: Vec<(ForceSums, ForceSums)>,
+}
+
+impl<R: Real> GridScratch<R> {
+    /// Room for the blocks of `nodes` nodes.
+    pub fn new(nodes: usize) -> Self {
+        let blocks = nodes.div_ceil(NODE_BLOCK);
+        GridScratch {
+            heaviest: vec![R::ZERO; blocks],
+            sums: vec![(ForceSums::default(), ForceSums::default()); blocks],
+        }
+    }
+
+    /// The mass below which a node counts as empty ([`MASS_EPS`] of the heaviest), on the team.
+    fn empty_below(&mut self, team: &Team, mass: &[R]) -> R {
+        team.for_blocks(mass.len(), NODE_BLOCK, &mut self.heaviest, |r| {
+            mass[r].iter().fold(R::ZERO, |a, &b| a.max(b))
+        });
+        let blocks = mass.len().div_ceil(NODE_BLOCK);
+        let heaviest = self.heaviest[..blocks]
+            .iter()
+            .fold(R::ZERO, |a, &b| a.max(b));
+        heaviest * R::of(MASS_EPS)
+    }
+
+    /// The blocks' sums of `nodes` nodes, added in block order.
+    fn total(&self, nodes: usize) -> (ForceSums, ForceSums) {
+        let add = |a: ForceSums, b: &ForceSums| ForceSums {
+            unbalanced: a.unbalanced + b.unbalanced,
+            external: a.external + b.external,
+            work: a.work + b.work,
+            dissipated: a.dissipated + b.dissipated,
+        };
+        self.sums[..nodes.div_ceil(NODE_BLOCK)].iter().fold(
+            (ForceSums::default(), ForceSums::default()),
+            |(a, aw), (b, bw)| (add(a, b), add(aw, bw)),
+        )
+    }
+}
 
 /// Local damping of force `f` at a node moving with `v` (one component):
 /// f - α |f| sign(v). At rest (v = 0) Anura3D's rule leaves the force undamped; the scenes'
@@ -63,8 +114,13 @@ pub const MASS_EPS: f64 = 1e-12;
 /// convergence check, |f_int + f_ext| / |f_ext| over the free components
 /// ([`ForceSums::ratio`] once summed over every process), and the energy terms of the step
 /// at the nodes' mid-step velocities v + a Δt/2 (`dt`: the step): the work of the external
-/// force and the energy local damping took out.
+/// force and the energy local damping took out. The nodes are shared out on the team in
+/// blocks of [`NODE_BLOCK`], and the sums formed per block (`scratch`): the same for any
+/// thread count.
+#[allow(clippy::too_many_arguments)]
 pub fn grid_update<R: Real>(
+    team: &Team,
+    scratch: &mut GridScratch<R>,
     g: &mut Grid<R>,
     traction: &[V3<R>],
     scale: R,
@@ -73,43 +129,56 @@ pub fn grid_update<R: Real>(
     rule: DampingRule,
     dt: R,
 ) -> ForceSums {
-    let (mut unbalanced, mut external) = (0.0, 0.0);
-    let (mut work, mut damping) = (0.0, 0.0);
     let half_dt = R::of(0.5) * dt;
-    let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
-    let eps = heaviest * R::of(MASS_EPS);
+    let nodes = g.mass.len();
+    let eps = scratch.empty_below(team, &g.mass);
     g.empty_below = eps;
-    for n in 0..g.mass.len() {
-        let m = g.mass[n];
-        if m <= eps {
-            g.acc[n] = [R::ZERO; 3];
-            continue;
-        }
-        let (mut out2, mut ext2) = (0.0, 0.0);
-        for a in 0..3 {
-            if fixed[n][a] {
-                g.acc[n][a] = R::ZERO;
+    let (mass, f_ext, f_int, momentum) = (&g.mass, &g.f_ext, &g.f_int, &g.momentum);
+    let acc_out = Shared::new(&mut g.acc);
+    team.for_blocks(nodes, NODE_BLOCK, &mut scratch.sums, |r| {
+        // SAFETY: the nodes of this block are this call's only.
+        let acc_out = unsafe { acc_out.range(r.clone()) };
+        let (mut unbalanced, mut external) = (0.0, 0.0);
+        let (mut work, mut damping) = (0.0, 0.0);
+        for (n, acc_n) in r.zip(acc_out) {
+            let m = mass[n];
+            if m <= eps {
+                *acc_n = [R::ZERO; 3];
                 continue;
             }
-            let ext = g.f_ext[n][a] + scale * traction[n][a];
-            let f = g.f_int[n][a] + ext;
-            out2 += f.f64() * f.f64();
-            ext2 += ext.f64() * ext.f64();
-            let fd = damp(rule, alpha, f, g.momentum[n][a]);
-            let acc = fd / m;
-            g.acc[n][a] = acc;
-            let v_mid = (g.momentum[n][a] / m + half_dt * acc).f64();
-            work += ext.f64() * v_mid;
-            damping += (f - fd).f64() * v_mid;
+            let (mut out2, mut ext2) = (0.0, 0.0);
+            for a in 0..3 {
+                if fixed[n][a] {
+                    acc_n[a] = R::ZERO;
+                    continue;
+                }
+                let ext = f_ext[n][a] + scale * traction[n][a];
+                let f = f_int[n][a] + ext;
+                out2 += f.f64() * f.f64();
+                ext2 += ext.f64() * ext.f64();
+                let fd = damp(rule, alpha, f, momentum[n][a]);
+                let acc = fd / m;
+                acc_n[a] = acc;
+                let v_mid = (momentum[n][a] / m + half_dt * acc).f64();
+                work += ext.f64() * v_mid;
+                damping += (f - fd).f64() * v_mid;
+            }
+            unbalanced += out2.sqrt();
+            external += ext2.sqrt();
         }
-        unbalanced += out2.sqrt();
-        external += ext2.sqrt();
-    }
+        let sums = ForceSums {
+            unbalanced,
+            external,
+            work,
+            dissipated: damping,
+        };
+        (sums, ForceSums::default())
+    });
+    let (s, _) = scratch.total(nodes);
     ForceSums {
-        unbalanced,
-        external,
-        work: work * dt.f64(),
-        dissipated: damping * dt.f64(),
+        work: s.work * dt.f64(),
+        dissipated: s.dissipated * dt.f64(),
+        ..s
     }
 }
 
@@ -181,6 +250,8 @@ impl ForceSums {
 /// dissipated. A fixed liquid component (an impermeable face) drops the liquid's term.
 #[allow(clippy::too_many_arguments)]
 pub fn grid_update_two_phase<R: Real>(
+    team: &Team,
+    scratch: &mut GridScratch<R>,
     g: &mut Grid<R>,
     traction: &[V3<R>],
     scale: R,
@@ -195,156 +266,174 @@ pub fn grid_update_two_phase<R: Real>(
     gravity: V3<R>,
     dt: R,
 ) -> (ForceSums, ForceSums) {
-    let (mut unbalanced, mut external) = (0.0, 0.0);
-    let (mut unbalanced_w, mut external_w) = (0.0, 0.0);
-    let (mut work, mut dissipated) = (0.0, 0.0);
     let half_dt = R::of(0.5) * dt;
-    let heaviest = g.mass.iter().fold(R::ZERO, |a, &b| a.max(b));
-    let eps = heaviest * R::of(MASS_EPS);
+    let nodes = g.mass.len();
+    let eps = scratch.empty_below(team, &g.mass);
     g.empty_below = eps;
     let gl = g.liquid.as_mut().expect("liquid arrays");
-    for n in 0..g.mass.len() {
-        let ms = g.mass[n];
-        if ms <= eps {
-            g.acc[n] = [R::ZERO; 3];
-            gl.acc[n] = [R::ZERO; 3];
-            continue;
-        }
-        let (mw, mwn, q) = (gl.mass[n], gl.mass_n[n], gl.drag[n]);
-        let wet = mw > eps;
-        let (mut out2, mut ext2, mut out2_w, mut ext2_w) = (0.0, 0.0, 0.0, 0.0);
-        for a in 0..3 {
-            let lt = liquid_scale * liquid_traction[n][a];
-            let ext = if liquid_load_on_mixture {
-                g.f_ext[n][a] + scale * traction[n][a] + lt
-            } else {
-                g.f_ext[n][a] + scale * traction[n][a]
-            };
-            let f_mix = g.f_int[n][a] + ext;
-            if !fixed[n][a] {
-                out2 += f_mix.f64() * f_mix.f64();
-                ext2 += ext.f64() * ext.f64();
-            }
-            if !wet {
-                g.acc[n][a] = if fixed[n][a] {
-                    R::ZERO
-                } else {
-                    damp(rule, alpha, f_mix, g.momentum[n][a]) / ms
-                };
-                if !fixed[n][a] {
-                    let v_mid = (g.momentum[n][a] / ms + half_dt * g.acc[n][a]).f64();
-                    work += ext.f64() * v_mid;
-                    dissipated += (f_mix - ms * g.acc[n][a]).f64() * v_mid;
-                }
-                gl.acc[n][a] = R::ZERO;
+    let (mass, f_ext, f_int, momentum) = (&g.mass, &g.f_ext, &g.f_int, &g.momentum);
+    let (l_mass, l_mass_n, l_drag, l_momentum, l_force) =
+        (&gl.mass, &gl.mass_n, &gl.drag, &gl.momentum, &gl.force);
+    let (acc_s, acc_w) = (Shared::new(&mut g.acc), Shared::new(&mut gl.acc));
+    team.for_blocks(nodes, NODE_BLOCK, &mut scratch.sums, |r| {
+        // SAFETY: the nodes of this block are this call's only.
+        let (acc_s, acc_w) = unsafe { (acc_s.range(r.clone()), acc_w.range(r.clone())) };
+        let (mut unbalanced, mut external) = (0.0, 0.0);
+        let (mut unbalanced_w, mut external_w) = (0.0, 0.0);
+        let (mut work, mut dissipated) = (0.0, 0.0);
+        for ((n, acc_s), acc_w) in r.zip(acc_s).zip(acc_w) {
+            let ms = mass[n];
+            if ms <= eps {
+                *acc_s = [R::ZERO; 3];
+                *acc_w = [R::ZERO; 3];
                 continue;
             }
-            let f_w = gl.force[n][a] + lt;
-            // Start-of-step velocities of the fixity-masked phases (Anura3D's nodal velocities).
-            let v = if fixed[n][a] {
-                R::ZERO
-            } else {
-                g.momentum[n][a] / ms
-            };
-            let w = if liquid_fixed[n][a] {
-                R::ZERO
-            } else {
-                gl.momentum[n][a] / mw
-            };
-            if !liquid_fixed[n][a] {
-                let qvw = q * (v - w);
-                let (out, ext) = (f_w + qvw, mw * gravity[a] + lt + qvw);
-                out2_w += out.f64() * out.f64();
-                ext2_w += ext.f64() * ext.f64();
-            }
-            let fw = match rule {
-                DampingRule::Phases => f_w,
-                DampingRule::Anura3d => damp(rule, alpha, f_w, w),
-            };
-            // The liquid's acceleration with the drag at the start-of-step velocities.
-            let a_w_explicit = if liquid_fixed[n][a] {
-                R::ZERO
-            } else {
-                (fw + q * (v - w)) / mw
-            };
-            let fs = match rule {
-                DampingRule::Phases => {
-                    let f_wn = mwn / mw * f_w;
-                    damp(rule, alpha, f_mix - f_wn, g.momentum[n][a])
-                        + damp(rule, alpha, f_wn, gl.momentum[n][a])
+            let (mw, mwn, q) = (l_mass[n], l_mass_n[n], l_drag[n]);
+            let wet = mw > eps;
+            let (mut out2, mut ext2, mut out2_w, mut ext2_w) = (0.0, 0.0, 0.0, 0.0);
+            for a in 0..3 {
+                let lt = liquid_scale * liquid_traction[n][a];
+                let ext = if liquid_load_on_mixture {
+                    f_ext[n][a] + scale * traction[n][a] + lt
+                } else {
+                    f_ext[n][a] + scale * traction[n][a]
+                };
+                let f_mix = f_int[n][a] + ext;
+                if !fixed[n][a] {
+                    out2 += f_mix.f64() * f_mix.f64();
+                    ext2 += ext.f64() * ext.f64();
                 }
-                DampingRule::Anura3d => {
-                    // Anura3D damps the liquid part of the mixture's force against the liquid
-                    // velocity it has just updated (with the explicit drag), the solid part
-                    // against the start-of-step solid velocity.
-                    let w_end = match drag {
-                        Drag::Explicit => w + a_w_explicit * dt,
-                        Drag::Implicit => w,
-                    };
-                    let f_wn = mwn / mw * f_w;
-                    damp(rule, alpha, f_mix - f_wn, v) + damp(rule, alpha, f_wn, w_end)
-                }
-            };
-            let (a_s, a_w) = match drag {
-                Drag::Implicit => {
-                    // Relative velocity w - v at the start of the step.
-                    let dv = gl.momentum[n][a] / mw - g.momentum[n][a] / ms;
-                    let qdt = q * dt;
-                    match (fixed[n][a], liquid_fixed[n][a]) {
-                        (true, true) => (R::ZERO, R::ZERO),
-                        (true, false) => (R::ZERO, (fw - q * dv) / (mw + qdt)),
-                        (false, true) => (fs / ms, R::ZERO),
-                        (false, false) => {
-                            let a_w =
-                                (fw - q * dv + qdt * fs / ms) / (mw + qdt * (R::ONE + mwn / ms));
-                            ((fs - mwn * a_w) / ms, a_w)
-                        }
-                    }
-                }
-                Drag::Explicit => {
-                    let a_s = if fixed[n][a] {
+                if !wet {
+                    acc_s[a] = if fixed[n][a] {
                         R::ZERO
                     } else {
-                        (fs - mwn * a_w_explicit) / ms
+                        damp(rule, alpha, f_mix, momentum[n][a]) / ms
                     };
-                    (a_s, a_w_explicit)
+                    if !fixed[n][a] {
+                        let v_mid = (momentum[n][a] / ms + half_dt * acc_s[a]).f64();
+                        work += ext.f64() * v_mid;
+                        dissipated += (f_mix - ms * acc_s[a]).f64() * v_mid;
+                    }
+                    acc_w[a] = R::ZERO;
+                    continue;
                 }
-            };
-            g.acc[n][a] = a_s;
-            gl.acc[n][a] = a_w;
-            // The step's energy terms (see above), the fixed phases at rest.
-            let v_mid = (v + half_dt * a_s).f64();
-            let mut power = f_mix.f64() * v_mid;
-            let mut external = ext.f64() * v_mid;
-            let mut kinetic = (ms * a_s).f64() * v_mid;
-            if !liquid_fixed[n][a] {
-                let w_mid = (w + half_dt * a_w).f64();
-                let porosity = (mwn / mw).f64();
-                let relative = porosity * (w_mid - v_mid);
-                power += f_w.f64() * relative;
-                external += (mw * gravity[a] + lt).f64() * relative;
-                kinetic += (mwn * a_w).f64() * w_mid;
+                let f_w = l_force[n][a] + lt;
+                // Start-of-step velocities of the fixity-masked phases (Anura3D's nodal
+                // velocities).
+                let v = if fixed[n][a] {
+                    R::ZERO
+                } else {
+                    momentum[n][a] / ms
+                };
+                let w = if liquid_fixed[n][a] {
+                    R::ZERO
+                } else {
+                    l_momentum[n][a] / mw
+                };
+                if !liquid_fixed[n][a] {
+                    let qvw = q * (v - w);
+                    let (out, ext) = (f_w + qvw, mw * gravity[a] + lt + qvw);
+                    out2_w += out.f64() * out.f64();
+                    ext2_w += ext.f64() * ext.f64();
+                }
+                let fw = match rule {
+                    DampingRule::Phases => f_w,
+                    DampingRule::Anura3d => damp(rule, alpha, f_w, w),
+                };
+                // The liquid's acceleration with the drag at the start-of-step velocities.
+                let a_w_explicit = if liquid_fixed[n][a] {
+                    R::ZERO
+                } else {
+                    (fw + q * (v - w)) / mw
+                };
+                let fs = match rule {
+                    DampingRule::Phases => {
+                        let f_wn = mwn / mw * f_w;
+                        damp(rule, alpha, f_mix - f_wn, momentum[n][a])
+                            + damp(rule, alpha, f_wn, l_momentum[n][a])
+                    }
+                    DampingRule::Anura3d => {
+                        // Anura3D damps the liquid part of the mixture's force against the
+                        // liquid velocity it has just updated (with the explicit drag), the
+                        // solid part against the start-of-step solid velocity.
+                        let w_end = match drag {
+                            Drag::Explicit => w + a_w_explicit * dt,
+                            Drag::Implicit => w,
+                        };
+                        let f_wn = mwn / mw * f_w;
+                        damp(rule, alpha, f_mix - f_wn, v) + damp(rule, alpha, f_wn, w_end)
+                    }
+                };
+                let (a_s, a_w) = match drag {
+                    Drag::Implicit => {
+                        // Relative velocity w - v at the start of the step.
+                        let dv = l_momentum[n][a] / mw - momentum[n][a] / ms;
+                        let qdt = q * dt;
+                        match (fixed[n][a], liquid_fixed[n][a]) {
+                            (true, true) => (R::ZERO, R::ZERO),
+                            (true, false) => (R::ZERO, (fw - q * dv) / (mw + qdt)),
+                            (false, true) => (fs / ms, R::ZERO),
+                            (false, false) => {
+                                let a_w = (fw - q * dv + qdt * fs / ms)
+                                    / (mw + qdt * (R::ONE + mwn / ms));
+                                ((fs - mwn * a_w) / ms, a_w)
+                            }
+                        }
+                    }
+                    Drag::Explicit => {
+                        let a_s = if fixed[n][a] {
+                            R::ZERO
+                        } else {
+                            (fs - mwn * a_w_explicit) / ms
+                        };
+                        (a_s, a_w_explicit)
+                    }
+                };
+                acc_s[a] = a_s;
+                acc_w[a] = a_w;
+                // The step's energy terms (see above), the fixed phases at rest.
+                let v_mid = (v + half_dt * a_s).f64();
+                let mut power = f_mix.f64() * v_mid;
+                let mut external = ext.f64() * v_mid;
+                let mut kinetic = (ms * a_s).f64() * v_mid;
+                if !liquid_fixed[n][a] {
+                    let w_mid = (w + half_dt * a_w).f64();
+                    let porosity = (mwn / mw).f64();
+                    let relative = porosity * (w_mid - v_mid);
+                    power += f_w.f64() * relative;
+                    external += (mw * gravity[a] + lt).f64() * relative;
+                    kinetic += (mwn * a_w).f64() * w_mid;
+                }
+                work += external;
+                dissipated += power - kinetic;
             }
-            work += external;
-            dissipated += power - kinetic;
+            unbalanced += out2.sqrt();
+            external += ext2.sqrt();
+            unbalanced_w += out2_w.sqrt();
+            external_w += ext2_w.sqrt();
         }
-        unbalanced += out2.sqrt();
-        external += ext2.sqrt();
-        unbalanced_w += out2_w.sqrt();
-        external_w += ext2_w.sqrt();
-    }
+        (
+            ForceSums {
+                unbalanced,
+                external,
+                work,
+                dissipated,
+            },
+            ForceSums {
+                unbalanced: unbalanced_w,
+                external: external_w,
+                ..ForceSums::default()
+            },
+        )
+    });
+    let (s, w) = scratch.total(nodes);
     (
         ForceSums {
-            unbalanced,
-            external,
-            work: work * dt.f64(),
-            dissipated: dissipated * dt.f64(),
+            work: s.work * dt.f64(),
+            dissipated: s.dissipated * dt.f64(),
+            ..s
         },
-        ForceSums {
-            unbalanced: unbalanced_w,
-            external: external_w,
-            ..ForceSums::default()
-        },
+        w,
     )
 }
 
@@ -373,7 +462,10 @@ mod tests {
 
     fn energies(g: &mut Grid<f64>, alpha: f64, drag: Drag, fixed: [bool; 3]) -> ForceSums {
         let gravity = [0.0, -9.81, 0.0];
+        let team = Team::new(1, crate::parallel::team::Pin::None).unwrap();
         grid_update_two_phase(
+            &team,
+            &mut GridScratch::new(1),
             g,
             &[[0.1, 0.2, 0.0]],
             1.0,
@@ -413,5 +505,92 @@ mod tests {
         // A fixed liquid: the solid alone, undamped and without drag, dissipates nothing.
         let s = energies(&mut node(50.0), 0.0, Drag::Implicit, [true; 3]);
         assert!(s.dissipated.abs() < 1e-15, "{}", s.dissipated);
+    }
+
+    /// A grid of `n` nodes with pseudo-random masses (some empty), momenta, forces and
+    /// fixities, saturated.
+    fn random_grid(n: usize) -> (Grid<f64>, Vec<[bool; 3]>, Vec<[f64; 3]>) {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut g = Grid::new(n);
+        let mut l = LiquidNodes::new(n);
+        let mut fixed = vec![[false; 3]; n];
+        let mut traction = vec![[0.0; 3]; n];
+        for i in 0..n {
+            g.mass[i] = if i % 17 == 0 { 0.0 } else { 1.0 + next() };
+            l.mass[i] = 0.5 + next() * 0.5;
+            l.mass_n[i] = 0.4 * l.mass[i];
+            l.drag[i] = 10.0 + next();
+            for a in 0..3 {
+                g.momentum[i][a] = next();
+                g.f_int[i][a] = next();
+                g.f_ext[i][a] = next();
+                l.momentum[i][a] = next();
+                l.force[i][a] = next();
+                traction[i][a] = next();
+                fixed[i][a] = next() > 0.4;
+            }
+        }
+        g.liquid = Some(l);
+        (g, fixed, traction)
+    }
+
+    #[test]
+    fn the_grid_update_is_the_same_for_any_thread_count() {
+        // Several blocks of nodes, the last one short: accelerations and every sum bit for bit.
+        let n = 3 * NODE_BLOCK + 77;
+        let run = |threads: usize| {
+            let team = Team::new(threads, crate::parallel::team::Pin::None).unwrap();
+            let mut scratch = GridScratch::new(n);
+            let (mut g, fixed, traction) = random_grid(n);
+            let two = grid_update_two_phase(
+                &team,
+                &mut scratch,
+                &mut g,
+                &traction,
+                0.7,
+                &traction,
+                0.3,
+                &fixed,
+                &fixed,
+                0.05,
+                DampingRule::Phases,
+                Drag::Implicit,
+                true,
+                [0.0, -9.81, 0.0],
+                1e-3,
+            );
+            let (mut d, _, _) = random_grid(n);
+            d.liquid = None;
+            let dry = grid_update(
+                &team,
+                &mut scratch,
+                &mut d,
+                &traction,
+                0.7,
+                &fixed,
+                0.05,
+                DampingRule::Anura3d,
+                1e-3,
+            );
+            let acc = |g: &Grid<f64>| {
+                let mut v: Vec<u64> = g.acc.iter().flatten().map(|x| x.to_bits()).collect();
+                if let Some(l) = &g.liquid {
+                    v.extend(l.acc.iter().flatten().map(|x| x.to_bits()));
+                }
+                v
+            };
+            (two, dry, acc(&g), acc(&d))
+        };
+        let one = run(1);
+        assert!(one.0 .0.unbalanced > 0.0 && one.1.work != 0.0);
+        for threads in [2, 3] {
+            assert_eq!(run(threads), one, "{threads} threads");
+        }
     }
 }

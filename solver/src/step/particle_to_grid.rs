@@ -2,23 +2,54 @@
 //! summed element by element and then node by node on the team (see [`crate::parallel::gather`]).
 
 use crate::element::mesh::Mesh;
+use crate::element::tet4::Tet4;
+use crate::element::tri3::Tri3;
 use crate::element::Element;
 use crate::material::liquid::Fluid;
-use crate::parallel::gather::{Layout, Slots};
+use crate::parallel::gather::{node_slots, Layout, Slots};
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 use crate::step::mixed::Mixed;
 
-/// f = σ ∇N for symmetric σ (xx yy zz xy yz zx).
-#[inline]
-fn traction<R: Real>(s: &[R; 6], dn: &V3<R>) -> V3<R> {
-    [
-        s[0] * dn[0] + s[3] * dn[1] + s[5] * dn[2],
-        s[3] * dn[0] + s[1] * dn[1] + s[4] * dn[2],
-        s[5] * dn[0] + s[4] * dn[1] + s[2] * dn[2],
-    ]
+/// f = σ ∇N for symmetric σ (xx yy zz xy yz zx); in a 2D element (∂N/∂z = 0) only the
+/// in-plane components, the z-component left 0.
+#[inline(always)]
+fn traction<E: Element, R: Real>(s: &[R; 6], dn: &V3<R>) -> V3<R> {
+    if E::DIM == 2 {
+        [
+            s[0] * dn[0] + s[3] * dn[1],
+            s[3] * dn[0] + s[1] * dn[1],
+            R::ZERO,
+        ]
+    } else {
+        [
+            s[0] * dn[0] + s[3] * dn[1] + s[5] * dn[2],
+            s[3] * dn[0] + s[1] * dn[1] + s[4] * dn[2],
+            s[5] * dn[0] + s[4] * dn[1] + s[2] * dn[2],
+        ]
+    }
+}
+
+/// Values per node of the solid pass: the mass, then momentum, internal force and weight with
+/// [`Element::DIM`] components each (a 2D element's z-components are 0 and not summed).
+const fn solid_width<E: Element>() -> usize {
+    1 + 3 * E::DIM
+}
+
+/// Values per node of the liquid pass: the two liquid masses and the drag, then liquid
+/// momentum, liquid force and the liquid's weight, [`Element::DIM`] components each.
+const fn liquid_width<E: Element>() -> usize {
+    3 + 3 * E::DIM
+}
+
+/// The first `E::DIM` values of `s` from `at` as a 3-vector (z 0 in 2D).
+#[inline(always)]
+fn vector<E: Element, R: Real>(s: &[R], at: usize) -> V3<R> {
+    let mut v = [R::ZERO; 3];
+    v[..E::DIM].copy_from_slice(&s[at..at + E::DIM]);
+    v
 }
 
 /// Maps every active particle to the nodes of its element: mass, momentum, internal force
@@ -47,7 +78,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
             (m.rule, &m.boundary[..]),
         )
     });
-    layout.scatter::<10, _>(team, slots, |e, four| {
+    let element = |e: usize, four: &mut [R]| {
         let grad = mesh.grad[e].as_ref();
         let range = layout.particles_of(e);
         // Mixed integration: is the element full, and its mean stress.
@@ -95,10 +126,10 @@ pub fn particle_to_grid<E: Element, R: Real>(
                         *c += pm;
                     }
                 }
-                for (k, slot) in four.iter_mut().enumerate() {
-                    let f = traction(&s, &grad[k]);
-                    for a in 0..3 {
-                        slot[4 + a] -= ve * f[a];
+                for (k, slot) in node_slots::<E, R>(four, solid_width::<E>()).enumerate() {
+                    let f = traction::<E, R>(&s, &grad[k]);
+                    for a in 0..E::DIM {
+                        slot[1 + E::DIM + a] -= ve * f[a];
                     }
                 }
             }
@@ -141,34 +172,43 @@ pub fn particle_to_grid<E: Element, R: Real>(
             } else {
                 R::ZERO
             };
-            for (k, slot) in four.iter_mut().enumerate() {
+            for (k, slot) in node_slots::<E, R>(four, solid_width::<E>()).enumerate() {
                 let w = m * n[k];
-                let f = traction(&s, &grad[k]);
+                let f = traction::<E, R>(&s, &grad[k]);
                 slot[0] += w;
-                for a in 0..3 {
+                for a in 0..E::DIM {
                     slot[1 + a] += w * v[a];
-                    slot[4 + a] -= f[a];
-                    slot[7 + a] += w * gravity[a];
+                    slot[1 + E::DIM + a] -= f[a];
+                    slot[1 + 2 * E::DIM + a] += w * gravity[a];
                 }
                 if E::AXISYMMETRIC {
-                    slot[4] -= hoop * n[k];
+                    slot[1 + E::DIM] -= hoop * n[k];
                 }
             }
         }
-    });
+    };
     let mass = Shared::new(&mut g.mass);
     let momentum = Shared::new(&mut g.momentum);
     let f_int = Shared::new(&mut g.f_int);
     let f_ext = Shared::new(&mut g.f_ext);
-    layout.gather::<10, _>(team, slots, |n, s| {
+    let node = |n: usize, s: &[R]| {
         // SAFETY: node n is this thread's only.
         unsafe {
             mass.write(n, s[0]);
-            momentum.write(n, [s[1], s[2], s[3]]);
-            f_int.write(n, [s[4], s[5], s[6]]);
-            f_ext.write(n, [s[7], s[8], s[9]]);
+            momentum.write(n, vector::<E, R>(s, 1));
+            f_int.write(n, vector::<E, R>(s, 1 + E::DIM));
+            f_ext.write(n, vector::<E, R>(s, 1 + 2 * E::DIM));
         }
-    });
+    };
+    // The pass as wide as the element's dimension needs (7 values in 2D, 10 in 3D).
+    const { assert!(solid_width::<Tri3>() == 7 && solid_width::<Tet4>() == 10) };
+    if solid_width::<E>() == 7 {
+        layout.scatter::<7, _>(team, slots, element);
+        layout.gather::<7, _>(team, slots, |n, s| node(n, &s));
+    } else {
+        layout.scatter::<10, _>(team, slots, element);
+        layout.gather::<10, _>(team, slots, |n, s| node(n, &s));
+    }
 }
 
 /// Adds the face loads carried by points, `scale` times their force, at the points' positions
@@ -217,16 +257,16 @@ pub fn liquid_to_grid<E: Element, R: Real>(
     let (Some(lp), Some(gl)) = (&p.liquid, &mut g.liquid) else {
         return;
     };
-    layout.scatter::<12, _>(team, slots, |e, four| {
+    let element = |e: usize, four: &mut [R]| {
         let grad = mesh.grad[e].as_ref();
         // A full element under mixed integration takes its pore-pressure force at the Gauss
         // point (its volume times the mean pore pressure), as the solid pass does.
         let full = mixed.is_some_and(|m| m.full[e]);
         if let (true, Some(m)) = (full, mixed) {
             let vp = mesh.volume[e] * m.pressure[e];
-            for (k, slot) in four.iter_mut().enumerate() {
-                for a in 0..3 {
-                    slot[6 + a] -= vp * grad[k][a];
+            for (k, slot) in node_slots::<E, R>(four, liquid_width::<E>()).enumerate() {
+                for a in 0..E::DIM {
+                    slot[3 + E::DIM + a] -= vp * grad[k][a];
                 }
             }
         }
@@ -252,41 +292,49 @@ pub fn liquid_to_grid<E: Element, R: Real>(
             } else {
                 R::ZERO
             };
-            for (k, slot) in four.iter_mut().enumerate() {
+            for (k, slot) in node_slots::<E, R>(four, liquid_width::<E>()).enumerate() {
                 let nk = n[k];
                 slot[0] += mw * nk;
                 slot[1] += f.n * mw * nk;
                 slot[2] += f.drag * vw * nk;
-                for a in 0..3 {
+                for a in 0..E::DIM {
                     slot[3 + a] += mw * nk * w[a];
-                    slot[6 + a] += mw * nk * gravity[a] - pw * grad[k][a];
-                    slot[9 + a] += f.n * mw * nk * gravity[a];
+                    slot[3 + E::DIM + a] += mw * nk * gravity[a] - pw * grad[k][a];
+                    slot[3 + 2 * E::DIM + a] += f.n * mw * nk * gravity[a];
                 }
                 if E::AXISYMMETRIC {
-                    slot[6] -= hoop * nk;
+                    slot[3 + E::DIM] -= hoop * nk;
                 }
             }
         }
-    });
+    };
     let mass = Shared::new(&mut gl.mass);
     let mass_n = Shared::new(&mut gl.mass_n);
     let drag = Shared::new(&mut gl.drag);
     let momentum = Shared::new(&mut gl.momentum);
     let force = Shared::new(&mut gl.force);
     let f_ext = Shared::new(&mut g.f_ext);
-    layout.gather::<12, _>(team, slots, |n, s| {
+    let node = |n: usize, s: &[R]| {
         // SAFETY: node n is this thread's only; f_ext[n] was written by this thread's range in
         // the solid pass (same node ranges).
         unsafe {
             mass.write(n, s[0]);
             mass_n.write(n, s[1]);
             drag.write(n, s[2]);
-            momentum.write(n, [s[3], s[4], s[5]]);
-            force.write(n, [s[6], s[7], s[8]]);
+            momentum.write(n, vector::<E, R>(s, 3));
+            force.write(n, vector::<E, R>(s, 3 + E::DIM));
             let fe = &mut f_ext.range(n..n + 1)[0];
-            for a in 0..3 {
-                fe[a] += s[9 + a];
+            for a in 0..E::DIM {
+                fe[a] += s[3 + 2 * E::DIM + a];
             }
         }
-    });
+    };
+    const { assert!(liquid_width::<Tri3>() == 9 && liquid_width::<Tet4>() == 12) };
+    if liquid_width::<E>() == 9 {
+        layout.scatter::<9, _>(team, slots, element);
+        layout.gather::<9, _>(team, slots, |n, s| node(n, &s));
+    } else {
+        layout.scatter::<12, _>(team, slots, element);
+        layout.gather::<12, _>(team, slots, |n, s| node(n, &s));
+    }
 }

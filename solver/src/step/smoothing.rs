@@ -11,7 +11,7 @@
 
 use crate::element::mesh::Mesh;
 use crate::element::Element;
-use crate::parallel::gather::{Layout, Slots, WIDTH};
+use crate::parallel::gather::{node_slots, Layout, Slots, WIDTH};
 use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
 use crate::state::grid::Grid;
@@ -101,7 +101,7 @@ impl<R: Real> StrainSmoothing<R> {
                 let ve = mesh.volume[e];
                 let (es, ew) = (es * dt * ve, ew * dt * ve);
                 for (j, _) in present.iter().enumerate().filter(|(_, &on)| on) {
-                    for slot in four.iter_mut() {
+                    for slot in node_slots::<E, R>(four, WIDTH) {
                         slot[3 * j] += es;
                         slot[3 * j + 1] += ew;
                         slot[3 * j + 2] += ve;

@@ -5,7 +5,7 @@ use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
-use crate::parallel::gather::{Layout, Slots, ELEMENT_BLOCK};
+use crate::parallel::gather::{node_slots, Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
 use crate::state::grid::Grid;
@@ -104,11 +104,12 @@ pub fn update_stress_and_move<E: Element, R: Real>(
             let grad = mesh.grad[e].as_ref();
             let mut l = [[R::ZERO; 3]; 3]; // velocity gradient L[a][b] = ∂v_a/∂x_b
             let mut dx = [R::ZERO; 3];
+            // A 2D element's velocities and gradients have no z-part: the in-plane block only.
             for k in 0..E::NODES {
                 let v = g.vel[mesh.corners[e].as_ref()[k] as usize];
-                for a in 0..3 {
+                for a in 0..E::DIM {
                     dx[a] += n[k] * v[a];
-                    for b in 0..3 {
+                    for b in 0..E::DIM {
                         l[a][b] += v[a] * grad[k][b];
                     }
                 }
@@ -167,7 +168,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 de[2]
             };
             volume[j] *= R::ONE + de[0] + de[1] + de_zz;
-            for a in 0..3 {
+            for a in 0..E::DIM {
                 x[j][a] += dt * dx[a];
                 u[j][a] += dt * dx[a];
             }
@@ -341,7 +342,7 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         for k in 0..E::NODES {
             let node = mesh.corners[e].as_ref()[k] as usize;
             let (v, w) = (vel[node], wvel[node]);
-            for a in 0..3 {
+            for a in 0..E::DIM {
                 div_v += v[a] * grad[k][a];
                 div_w += w[a] * grad[k][a];
             }
@@ -378,7 +379,7 @@ pub fn update_pore_pressure<E: Element, R: Real>(
             let rate = rate_in(e, i, f);
             let n = mesh.shape(e, &x[i]);
             let n = n.as_ref();
-            for (k, slot) in four.iter_mut().enumerate() {
+            for (k, slot) in node_slots::<E, R>(four, 2).enumerate() {
                 slot[0] += volume[i] * n[k] * rate;
                 slot[1] += volume[i] * n[k];
             }
