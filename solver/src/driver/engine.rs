@@ -20,7 +20,7 @@ use crate::state::particles::{self, Field, FieldVisitor, Particles, Value};
 use crate::step::grid_update::{DampingRule, Drag};
 use crate::step::load_curve::LoadCurve;
 use crate::step::stress::{Guard, GuardSums};
-use crate::step::{grid_to_particle, grid_update, particle_to_grid, stress};
+use crate::step::{grid_to_particle, grid_update, nodal_energy, particle_to_grid, stress};
 
 pub use crate::driver::guard::{Check, Divergence};
 
@@ -246,6 +246,8 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     guard_slots: Vec<GuardSums>,
     /// The grid update's per-block sums.
     grid_scratch: grid_update::GridScratch<R>,
+    /// The nodal energy pass's per-block sums.
+    energy_blocks: Vec<nodal_energy::NodalEnergy>,
     /// Per material index: mass per initial volume of its points (t/m³).
     initial_density: Vec<R>,
     /// Strain energy taken up so far, Σ V σ:Δε over the steps (kJ).
@@ -479,6 +481,10 @@ impl<R: Real, E: Element> Engine<R, E> {
             guards: case.guards,
             guard_slots,
             grid_scratch: grid_update::GridScratch::new(mesh.nodes()),
+            energy_blocks: vec![
+                nodal_energy::NodalEnergy::default();
+                mesh.nodes().div_ceil(nodal_energy::NODE_BLOCK)
+            ],
             initial_density,
             strain_energy: 0.0,
             dissipated: 0.0,
@@ -572,6 +578,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             guards: _,
             guard_slots: _,
             grid_scratch: _,
+            energy_blocks: _,
             initial_density: _,
             courant: _,
             energy_checked: _,
@@ -763,6 +770,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             &mut self.grid,
         );
         let t1 = Instant::now();
+        let liquid_scale = R::of(case.liquid_curve.at(self.time + dt));
         let (forces, liquid_forces) = if self.grid.liquid.is_some() {
             grid_update::grid_update_two_phase(
                 &self.team,
@@ -771,7 +779,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &self.traction,
                 tm,
                 &self.liquid_traction,
-                R::of(case.liquid_curve.at(self.time + dt)),
+                liquid_scale,
                 &self.fixed,
                 &self.liquid_fixed,
                 R::of(case.damping),
@@ -791,7 +799,6 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &self.fixed,
                 R::of(case.damping),
                 case.damping_rule,
-                R::of(dt),
             );
             (f, grid_update::ForceSums::default())
         };
@@ -895,22 +902,24 @@ impl<R: Real, E: Element> Engine<R, E> {
         if let Some(m) = &self.mixed {
             m.after_stress(&self.team, &self.layout, &mut self.particles);
         }
-        // External work of gravity and face loads over the step, with the new nodal velocities,
-        // and the nodes' kinetic energy.
-        let (mut w, mut kinetic) = (0.0, 0.0);
-        let g = &self.grid;
-        for n in 0..g.mass.len() {
-            for a in 0..3 {
-                let f = g.f_ext[n][a] + tm * self.traction[n][a];
-                w += (f * g.vel[n][a]).f64();
-                kinetic += 0.5 * (g.mass[n] * g.vel[n][a] * g.vel[n][a]).f64();
-                if let Some(l) = &g.liquid {
-                    kinetic += 0.5 * (l.mass_n[n] * l.vel[n][a] * l.vel[n][a]).f64();
-                }
-            }
-        }
-        let w = self.comm.sum(w);
-        self.nodal_kinetic = self.comm.sum(kinetic);
+        // The step's energy terms at the nodes, with the remapped velocities: Anura3D's
+        // external power and nodal kinetic energy, and the guard's work and dissipation.
+        let energy = nodal_energy::nodal_energy(
+            &self.team,
+            &mut self.energy_blocks,
+            &self.grid,
+            &nodal_energy::Loads {
+                traction: (&self.traction, tm),
+                liquid_traction: (&self.liquid_traction, liquid_scale),
+                liquid_load_on_mixture: case.liquid_load_on_mixture,
+                fixed: &self.fixed,
+                liquid_fixed: &self.liquid_fixed,
+                gravity,
+            },
+            R::of(dt),
+        );
+        let w = self.comm.sum(energy.power_end);
+        self.nodal_kinetic = self.comm.sum(energy.kinetic);
         self.external_work += w * dt;
         self.steps += 1;
         self.time += dt;
@@ -918,7 +927,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             self.time = t;
         }
         if self.guards.enabled {
-            self.check_step(dt, w, &forces)?;
+            self.check_step(dt, w, &forces, &energy)?;
         }
         let t4 = Instant::now();
         self.locate()?;
@@ -937,12 +946,14 @@ impl<R: Real, E: Element> Engine<R, E> {
 
     /// The guard rails after a step: sums the per-block slots in block order (so the result
     /// does not depend on the threads), updates the energy terms and checks them. `w`:
-    /// the external power summed over the nodes this step; `forces`: the grid update's sums.
+    /// the external power summed over the nodes this step; `forces`: the grid update's sums;
+    /// `energy`: the step's nodal energy terms (this process's).
     fn check_step(
         &mut self,
         dt: f64,
         w: f64,
         forces: &grid_update::ForceSums,
+        energy: &nodal_energy::NodalEnergy,
     ) -> Result<(), StepError> {
         let (mut strain, mut kinetic, mut liquid, mut margin) = (0.0, 0.0, 0.0, f64::INFINITY);
         for s in &self.guard_slots {
@@ -960,9 +971,10 @@ impl<R: Real, E: Element> Engine<R, E> {
         self.strain_energy += strain;
         self.liquid_energy = liquid;
         self.step_kinetic = kinetic;
-        self.dissipated += forces.dissipated;
-        self.balance_work += forces.work;
-        let nodal = w * dt + forces.work + forces.dissipated + forces.unbalanced;
+        let (work, dissipated) = (self.comm.sum(energy.work), self.comm.sum(energy.dissipated));
+        self.dissipated += dissipated;
+        self.balance_work += work;
+        let nodal = w * dt + work + dissipated + forces.unbalanced;
         let fail = |check| Err(StepError::Diverged(Box::new(self.diagnose(check))));
         // A non-finite stress, velocity, position, volume or pore pressure makes the energies'
         // sums NaN or infinite (the passes fold the last three in); nodal values the nodal

@@ -44,8 +44,6 @@ impl<R: Real> GridScratch<R> {
         let add = |a: ForceSums, b: &ForceSums| ForceSums {
             unbalanced: a.unbalanced + b.unbalanced,
             external: a.external + b.external,
-            work: a.work + b.work,
-            dissipated: a.dissipated + b.dissipated,
         };
         self.sums[..nodes.div_ceil(NODE_BLOCK)].iter().fold(
             (ForceSums::default(), ForceSums::default()),
@@ -112,9 +110,8 @@ pub const MASS_EPS: f64 = 1e-12;
 ///
 /// Returns this process's sums for the out-of-balance force ratio of Anura3D's quasi-static
 /// convergence check, |f_int + f_ext| / |f_ext| over the free components
-/// ([`ForceSums::ratio`] once summed over every process), and the energy terms of the step
-/// at the nodes' mid-step velocities v + a Δt/2 (`dt`: the step): the work of the external
-/// force and the energy local damping took out. The nodes are shared out on the team in
+/// ([`ForceSums::ratio`] once summed over every process); the step's energy terms are taken
+/// after the remap ([`crate::step::nodal_energy`]). The nodes are shared out on the team in
 /// blocks of [`NODE_BLOCK`], and the sums formed per block (`scratch`): the same for any
 /// thread count.
 #[allow(clippy::too_many_arguments)]
@@ -127,9 +124,7 @@ pub fn grid_update<R: Real>(
     fixed: &[[bool; 3]],
     alpha: R,
     rule: DampingRule,
-    dt: R,
 ) -> ForceSums {
-    let half_dt = R::of(0.5) * dt;
     let nodes = g.mass.len();
     let eps = scratch.empty_below(team, &g.mass);
     g.empty_below = eps;
@@ -139,7 +134,6 @@ pub fn grid_update<R: Real>(
         // SAFETY: the nodes of this block are this call's only.
         let acc_out = unsafe { acc_out.range(r.clone()) };
         let (mut unbalanced, mut external) = (0.0, 0.0);
-        let (mut work, mut damping) = (0.0, 0.0);
         for (n, acc_n) in r.zip(acc_out) {
             let m = mass[n];
             if m <= eps {
@@ -156,30 +150,20 @@ pub fn grid_update<R: Real>(
                 let f = f_int[n][a] + ext;
                 out2 += f.f64() * f.f64();
                 ext2 += ext.f64() * ext.f64();
-                let fd = damp(rule, alpha, f, momentum[n][a]);
-                let acc = fd / m;
-                acc_n[a] = acc;
-                let v_mid = (momentum[n][a] / m + half_dt * acc).f64();
-                work += ext.f64() * v_mid;
-                damping += (f - fd).f64() * v_mid;
+                acc_n[a] = damp(rule, alpha, f, momentum[n][a]) / m;
             }
             unbalanced += out2.sqrt();
             external += ext2.sqrt();
         }
-        let sums = ForceSums {
-            unbalanced,
-            external,
-            work,
-            dissipated: damping,
-        };
-        (sums, ForceSums::default())
+        (
+            ForceSums {
+                unbalanced,
+                external,
+            },
+            ForceSums::default(),
+        )
     });
-    let (s, _) = scratch.total(nodes);
-    ForceSums {
-        work: s.work * dt.f64(),
-        dissipated: s.dissipated * dt.f64(),
-        ..s
-    }
+    scratch.total(nodes).0
 }
 
 /// Norms of the out-of-balance and the external force over the free components, Anura3D's
@@ -190,11 +174,6 @@ pub struct ForceSums {
     pub unbalanced: f64,
     /// Σ_nodes |f_ext|.
     pub external: f64,
-    /// Work of the external force over the step at the mid-step velocities (kJ; the energy
-    /// balance's work term).
-    pub work: f64,
-    /// Energy taken out over the step by local damping and, in two-phase cases, the drag (kJ).
-    pub dissipated: f64,
 }
 
 impl ForceSums {
@@ -203,8 +182,6 @@ impl ForceSums {
         ForceSums {
             unbalanced: comm.sum(self.unbalanced),
             external: comm.sum(self.external),
-            work: comm.sum(self.work),
-            dissipated: comm.sum(self.dissipated),
         }
     }
 
@@ -239,15 +216,8 @@ impl ForceSums {
 /// force ratios of the mixture, as [`grid_update`], and of the liquid: |F_w + Q (v - w)| /
 /// |M_w g + loads + Q (v - w)| over the free liquid components (start-of-step velocities, as
 /// Anura3D's convergence check; 0 without external force). `gravity` is the acceleration of
-/// this step.
-///
-/// The mixture's sums also carry the step's energy terms at the mid-step velocities v̄, w̄.
-/// With the liquid's equation in the mixture's, the nodes' kinetic energy changes by
-/// v̄·F + n (w̄ - v̄)·F_w less the drag's n Q (w - v)·(w̄ - v̄) and what the damping takes; the
-/// external work is that power's external part (the mixture's loads and weight on v̄, the
-/// liquid's weight and loads on n (w̄ - v̄)), and what the forces' power leaves over the
-/// kinetic energy's exact change, M_s a_s v̄ + M̄_w a_w w̄, is the energy drag and damping
-/// dissipated. A fixed liquid component (an impermeable face) drops the liquid's term.
+/// this step. The step's energy terms are taken after the remap
+/// ([`crate::step::nodal_energy`]).
 #[allow(clippy::too_many_arguments)]
 pub fn grid_update_two_phase<R: Real>(
     team: &Team,
@@ -266,7 +236,6 @@ pub fn grid_update_two_phase<R: Real>(
     gravity: V3<R>,
     dt: R,
 ) -> (ForceSums, ForceSums) {
-    let half_dt = R::of(0.5) * dt;
     let nodes = g.mass.len();
     let eps = scratch.empty_below(team, &g.mass);
     g.empty_below = eps;
@@ -280,7 +249,6 @@ pub fn grid_update_two_phase<R: Real>(
         let (acc_s, acc_w) = unsafe { (acc_s.range(r.clone()), acc_w.range(r.clone())) };
         let (mut unbalanced, mut external) = (0.0, 0.0);
         let (mut unbalanced_w, mut external_w) = (0.0, 0.0);
-        let (mut work, mut dissipated) = (0.0, 0.0);
         for ((n, acc_s), acc_w) in r.zip(acc_s).zip(acc_w) {
             let ms = mass[n];
             if ms <= eps {
@@ -309,11 +277,6 @@ pub fn grid_update_two_phase<R: Real>(
                     } else {
                         damp(rule, alpha, f_mix, momentum[n][a]) / ms
                     };
-                    if !fixed[n][a] {
-                        let v_mid = (momentum[n][a] / ms + half_dt * acc_s[a]).f64();
-                        work += ext.f64() * v_mid;
-                        dissipated += (f_mix - ms * acc_s[a]).f64() * v_mid;
-                    }
                     acc_w[a] = R::ZERO;
                     continue;
                 }
@@ -391,21 +354,6 @@ pub fn grid_update_two_phase<R: Real>(
                 };
                 acc_s[a] = a_s;
                 acc_w[a] = a_w;
-                // The step's energy terms (see above), the fixed phases at rest.
-                let v_mid = (v + half_dt * a_s).f64();
-                let mut power = f_mix.f64() * v_mid;
-                let mut external = ext.f64() * v_mid;
-                let mut kinetic = (ms * a_s).f64() * v_mid;
-                if !liquid_fixed[n][a] {
-                    let w_mid = (w + half_dt * a_w).f64();
-                    let porosity = (mwn / mw).f64();
-                    let relative = porosity * (w_mid - v_mid);
-                    power += f_w.f64() * relative;
-                    external += (mw * gravity[a] + lt).f64() * relative;
-                    kinetic += (mwn * a_w).f64() * w_mid;
-                }
-                work += external;
-                dissipated += power - kinetic;
             }
             unbalanced += out2.sqrt();
             external += ext2.sqrt();
@@ -416,96 +364,20 @@ pub fn grid_update_two_phase<R: Real>(
             ForceSums {
                 unbalanced,
                 external,
-                work,
-                dissipated,
             },
             ForceSums {
                 unbalanced: unbalanced_w,
                 external: external_w,
-                ..ForceSums::default()
             },
         )
     });
-    let (s, w) = scratch.total(nodes);
-    (
-        ForceSums {
-            work: s.work * dt.f64(),
-            dissipated: s.dissipated * dt.f64(),
-            ..s
-        },
-        w,
-    )
+    scratch.total(nodes)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::state::grid::LiquidNodes;
-
-    /// One saturated node moving along x and y, its liquid faster than its solid, with loads
-    /// on both phases and the liquid's weight.
-    fn node(drag: f64) -> Grid<f64> {
-        let mut g = Grid::new(1);
-        let mut l = LiquidNodes::new(1);
-        g.mass[0] = 2.0;
-        g.momentum[0] = [0.2, -0.1, 0.0];
-        g.f_int[0] = [-3.0, 1.5, 0.25];
-        g.f_ext[0] = [0.5, -4.0, 0.0];
-        l.mass[0] = 1.0;
-        l.mass_n[0] = 0.4;
-        l.drag[0] = drag;
-        l.momentum[0] = [0.5, 0.3, -0.2];
-        l.force[0] = [1.0, -2.0, 0.5];
-        g.liquid = Some(l);
-        g
-    }
-
-    fn energies(g: &mut Grid<f64>, alpha: f64, drag: Drag, fixed: [bool; 3]) -> ForceSums {
-        let gravity = [0.0, -9.81, 0.0];
-        let team = Team::new(1, crate::parallel::team::Pin::None).unwrap();
-        grid_update_two_phase(
-            &team,
-            &mut GridScratch::new(1),
-            g,
-            &[[0.1, 0.2, 0.0]],
-            1.0,
-            &[[0.0, -0.3, 0.0]],
-            1.0,
-            &[[false; 3]],
-            &[fixed],
-            alpha,
-            DampingRule::Phases,
-            drag,
-            true,
-            gravity,
-            1e-3,
-        )
-        .0
-    }
-
-    #[test]
-    fn without_drag_or_damping_the_two_phase_update_dissipates_nothing() {
-        // The kinetic energy's change is then exactly the forces' power: what the update
-        // reports as dissipated is round-off, whatever the loads (the power's split is right).
-        for drag in [Drag::Implicit, Drag::Explicit] {
-            let s = energies(&mut node(0.0), 0.0, drag, [false; 3]);
-            assert!(s.dissipated.abs() < 1e-15, "{drag:?}: {}", s.dissipated);
-            assert!(s.work.abs() > 1e-4);
-        }
-    }
-
-    #[test]
-    fn drag_and_damping_dissipate_and_an_impermeable_face_drops_the_liquid_term() {
-        for drag in [Drag::Implicit, Drag::Explicit] {
-            let d = energies(&mut node(50.0), 0.0, drag, [false; 3]).dissipated;
-            assert!(d > 0.0, "{drag:?}: {d}");
-            let d = energies(&mut node(0.0), 0.5, drag, [false; 3]).dissipated;
-            assert!(d > 0.0, "{drag:?}: {d}");
-        }
-        // A fixed liquid: the solid alone, undamped and without drag, dissipates nothing.
-        let s = energies(&mut node(50.0), 0.0, Drag::Implicit, [true; 3]);
-        assert!(s.dissipated.abs() < 1e-15, "{}", s.dissipated);
-    }
 
     /// A grid of `n` nodes with pseudo-random masses (some empty), momenta, forces and
     /// fixities, saturated.
@@ -576,7 +448,6 @@ mod tests {
                 &fixed,
                 0.05,
                 DampingRule::Anura3d,
-                1e-3,
             );
             let acc = |g: &Grid<f64>| {
                 let mut v: Vec<u64> = g.acc.iter().flatten().map(|x| x.to_bits()).collect();
@@ -588,7 +459,7 @@ mod tests {
             (two, dry, acc(&g), acc(&d))
         };
         let one = run(1);
-        assert!(one.0 .0.unbalanced > 0.0 && one.1.work != 0.0);
+        assert!(one.0 .0.unbalanced > 0.0 && one.1.external > 0.0);
         for threads in [2, 3] {
             assert_eq!(run(threads), one, "{threads} threads");
         }

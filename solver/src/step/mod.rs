@@ -4,6 +4,7 @@ pub mod grid_to_particle;
 pub mod grid_update;
 pub mod load_curve;
 pub mod mixed;
+pub mod nodal_energy;
 pub mod nodal_velocity;
 pub mod particle_to_grid;
 pub mod prescribed;
