@@ -219,6 +219,7 @@ fn main() {
         phases,
         info,
         bytes_per_point,
+        modelled,
     } = result;
     let mut sorted = rates.clone();
     sorted.sort_by(f64::total_cmp);
@@ -229,13 +230,18 @@ fn main() {
         .zip(phases[k])
         .map(|(n, s)| format!("\"{n}\": {:.6e}", s / steps as f64))
         .collect();
+    let modelled_bytes: Vec<String> = PHASES[..5]
+        .iter()
+        .zip(modelled)
+        .map(|(n, b)| format!("\"{n}\": {b:.1}"))
+        .collect();
     let pinned: Vec<String> = info
         .2
         .iter()
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
     println!(
-        "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}{}}}",
+        "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"modelled_bytes_per_particle_step\": {{{}}}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}{}}}",
         if saturated { "saturated" } else { "dry" },
         if plane { 2 } else { 3 },
         arg(&a, "--law").unwrap_or("linear"),
@@ -251,6 +257,7 @@ fn main() {
         if f32 { "f32" } else { "f64" },
         case.guards.enabled,
         bytes_per_point,
+        modelled_bytes.join(", "),
         rates,
         median,
         per_phase.join(", "),
@@ -264,6 +271,8 @@ struct Measured {
     phases: Vec<[f64; 6]>,
     info: (usize, usize, Vec<Option<usize>>),
     bytes_per_point: usize,
+    /// Modelled bytes per particle-step of each phase.
+    modelled: [f64; 5],
 }
 
 /// [`measure`] with the precision and element [`dispatch`] picks for the case.
@@ -294,6 +303,7 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
         phases: Vec::new(),
         info: (0, 0, Vec::new()),
         bytes_per_point: 0,
+        modelled: [0.0; 5],
     };
     for _ in 0..reps {
         let mut engine = Engine::<R, E>::new(case, false).unwrap();
@@ -310,6 +320,11 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
         m.phases.push(engine.phase_seconds);
         m.info = (np, engine.team.threads, engine.team.pinned.clone());
         m.bytes_per_point = engine.particles.bytes_per_point();
+        m.modelled = mpm_solve::driver::traffic::modelled_bytes::<R, E>(
+            &engine.particles,
+            engine.mesh.elements(),
+            engine.mesh.nodes(),
+        );
     }
     m
 }

@@ -74,10 +74,20 @@ fn writes_every_output_and_repeats_byte_for_byte() {
         "wall_seconds",
         "particle_steps_per_second",
         "phase_seconds",
+        "phase_ns_per_particle_step",
+        "modelled_bytes_per_particle_step",
         "bytes_per_particle",
         "peak_rss_bytes",
     ] {
         assert!(run.get(key).is_some(), "run.json lacks {key}");
+    }
+    // Every step phase has a positive modelled traffic but the grid update, which may be
+    // small; all are finite.
+    for phase in ["particle_to_grid", "grid_to_particle", "stress", "locate"] {
+        let b = run["modelled_bytes_per_particle_step"][phase]
+            .as_f64()
+            .unwrap();
+        assert!(b > 0.0 && b.is_finite(), "{phase}: {b}");
     }
     assert_eq!(run["precision"], "f64");
 }

@@ -6,4 +6,5 @@ pub mod engine;
 pub mod guard;
 pub mod output;
 pub mod run;
+pub mod traffic;
 pub mod units;

@@ -278,6 +278,30 @@ pub fn write_summary<R: Real, E: Element>(
         0.0
     };
     let grid_bytes = engine.grid.bytes() as f64 / n.max(1) as f64;
+    // Nanoseconds per particle-step of each phase, and the bytes each must move at least.
+    let particle_steps = (n as f64) * engine.steps as f64;
+    let phase_ns: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
+        .iter()
+        .zip(engine.phase_seconds)
+        .map(|(k, v)| {
+            let ns = if particle_steps > 0.0 {
+                v * 1e9 / particle_steps
+            } else {
+                0.0
+            };
+            (k.to_string(), serde_json::json!(ns))
+        })
+        .collect();
+    let modelled = crate::driver::traffic::modelled_bytes::<R, E>(
+        &engine.particles,
+        engine.mesh.elements(),
+        engine.mesh.nodes(),
+    );
+    let bytes: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
+        .iter()
+        .zip(modelled)
+        .map(|(k, b)| (k.to_string(), serde_json::json!(b)))
+        .collect();
     // serde_json writes a non-finite number as null, so the file stays strict JSON.
     let json = serde_json::json!({
         "schema_version": RUN_JSON_SCHEMA,
@@ -302,6 +326,8 @@ pub fn write_summary<R: Real, E: Element>(
         "wall_seconds": wall,
         "particle_steps_per_second": ps,
         "phase_seconds": phases,
+        "phase_ns_per_particle_step": phase_ns,
+        "modelled_bytes_per_particle_step": bytes,
         "bytes_per_particle": engine.particles.bytes_per_point() as f64 + grid_bytes,
         "peak_rss_bytes": peak_rss_bytes(),
         "lost_particles": engine.lost,

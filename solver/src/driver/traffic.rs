@@ -1,0 +1,188 @@
+//! Modelled memory traffic of a step, per phase, in bytes per particle-step: what each phase
+//! must read and write at least, for the roofline (`run.json`'s `modelled_bytes_per_particle_step`,
+//! docs/design.md §9).
+//!
+//! The point arrays come from the one field list ([`Particles::read_fields`]) and a table of
+//! which phase reads or rewrites which field, so a field added to the list is counted by
+//! every phase that names it. Element data (map, gradients, corners, volume) are read once per
+//! element and shared by its points; every parallel sum writes its slots and reads them back
+//! (W values per slot, [`crate::parallel::gather`]); nodal arrays are counted once per node;
+//! nodal values gathered by a point are taken as cache hits (a node's neighbours read it in
+//! turn). The re-sort after points change element is left out: it moves every field, but only
+//! when points have moved, not every step.
+
+use crate::element::Element;
+use crate::real::{Real, V3};
+use crate::state::particles::{Field, FieldReader, Particles, Value};
+
+/// How a phase touches a point array.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Access {
+    Read,
+    ReadWrite,
+}
+
+use Access::{Read, ReadWrite};
+
+/// The point arrays each phase of [`crate::driver::engine::PHASES`] touches (by the field
+/// list's names); arrays a case does not have are skipped.
+const PHASE_FIELDS: [&[(&str, Access)]; 5] = [
+    // particle to grid: both phases' mass, momentum and forces
+    &[
+        ("x", Read),
+        ("v", Read),
+        ("mass", Read),
+        ("volume", Read),
+        ("stress", Read),
+        ("material", Read),
+        ("active", Read),
+        ("p", Read),
+        ("w", Read),
+        ("volume0", Read),
+    ],
+    // grid update: nodes only
+    &[],
+    // grid to particle: velocities updated and remapped
+    &[
+        ("x", Read),
+        ("mass", Read),
+        ("volume", Read),
+        ("material", Read),
+        ("active", Read),
+        ("volume0", Read),
+        ("v", ReadWrite),
+        ("w", ReadWrite),
+    ],
+    // stress: pore pressure, strain, law, volume and position, guard sums
+    &[
+        ("element", Read),
+        ("material", Read),
+        ("active", Read),
+        ("mass", Read),
+        ("x", ReadWrite),
+        ("u", ReadWrite),
+        ("stress", ReadWrite),
+        ("volume", ReadWrite),
+        ("state", ReadWrite),
+        ("p", ReadWrite),
+    ],
+    // locate: the walk from the old element
+    &[("x", Read), ("active", Read), ("element", ReadWrite)],
+];
+
+/// Bytes of the point arrays `fields` names, per point (a rewritten array twice).
+fn point_bytes<R: Real>(p: &Particles<R>, fields: &[(&str, Access)]) -> usize {
+    struct Count<'a> {
+        fields: &'a [(&'a str, Access)],
+        bytes: usize,
+    }
+    impl FieldReader for Count<'_> {
+        fn field<T: Value>(&mut self, field: Field, _: &[T]) {
+            if let Some((_, access)) = self.fields.iter().find(|(n, _)| *n == field.name) {
+                let times = if *access == ReadWrite { 2 } else { 1 };
+                self.bytes += times * std::mem::size_of::<T>() * field.per_point;
+            }
+        }
+    }
+    let mut c = Count { fields, bytes: 0 };
+    p.read_fields(&mut c);
+    c.bytes
+}
+
+/// The modelled bytes per particle-step of each phase of a case with `p`'s points on a mesh of
+/// `elements` elements of type `E` and `nodes` nodes.
+pub fn modelled_bytes<R: Real, E: Element>(
+    p: &Particles<R>,
+    elements: usize,
+    nodes: usize,
+) -> [f64; 5] {
+    let s = std::mem::size_of::<R>();
+    let liquid = p.liquid.is_some();
+    let points = p.len().max(1) as f64;
+    // Per element: map, gradients, corners and volume; shared by the element's points.
+    let element = (std::mem::size_of::<E::Map<R>>()
+        + E::NODES * (std::mem::size_of::<V3<R>>() + 4)
+        + s) as f64
+        * elements as f64
+        / points;
+    // A sum `width` values wide: each element's node slots written, then read back.
+    let slots = |width: usize| (2 * E::NODES * width * s) as f64 * elements as f64 / points;
+    let per_node = |bytes: f64| bytes * nodes as f64 / points;
+    let (d, v) = (E::DIM, 3 * s);
+    let both = |dry: f64, wet: f64| if liquid { dry + wet } else { dry };
+    let points_of = |k: usize| point_bytes(p, PHASE_FIELDS[k]) as f64;
+    [
+        // particle to grid: slots; mass, momentum, f_int, f_ext written (the liquid adds its
+        // masses, drag, momentum, force, and its weight to f_ext)
+        points_of(0)
+            + both(element, element)
+            + both(slots(1 + 3 * d), slots(3 + 3 * d))
+            + per_node(both((s + 3 * v) as f64, (3 * s + 2 * v + 2 * v) as f64)),
+        // grid update: mass, momentum, forces, loads and fixities read, acceleration written
+        per_node(both((s + 5 * v + 3) as f64, (3 * s + 3 * v + 3 + v) as f64)),
+        // grid to particle: slots of the remap; the nodal velocity written from mass and
+        // fixities
+        points_of(2)
+            + both(element, element)
+            + both(slots(d), slots(d))
+            + per_node(both((s + 3 + v) as f64, (s + 3 + v) as f64)),
+        // stress: element data; the pore-pressure rate's slots; the step's nodal energy terms
+        // (mass, momentum, velocity, acceleration, forces, loads, fixities)
+        points_of(3)
+            + element
+            + if liquid { element + slots(2) } else { 0.0 }
+            + per_node(both((s + 6 * v + 3) as f64, (2 * s + 4 * v + 3) as f64)),
+        // locate
+        points_of(4) + element,
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::tet4::Tet4;
+    use crate::element::tri3::Tri3;
+
+    fn points(n: usize, liquid: bool) -> Particles<f64> {
+        let mut p = Particles::<f64>::default();
+        p.x = vec![[0.0; 3]; n];
+        p.u = vec![[0.0; 3]; n];
+        p.v = vec![[0.0; 3]; n];
+        p.mass = vec![1.0; n];
+        p.volume = vec![1.0; n];
+        p.stress = vec![[0.0; 6]; n];
+        p.element = vec![0; n];
+        p.material = vec![0; n];
+        p.id = (0..n as u32).collect();
+        p.active = vec![true; n];
+        if liquid {
+            p.add_liquid(|_| 0.0, false);
+        }
+        p
+    }
+
+    #[test]
+    fn the_model_counts_the_field_list_and_what_the_liquid_adds() {
+        // A dry tetrahedral column, 4 points per element, 20 points per node.
+        let dry = modelled_bytes::<f64, Tet4>(&points(80, false), 20, 4);
+        // Locate: x read (24), element rewritten (8), active (1), plus the element's data
+        // (map 72 + 4 x (24 + 4) gradients and corners + 8 volume = 192) over 4 points.
+        assert_eq!(dry[4], 24.0 + 8.0 + 1.0 + 192.0 / 4.0);
+        // The liquid adds to every phase but locate.
+        let wet = modelled_bytes::<f64, Tet4>(&points(80, true), 20, 4);
+        for k in 0..4 {
+            assert!(wet[k] > dry[k], "phase {k}");
+        }
+        assert_eq!(wet[4], dry[4]);
+        // In single precision the point arrays halve (the u32 and bool arrays do not).
+        let mut f32_points = Particles::<f32>::default();
+        f32_points.x = vec![[0.0; 3]; 80];
+        f32_points.element = vec![0; 80];
+        f32_points.active = vec![true; 80];
+        let half = modelled_bytes::<f32, Tet4>(&f32_points, 20, 4);
+        assert_eq!(half[4], 12.0 + 8.0 + 1.0 + (36.0 + 4.0 * 16.0 + 4.0) / 4.0);
+        // A triangle's slots are narrower: its particle-to-grid traffic per point is less.
+        let tri = modelled_bytes::<f64, Tri3>(&points(60, false), 20, 4);
+        assert!(tri[0] < dry[0] + 1e-9);
+    }
+}
