@@ -144,17 +144,19 @@ mod tests {
     use crate::element::tri3::Tri3;
 
     fn points(n: usize, liquid: bool) -> Particles<f64> {
-        let mut p = Particles::<f64>::default();
-        p.x = vec![[0.0; 3]; n];
-        p.u = vec![[0.0; 3]; n];
-        p.v = vec![[0.0; 3]; n];
-        p.mass = vec![1.0; n];
-        p.volume = vec![1.0; n];
-        p.stress = vec![[0.0; 6]; n];
-        p.element = vec![0; n];
-        p.material = vec![0; n];
-        p.id = (0..n as u32).collect();
-        p.active = vec![true; n];
+        let mut p = Particles::<f64> {
+            x: vec![[0.0; 3]; n],
+            u: vec![[0.0; 3]; n],
+            v: vec![[0.0; 3]; n],
+            mass: vec![1.0; n],
+            volume: vec![1.0; n],
+            stress: vec![[0.0; 6]; n],
+            element: vec![0; n],
+            material: vec![0; n],
+            id: (0..n as u32).collect(),
+            active: vec![true; n],
+            ..Default::default()
+        };
         if liquid {
             p.add_liquid(|_| 0.0, false);
         }
@@ -175,10 +177,12 @@ mod tests {
         }
         assert_eq!(wet[4], dry[4]);
         // In single precision the point arrays halve (the u32 and bool arrays do not).
-        let mut f32_points = Particles::<f32>::default();
-        f32_points.x = vec![[0.0; 3]; 80];
-        f32_points.element = vec![0; 80];
-        f32_points.active = vec![true; 80];
+        let f32_points = Particles::<f32> {
+            x: vec![[0.0; 3]; 80],
+            element: vec![0; 80],
+            active: vec![true; 80],
+            ..Default::default()
+        };
         let half = modelled_bytes::<f32, Tet4>(&f32_points, 20, 4);
         assert_eq!(half[4], 12.0 + 8.0 + 1.0 + (36.0 + 4.0 * 16.0 + 4.0) / 4.0);
         // A triangle's slots are narrower: its particle-to-grid traffic per point is less.
