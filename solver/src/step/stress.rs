@@ -93,122 +93,141 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         );
         let (active, element, material) = (&active[..n], &element[..n], &material[..n]);
         let mass = &mass[r.clone()][..n];
-        let pore = pore.map(|p| &p[r][..n]);
-        for j in 0..n {
-            if !active[j] {
+        let pore = pore.map(|p| &p[r.clone()][..n]);
+        // Element by element (the points are sorted by element): a linear element's velocity
+        // gradient is the same at all its points, so it is formed once per element, from its
+        // nodes' velocities gathered once.
+        for e in layout.element_range(t) {
+            let points = layout.particles_of(e);
+            if points.is_empty() {
                 continue;
             }
-            let e = element[j] as usize;
-            let n = mesh.shape(e, &x[j]);
-            let n = n.as_ref();
             let grad = mesh.grad[e].as_ref();
+            let corners = mesh.corners[e].as_ref();
+            let vel = E::nodes(|k| g.vel[corners[k] as usize]);
+            let vel = vel.as_ref();
             let mut l = [[R::ZERO; 3]; 3]; // velocity gradient L[a][b] = ∂v_a/∂x_b
-            let mut dx = [R::ZERO; 3];
-            // A 2D element's velocities and gradients have no z-part: the in-plane block only.
+                                           // A 2D element's velocities and gradients have no z-part: the in-plane block only.
             for k in 0..E::NODES {
-                let v = g.vel[mesh.corners[e].as_ref()[k] as usize];
                 for a in 0..E::DIM {
-                    dx[a] += n[k] * v[a];
                     for b in 0..E::DIM {
-                        l[a][b] += v[a] * grad[k][b];
+                        l[a][b] += vel[k][a] * grad[k][b];
                     }
                 }
             }
-            // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the radius).
-            let hoop = if E::AXISYMMETRIC {
-                dx[0] / x[j][0]
-            } else {
-                l[2][2]
-            };
-            let mut de = [
-                l[0][0] * dt,
-                l[1][1] * dt,
-                hoop * dt,
-                half * (l[0][1] + l[1][0]) * dt,
-                half * (l[1][2] + l[2][1]) * dt,
-                half * (l[2][0] + l[0][2]) * dt,
-            ];
-            if let Some(sm) = smoothing {
-                let [es, _] = sm.element_mean(mesh, e, material[j]);
-                let c = (de[0] + de[1] + de[2] - es) * third;
-                for d in de.iter_mut().take(3) {
-                    *d -= c;
+            for j in points.start - r.start..points.end - r.start {
+                if !active[j] {
+                    continue;
                 }
-            }
-            // Anura3D's objective update (its "Hill" rate): the co-rotation and the change of
-            // volume, -tr(Δε) σ, of the start-of-step stress, added after the law's update as
-            // Anura3D adds them (for a plastic law the order matters: the return sees the
-            // unrotated trial).
-            let s0 = stress[j];
-            let hill = objective.then(|| {
-                let w = [
-                    half * (l[0][1] - l[1][0]) * dt, // ω_xy
-                    half * (l[1][2] - l[2][1]) * dt, // ω_yz
-                    half * (l[2][0] - l[0][2]) * dt, // ω_zx
+                debug_assert_eq!(element[j] as usize, e, "points not sorted by element");
+                let n = mesh.shape(e, &x[j]);
+                let n = n.as_ref();
+                let mut dx = [R::ZERO; 3];
+                for k in 0..E::NODES {
+                    for a in 0..E::DIM {
+                        dx[a] += n[k] * vel[k][a];
+                    }
+                }
+                // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the radius).
+                let hoop = if E::AXISYMMETRIC {
+                    dx[0] / x[j][0]
+                } else {
+                    l[2][2]
+                };
+                let mut de = [
+                    l[0][0] * dt,
+                    l[1][1] * dt,
+                    hoop * dt,
+                    half * (l[0][1] + l[1][0]) * dt,
+                    half * (l[1][2] + l[2][1]) * dt,
+                    half * (l[2][0] + l[0][2]) * dt,
                 ];
-                let ev = de[0] + de[1] + de[2];
-                let mut h = rotation(&s0, &w);
-                for (h, v) in h.iter_mut().zip(s0) {
-                    *h -= ev * v;
+                if let Some(sm) = smoothing {
+                    let [es, _] = sm.element_mean(mesh, e, material[j]);
+                    let c = (de[0] + de[1] + de[2] - es) * third;
+                    for d in de.iter_mut().take(3) {
+                        *d -= c;
+                    }
                 }
-                h
-            });
-            laws[material[j] as usize].update(&mut stress[j], &de, &mut state[k * j..k * j + k]);
-            if let Some(h) = hill {
-                for (s, h) in stress[j].iter_mut().zip(h) {
-                    *s += h;
+                // Anura3D's objective update (its "Hill" rate): the co-rotation and the change of
+                // volume, -tr(Δε) σ, of the start-of-step stress, added after the law's update as
+                // Anura3D adds them (for a plastic law the order matters: the return sees the
+                // unrotated trial).
+                let s0 = stress[j];
+                let hill = objective.then(|| {
+                    let w = [
+                        half * (l[0][1] - l[1][0]) * dt, // ω_xy
+                        half * (l[1][2] - l[2][1]) * dt, // ω_yz
+                        half * (l[2][0] - l[0][2]) * dt, // ω_zx
+                    ];
+                    let ev = de[0] + de[1] + de[2];
+                    let mut h = rotation(&s0, &w);
+                    for (h, v) in h.iter_mut().zip(s0) {
+                        *h -= ev * v;
+                    }
+                    h
+                });
+                laws[material[j] as usize].update(
+                    &mut stress[j],
+                    &de,
+                    &mut state[k * j..k * j + k],
+                );
+                if let Some(h) = hill {
+                    for (s, h) in stress[j].iter_mut().zip(h) {
+                        *s += h;
+                    }
                 }
-            }
-            let v0 = volume[j];
-            // The hoop strain changes an axisymmetric point's volume unless the case follows
-            // Anura3D, which leaves it out ([`crate::input::case::Case::hoop_in_volume`]).
-            let de_zz = if E::AXISYMMETRIC && !hoop_in_volume {
-                R::ZERO
-            } else {
-                de[2]
-            };
-            volume[j] *= R::ONE + de[0] + de[1] + de_zz;
-            for a in 0..E::DIM {
-                x[j][a] += dt * dx[a];
-                u[j][a] += dt * dx[a];
-            }
-            if let Some(sums) = sums.as_mut() {
-                // Work of the mean stress over the step (exact for a linear law) on the start
-                // volume; shear components count twice (tensor shear strains).
-                let s1 = stress[j];
-                let mut w = R::ZERO;
-                for c in 0..6 {
-                    let twice = if c < 3 { R::ONE } else { R::of(2.0) };
-                    w += twice * (s0[c] + s1[c]) * de[c];
+                let v0 = volume[j];
+                // The hoop strain changes an axisymmetric point's volume unless the case follows
+                // Anura3D, which leaves it out ([`crate::input::case::Case::hoop_in_volume`]).
+                let de_zz = if E::AXISYMMETRIC && !hoop_in_volume {
+                    R::ZERO
+                } else {
+                    de[2]
+                };
+                volume[j] *= R::ONE + de[0] + de[1] + de_zz;
+                for a in 0..E::DIM {
+                    x[j][a] += dt * dx[a];
+                    u[j][a] += dt * dx[a];
                 }
-                // 0, or NaN for a non-finite position or new volume: added to the strain sum,
-                // which a non-finite stress makes non-finite too, so one test of the sums
-                // catches them all.
-                let finite = R::ZERO * (x[j][0] + x[j][1] + x[j][2] + volume[j]);
-                // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no division
-                // per point.
-                let margin =
-                    volume[j] * initial_density[material[j] as usize] - min_ratio * mass[j];
-                let b = e / ELEMENT_BLOCK;
-                if b != open.block {
-                    open.close(&mut sums[open.block - blocks.start..]);
-                    open = Open::new(b);
-                }
-                // Twice the energies: the engine halves the sums (exactly, a power of two).
-                open.strain += (w * v0 + finite).f64();
-                if let Some(pore) = pore {
-                    // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work
-                    // on Δp = (K_w/n) Δε_mix. A non-finite pore pressure makes the sum NaN.
-                    let p = pore[j];
-                    let c = fluids[material[j] as usize]
-                        .as_ref()
-                        .map_or(R::ZERO, |f| f.n_over_kw);
-                    open.liquid += (volume[j] * p * p * c + R::ZERO * p).f64();
-                }
-                // A plain comparison (one instruction): NaN is caught by the strain sum.
-                let m = margin.f64();
-                if m < open.volume_margin {
-                    open.volume_margin = m;
+                if let Some(sums) = sums.as_mut() {
+                    // Work of the mean stress over the step (exact for a linear law) on the start
+                    // volume; shear components count twice (tensor shear strains).
+                    let s1 = stress[j];
+                    let mut w = R::ZERO;
+                    for c in 0..6 {
+                        let twice = if c < 3 { R::ONE } else { R::of(2.0) };
+                        w += twice * (s0[c] + s1[c]) * de[c];
+                    }
+                    // 0, or NaN for a non-finite position or new volume: added to the strain sum,
+                    // which a non-finite stress makes non-finite too, so one test of the sums
+                    // catches them all.
+                    let finite = R::ZERO * (x[j][0] + x[j][1] + x[j][2] + volume[j]);
+                    // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no division
+                    // per point.
+                    let margin =
+                        volume[j] * initial_density[material[j] as usize] - min_ratio * mass[j];
+                    let b = e / ELEMENT_BLOCK;
+                    if b != open.block {
+                        open.close(&mut sums[open.block - blocks.start..]);
+                        open = Open::new(b);
+                    }
+                    // Twice the energies: the engine halves the sums (exactly, a power of two).
+                    open.strain += (w * v0 + finite).f64();
+                    if let Some(pore) = pore {
+                        // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work
+                        // on Δp = (K_w/n) Δε_mix. A non-finite pore pressure makes the sum NaN.
+                        let p = pore[j];
+                        let c = fluids[material[j] as usize]
+                            .as_ref()
+                            .map_or(R::ZERO, |f| f.n_over_kw);
+                        open.liquid += (volume[j] * p * p * c + R::ZERO * p).f64();
+                    }
+                    // A plain comparison (one instruction): NaN is caught by the strain sum.
+                    let m = margin.f64();
+                    if m < open.volume_margin {
+                        open.volume_margin = m;
+                    }
                 }
             }
         }
@@ -334,9 +353,9 @@ pub fn update_pore_pressure<E: Element, R: Real>(
     }
     let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
     let (vel, wvel) = (&g.vel, &gl.vel);
-    // The rate of point i in element e: one per element for linear elements, plus, in an
-    // axisymmetric section, each phase's hoop rate u_r / r at the point.
-    let rate_in = |e: usize, i: usize, f: &Fluid<R>| {
+    // The divergence of both phases' velocities in element e: one per element for linear
+    // elements.
+    let divergence = |e: usize| {
         let grad = mesh.grad[e].as_ref();
         let (mut div_v, mut div_w) = (R::ZERO, R::ZERO);
         for k in 0..E::NODES {
@@ -347,6 +366,11 @@ pub fn update_pore_pressure<E: Element, R: Real>(
                 div_w += w[a] * grad[k][a];
             }
         }
+        (div_v, div_w)
+    };
+    // The rate of point i in element e from its element's divergences, plus, in an
+    // axisymmetric section, each phase's hoop rate u_r / r at the point.
+    let rate_at = |e: usize, i: usize, f: &Fluid<R>, (mut div_v, mut div_w): (R, R)| {
         if E::AXISYMMETRIC {
             let n = mesh.shape(e, &x[i]);
             let r = x[i][0];
@@ -363,7 +387,8 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         team.run(|t| {
             for i in layout.particle_range(t) {
                 if let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) {
-                    let rate = rate_in(p.element[i] as usize, i, f);
+                    let e = p.element[i] as usize;
+                    let rate = rate_at(e, i, f, divergence(e));
                     // SAFETY: particle i belongs to this thread only.
                     unsafe { pressure.range(i..i + 1)[0] += rate * dt };
                 }
@@ -372,11 +397,16 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         return;
     }
     layout.scatter::<2, _>(team, slots, |e, four| {
-        for i in layout.particles_of(e) {
+        let points = layout.particles_of(e);
+        if points.is_empty() {
+            return;
+        }
+        let div = divergence(e);
+        for i in points {
             let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) else {
                 continue;
             };
-            let rate = rate_in(e, i, f);
+            let rate = rate_at(e, i, f, div);
             let n = mesh.shape(e, &x[i]);
             let n = n.as_ref();
             for (k, slot) in node_slots::<E, R>(four, 2).enumerate() {
