@@ -30,3 +30,6 @@ pub mod driver;
 pub mod jobs;
 
 pub mod compare;
+
+#[cfg(test)]
+mod test_rng;

@@ -942,13 +942,8 @@ mod cost {
     fn mohr_coulomb_update_cost() {
         let l = MohrCoulomb::<f64>::new(1e4, 0.3, 30.0, 5.0, 0.0, 0.0);
         let de = [-1e-7, -3e-7, 1e-7, 2e-8, 0.0, -1e-8];
-        let mut x = 12345u64;
-        let mut rand = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = crate::test_rng::uniform(12345);
+        let mut rand = || uniform() + 0.5;
         let n = 100_000;
         // At rest under gravity (K0 = 0.43) with a little shear: elastic.
         let rest: Vec<[f64; 6]> = (0..n)

@@ -577,13 +577,7 @@ mod cost {
     use std::hint::black_box;
 
     fn states() -> Vec<[f64; 6]> {
-        let mut x = 99u64;
-        let mut rand = move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rand = crate::test_rng::uniform(99);
         (0..100_000)
             .map(|_| {
                 [

@@ -209,6 +209,22 @@ impl<R: Real, E: Element> Layout<R, E> {
         });
     }
 
+    /// Both passes: [`Layout::scatter`] with `element`, then [`Layout::gather`] handing each
+    /// node's `W` sums to `node` as a slice (so that one `node` serves passes of any width).
+    pub fn sum_to_nodes<const W: usize, F, G>(
+        &self,
+        team: &Team,
+        slots: &mut Slots<R>,
+        element: F,
+        node: G,
+    ) where
+        F: Fn(usize, &mut [R]) + Sync,
+        G: Fn(usize, &[R]) + Sync,
+    {
+        self.scatter::<W, _>(team, slots, element);
+        self.gather::<W, _>(team, slots, |n, s| node(n, &s));
+    }
+
     /// Pass 2: on every thread, for each node of its range, the sum of the first `W` values of
     /// the node's slots, in element order, handed to `node(n, sum)`.
     pub fn gather<const W: usize, F>(&self, team: &Team, slots: &Slots<R>, node: F)

@@ -382,13 +382,7 @@ mod tests {
     /// A grid of `n` nodes with pseudo-random masses (some empty), momenta, forces and
     /// fixities, saturated.
     fn random_grid(n: usize) -> (Grid<f64>, Vec<[bool; 3]>, Vec<[f64; 3]>) {
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut next = crate::test_rng::uniform(0x9e37_79b9_7f4a_7c15);
         let mut g = Grid::new(n);
         let mut l = LiquidNodes::new(n);
         let mut fixed = vec![[false; 3]; n];

@@ -203,11 +203,9 @@ pub fn particle_to_grid<E: Element, R: Real>(
     // The pass as wide as the element's dimension needs (7 values in 2D, 10 in 3D).
     const { assert!(solid_width::<Tri3>() == 7 && solid_width::<Tet4>() == 10) };
     if solid_width::<E>() == 7 {
-        layout.scatter::<7, _>(team, slots, element);
-        layout.gather::<7, _>(team, slots, |n, s| node(n, &s));
+        layout.sum_to_nodes::<7, _, _>(team, slots, element, node);
     } else {
-        layout.scatter::<10, _>(team, slots, element);
-        layout.gather::<10, _>(team, slots, |n, s| node(n, &s));
+        layout.sum_to_nodes::<10, _, _>(team, slots, element, node);
     }
 }
 
@@ -331,10 +329,8 @@ pub fn liquid_to_grid<E: Element, R: Real>(
     };
     const { assert!(liquid_width::<Tri3>() == 9 && liquid_width::<Tet4>() == 12) };
     if liquid_width::<E>() == 9 {
-        layout.scatter::<9, _>(team, slots, element);
-        layout.gather::<9, _>(team, slots, |n, s| node(n, &s));
+        layout.sum_to_nodes::<9, _, _>(team, slots, element, node);
     } else {
-        layout.scatter::<12, _>(team, slots, element);
-        layout.gather::<12, _>(team, slots, |n, s| node(n, &s));
+        layout.sum_to_nodes::<12, _, _>(team, slots, element, node);
     }
 }
