@@ -16,9 +16,9 @@ use crate::parallel::team::Team;
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 
-/// Nodes per block: each block's sums are formed in node order and the blocks added in order,
-/// so the sums are the same for any thread count.
-pub const NODE_BLOCK: usize = 1024;
+/// Nodes per block, as in the grid update: each block's sums are formed in node order and the
+/// blocks added in order, so the sums are the same for any thread count.
+pub use crate::step::grid_update::NODE_BLOCK;
 
 /// The nodal energy terms of one step (this process's nodes; kJ and kW).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
