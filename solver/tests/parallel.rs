@@ -2,39 +2,12 @@
 //! byte-identical for any thread count and both pin modes.
 
 use mpm_solve::element::tet4::Tet4;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use assert_cmd::Command;
 
-fn testdata(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../testdata")
-        .join(name)
-}
-
-/// The files of `dir` (recursively, but `run.json`, the checkpoint, which holds timings, and
-/// the lock), with their bytes.
-fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let path = e.unwrap().path();
-            let name = path.file_name().unwrap();
-            if name == "checkpoint" || name == ".lock" {
-                continue;
-            }
-            if path.is_dir() {
-                stack.push(path);
-            } else if path.file_name().unwrap() != "run.json" {
-                let name = path.strip_prefix(dir).unwrap().display().to_string();
-                out.push((name, std::fs::read(&path).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
-}
+mod common;
+use common::{outputs, testdata};
 
 fn check_identical(scene: &Path, extra: &[&str]) {
     let mut reference: Option<Vec<(String, Vec<u8>)>> = None;

@@ -17,7 +17,7 @@ use mpm_solve::jobs::consolidation;
 use mpm_solve::real::Real;
 
 mod common;
-use common::testdata;
+use common::{outputs, testdata};
 
 /// A scene from testdata with its mesh path made absolute and `edit` applied, as `dir/NAME`.
 fn scene_in(dir: &Path, name: &str, mesh: &str, edit: &dyn Fn(String) -> String) -> PathBuf {
@@ -175,24 +175,6 @@ fixed = [true, false, false]
     }
     eprintln!("plane-strain self-weight: worst {worst:.2e} of ρ g H");
     assert!(worst < 0.03, "worst {worst}");
-}
-
-/// The output files of `dir` but run.json and the checkpoint, with their bytes.
-fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| {
-            let n = p.file_name().unwrap();
-            p.is_file() && n != "run.json" && n != "checkpoint" && n != ".lock"
-        })
-        .map(|p| {
-            let name = p.file_name().unwrap().to_string_lossy().to_string();
-            (name, std::fs::read(&p).unwrap())
-        })
-        .collect();
-    out.sort();
-    out
 }
 
 #[test]

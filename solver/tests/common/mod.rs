@@ -93,3 +93,27 @@ pub fn run_oracle(bin: &Path, dir: &Path, name: &str) {
         &text[text.len().saturating_sub(2000)..]
     );
 }
+
+/// The files of `dir` (recursively, but `run.json`, the checkpoint, which holds timings, and
+/// the lock), with their bytes.
+pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let path = e.unwrap().path();
+            let name = path.file_name().unwrap();
+            if name == "checkpoint" || name == ".lock" {
+                continue;
+            }
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.file_name().unwrap() != "run.json" {
+                let name = path.strip_prefix(dir).unwrap().display().to_string();
+                out.push((name, std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
