@@ -578,8 +578,29 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         return Ok(());
     };
     plan.check(&limits, Some(out))?;
+    let comm = communicator()?;
+    let root = comm.as_ref().map_or(true, |c| c.rank() == 0);
+    // A rank that fails leaves without MPI's finalisation (which would wait for the others):
+    // the launcher then stops the job.
+    let fail = |e: anyhow::Error| {
+        std::mem::forget(comm.clone());
+        Err(e)
+    };
+    if comm.is_some() && case.consolidation.is_some() {
+        return fail(anyhow::anyhow!(
+            "the consolidation job runs on one process; start it without mpirun"
+        ));
+    }
     let created = !out.exists();
-    let _lock = take_folder(&case, out, args)?;
+    // Rank 0 alone owns the output folder of a run over MPI ranks.
+    let _lock = if root {
+        match take_folder(&case, out, args) {
+            Ok(lock) => Some(lock),
+            Err(e) => return fail(e),
+        }
+    } else {
+        None
+    };
     // A first SIGINT or SIGTERM stops the run after its step, with a checkpoint; a second one
     // ends the process at once.
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
@@ -600,13 +621,17 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         drop_lost: args.drop_lost,
         max_lost: args.max_lost,
         force: args.force,
-        checkpoint: Some(args.checkpoint_every.unwrap_or_default()),
+        // A run over MPI ranks keeps no checkpoint (not modelled there yet).
+        checkpoint: comm
+            .is_none()
+            .then(|| args.checkpoint_every.unwrap_or_default()),
         resume: args.resume.is_some(),
         stop: Some(stop),
         abort_after_step: args.abort_after_step,
         rethread_after_step: args.rethread_after_step,
+        comm,
     };
-    let mode = if args.quiet {
+    let mode = if args.quiet || !root {
         Progress::Off
     } else if std::io::stderr().is_terminal() {
         Progress::Bar
@@ -628,6 +653,11 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
     )
     .map_err(anyhow::Error::from)
     .and_then(|r| r);
+    if result.is_err() {
+        // A failing rank of several must not wait in MPI's finalisation for ranks that may be
+        // waiting for it: it leaves without, and the launcher stops the others.
+        std::mem::forget(options.comm.clone());
+    }
     // A run refused at set-up (before its first output) leaves no folder it created.
     if result.is_err() && created {
         let only_lock = std::fs::read_dir(out)
@@ -736,7 +766,7 @@ fn execute<R: Real, E: Element>(
             options,
             &mut reporter,
         )?;
-        done(&engine, out);
+        done(&engine, engine.particles.len() as u64, out);
         for (name, tr) in
             std::iter::once(("default", &t)).chain(w.as_ref().map(|w| ("workshop", w)))
         {
@@ -753,13 +783,40 @@ fn execute<R: Real, E: Element>(
         return Ok(());
     }
     let engine = mpm_solve::driver::run::run_with::<R, E>(case, out, options, &mut reporter)?;
-    done(&engine, out);
+    let points = engine
+        .communicator()
+        .sum_count(engine.particles.len() as u64);
+    if engine.rank().0 == 0 {
+        done(&engine, points, out);
+    }
     Ok(())
+}
+
+/// The run's MPI ranks when an MPI launcher started this process with more than one (cargo
+/// feature `mpi`); `None` otherwise.
+fn communicator(
+) -> anyhow::Result<Option<std::sync::Arc<dyn mpm_solve::parallel::comm::Communicator>>> {
+    #[cfg(feature = "mpi")]
+    {
+        use mpm_solve::parallel::comm::Communicator as _;
+        let launched = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"]
+            .iter()
+            .any(|v| std::env::var_os(v).is_some());
+        if launched {
+            let world = mpm_solve::parallel::mpi_comm::MpiWorld::init()
+                .context("initialising MPI (funneled threads)")?;
+            if world.ranks() > 1 {
+                return Ok(Some(std::sync::Arc::new(world)));
+            }
+        }
+    }
+    Ok(None)
 }
 
 /// The closing line of a run.
 fn done<R: Real, E: Element>(
     engine: &mpm_solve::driver::engine::Engine<R, E>,
+    points: u64,
     out: &std::path::Path,
 ) {
     let lost = if engine.lost > 0 {
@@ -773,7 +830,7 @@ fn done<R: Real, E: Element>(
         units::count(engine.steps as f64),
         if engine.steps == 1 { "" } else { "s" },
         units::duration(engine.dt),
-        units::count(engine.particles.len() as f64),
+        units::count(points as f64),
         out.display()
     );
 }

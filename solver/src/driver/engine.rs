@@ -10,6 +10,7 @@ use crate::input::case::{Case, Guards, Integration, MixedRule};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::comm::{Communicator, SingleProcess};
+use crate::parallel::gather::ordered_total;
 use crate::parallel::gather::{sort_by_element, Layout, Slots, SortScratch};
 use crate::parallel::partition::Partition;
 pub use crate::parallel::team::Options;
@@ -21,6 +22,7 @@ use crate::step::grid_update::{DampingRule, Drag};
 use crate::step::load_curve::LoadCurve;
 use crate::step::stress::{Guard, GuardSums};
 use crate::step::{grid_to_particle, grid_update, nodal_energy, particle_to_grid, stress};
+use std::sync::Arc;
 
 pub use crate::driver::guard::{Check, Divergence};
 
@@ -79,11 +81,13 @@ pub enum SetupError {
         /// Input numbers of the face's corner nodes.
         nodes: Vec<u32>,
     },
-    /// More than one process: the nodal sums at shared nodes are not exchanged yet.
-    #[error("a run over {ranks} processes needs the exchange of nodal sums at shared nodes, which this build does not have; run on one process")]
+    /// More than one process, with a feature that runs on one only.
+    #[error("a run over {ranks} MPI ranks cannot model {what} yet; run it on one process")]
     Distributed {
         /// Processes of the communicator.
         ranks: usize,
+        /// What the case asks for.
+        what: &'static str,
     },
 }
 
@@ -162,7 +166,7 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     /// What each step reads of the case.
     pub config: StepConfig,
     /// The global reductions (energies, work, force norms, time step, lost points).
-    comm: Box<dyn Communicator>,
+    comm: Arc<dyn Communicator>,
     /// This process's share of the mesh (all of it on one process).
     pub partition: Partition,
     /// Computational mesh: the partition's elements, numbered locally.
@@ -246,8 +250,14 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     guard_slots: Vec<GuardSums>,
     /// The grid update's per-block sums.
     grid_scratch: grid_update::GridScratch<R>,
-    /// The nodal energy pass's per-block sums.
-    energy_blocks: Vec<nodal_energy::NodalEnergy>,
+    /// The nodal energy pass's blocks of nodes.
+    energy_blocks: Vec<()>,
+    /// The nodal energy pass's per-node terms.
+    energy_values: Vec<[f64; 4]>,
+    /// Per block of owned elements, partial sums over its owned nodes or points.
+    owned_partials: Vec<[f64; 4]>,
+    /// Every rank's partial sums, gathered.
+    gathered: Vec<f64>,
     /// Per material index: mass per initial volume of its points (t/m³).
     initial_density: Vec<R>,
     /// Strain energy taken up so far, Σ V σ:Δε over the steps (kJ).
@@ -290,7 +300,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         drop_lost: bool,
         options: Options,
     ) -> Result<Self, SetupError> {
-        Self::with_communicator(case, drop_lost, options, Box::new(SingleProcess))
+        Self::with_communicator(case, drop_lost, options, Arc::new(SingleProcess))
     }
 
     /// [`Engine::with_options`] with the reductions of `comm` (one process: [`SingleProcess`]).
@@ -298,7 +308,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         case: &Case,
         drop_lost: bool,
         options: Options,
-        comm: Box<dyn Communicator>,
+        comm: Arc<dyn Communicator>,
     ) -> Result<Self, SetupError> {
         if E::AXISYMMETRIC {
             // Both average over an element, where the radius weighting of an axisymmetric
@@ -315,13 +325,46 @@ impl<R: Real, E: Element> Engine<R, E> {
         }
         let team = Team::new(options.threads, options.pin)?;
         let global = case.mesh::<E, R>()?;
-        if comm.ranks() > 1 {
-            return Err(SetupError::Distributed {
-                ranks: comm.ranks(),
-            });
-        }
         // Element-indexed input is read through the partition: `own` is the global range.
-        let partition = Partition::whole(&global);
+        let partition = if comm.ranks() > 1 {
+            let unmodelled = [
+                (
+                    matches!(case.integration, Integration::Mixed { .. }),
+                    "mixed integration (MPM-MIXED)",
+                ),
+                (case.strain_smoothing, "strain smoothing"),
+                (case.prescribed.is_some(), "prescribed velocities on points"),
+                (
+                    !case.nodal_velocity.is_empty(),
+                    "prescribed velocities on nodes",
+                ),
+                (
+                    !case.point_loads.is_empty(),
+                    "loads carried by material points",
+                ),
+            ];
+            if let Some((_, what)) = unmodelled.iter().find(|(on, _)| *on) {
+                return Err(SetupError::Distributed {
+                    ranks: comm.ranks(),
+                    what,
+                });
+            }
+            let weight: Vec<u64> = case
+                .points_per_element
+                .iter()
+                .map(|&n| u64::from(n))
+                .collect();
+            let mut parts = Partition::along_curve(&global, &weight, comm.ranks());
+            if parts.len() != comm.ranks() || parts.iter().any(|p| p.owned() == 0) {
+                return Err(SetupError::Distributed {
+                    ranks: comm.ranks(),
+                    what: "more ranks than blocks of 64 elements",
+                });
+            }
+            parts.swap_remove(comm.rank())
+        } else {
+            Partition::whole(&global)
+        };
         let own = partition.elements();
         let mesh = partition.local_mesh(global);
         let density = |m: u32| {
@@ -436,7 +479,22 @@ impl<R: Real, E: Element> Engine<R, E> {
             let pv = pv.clone().owned_by(&partition);
             crate::step::prescribed::Prescribed::new(&pv, &mesh, &particles)
         });
-        let layout = Layout::new(&mesh, &particles, team.threads);
+        let layout = if partition.is_whole() {
+            Layout::new(&mesh, &particles, team.threads)
+        } else {
+            let halo = Arc::new(crate::parallel::halo::Halo::new(
+                comm.clone(),
+                partition.neighbours(),
+            ));
+            Layout::ordered(
+                &mesh,
+                &particles,
+                team.threads,
+                Some(&partition.elements_in_global_order()),
+                partition.owned(),
+                Some(halo),
+            )
+        };
         if options.first_touch {
             particles = first_touch(&team, &layout, particles);
         }
@@ -481,10 +539,10 @@ impl<R: Real, E: Element> Engine<R, E> {
             guards: case.guards,
             guard_slots,
             grid_scratch: grid_update::GridScratch::new(mesh.nodes()),
-            energy_blocks: vec![
-                nodal_energy::NodalEnergy::default();
-                mesh.nodes().div_ceil(nodal_energy::NODE_BLOCK)
-            ],
+            energy_blocks: vec![(); mesh.nodes().div_ceil(nodal_energy::NODE_BLOCK)],
+            energy_values: vec![[0.0; 4]; mesh.nodes()],
+            owned_partials: vec![[0.0; 4]; layout.owned_blocks()],
+            gathered: Vec::new(),
             initial_density,
             strain_energy: 0.0,
             dissipated: 0.0,
@@ -500,7 +558,9 @@ impl<R: Real, E: Element> Engine<R, E> {
             energy_checked: (reactions.is_empty(), reactions.is_empty()),
             comm,
             config: StepConfig::of(case),
-            input_element: own.clone().map(|e| case.element_number(e) - 1).collect(),
+            input_element: (0..mesh.elements())
+                .map(|e| case.element_number(partition.global_element(e)) - 1)
+                .collect(),
             partition,
             smoothing,
             gravity_by_material: vec![[R::ZERO; 3]; weight_ratio.len()],
@@ -535,15 +595,93 @@ impl<R: Real, E: Element> Engine<R, E> {
             slots,
             sort_scratch: SortScratch::default(),
         };
-        if case.initial_stress.is_some() {
-            engine.stored_energy = engine.comm.sum(stored_energy(case, &engine.particles));
-        }
-        let (liquid_kinetic, liquid_energy) = engine.liquid_energies();
-        engine.initial_kinetic = engine.kinetic_energy() + liquid_kinetic;
+        // Sums over the points in their global order (on one rank, as one process forms them).
+        let whole = engine.on_root(|e| {
+            let stored = if case.initial_stress.is_some() {
+                e.comm.sum(stored_energy(case, &e.particles))
+            } else {
+                0.0
+            };
+            let (liquid_kinetic, liquid_energy) = e.liquid_energies();
+            vec![stored, e.kinetic_energy() + liquid_kinetic, liquid_energy]
+        });
+        let mut sums = Vec::new();
+        engine
+            .comm
+            .all_gather(&whole.unwrap_or_default(), &mut sums);
+        engine.stored_energy = sums[0];
+        engine.initial_kinetic = sums[1];
         engine.step_kinetic = engine.initial_kinetic;
-        engine.liquid_initial = liquid_energy;
-        engine.liquid_energy = liquid_energy;
+        engine.liquid_initial = sums[2];
+        engine.liquid_energy = sums[2];
         Ok(engine)
+    }
+
+    /// Whether this engine is one rank of several.
+    pub fn is_distributed(&self) -> bool {
+        !self.partition.is_whole()
+    }
+
+    /// This process's rank and the number of ranks.
+    pub fn rank(&self) -> (usize, usize) {
+        (self.comm.rank(), self.comm.ranks())
+    }
+
+    /// The communicator of the run.
+    pub fn communicator(&self) -> &dyn Communicator {
+        &*self.comm
+    }
+
+    /// Runs `f` on rank 0 with every rank's points gathered there in their global order (the
+    /// order one process keeps, elements numbered globally) and the reductions of one process,
+    /// so that the output files and sums over points are those of a one-process run; the other
+    /// ranks get `None`. On one process, `f(self)`. Collective.
+    pub fn on_root<T>(&mut self, f: impl FnOnce(&Self) -> T) -> Option<T> {
+        if self.partition.is_whole() {
+            return Some(f(self));
+        }
+        let mut bytes = Vec::with_capacity(self.particles.len() * self.particles.encoded_len());
+        for i in 0..self.particles.len() {
+            let local = self.particles.element[i];
+            self.particles.element[i] = self.partition.global_element(local as usize) as u32;
+            self.particles.put_point(i, &mut bytes);
+            self.particles.element[i] = local;
+        }
+        let all = self.comm.gather_bytes(&bytes)?;
+        let mut everyone = self.particles.clone();
+        everyone.retain(&vec![false; everyone.len()]);
+        for part in &all {
+            if !part.is_empty() {
+                everyone.push_encoded(part);
+            }
+        }
+        let own = std::mem::replace(&mut self.particles, everyone);
+        let comm = std::mem::replace(&mut self.comm, Arc::new(SingleProcess));
+        let out = f(self);
+        self.particles = own;
+        self.comm = comm;
+        Some(out)
+    }
+
+    /// Per rank (on rank 0; `None` elsewhere): its points, seconds per phase, and halo: the
+    /// elements it sends and receives per exchange and the bytes it has sent. Collective.
+    pub fn rank_report(&self) -> Option<Vec<serde_json::Value>> {
+        let halo = self.layout.halo();
+        let mine = serde_json::json!({
+            "rank": self.comm.rank(),
+            "elements": self.partition.owned(),
+            "halo_elements": self.partition.halo().len(),
+            "points": self.particles.len(),
+            "phase_seconds": self.phase_seconds,
+            "neighbours": halo.map(|h| h.sizes().iter().map(|&(r, s, g)| serde_json::json!({"rank": r, "sends": s, "receives": g})).collect::<Vec<_>>()).unwrap_or_default(),
+            "bytes_sent": halo.map_or(0, |h| h.bytes_sent()),
+        });
+        let all = self.comm.gather_bytes(mine.to_string().as_bytes())?;
+        Some(
+            all.iter()
+                .map(|b| serde_json::from_slice(b).expect("a rank's report"))
+                .collect(),
+        )
     }
 
     /// The engine's state between steps that is not in the particle arrays and that later steps
@@ -579,6 +717,9 @@ impl<R: Real, E: Element> Engine<R, E> {
             guard_slots: _,
             grid_scratch: _,
             energy_blocks: _,
+            energy_values: _,
+            owned_partials: _,
+            gathered: _,
             initial_density: _,
             courant: _,
             energy_checked: _,
@@ -647,7 +788,9 @@ impl<R: Real, E: Element> Engine<R, E> {
     /// thread count. The results do not change (they never depend on the threads); the
     /// points stay where the old team first touched them.
     pub fn rethread(&mut self, team: Team) {
-        self.layout = Layout::new(&self.mesh, &self.particles, team.threads);
+        self.layout = self
+            .layout
+            .for_threads(&self.mesh, &self.particles, team.threads);
         self.slots = self.layout.new_slots();
         self.locate_outcome = vec![((usize::MAX, 0), 0, false); team.threads];
         self.team = team;
@@ -771,7 +914,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         );
         let t1 = Instant::now();
         let liquid_scale = R::of(case.liquid_curve.at(self.time + dt));
-        let (forces, liquid_forces) = if self.grid.liquid.is_some() {
+        if self.grid.liquid.is_some() {
             grid_update::grid_update_two_phase(
                 &self.team,
                 &mut self.grid_scratch,
@@ -788,9 +931,10 @@ impl<R: Real, E: Element> Engine<R, E> {
                 case.liquid_load_on_mixture,
                 gravity,
                 R::of(dt),
-            )
+                &*self.comm,
+            );
         } else {
-            let f = grid_update::grid_update(
+            grid_update::grid_update(
                 &self.team,
                 &mut self.grid_scratch,
                 &mut self.grid,
@@ -799,12 +943,19 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &self.fixed,
                 R::of(case.damping),
                 case.damping_rule,
+                &*self.comm,
             );
-            (f, grid_update::ForceSums::default())
+        }
+        let (forces, liquid_forces) = {
+            let (layout, team, comm) = (&self.layout, &self.team, &*self.comm);
+            let (partials, gathered) = (&mut self.owned_partials, &mut self.gathered);
+            self.grid_scratch.totals(|values| {
+                layout.sum_owned(team, values, partials);
+                ordered_total(comm, &partials[..layout.owned_blocks()], gathered)
+            })
         };
-        let forces = forces.reduced(&*self.comm);
         self.force_error = forces.ratio();
-        self.liquid_force_error = liquid_forces.reduced(&*self.comm).ratio();
+        self.liquid_force_error = liquid_forces.ratio();
         let t2 = Instant::now();
         let pm = self
             .prescribed
@@ -904,8 +1055,9 @@ impl<R: Real, E: Element> Engine<R, E> {
         }
         // The step's energy terms at the nodes, with the remapped velocities: Anura3D's
         // external power and nodal kinetic energy, and the guard's work and dissipation.
-        let energy = nodal_energy::nodal_energy(
+        nodal_energy::nodal_energy(
             &self.team,
+            &mut self.energy_values,
             &mut self.energy_blocks,
             &self.grid,
             &nodal_energy::Loads {
@@ -916,10 +1068,19 @@ impl<R: Real, E: Element> Engine<R, E> {
                 liquid_fixed: &self.liquid_fixed,
                 gravity,
             },
-            R::of(dt),
         );
-        let w = self.comm.sum(energy.power_end);
-        self.nodal_kinetic = self.comm.sum(energy.kinetic);
+        self.layout
+            .sum_owned(&self.team, &self.energy_values, &mut self.owned_partials);
+        let energy = nodal_energy::NodalEnergy::of_sums(
+            ordered_total(
+                &*self.comm,
+                &self.owned_partials[..self.layout.owned_blocks()],
+                &mut self.gathered,
+            ),
+            dt,
+        );
+        let w = energy.power_end;
+        self.nodal_kinetic = energy.kinetic;
         self.external_work += w * dt;
         self.steps += 1;
         self.time += dt;
@@ -955,23 +1116,32 @@ impl<R: Real, E: Element> Engine<R, E> {
         forces: &grid_update::ForceSums,
         energy: &nodal_energy::NodalEnergy,
     ) -> Result<(), StepError> {
+        // The owned blocks' sums of every rank, added in block order.
+        for (p, s) in self
+            .owned_partials
+            .iter_mut()
+            .zip(&self.guard_slots[..self.layout.owned_blocks()])
+        {
+            *p = [s.strain, s.kinetic, s.liquid, s.volume_margin];
+        }
+        self.comm.all_gather(
+            self.owned_partials[..self.layout.owned_blocks()].as_flattened(),
+            &mut self.gathered,
+        );
         let (mut strain, mut kinetic, mut liquid, mut margin) = (0.0, 0.0, 0.0, f64::INFINITY);
-        for s in &self.guard_slots {
-            strain += s.strain;
-            kinetic += s.kinetic;
-            liquid += s.liquid;
-            margin = margin.min(s.volume_margin);
+        for s in self.gathered.chunks_exact(4) {
+            strain += s[0];
+            kinetic += s[1];
+            liquid += s[2];
+            margin = margin.min(s[3]);
         }
         // The slots hold twice each energy (see `GuardSums`).
-        let strain = 0.5 * self.comm.sum(strain);
-        let kinetic = 0.5 * self.comm.sum(kinetic);
-        let liquid = 0.5 * self.comm.sum(liquid);
-        let margin = self.comm.min(margin);
+        let (strain, kinetic, liquid) = (0.5 * strain, 0.5 * kinetic, 0.5 * liquid);
         let previous = self.step_kinetic;
         self.strain_energy += strain;
         self.liquid_energy = liquid;
         self.step_kinetic = kinetic;
-        let (work, dissipated) = (self.comm.sum(energy.work), self.comm.sum(energy.dissipated));
+        let (work, dissipated) = (energy.work, energy.dissipated);
         self.dissipated += dissipated;
         self.balance_work += work;
         let nodal = w * dt + work + dissipated + forces.unbalanced;
@@ -1086,10 +1256,24 @@ impl<R: Real, E: Element> Engine<R, E> {
                     continue;
                 }
                 let found = walk(mesh, el[j], &x[i]);
-                let (Found::In(e) | Found::Outside(e)) = found;
+                let (Found::In(e) | Found::Outside(e) | Found::Beyond(e)) = found;
                 moved |= e != el[j];
                 match found {
                     Found::In(e) => el[j] = e,
+                    Found::Beyond(e) => {
+                        // Beyond the halo: moved more than an element in one step, which the
+                        // rank cannot follow; stops the run as a point leaving the mesh does.
+                        log::error!(
+                            "a material point moved beyond this rank's halo in one step (from local element {})",
+                            el[j]
+                        );
+                        el[j] = e;
+                        if count == 0 {
+                            first = (i, e);
+                        }
+                        count += 1;
+                        break;
+                    }
                     Found::Outside(e) => {
                         el[j] = e;
                         if count == 0 {
@@ -1106,23 +1290,45 @@ impl<R: Real, E: Element> Engine<R, E> {
             // SAFETY: slot t is this thread's only.
             unsafe { outcome.write(t, (first, count, moved)) };
         });
-        if !drop_lost {
-            if let Some(&((i, e), _, _)) = self.locate_outcome.iter().filter(|o| o.1 > 0).min() {
-                return Err(Lost {
-                    id: p.id[i],
-                    step: self.steps,
-                    time: self.time,
-                    x: mesh.global(&p.x[i])[0],
-                    y: mesh.global(&p.x[i])[1],
-                    z: mesh.global(&p.x[i])[2],
-                    element: self.input_element[e as usize] + 1,
-                });
-            }
+        let outside = self.locate_outcome.iter().map(|o| o.1).sum::<u64>();
+        let outside_anywhere = self.comm.sum_count(outside);
+        if !drop_lost && outside_anywhere > 0 {
+            // Every rank stops, naming the first rank's first lost point.
+            let mine = self
+                .locate_outcome
+                .iter()
+                .filter(|o| o.1 > 0)
+                .min()
+                .map(|&((i, e), _, _)| {
+                    let g = mesh.global(&p.x[i]);
+                    vec![
+                        f64::from(p.id[i]),
+                        g[0],
+                        g[1],
+                        g[2],
+                        f64::from(self.input_element[e as usize] + 1),
+                    ]
+                })
+                .unwrap_or_default();
+            let mut all = Vec::new();
+            self.comm.all_gather(&mine, &mut all);
+            return Err(Lost {
+                id: all[0] as u32,
+                step: self.steps,
+                time: self.time,
+                x: all[1],
+                y: all[2],
+                z: all[3],
+                element: all[4] as u32,
+            });
         }
-        self.lost += self
-            .comm
-            .sum_count(self.locate_outcome.iter().map(|o| o.1).sum::<u64>());
-        let moved = self.locate_outcome.iter().any(|o| o.2);
+        self.lost += outside_anywhere;
+        let mut moved = self.locate_outcome.iter().any(|o| o.2);
+        if !self.partition.is_whole() {
+            moved |= self.migrate();
+        }
+        let p = &mut self.particles;
+        let mesh = &self.mesh;
         let permuted = sort_by_element(p, mesh.elements(), &mut self.sort_scratch);
         // A point can change element and still be in order (the last point of an element
         // moving into the next): the elements' point ranges must follow it all the same, or
@@ -1147,6 +1353,58 @@ impl<R: Real, E: Element> Engine<R, E> {
             }
         }
         Ok(())
+    }
+
+    /// Sends the points that moved into halo elements to the ranks owning those elements and
+    /// takes in the points coming here, keeping the global point order: those from lower ranks
+    /// (earlier in the order) first, then this rank's, then those from higher ranks, so that
+    /// the stable sort by element that follows orders them as one process would. Returns
+    /// whether any point came or went. Collective.
+    fn migrate(&mut self) -> bool {
+        let owned = self.partition.owned() as u32;
+        let p = &mut self.particles;
+        let leaving = p.element.iter().filter(|&&e| e >= owned).count() as u64;
+        if self.comm.sum_count(leaving) == 0 {
+            return false;
+        }
+        let (me, ranks) = (self.comm.rank(), self.comm.ranks());
+        let mut sends = vec![Vec::new(); ranks];
+        let mut keep = vec![true; p.len()];
+        for i in 0..p.len() {
+            let e = p.element[i];
+            if e < owned {
+                continue;
+            }
+            let g = self.partition.global_element(e as usize);
+            p.element[i] = g as u32;
+            p.put_point(i, &mut sends[self.partition.rank_of(g)]);
+            keep[i] = false;
+        }
+        if leaving > 0 {
+            p.retain(&keep);
+        }
+        let got = self.comm.all_to_all_bytes(&sends);
+        let kept = p.len();
+        let mut before = 0;
+        for (q, bytes) in got.iter().enumerate() {
+            if q == me || bytes.is_empty() {
+                continue;
+            }
+            let n = p.push_encoded(bytes);
+            if q < me {
+                before += n;
+            }
+        }
+        // [kept, lower ranks', higher ranks'] → [lower ranks', kept, higher ranks'].
+        p.rotate_front(kept + before, before);
+        for i in (0..before).chain(kept + before..p.len()) {
+            let g = p.element[i] as usize;
+            p.element[i] =
+                self.partition
+                    .local_element(g)
+                    .expect("a point sent to the rank owning its element") as u32;
+        }
+        true
     }
 
     /// The liquid's kinetic energy Σ n ρw V_w |w|² / 2 and the energy its compression holds,

@@ -257,6 +257,7 @@ pub fn peak_rss_bytes() -> u64 {
 pub const RUN_JSON_SCHEMA: u32 = 1;
 
 /// Writes `run.json` (strict JSON: a non-finite number is written as null).
+#[allow(clippy::too_many_arguments)]
 pub fn write_summary<R: Real, E: Element>(
     dir: &Path,
     case: &Case,
@@ -265,6 +266,7 @@ pub fn write_summary<R: Real, E: Element>(
     stepping: f64,
     diverged: Option<&crate::driver::guard::Divergence>,
     interrupted: bool,
+    ranks: Option<Vec<serde_json::Value>>,
 ) -> mpm_shared::Result<()> {
     let phases: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
         .iter()
@@ -362,6 +364,14 @@ pub fn write_summary<R: Real, E: Element>(
             "message": d.to_string(),
         })),
     });
+    let mut json = json;
+    if let Some(ranks) = ranks {
+        // A run over MPI ranks: the mesh is the whole one, and each rank reports its share.
+        let elements: u64 = ranks.iter().filter_map(|r| r["elements"].as_u64()).sum();
+        json["elements"] = serde_json::json!(elements);
+        json["nodes"] = serde_json::Value::Null;
+        json["ranks"] = serde_json::json!(ranks);
+    }
     let mut text = serde_json::to_string_pretty(&json).expect("plain JSON");
     text.push('\n');
     mpm_shared::io::write_output(&dir.join("run.json"), text.as_bytes())

@@ -109,6 +109,8 @@ pub struct RunOptions {
     /// For tests of a team that changes while the run goes on: after this step, start the
     /// team again with this many threads (unpinned), as a core taken by another process does.
     pub rethread_after_step: Option<(u64, usize)>,
+    /// The processes of the run (MPI ranks); `None`: this process alone.
+    pub comm: Option<Arc<dyn crate::parallel::comm::Communicator>>,
 }
 
 impl Default for RunOptions {
@@ -122,6 +124,7 @@ impl Default for RunOptions {
             stop: None,
             abort_after_step: None,
             rethread_after_step: None,
+            comm: None,
         }
     }
 }
@@ -272,10 +275,36 @@ fn drive<R: Real, E: Element>(
             .into());
         }
     }
-    let mut engine = Engine::<R, E>::new(case, options.drop_lost)?;
-    check_probes(case, &engine)?;
+    let mut engine = match &options.comm {
+        Some(comm) => {
+            // Ranks are placed by the launcher (`mpirun --bind-to`); their threads stay unpinned.
+            let engine_options = crate::driver::engine::Options {
+                pin: crate::parallel::team::Pin::None,
+                ..case.engine
+            };
+            Engine::<R, E>::with_communicator(
+                case,
+                options.drop_lost,
+                engine_options,
+                comm.clone(),
+            )?
+        }
+        None => Engine::<R, E>::new(case, options.drop_lost)?,
+    };
+    if engine.is_distributed() && (options.checkpoint.is_some() || options.resume) {
+        return Err(crate::driver::engine::SetupError::Distributed {
+            ranks: engine.rank().1,
+            what: "checkpoints",
+        }
+        .into());
+    }
     observer.on_start(&engine)?;
-    let mut out = Output::new(dir, case, &engine)?;
+    // Rank 0 writes the files, from every rank's points (one process: itself).
+    let out = engine.on_root(|e| -> Result<Output, RunError> {
+        check_probes(case, e)?;
+        Ok(Output::new(dir, case, e)?)
+    });
+    let mut out = out.transpose()?;
     let mut d = Driver::default();
     if let Some(s) = saved {
         checkpoint::tidy(dir, &s.series, s.finished(case.output_times.len()))?;
@@ -283,41 +312,66 @@ fn drive<R: Real, E: Element>(
         observer
             .restore(&s.observer)
             .map_err(|what| s.corrupt(format!("job state: {what}")))?;
-        out.resume(s.series.clone())?;
+        out.as_mut()
+            .expect("checkpoints run on one process")
+            .resume(s.series.clone())?;
         d = s.driver;
     }
     // Wall seconds before this process, for run.json.
     let wall_before = d.wall;
     let elapsed = || wall_before + wall.elapsed().as_secs_f64();
     // run.json, written at the end, where a guard rail stops the run, or at a signal.
-    let summary = |engine: &Engine<R, E>, d: &Driver, diverged, interrupted| {
-        output::write_summary(
+    let summary = |engine: &mut Engine<R, E>,
+                   d: &Driver,
+                   diverged: Option<&crate::driver::guard::Divergence>,
+                   interrupted|
+     -> Result<(), RunError> {
+        let ranks = engine.rank_report().filter(|_| engine.is_distributed());
+        engine
+            .on_root(|e| {
+                output::write_summary(
+                    dir,
+                    case,
+                    e,
+                    elapsed(),
+                    d.stepping,
+                    diverged,
+                    interrupted,
+                    ranks,
+                )
+            })
+            .transpose()?;
+        Ok(())
+    };
+    // Every output is written by rank 0 from every rank's points (one process: itself).
+    let write = |engine: &mut Engine<R, E>, out: &mut Option<Output>| -> Result<(), RunError> {
+        engine
+            .on_root(|e| out.as_mut().expect("rank 0 has the output").write(e))
+            .transpose()?;
+        Ok(())
+    };
+    let save = |engine: &Engine<R, E>,
+                out: &Option<Output>,
+                d: &mut Driver,
+                observer: &dyn Observer<R, E>| {
+        d.wall = elapsed();
+        let scalars = engine.checkpoint_scalars();
+        let observed = observer.save();
+        checkpoint::write(
             dir,
-            case,
-            engine,
-            elapsed(),
-            d.stepping,
-            diverged,
-            interrupted,
+            &checkpoint::State {
+                fingerprint: &fingerprint,
+                driver: *d,
+                scalars: &scalars,
+                particles: &engine.particles,
+                series: out
+                    .as_ref()
+                    .expect("checkpoints run on one process")
+                    .series(),
+                observer: &observed,
+            },
         )
     };
-    let save =
-        |engine: &Engine<R, E>, out: &Output, d: &mut Driver, observer: &dyn Observer<R, E>| {
-            d.wall = elapsed();
-            let scalars = engine.checkpoint_scalars();
-            let observed = observer.save();
-            checkpoint::write(
-                dir,
-                &checkpoint::State {
-                    fingerprint: &fingerprint,
-                    driver: *d,
-                    scalars: &scalars,
-                    particles: &engine.particles,
-                    series: out.series(),
-                    observer: &observed,
-                },
-            )
-        };
     let mut last_checkpoint = Instant::now();
     if options.checkpoint.is_some() && engine.steps == 0 && d.next_output == 0 {
         // A run killed before its first output resumes from here, not from nothing.
@@ -378,10 +432,10 @@ fn drive<R: Real, E: Element>(
                     // The state at the failing step, when still finite, is the most useful
                     // last output (where it went wrong); otherwise the outputs so far stand.
                     if dv.check != crate::driver::guard::Check::NonFinite {
-                        out.write(&engine)?;
+                        write(&mut engine, &mut out)?;
                     }
                     d.stepping = t_start + t0.elapsed().as_secs_f64();
-                    summary(&engine, &d, Some(dv), false)?;
+                    summary(&mut engine, &d, Some(dv), false)?;
                 }
                 return Err(e.into());
             }
@@ -426,14 +480,14 @@ fn drive<R: Real, E: Element>(
                 last_checkpoint = Instant::now();
             }
             if let Some(e) = interrupted {
-                summary(&engine, &d, None, true)?;
+                summary(&mut engine, &d, None, true)?;
                 return Err(e);
             }
         }
         d.load_step_start = t_out;
         d.stepping = t_start + t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        out.write(&engine)?;
+        write(&mut engine, &mut out)?;
         observer.on_output(&engine);
         // The next load step starts here.
         (d.next_output, d.taken, d.begun) = (k + 1, 0, engine.time);
@@ -450,12 +504,12 @@ fn drive<R: Real, E: Element>(
         }
         engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
         if let Some(e) = interrupted {
-            summary(&engine, &d, None, true)?;
+            summary(&mut engine, &d, None, true)?;
             return Err(e);
         }
     }
     observer.on_end(&engine);
-    summary(&engine, &d, None, false)?;
+    summary(&mut engine, &d, None, false)?;
     Ok(engine)
 }
 

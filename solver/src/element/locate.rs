@@ -12,6 +12,9 @@ pub enum Found {
     In(u32),
     /// Left the mesh through a boundary face of this element.
     Outside(u32),
+    /// The walk left this rank's elements and halo through a face of this element (a point
+    /// that moved more than an element in a step, on a rank of several).
+    Beyond(u32),
 }
 
 /// How far outside an element (in local coordinates) a point may lie and still count as in
@@ -34,6 +37,9 @@ pub fn walk<E: Element, R: Real>(mesh: &Mesh<E, R>, start: u32, p: &V3<R>) -> Fo
         let next = mesh.neighbour[e as usize].as_ref()[k];
         if next == u32::MAX {
             return Found::Outside(e);
+        }
+        if next == crate::element::mesh::REMOTE {
+            return Found::Beyond(e);
         }
         e = next;
     }

@@ -5,6 +5,10 @@
 
 use mpm_shared::Model;
 
+/// Neighbour marker of a face whose element belongs to another process and lies beyond its
+/// halo (see `parallel::partition`).
+pub const REMOTE: u32 = u32::MAX - 1;
+
 use crate::element::tet4::Tet4;
 use crate::element::Element;
 use crate::real::{Real, V3};

@@ -6,7 +6,7 @@
 
 /// Reductions over every process of a run. Each call is collective: every process calls it,
 /// in the same order, with its own part.
-pub trait Communicator: Send + Sync {
+pub trait Communicator: Send + Sync + std::fmt::Debug {
     /// This process's number, 0-based.
     fn rank(&self) -> usize;
     /// Number of processes.
@@ -19,6 +19,22 @@ pub trait Communicator: Send + Sync {
     fn max(&self, local: f64) -> f64;
     /// Sum of counts.
     fn sum_count(&self, local: u64) -> u64;
+    /// Every process's `local`, concatenated in rank order, into `out` (which is resized; its
+    /// capacity is kept between calls, so a step that reuses it allocates nothing once warm).
+    /// Each process may give a different number of values.
+    fn all_gather(&self, local: &[f64], out: &mut Vec<f64>);
+    /// Point-to-point exchange with neighbours: sends each `(rank, values)` of `sends` and
+    /// fills each `(rank, buffer)` of `recvs` with what that rank sends here (its length must
+    /// match). Every pair must appear on both sides; the messages travel concurrently.
+    fn exchange(&self, sends: &[(usize, &[f64])], recvs: &mut [(usize, &mut [f64])]);
+    /// Bytes from each rank to each rank (`sends[q]` goes to rank q); returns what each rank
+    /// sent here, by rank. Every process calls it, with a `sends` as long as [`ranks`].
+    ///
+    /// [`ranks`]: Communicator::ranks
+    fn all_to_all_bytes(&self, sends: &[Vec<u8>]) -> Vec<Vec<u8>>;
+    /// Rank 0 receives every process's bytes, in rank order (its own first); the others get
+    /// `None`.
+    fn gather_bytes(&self, local: &[u8]) -> Option<Vec<Vec<u8>>>;
 }
 
 /// One process: every reduction is its own value.
@@ -48,6 +64,30 @@ impl Communicator for SingleProcess {
 
     fn sum_count(&self, local: u64) -> u64 {
         local
+    }
+
+    fn all_gather(&self, local: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        out.extend_from_slice(local);
+    }
+
+    fn exchange(&self, sends: &[(usize, &[f64])], recvs: &mut [(usize, &mut [f64])]) {
+        // One process has no neighbours; a message to itself is a copy.
+        for (to, buffer) in recvs.iter_mut() {
+            let (_, values) = sends
+                .iter()
+                .find(|(r, _)| r == to)
+                .expect("a receive without its send");
+            buffer.copy_from_slice(values);
+        }
+    }
+
+    fn all_to_all_bytes(&self, sends: &[Vec<u8>]) -> Vec<Vec<u8>> {
+        sends.to_vec()
+    }
+
+    fn gather_bytes(&self, local: &[u8]) -> Option<Vec<Vec<u8>>> {
+        Some(vec![local.to_vec()])
     }
 }
 

@@ -14,18 +14,16 @@ use std::ops::Range;
 use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::Element;
-use crate::parallel::team::{balanced_ranges, Shared, Team};
+use crate::parallel::comm::Communicator;
+use crate::parallel::halo::Halo;
+use crate::parallel::team::{aligned_to_blocks, balanced_ranges, Shared, Team};
 use crate::real::Real;
 use crate::state::particles::{Field, FieldVisitor, Particles, Value};
 
 /// Widest slot (values per element node) a pass uses.
 pub const WIDTH: usize = 12;
 
-/// The threads' element ranges start at multiples of this many elements (the last ends with
-/// the mesh), so that a sum over a block of consecutive elements is formed by one thread in
-/// element order: per-block partial sums (the guard rails') are the same for any thread count,
-/// and there are 64 times fewer of them to write and add than per-element ones.
-pub const ELEMENT_BLOCK: usize = 64;
+pub use crate::parallel::team::ELEMENT_BLOCK;
 
 /// Layout and scratch of the parallel step.
 #[derive(Debug)]
@@ -44,6 +42,19 @@ pub struct Layout<R: Real, E: Element = Tet4> {
     node_start: Vec<u32>,
     /// Slots (NODES e + k) of every node, in element order.
     node_slot: Vec<u32>,
+    /// For each block of owned elements, where its owned nodes start in `owned_node`
+    /// (`blocks + 1` long).
+    owned_start: Vec<u32>,
+    /// Nodes owned per element block: a node belongs to the first element (in global order)
+    /// that touches it, and is listed under that element's block, by element and corner. A sum
+    /// over nodes formed block by block in this order is the same for any thread or rank count.
+    owned_node: Vec<u32>,
+    /// The exchange of border slots with other ranks (`None` on one process).
+    halo: Option<std::sync::Arc<Halo>>,
+    /// The local elements in global order, on a rank of several.
+    order: Option<Vec<u32>>,
+    /// Number of owned elements (the halo's follow).
+    owned: usize,
     _types: std::marker::PhantomData<(R, E)>,
 }
 
@@ -70,9 +81,23 @@ pub fn node_slots<E: Element, R>(
 impl<R: Real, E: Element> Layout<R, E> {
     /// The layout of `mesh` for `threads` threads, with particles `p` (sorted by element).
     pub fn new(mesh: &Mesh<E, R>, p: &Particles<R>, threads: usize) -> Self {
+        Self::ordered(mesh, p, threads, None, mesh.elements(), None)
+    }
+
+    /// [`Layout::new`] for one rank of several: each node sums its elements' slots in the
+    /// order of `order` (the local elements in global order), and every scatter exchanges the
+    /// border slots through `halo` before the nodes are formed.
+    pub fn ordered(
+        mesh: &Mesh<E, R>,
+        p: &Particles<R>,
+        threads: usize,
+        order: Option<&[u32]>,
+        owned: usize,
+        halo: Option<std::sync::Arc<Halo>>,
+    ) -> Self {
         let (ne, nn) = (mesh.elements(), mesh.nodes());
         let elem_start = element_starts(&p.element, ne);
-        let element_ranges = aligned(
+        let element_ranges = aligned_to_blocks(
             balanced_ranges(
                 (0..ne).map(|e| E::NODES as u64 * u64::from(elem_start[e + 1] - elem_start[e])),
                 threads,
@@ -90,8 +115,18 @@ impl<R: Real, E: Element> Layout<R, E> {
         }
         let mut fill = node_start.clone();
         let mut node_slot = vec![0u32; E::NODES * ne];
-        for (e, c) in mesh.corners.iter().enumerate() {
-            for (k, &n) in c.as_ref().iter().enumerate() {
+        let natural: Vec<u32>;
+        let order = match order {
+            Some(o) => o,
+            None => {
+                natural = (0..ne as u32).collect();
+                &natural
+            }
+        };
+        assert_eq!(order.len(), ne, "an order of every element");
+        for &e in order {
+            let e = e as usize;
+            for (k, &n) in mesh.corners[e].as_ref().iter().enumerate() {
                 node_slot[fill[n as usize] as usize] = (E::NODES * e + k) as u32;
                 fill[n as usize] += 1;
             }
@@ -100,12 +135,41 @@ impl<R: Real, E: Element> Layout<R, E> {
             (0..nn).map(|n| u64::from(node_start[n + 1] - node_start[n])),
             threads,
         );
+        // Each node's first element in global order is its owner; the node is this rank's
+        // when that element is owned here.
+        let mut owner = vec![u32::MAX; nn];
+        for &e in order {
+            for &n in mesh.corners[e as usize].as_ref() {
+                if owner[n as usize] == u32::MAX {
+                    owner[n as usize] = e;
+                }
+            }
+        }
+        let blocks = owned.div_ceil(ELEMENT_BLOCK);
+        let mut owned_start = Vec::with_capacity(blocks + 1);
+        let mut owned_node = Vec::new();
+        for b in 0..blocks {
+            owned_start.push(owned_node.len() as u32);
+            for e in b * ELEMENT_BLOCK..((b + 1) * ELEMENT_BLOCK).min(owned) {
+                for &n in mesh.corners[e].as_ref() {
+                    if owner[n as usize] == e as u32 {
+                        owned_node.push(n);
+                    }
+                }
+            }
+        }
+        owned_start.push(owned_node.len() as u32);
         let layout = Layout {
             elem_start,
             element_ranges,
             node_ranges,
             node_start,
             node_slot,
+            owned_start,
+            owned_node,
+            halo: halo.clone(),
+            order: halo.as_ref().map(|_| order.to_vec()),
+            owned,
             _types: std::marker::PhantomData,
         };
         layout.debug_check();
@@ -196,17 +260,64 @@ impl<R: Real, E: Element> Layout<R, E> {
     {
         const { assert!(W <= WIDTH) };
         let per_element = E::NODES * W;
-        let slots = Shared::new(slots);
+        let shared = Shared::new(slots);
         let ranges = &self.element_ranges;
         team.run(|k| {
             let r = ranges[k].clone();
             // SAFETY: the element ranges are disjoint, so are their slots.
-            let mine = unsafe { slots.range(per_element * r.start..per_element * r.end) };
+            let mine = unsafe { shared.range(per_element * r.start..per_element * r.end) };
             for (own, e) in mine.chunks_exact_mut(per_element).zip(r) {
                 own.fill(R::ZERO);
                 element(e, own);
             }
         });
+        if let Some(h) = &self.halo {
+            h.exchange(&mut slots[..], per_element);
+        }
+    }
+
+    /// The same layout (element order, halo) for another thread count.
+    pub fn for_threads(&self, mesh: &Mesh<E, R>, p: &Particles<R>, threads: usize) -> Self {
+        Self::ordered(
+            mesh,
+            p,
+            threads,
+            self.order.as_deref(),
+            self.owned,
+            self.halo.clone(),
+        )
+    }
+
+    /// Blocks of owned elements (the partial sums of [`Layout::sum_owned`]).
+    pub fn owned_blocks(&self) -> usize {
+        self.owned_start.len() - 1
+    }
+
+    /// Per block of owned elements, the sum of `values` over the block's owned nodes, in
+    /// order, into `partials` (at least [`Layout::owned_blocks`] long). Added up in block order
+    /// over every rank ([`ordered_total`]), these give a sum over the mesh's nodes that is the
+    /// same for any thread and rank count.
+    pub fn sum_owned<const K: usize>(
+        &self,
+        team: &Team,
+        values: &[[f64; K]],
+        partials: &mut [[f64; K]],
+    ) {
+        let (start, node) = (&self.owned_start, &self.owned_node);
+        team.for_blocks(self.owned_blocks(), 1, partials, |r| {
+            let mut s = [0.0; K];
+            for &n in &node[start[r.start] as usize..start[r.start + 1] as usize] {
+                for c in 0..K {
+                    s[c] += values[n as usize][c];
+                }
+            }
+            s
+        });
+    }
+
+    /// The halo exchange, on a rank of several.
+    pub fn halo(&self) -> Option<&Halo> {
+        self.halo.as_deref()
     }
 
     /// Both passes: [`Layout::scatter`] with `element`, then [`Layout::gather`] handing each
@@ -248,23 +359,22 @@ impl<R: Real, E: Element> Layout<R, E> {
     }
 }
 
-/// `ranges` (contiguous, covering `0..elements`) with every boundary between two moved to the
-/// nearest multiple of [`ELEMENT_BLOCK`] (at most `elements`): a change of balance of at most
-/// half a block per thread.
-fn aligned(ranges: Vec<Range<usize>>, elements: usize) -> Vec<Range<usize>> {
-    let round = |b: usize| ((b + ELEMENT_BLOCK / 2) / ELEMENT_BLOCK * ELEMENT_BLOCK).min(elements);
-    let last = ranges.len() - 1;
-    let mut start = 0;
-    ranges
-        .iter()
-        .enumerate()
-        .map(|(k, r)| {
-            let end = if k == last { elements } else { round(r.end) };
-            let out = start..end;
-            start = end;
-            out
-        })
-        .collect()
+/// The sum of every rank's block `partials`, added in block order (rank order, then each
+/// rank's own): the same bits on every rank and for any rank count. `scratch` keeps the
+/// gathered values between calls.
+pub fn ordered_total<const K: usize>(
+    comm: &dyn Communicator,
+    partials: &[[f64; K]],
+    scratch: &mut Vec<f64>,
+) -> [f64; K] {
+    comm.all_gather(partials.as_flattened(), scratch);
+    let mut total = [0.0; K];
+    for block in scratch.chunks_exact(K) {
+        for c in 0..K {
+            total[c] += block[c];
+        }
+    }
+    total
 }
 
 /// First particle of each element for particles sorted by `element`.

@@ -2,6 +2,9 @@
 
 pub mod comm;
 pub mod gather;
+pub mod halo;
 pub mod machine;
+#[cfg(feature = "mpi")]
+pub mod mpi_comm;
 pub mod partition;
 pub mod team;

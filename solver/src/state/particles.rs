@@ -284,6 +284,100 @@ impl<R: Real> Particles<R> {
         c.0
     }
 
+    /// Appends point `i` of every array, as bits (the field list's order): a point leaving for
+    /// another rank or gathered for the output files. [`Particles::push_encoded`] reads it back.
+    pub fn put_point(&self, i: usize, out: &mut Vec<u8>) {
+        struct Put<'a>(usize, &'a mut Vec<u8>);
+        impl FieldReader for Put<'_> {
+            fn field<T: Value>(&mut self, field: Field, values: &[T]) {
+                let k = field.per_point;
+                for v in &values[k * self.0..k * (self.0 + 1)] {
+                    v.put_bits(self.1);
+                }
+            }
+        }
+        self.read_fields(&mut Put(i, out));
+    }
+
+    /// Bytes [`Particles::put_point`] writes per point.
+    pub fn encoded_len(&self) -> usize {
+        struct Len(usize);
+        impl FieldReader for Len {
+            fn field<T: Value>(&mut self, field: Field, _: &[T]) {
+                self.0 += T::BYTES * field.per_point;
+            }
+        }
+        let mut l = Len(0);
+        self.read_fields(&mut l);
+        l.0
+    }
+
+    /// Appends the points that [`Particles::put_point`] wrote into `bytes` (from arrays of the
+    /// same fields). Returns how many.
+    pub fn push_encoded(&mut self, bytes: &[u8]) -> usize {
+        let size = self.encoded_len();
+        assert!(size > 0 && bytes.len() % size == 0, "whole encoded points");
+        let n = bytes.len() / size;
+        struct Push<'a> {
+            bytes: &'a [u8],
+            size: usize,
+            offset: usize,
+            n: usize,
+        }
+        impl FieldVisitor for Push<'_> {
+            fn field<T: Value>(&mut self, field: Field, values: &mut Vec<T>) {
+                let k = field.per_point;
+                for p in 0..self.n {
+                    for c in 0..k {
+                        let at = p * self.size + self.offset + c * T::BYTES;
+                        values.push(
+                            T::from_bits(&self.bytes[at..at + T::BYTES]).expect("encoded value"),
+                        );
+                    }
+                }
+                self.offset += k * T::BYTES;
+            }
+        }
+        self.visit_fields(&mut Push {
+            bytes,
+            size,
+            offset: 0,
+            n,
+        });
+        n
+    }
+
+    /// Rotates the first `n` points right by `by` (the last `by` of them come first).
+    pub fn rotate_front(&mut self, n: usize, by: usize) {
+        struct Rotate(usize, usize);
+        impl FieldVisitor for Rotate {
+            fn field<T: Value>(&mut self, field: Field, values: &mut Vec<T>) {
+                let k = field.per_point;
+                values[..k * self.0].rotate_right(k * self.1);
+            }
+        }
+        self.visit_fields(&mut Rotate(n, by));
+    }
+
+    /// Keeps the points whose `keep[i]` is true, in order.
+    pub fn retain(&mut self, keep: &[bool]) {
+        struct Retain<'a>(&'a [bool]);
+        impl FieldVisitor for Retain<'_> {
+            fn field<T: Value>(&mut self, field: Field, values: &mut Vec<T>) {
+                let k = field.per_point;
+                let mut to = 0;
+                for (i, &kept) in self.0.iter().enumerate() {
+                    if kept {
+                        values.copy_within(k * i..k * (i + 1), k * to);
+                        to += 1;
+                    }
+                }
+                values.truncate(k * to);
+            }
+        }
+        self.visit_fields(&mut Retain(keep));
+    }
+
     /// Adds the liquid state, every point starting at rest with pore pressure `p0(material)`;
     /// with `fixed_liquid_mass`, the liquid's mass is kept at that of the initial volume.
     pub fn add_liquid(&mut self, p0: impl Fn(u32) -> f64, fixed_liquid_mass: bool) {
@@ -326,7 +420,9 @@ pub fn place<E: Element, R: Real>(
 ) -> Result<Particles<R>, PlacementError> {
     let mut p = Particles::default();
     let mut id = 0u32;
-    for e in 0..mesh.elements() {
+    debug_assert!(points.len() <= mesh.elements());
+    // One count per owned element (a rank's halo elements, after them, get none here).
+    for e in 0..points.len() {
         if let Some(f) = first_id {
             id = f[e];
         }

@@ -1,5 +1,6 @@
 //! Grid update: nodal accelerations with local damping and fixities (docs/design.md §4, step 2).
 
+use crate::parallel::comm::Communicator;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
@@ -14,7 +15,12 @@ pub const NODE_BLOCK: usize = 1024;
 #[derive(Debug, Clone)]
 pub struct GridScratch<R> {
     heaviest: Vec<R>,
-    sums: Vec<(ForceSums, ForceSums)>,
+    done: Vec<()>,
+    /// Per node, the terms of the force sums: |f_mix|, |f_ext| over the free solid components
+    /// and the same for the liquid (0 at empty nodes). Summed by the layout's owned-node blocks
+    /// ([`crate::parallel::gather::Layout::sum_owned`]), so that the sums are the same for any
+    /// thread and rank count.
+    pub node_sums: Vec<[f64; 4]>,
 }
 
 impl<R: Real> GridScratch<R> {
@@ -23,12 +29,14 @@ impl<R: Real> GridScratch<R> {
         let blocks = nodes.div_ceil(NODE_BLOCK);
         GridScratch {
             heaviest: vec![R::ZERO; blocks],
-            sums: vec![(ForceSums::default(), ForceSums::default()); blocks],
+            done: vec![(); blocks],
+            node_sums: vec![[0.0; 4]; nodes],
         }
     }
 
-    /// The mass below which a node counts as empty ([`MASS_EPS`] of the heaviest), on the team.
-    fn empty_below(&mut self, team: &Team, mass: &[R]) -> R {
+    /// The mass below which a node counts as empty ([`MASS_EPS`] of the heaviest node of every
+    /// process), on the team.
+    fn empty_below(&mut self, team: &Team, comm: &dyn Communicator, mass: &[R]) -> R {
         team.for_blocks(mass.len(), NODE_BLOCK, &mut self.heaviest, |r| {
             mass[r].iter().fold(R::ZERO, |a, &b| a.max(b))
         });
@@ -36,18 +44,25 @@ impl<R: Real> GridScratch<R> {
         let heaviest = self.heaviest[..blocks]
             .iter()
             .fold(R::ZERO, |a, &b| a.max(b));
-        heaviest * R::of(MASS_EPS)
+        // A rank's nodes shared with another hold part of their mass only, never more: the
+        // largest over the ranks is the whole mesh's.
+        R::of(comm.max(heaviest.f64())) * R::of(MASS_EPS)
     }
 
-    /// The blocks' sums of `nodes` nodes, added in block order.
-    fn total(&self, nodes: usize) -> (ForceSums, ForceSums) {
-        let add = |a: ForceSums, b: &ForceSums| ForceSums {
-            unbalanced: a.unbalanced + b.unbalanced,
-            external: a.external + b.external,
-        };
-        self.sums[..nodes.div_ceil(NODE_BLOCK)].iter().fold(
-            (ForceSums::default(), ForceSums::default()),
-            |(a, aw), (b, bw)| (add(a, b), add(aw, bw)),
+    /// The force sums from the per-node terms, (mixture, liquid), with `sum` adding a per-node
+    /// array over the mesh ([`crate::parallel::gather::Layout::sum_owned`] and
+    /// [`crate::parallel::gather::ordered_total`]).
+    pub fn totals(&self, sum: impl FnOnce(&[[f64; 4]]) -> [f64; 4]) -> (ForceSums, ForceSums) {
+        let t = sum(&self.node_sums);
+        (
+            ForceSums {
+                unbalanced: t[0],
+                external: t[1],
+            },
+            ForceSums {
+                unbalanced: t[2],
+                external: t[3],
+            },
         )
     }
 }
@@ -124,20 +139,22 @@ pub fn grid_update<R: Real>(
     fixed: &[[bool; 3]],
     alpha: R,
     rule: DampingRule,
-) -> ForceSums {
+    comm: &dyn Communicator,
+) {
     let nodes = g.mass.len();
-    let eps = scratch.empty_below(team, &g.mass);
+    let eps = scratch.empty_below(team, comm, &g.mass);
     g.empty_below = eps;
     let (mass, f_ext, f_int, momentum) = (&g.mass, &g.f_ext, &g.f_int, &g.momentum);
     let acc_out = Shared::new(&mut g.acc);
-    team.for_blocks(nodes, NODE_BLOCK, &mut scratch.sums, |r| {
+    let sums_out = Shared::new(&mut scratch.node_sums);
+    team.for_blocks(nodes, NODE_BLOCK, &mut scratch.done, |r| {
         // SAFETY: the nodes of this block are this call's only.
-        let acc_out = unsafe { acc_out.range(r.clone()) };
-        let (mut unbalanced, mut external) = (0.0, 0.0);
-        for (n, acc_n) in r.zip(acc_out) {
+        let (acc_out, sums) = unsafe { (acc_out.range(r.clone()), sums_out.range(r.clone())) };
+        for ((n, acc_n), sum) in r.zip(acc_out).zip(sums) {
             let m = mass[n];
             if m <= eps {
                 *acc_n = [R::ZERO; 3];
+                *sum = [0.0; 4];
                 continue;
             }
             let (mut out2, mut ext2) = (0.0, 0.0);
@@ -152,18 +169,9 @@ pub fn grid_update<R: Real>(
                 ext2 += ext.f64() * ext.f64();
                 acc_n[a] = damp(rule, alpha, f, momentum[n][a]) / m;
             }
-            unbalanced += out2.sqrt();
-            external += ext2.sqrt();
+            *sum = [out2.sqrt(), ext2.sqrt(), 0.0, 0.0];
         }
-        (
-            ForceSums {
-                unbalanced,
-                external,
-            },
-            ForceSums::default(),
-        )
     });
-    scratch.total(nodes).0
 }
 
 /// Norms of the out-of-balance and the external force over the free components, Anura3D's
@@ -177,14 +185,6 @@ pub struct ForceSums {
 }
 
 impl ForceSums {
-    /// The sums over every process.
-    pub fn reduced(self, comm: &dyn crate::parallel::comm::Communicator) -> Self {
-        ForceSums {
-            unbalanced: comm.sum(self.unbalanced),
-            external: comm.sum(self.external),
-        }
-    }
-
     /// |out-of-balance| / |external| (0 without external force).
     pub fn ratio(self) -> f64 {
         if self.external > 0.0 {
@@ -235,25 +235,32 @@ pub fn grid_update_two_phase<R: Real>(
     liquid_load_on_mixture: bool,
     gravity: V3<R>,
     dt: R,
-) -> (ForceSums, ForceSums) {
+    comm: &dyn Communicator,
+) {
     let nodes = g.mass.len();
-    let eps = scratch.empty_below(team, &g.mass);
+    let eps = scratch.empty_below(team, comm, &g.mass);
     g.empty_below = eps;
     let gl = g.liquid.as_mut().expect("liquid arrays");
     let (mass, f_ext, f_int, momentum) = (&g.mass, &g.f_ext, &g.f_int, &g.momentum);
     let (l_mass, l_mass_n, l_drag, l_momentum, l_force) =
         (&gl.mass, &gl.mass_n, &gl.drag, &gl.momentum, &gl.force);
     let (acc_s, acc_w) = (Shared::new(&mut g.acc), Shared::new(&mut gl.acc));
-    team.for_blocks(nodes, NODE_BLOCK, &mut scratch.sums, |r| {
+    let sums_out = Shared::new(&mut scratch.node_sums);
+    team.for_blocks(nodes, NODE_BLOCK, &mut scratch.done, |r| {
         // SAFETY: the nodes of this block are this call's only.
-        let (acc_s, acc_w) = unsafe { (acc_s.range(r.clone()), acc_w.range(r.clone())) };
-        let (mut unbalanced, mut external) = (0.0, 0.0);
-        let (mut unbalanced_w, mut external_w) = (0.0, 0.0);
-        for ((n, acc_s), acc_w) in r.zip(acc_s).zip(acc_w) {
+        let (acc_s, acc_w, sums) = unsafe {
+            (
+                acc_s.range(r.clone()),
+                acc_w.range(r.clone()),
+                sums_out.range(r.clone()),
+            )
+        };
+        for (((n, acc_s), acc_w), sum) in r.zip(acc_s).zip(acc_w).zip(sums) {
             let ms = mass[n];
             if ms <= eps {
                 *acc_s = [R::ZERO; 3];
                 *acc_w = [R::ZERO; 3];
+                *sum = [0.0; 4];
                 continue;
             }
             let (mw, mwn, q) = (l_mass[n], l_mass_n[n], l_drag[n]);
@@ -355,28 +362,15 @@ pub fn grid_update_two_phase<R: Real>(
                 acc_s[a] = a_s;
                 acc_w[a] = a_w;
             }
-            unbalanced += out2.sqrt();
-            external += ext2.sqrt();
-            unbalanced_w += out2_w.sqrt();
-            external_w += ext2_w.sqrt();
+            *sum = [out2.sqrt(), ext2.sqrt(), out2_w.sqrt(), ext2_w.sqrt()];
         }
-        (
-            ForceSums {
-                unbalanced,
-                external,
-            },
-            ForceSums {
-                unbalanced: unbalanced_w,
-                external: external_w,
-            },
-        )
     });
-    scratch.total(nodes)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::parallel::comm::SingleProcess;
     use crate::state::grid::LiquidNodes;
 
     /// A grid of `n` nodes with pseudo-random masses (some empty), momenta, forces and
@@ -414,7 +408,7 @@ mod tests {
             let team = Team::new(threads, crate::parallel::team::Pin::None).unwrap();
             let mut scratch = GridScratch::new(n);
             let (mut g, fixed, traction) = random_grid(n);
-            let two = grid_update_two_phase(
+            grid_update_two_phase(
                 &team,
                 &mut scratch,
                 &mut g,
@@ -430,10 +424,12 @@ mod tests {
                 true,
                 [0.0, -9.81, 0.0],
                 1e-3,
+                &SingleProcess,
             );
+            let two = scratch.node_sums.clone();
             let (mut d, _, _) = random_grid(n);
             d.liquid = None;
-            let dry = grid_update(
+            grid_update(
                 &team,
                 &mut scratch,
                 &mut d,
@@ -442,7 +438,9 @@ mod tests {
                 &fixed,
                 0.05,
                 DampingRule::Anura3d,
+                &SingleProcess,
             );
+            let dry = scratch.node_sums.clone();
             let acc = |g: &Grid<f64>| {
                 let mut v: Vec<u64> = g.acc.iter().flatten().map(|x| x.to_bits()).collect();
                 if let Some(l) = &g.liquid {
@@ -453,7 +451,7 @@ mod tests {
             (two, dry, acc(&g), acc(&d))
         };
         let one = run(1);
-        assert!(one.0 .0.unbalanced > 0.0 && one.1.external > 0.0);
+        assert!(one.0.iter().any(|s| s[0] > 0.0) && one.1.iter().any(|s| s[1] > 0.0));
         for threads in [2, 3] {
             assert_eq!(run(threads), one, "{threads} threads");
         }

@@ -12,7 +12,7 @@
 //! moved to the far side of its element) is accelerated a hundred thousand times harder than
 //! the point, and a load on it would seem to do that much more work, which no point receives.
 
-use crate::parallel::team::Team;
+use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 
@@ -35,12 +35,14 @@ pub struct NodalEnergy {
 }
 
 impl NodalEnergy {
-    fn add(self, o: &NodalEnergy) -> NodalEnergy {
+    /// The step's terms from the mesh's sums of the per-node values that [`nodal_energy`]
+    /// writes (power, kinetic energy, work rate, dissipation rate), for a step of `dt`.
+    pub fn of_sums(t: [f64; 4], dt: f64) -> Self {
         NodalEnergy {
-            power_end: self.power_end + o.power_end,
-            kinetic: self.kinetic + o.kinetic,
-            work: self.work + o.work,
-            dissipated: self.dissipated + o.dissipated,
+            power_end: t[0],
+            kinetic: t[1],
+            work: t[2] * dt,
+            dissipated: t[3] * dt,
         }
     }
 }
@@ -63,24 +65,29 @@ pub struct Loads<'a, R: Real> {
     pub gravity: V3<R>,
 }
 
-/// The energy terms of the step over the nodes, on the team (`blocks`: preallocated, one per
-/// [`NODE_BLOCK`] nodes). Call after the remap of both phases (`g.vel` and the liquid's `vel`
-/// hold the remapped velocities, `g.momentum` and `g.acc` those of the step).
+/// The energy terms of the step per node, on the team, into `values` (one per node:
+/// [`NodalEnergy::of_sums`]'s power, kinetic energy, work rate and dissipation rate; `done`:
+/// preallocated, one per [`NODE_BLOCK`] nodes). Call after the remap of both phases (`g.vel`
+/// and the liquid's `vel` hold the remapped velocities, `g.momentum` and `g.acc` those of the
+/// step).
 pub fn nodal_energy<R: Real>(
     team: &Team,
-    blocks: &mut [NodalEnergy],
+    values: &mut [[f64; 4]],
+    done: &mut [()],
     g: &Grid<R>,
     loads: &Loads<'_, R>,
-    dt: R,
-) -> NodalEnergy {
+) {
     let nodes = g.mass.len();
     let eps = g.empty_below;
     let half = R::of(0.5);
     let (traction, scale) = loads.traction;
     let (liquid_traction, liquid_scale) = loads.liquid_traction;
-    team.for_blocks(nodes, NODE_BLOCK, blocks, |r| {
-        let mut s = NodalEnergy::default();
-        for n in r {
+    let out = Shared::new(values);
+    team.for_blocks(nodes, NODE_BLOCK, done, |r| {
+        // SAFETY: the nodes of this block are this call's only.
+        let out = unsafe { out.range(r.clone()) };
+        for (n, value) in r.zip(out) {
+            let mut s = NodalEnergy::default();
             let ms = g.mass[n];
             // The end-of-step power of gravity and the solid's loads, and the nodal kinetic
             // energy (every node).
@@ -93,6 +100,7 @@ pub fn nodal_energy<R: Real>(
                 }
             }
             if ms <= eps {
+                *value = [s.power_end, s.kinetic, 0.0, 0.0];
                 continue;
             }
             let wet = g.liquid.as_ref().filter(|l| l.mass[n] > eps);
@@ -143,18 +151,9 @@ pub fn nodal_energy<R: Real>(
                 s.work += external;
                 s.dissipated += power - kinetic;
             }
+            *value = [s.power_end, s.kinetic, s.work, s.dissipated];
         }
-        s
     });
-    let total = blocks[..nodes.div_ceil(NODE_BLOCK)]
-        .iter()
-        .fold(NodalEnergy::default(), |a, b| a.add(b));
-    let dt = dt.f64();
-    NodalEnergy {
-        work: total.work * dt,
-        dissipated: total.dissipated * dt,
-        ..total
-    }
 }
 
 #[cfg(test)]
@@ -204,6 +203,7 @@ mod tests {
             true,
             gravity,
             dt,
+            &crate::parallel::comm::SingleProcess,
         );
         for a in 0..3 {
             g.vel[0][a] = g.momentum[0][a] / g.mass[0] + g.acc[0][a] * dt;
@@ -222,7 +222,20 @@ mod tests {
             liquid_fixed: &[fixed],
             gravity,
         };
-        nodal_energy(&team, &mut [NodalEnergy::default()], g, &loads, dt)
+        energy_of(&team, g, &loads, dt)
+    }
+
+    /// The pass's terms summed over the nodes in node order.
+    fn energy_of(team: &Team, g: &Grid<f64>, loads: &Loads<'_, f64>, dt: f64) -> NodalEnergy {
+        let mut values = vec![[0.0; 4]; g.mass.len()];
+        nodal_energy(team, &mut values, &mut [(); 1], g, loads);
+        let mut t = [0.0; 4];
+        for v in &values {
+            for c in 0..4 {
+                t[c] += v[c];
+            }
+        }
+        NodalEnergy::of_sums(t, dt)
     }
 
     #[test]
@@ -273,6 +286,7 @@ mod tests {
             &[[false; 3]; 2],
             0.0,
             DampingRule::Phases,
+            &crate::parallel::comm::SingleProcess,
         );
         // The point: v += Δt Σ N a; the remap gives every node the point's new velocity.
         let dv: f64 = (0..2).map(|k| shares[k] * g.acc[k][1] * dt).sum();
@@ -288,7 +302,7 @@ mod tests {
             liquid_fixed: &[[false; 3]; 2],
             gravity: [0.0; 3],
         };
-        let e = nodal_energy(&team, &mut [NodalEnergy::default()], &g, &loads, dt);
+        let e = energy_of(&team, &g, &loads, dt);
         let kinetic = 0.5 * m * (v1 * v1 - v0 * v0);
         assert!(
             (e.work - kinetic).abs() < 1e-12 * kinetic.abs().max(1e-9),

@@ -1,0 +1,233 @@
+//! The [`Communicator`] of a run over MPI ranks (cargo feature `mpi`; rsmpi over the system's
+//! MPI library). Every reduction that must give the same bits on any number of ranks is formed
+//! here from gathered values added in rank order, never by MPI's own reduction operators,
+//! whose association order the standard leaves open.
+
+use std::thread::ThreadId;
+
+use mpi::datatype::PartitionMut;
+use mpi::topology::{Communicator as _, SimpleCommunicator};
+use mpi::traits::*;
+
+use crate::parallel::comm::Communicator;
+
+/// `MPI_COMM_WORLD` of an initialised MPI (funneled: only the thread that initialised it calls
+/// MPI).
+pub struct MpiWorld {
+    /// Finalises MPI when dropped.
+    _universe: mpi::environment::Universe,
+    world: SimpleCommunicator,
+    /// The one thread that may call MPI.
+    caller: ThreadId,
+}
+
+// SAFETY: MPI was initialised at the funneled level, so its calls are valid from the thread
+// that initialised it, whichever thread owns this value; every method checks (in debug builds)
+// that it runs on that thread, and the engine calls the communicator only from its driving
+// thread, never from its worker team.
+unsafe impl Send for MpiWorld {}
+// SAFETY: as for `Send`: shared references are only used by the initialising thread.
+unsafe impl Sync for MpiWorld {}
+
+impl std::fmt::Debug for MpiWorld {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MpiWorld")
+            .field("rank", &self.world.rank())
+            .field("ranks", &self.world.size())
+            .finish()
+    }
+}
+
+impl MpiWorld {
+    /// Initialises MPI on this thread (`None` when it was initialised already or the library
+    /// does not offer the funneled threading level).
+    pub fn init() -> Option<Self> {
+        let (universe, level) = mpi::initialize_with_threading(mpi::Threading::Funneled)?;
+        if level < mpi::Threading::Funneled {
+            return None;
+        }
+        let world = universe.world();
+        Some(MpiWorld {
+            _universe: universe,
+            world,
+            caller: std::thread::current().id(),
+        })
+    }
+
+    fn on_caller(&self) {
+        debug_assert_eq!(
+            std::thread::current().id(),
+            self.caller,
+            "MPI called from a thread other than the one that initialised it"
+        );
+    }
+
+    /// Sizes from every rank, then their offsets.
+    fn counts(&self, local: usize) -> (Vec<i32>, Vec<i32>) {
+        let mut counts = vec![0i32; self.ranks()];
+        let n = i32::try_from(local).expect("a message under 2^31 values");
+        self.world.all_gather_into(&n, &mut counts[..]);
+        let displs = offsets(&counts);
+        (counts, displs)
+    }
+
+    fn all_gather_f64(&self, local: &[f64]) -> Vec<f64> {
+        let mut out = Vec::new();
+        self.all_gather(local, &mut out);
+        out
+    }
+}
+
+/// Exclusive prefix sums of `counts`.
+fn offsets(counts: &[i32]) -> Vec<i32> {
+    counts
+        .iter()
+        .scan(0i32, |acc, &c| {
+            let at = *acc;
+            *acc += c;
+            Some(at)
+        })
+        .collect()
+}
+
+impl Communicator for MpiWorld {
+    fn rank(&self) -> usize {
+        self.world.rank() as usize
+    }
+
+    fn ranks(&self) -> usize {
+        self.world.size() as usize
+    }
+
+    fn sum(&self, local: f64) -> f64 {
+        // Added in rank order on every rank: the same bits everywhere.
+        self.all_gather_f64(&[local]).iter().fold(0.0, |a, b| a + b)
+    }
+
+    fn min(&self, local: f64) -> f64 {
+        self.all_gather_f64(&[local])
+            .iter()
+            .fold(f64::INFINITY, |a, &b| a.min(b))
+    }
+
+    fn max(&self, local: f64) -> f64 {
+        self.all_gather_f64(&[local])
+            .iter()
+            .fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+    }
+
+    fn sum_count(&self, local: u64) -> u64 {
+        self.on_caller();
+        let mut all = vec![0u64; self.ranks()];
+        self.world.all_gather_into(&local, &mut all[..]);
+        all.iter().sum()
+    }
+
+    fn all_gather(&self, local: &[f64], out: &mut Vec<f64>) {
+        self.on_caller();
+        let (counts, displs) = self.counts(local.len());
+        let total = counts.iter().map(|&c| c as usize).sum();
+        out.clear();
+        out.resize(total, 0.0);
+        let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
+        self.world.all_gather_varcount_into(local, &mut part);
+    }
+
+    fn exchange(&self, sends: &[(usize, &[f64])], recvs: &mut [(usize, &mut [f64])]) {
+        self.on_caller();
+        mpi::request::scope(|scope| {
+            let mut pending = Vec::with_capacity(sends.len() + recvs.len());
+            let mut incoming = Vec::with_capacity(recvs.len());
+            for (from, buffer) in recvs.iter_mut() {
+                incoming.push(
+                    self.world
+                        .process_at_rank(*from as i32)
+                        .immediate_receive_into(scope, &mut buffer[..]),
+                );
+            }
+            for (to, values) in sends {
+                pending.push(
+                    self.world
+                        .process_at_rank(*to as i32)
+                        .immediate_send(scope, *values),
+                );
+            }
+            for r in incoming {
+                r.wait();
+            }
+            for r in pending {
+                r.wait();
+            }
+        });
+    }
+
+    fn all_to_all_bytes(&self, sends: &[Vec<u8>]) -> Vec<Vec<u8>> {
+        self.on_caller();
+        assert_eq!(sends.len(), self.ranks(), "one message per rank");
+        let send_counts: Vec<u64> = sends.iter().map(|m| m.len() as u64).collect();
+        let mut recv_counts = vec![0u64; self.ranks()];
+        self.world
+            .all_to_all_into(&send_counts[..], &mut recv_counts[..]);
+        let me = self.rank();
+        let mut received: Vec<Vec<u8>> =
+            recv_counts.iter().map(|&c| vec![0u8; c as usize]).collect();
+        received[me] = sends[me].clone();
+        // Only the non-empty messages travel, point to point.
+        mpi::request::scope(|scope| {
+            let mut pending = Vec::new();
+            for (q, buffer) in received.iter_mut().enumerate() {
+                if q != me && !buffer.is_empty() {
+                    pending.push(
+                        self.world
+                            .process_at_rank(q as i32)
+                            .immediate_receive_into(scope, &mut buffer[..]),
+                    );
+                }
+            }
+            let mut outgoing = Vec::new();
+            for (q, m) in sends.iter().enumerate() {
+                if q != me && !m.is_empty() {
+                    outgoing.push(
+                        self.world
+                            .process_at_rank(q as i32)
+                            .immediate_send(scope, &m[..]),
+                    );
+                }
+            }
+            for r in pending {
+                r.wait();
+            }
+            for r in outgoing {
+                r.wait();
+            }
+        });
+        received
+    }
+
+    fn gather_bytes(&self, local: &[u8]) -> Option<Vec<Vec<u8>>> {
+        self.on_caller();
+        let root = self.world.process_at_rank(0);
+        let n = i32::try_from(local.len()).expect("a message under 2 GiB");
+        if self.rank() == 0 {
+            let mut counts = vec![0i32; self.ranks()];
+            root.gather_into_root(&n, &mut counts[..]);
+            let displs = offsets(&counts);
+            let mut all = vec![0u8; counts.iter().map(|&c| c as usize).sum()];
+            {
+                let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
+                root.gather_varcount_into_root(local, &mut part);
+            }
+            Some(
+                counts
+                    .iter()
+                    .zip(&displs)
+                    .map(|(&c, &d)| all[d as usize..(d + c) as usize].to_vec())
+                    .collect(),
+            )
+        } else {
+            root.gather_into(&n);
+            root.gather_varcount_into(local);
+            None
+        }
+    }
+}

@@ -1,0 +1,90 @@
+//! Runs over MPI ranks give the files of the threaded run, byte for byte (cargo feature `mpi`,
+//! with `mpirun` on the path): `cargo test --release -p mpm-solve --features mpi --test mpi`.
+#![cfg(feature = "mpi")]
+
+mod common;
+
+use common::outputs;
+use std::path::Path;
+use std::process::Command;
+
+fn mpirun(ranks: usize, case: &str, out: &Path) {
+    let status = Command::new("mpirun")
+        .args(["--oversubscribe", "-np", &ranks.to_string()])
+        .arg(env!("CARGO_BIN_EXE_mpm-solve"))
+        .arg(case)
+        .arg("--out")
+        .arg(out)
+        .args(["--threads", "1", "-q"])
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .status()
+        .expect("mpirun on the path");
+    assert!(status.success(), "{case} on {ranks} ranks: {status}");
+}
+
+fn same_for_any_rank_count(case: &str, migrates: bool) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let case = root.join(case);
+    let case = case.to_str().unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let threaded = tmp.path().join("threaded");
+    let status = Command::new(env!("CARGO_BIN_EXE_mpm-solve"))
+        .arg(case)
+        .arg("--out")
+        .arg(&threaded)
+        .args(["--threads", "2", "-q"])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let want = outputs(&threaded);
+    assert!(want.iter().any(|(n, _)| n.starts_with("particles_")));
+    for ranks in [1, 2, 3] {
+        let dir = tmp.path().join(format!("np{ranks}"));
+        mpirun(ranks, case, &dir);
+        let got = outputs(&dir);
+        assert_eq!(
+            got.iter().map(|f| &f.0).collect::<Vec<_>>(),
+            want.iter().map(|f| &f.0).collect::<Vec<_>>(),
+            "{ranks} ranks: the same files"
+        );
+        for ((name, a), (_, b)) in got.iter().zip(&want) {
+            assert!(
+                a == b,
+                "{case}, {ranks} ranks: {name} differs from the threaded run's"
+            );
+        }
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("run.json")).unwrap()).unwrap();
+        if ranks > 1 {
+            let per_rank = json["ranks"].as_array().expect("per-rank report");
+            assert_eq!(per_rank.len(), ranks);
+            let now: Vec<u64> = per_rank
+                .iter()
+                .map(|r| r["points"].as_u64().unwrap())
+                .collect();
+            assert!(per_rank
+                .iter()
+                .all(|r| r["bytes_sent"].as_u64().unwrap() > 0));
+            if migrates {
+                // 4 points per element at the start: points have changed rank since.
+                let started: Vec<u64> = per_rank
+                    .iter()
+                    .map(|r| 4 * r["elements"].as_u64().unwrap())
+                    .collect();
+                assert_ne!(now, started, "no point migrated");
+                assert_eq!(now.iter().sum::<u64>(), started.iter().sum::<u64>());
+            }
+        }
+    }
+}
+
+#[test]
+fn a_two_phase_column_is_the_same_on_one_two_and_three_ranks() {
+    same_for_any_rank_count("testdata/golden/column_saturated.toml", false);
+}
+
+#[test]
+fn points_migrating_between_ranks_give_the_threaded_results() {
+    same_for_any_rank_count("testdata/mc_column_soft.toml", true);
+}
