@@ -71,6 +71,39 @@ impl MpiWorld {
         (counts, displs)
     }
 
+    /// Non-blocking sends and receives with the given ranks, all in flight at once.
+    fn point_to_point<T: Equivalence>(
+        &self,
+        sends: &[(usize, &[T])],
+        recvs: &mut [(usize, &mut [T])],
+    ) {
+        self.on_caller();
+        mpi::request::scope(|scope| {
+            let incoming: Vec<_> = recvs
+                .iter_mut()
+                .map(|(from, buffer)| {
+                    self.world
+                        .process_at_rank(*from as i32)
+                        .immediate_receive_into(scope, &mut buffer[..])
+                })
+                .collect();
+            let outgoing: Vec<_> = sends
+                .iter()
+                .map(|(to, values)| {
+                    self.world
+                        .process_at_rank(*to as i32)
+                        .immediate_send(scope, *values)
+                })
+                .collect();
+            for r in incoming {
+                r.wait();
+            }
+            for r in outgoing {
+                r.wait();
+            }
+        });
+    }
+
     fn all_gather_f64(&self, local: &[f64]) -> Vec<f64> {
         let mut out = Vec::new();
         self.all_gather(local, &mut out);
@@ -134,31 +167,7 @@ impl Communicator for MpiWorld {
     }
 
     fn exchange(&self, sends: &[(usize, &[f64])], recvs: &mut [(usize, &mut [f64])]) {
-        self.on_caller();
-        mpi::request::scope(|scope| {
-            let mut pending = Vec::with_capacity(sends.len() + recvs.len());
-            let mut incoming = Vec::with_capacity(recvs.len());
-            for (from, buffer) in recvs.iter_mut() {
-                incoming.push(
-                    self.world
-                        .process_at_rank(*from as i32)
-                        .immediate_receive_into(scope, &mut buffer[..]),
-                );
-            }
-            for (to, values) in sends {
-                pending.push(
-                    self.world
-                        .process_at_rank(*to as i32)
-                        .immediate_send(scope, *values),
-                );
-            }
-            for r in incoming {
-                r.wait();
-            }
-            for r in pending {
-                r.wait();
-            }
-        });
+        self.point_to_point(sends, recvs);
     }
 
     fn all_to_all_bytes(&self, sends: &[Vec<u8>]) -> Vec<Vec<u8>> {
@@ -173,34 +182,22 @@ impl Communicator for MpiWorld {
             recv_counts.iter().map(|&c| vec![0u8; c as usize]).collect();
         received[me] = sends[me].clone();
         // Only the non-empty messages travel, point to point.
-        mpi::request::scope(|scope| {
-            let mut pending = Vec::new();
-            for (q, buffer) in received.iter_mut().enumerate() {
-                if q != me && !buffer.is_empty() {
-                    pending.push(
-                        self.world
-                            .process_at_rank(q as i32)
-                            .immediate_receive_into(scope, &mut buffer[..]),
-                    );
-                }
-            }
-            let mut outgoing = Vec::new();
-            for (q, m) in sends.iter().enumerate() {
-                if q != me && !m.is_empty() {
-                    outgoing.push(
-                        self.world
-                            .process_at_rank(q as i32)
-                            .immediate_send(scope, &m[..]),
-                    );
-                }
-            }
-            for r in pending {
-                r.wait();
-            }
-            for r in outgoing {
-                r.wait();
-            }
-        });
+        let (mine, others): (Vec<_>, Vec<_>) =
+            received.iter_mut().enumerate().partition(|(q, _)| *q == me);
+        drop(mine);
+        let mut recvs: Vec<(usize, &mut [u8])> = others
+            .into_iter()
+            .filter(|(_, b)| !b.is_empty())
+            .map(|(q, b)| (q, &mut b[..]))
+            .collect();
+        let sends: Vec<(usize, &[u8])> = sends
+            .iter()
+            .enumerate()
+            .filter(|(q, m)| *q != me && !m.is_empty())
+            .map(|(q, m)| (q, &m[..]))
+            .collect();
+        self.point_to_point(&sends, &mut recvs);
+        drop(recvs);
         received
     }
 
