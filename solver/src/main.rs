@@ -118,6 +118,11 @@ struct Args {
     /// holds a completed run of the same case and options (which is then replaced).
     #[arg(long)]
     overwrite: bool,
+    /// Over MPI ranks: cut the curve again, balanced by the points each element holds, when
+    /// the rank with the most material points holds more than RATIO times the mean (points
+    /// migrate as the soil deforms); 0 never re-partitions. The results do not depend on it.
+    #[arg(long, value_name = "RATIO", default_value_t = mpm_solve::driver::run::DEFAULT_REBALANCE, value_parser = ratio)]
+    rebalance: f64,
     /// For tests of --resume: abort, as a crash would, once this process has taken STEP steps.
     #[arg(long, hide = true, value_name = "STEP")]
     abort_after_step: Option<u64>,
@@ -326,6 +331,16 @@ fn fraction(s: &str) -> Result<f64, String> {
         Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
         _ => Err(format!(
             "expected a fraction from 0 to 1 (0.1 = 10 %), got {s}"
+        )),
+    }
+}
+
+/// `--rebalance`: 0 (never) or a ratio of at least 1.
+fn ratio(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v == 0.0 || (v >= 1.0 && v.is_finite()) => Ok(v),
+        _ => Err(format!(
+            "expected 0 (never) or a ratio of at least 1 (1.2: a fifth above the mean), got {s}"
         )),
     }
 }
@@ -630,6 +645,7 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         abort_after_step: args.abort_after_step,
         rethread_after_step: args.rethread_after_step,
         comm,
+        rebalance: args.rebalance,
     };
     let mode = if args.quiet || !root {
         Progress::Off

@@ -8,14 +8,14 @@ use common::outputs;
 use std::path::Path;
 use std::process::Command;
 
-fn mpirun(ranks: usize, case: &str, out: &Path) {
+fn mpirun(ranks: usize, case: &str, out: &Path, rebalance: &str) {
     let status = Command::new("mpirun")
         .args(["--oversubscribe", "-np", &ranks.to_string()])
         .arg(env!("CARGO_BIN_EXE_mpm-solve"))
         .arg(case)
         .arg("--out")
         .arg(out)
-        .args(["--threads", "1", "-q"])
+        .args(["--threads", "1", "-q", "--rebalance", rebalance])
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .status()
@@ -39,9 +39,11 @@ fn same_for_any_rank_count(case: &str, migrates: bool) {
     assert!(status.success());
     let want = outputs(&threaded);
     assert!(want.iter().any(|(n, _)| n.starts_with("particles_")));
-    for ranks in [1, 2, 3] {
-        let dir = tmp.path().join(format!("np{ranks}"));
-        mpirun(ranks, case, &dir);
+    // `--rebalance 0` keeps the first cut (points migrate across it); `1` cuts the curve
+    // again whenever a rank holds more points than the mean and a cut can do better.
+    for (ranks, rebalance) in [(1, "0"), (2, "0"), (3, "0"), (4, "0"), (2, "1"), (3, "1")] {
+        let dir = tmp.path().join(format!("np{ranks}-{rebalance}"));
+        mpirun(ranks, case, &dir, rebalance);
         let got = outputs(&dir);
         assert_eq!(
             got.iter().map(|f| &f.0).collect::<Vec<_>>(),
@@ -66,7 +68,16 @@ fn same_for_any_rank_count(case: &str, migrates: bool) {
             assert!(per_rank
                 .iter()
                 .all(|r| r["bytes_sent"].as_u64().unwrap() > 0));
-            if migrates {
+            let repartitions = json["balance"]["repartitions"].as_u64().unwrap();
+            if rebalance == "0" {
+                assert_eq!(repartitions, 0);
+            } else if migrates {
+                assert!(repartitions > 0, "{ranks} ranks: never re-partitioned");
+                assert!(per_rank
+                    .iter()
+                    .any(|r| r["points_moved_by_repartitions"].as_u64().unwrap() > 0));
+            }
+            if migrates && rebalance == "0" {
                 // 4 points per element at the start: points have changed rank since.
                 let started: Vec<u64> = per_rank
                     .iter()
@@ -80,7 +91,7 @@ fn same_for_any_rank_count(case: &str, migrates: bool) {
 }
 
 #[test]
-fn a_two_phase_column_is_the_same_on_one_two_and_three_ranks() {
+fn a_two_phase_column_is_the_same_on_one_to_four_ranks() {
     same_for_any_rank_count("testdata/golden/column_saturated.toml", false);
 }
 

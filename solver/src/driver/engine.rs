@@ -1,5 +1,6 @@
 //! The explicit MPM engine: state, critical time step and one MUSL step through the phases.
 
+use std::ops::Range;
 use std::time::Instant;
 
 use crate::element::locate::{walk, Found};
@@ -285,6 +286,34 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     /// Whether the blow-up check and the energy balance apply (not with prescribed velocities,
     /// whose work neither counts).
     energy_checked: (bool, bool),
+    /// Whether each thread first touches its points' pages (again after a re-partition).
+    first_touch: bool,
+    /// The ranks' balance of points and its re-partitions (all zero on one process).
+    pub balance: Balance,
+}
+
+/// How evenly the ranks share the material points, and what was done about it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Balance {
+    /// The largest rank's points over the mean, after the last migration (1: even; 0 before
+    /// the first measure).
+    pub imbalance: f64,
+    /// The largest imbalance measured in the run.
+    pub worst: f64,
+    /// Re-partitions made so far.
+    pub repartitions: u64,
+    /// Seconds spent re-partitioning (the weights, the partition, the points' moves and the
+    /// rank's new share).
+    pub seconds: f64,
+    /// Points this rank sent to others in re-partitions.
+    pub points_moved: u64,
+    /// Whether points came or went since the imbalance was last measured.
+    stale: bool,
+    /// The imbalance at which the last look found no better partition (0: none), so that the
+    /// element weights are not gathered again until it grows.
+    declined_at: f64,
+    /// Halo bytes sent under earlier partitions.
+    bytes_before: u64,
 }
 
 impl<R: Real, E: Element> Engine<R, E> {
@@ -437,16 +466,14 @@ impl<R: Real, E: Element> Engine<R, E> {
             .iter()
             .map(|m| m.as_ref().and_then(|s| s.liquid.as_ref()).map(Fluid::new))
             .collect();
-        let mut fixed = vec![[false; 3]; mesh.nodes()];
-        let mut liquid_fixed = vec![[false; 3]; mesh.nodes()];
-        let mut traction = vec![[R::ZERO; 3]; mesh.nodes()];
-        let mut liquid_traction = vec![[R::ZERO; 3]; mesh.nodes()];
-        for (c, &m) in mesh.model_node.iter().enumerate() {
-            fixed[c] = case.fixed[m as usize];
-            liquid_fixed[c] = case.liquid_fixed[m as usize];
-            traction[c] = case.traction[m as usize].map(R::of);
-            liquid_traction[c] = case.liquid_traction[m as usize].map(R::of);
-        }
+        let NodeInputs {
+            mut fixed,
+            liquid_fixed,
+            traction,
+            liquid_traction,
+            input_element,
+            input_node,
+        } = NodeInputs::of(case, &mesh, &partition);
         let reactions = case.reactions();
         let nodal_velocity = (!case.nodal_velocity.is_empty()).then(|| {
             let nv = crate::step::nodal_velocity::NodalVelocity::new(
@@ -466,10 +493,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         let dt = comm.min(crate::input::time_step::critical(case, own.clone(), |e| {
             mesh.min_altitude[e - own.start].f64()
         })?);
-        let (critical_element, _) =
-            crate::input::time_step::shortest_crossing(case, own.clone(), |e| {
-                mesh.min_altitude[e - own.start].f64()
-            });
+        let critical_element = critical_element(case, &partition, &mesh);
         let mut grid = Grid::new(mesh.nodes());
         if two_phase {
             grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
@@ -479,22 +503,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             let pv = pv.clone().owned_by(&partition);
             crate::step::prescribed::Prescribed::new(&pv, &mesh, &particles)
         });
-        let layout = if partition.is_whole() {
-            Layout::new(&mesh, &particles, team.threads)
-        } else {
-            let halo = Arc::new(crate::parallel::halo::Halo::new(
-                comm.clone(),
-                partition.neighbours(),
-            ));
-            Layout::ordered(
-                &mesh,
-                &particles,
-                team.threads,
-                Some(&partition.elements_in_global_order()),
-                partition.owned(),
-                Some(halo),
-            )
-        };
+        let layout = layout_of(&partition, &mesh, &particles, team.threads, &comm);
         if options.first_touch {
             particles = first_touch(&team, &layout, particles);
         }
@@ -529,11 +538,6 @@ impl<R: Real, E: Element> Engine<R, E> {
             .iter()
             .map(|m| R::of(m.as_ref().map_or(0.0, |s| s.density)))
             .collect();
-        let input_node = mesh
-            .model_node
-            .iter()
-            .map(|&m| case.node_number(m as usize))
-            .collect();
         let mut engine = Engine {
             input_node,
             guards: case.guards,
@@ -552,15 +556,13 @@ impl<R: Real, E: Element> Engine<R, E> {
             step_kinetic: 0.0,
             initial_kinetic: 0.0,
             stored_energy: 0.0,
-            courant: (case.courant, critical_element - own.start),
+            courant: (case.courant, critical_element),
             // Both energy checks need every energy term; prescribed velocities do work that is
             // not counted.
             energy_checked: (reactions.is_empty(), reactions.is_empty()),
             comm,
             config: StepConfig::of(case),
-            input_element: (0..mesh.elements())
-                .map(|e| case.element_number(partition.global_element(e)) - 1)
-                .collect(),
+            input_element,
             partition,
             smoothing,
             gravity_by_material: vec![[R::ZERO; 3]; weight_ratio.len()],
@@ -594,6 +596,11 @@ impl<R: Real, E: Element> Engine<R, E> {
             layout,
             slots,
             sort_scratch: SortScratch::default(),
+            first_touch: options.first_touch,
+            balance: Balance {
+                stale: true,
+                ..Balance::default()
+            },
         };
         // Sums over the points in their global order (on one rank, as one process forms them).
         let whole = engine.on_root(|e| {
@@ -674,7 +681,10 @@ impl<R: Real, E: Element> Engine<R, E> {
             "points": self.particles.len(),
             "phase_seconds": self.phase_seconds,
             "neighbours": halo.map(|h| h.sizes().iter().map(|&(r, s, g)| serde_json::json!({"rank": r, "sends": s, "receives": g})).collect::<Vec<_>>()).unwrap_or_default(),
-            "bytes_sent": halo.map_or(0, |h| h.bytes_sent()),
+            "bytes_sent": self.balance.bytes_before + halo.map_or(0, |h| h.bytes_sent()),
+            "pinned_cores": self.team.pinned,
+            "points_moved_by_repartitions": self.balance.points_moved,
+            "repartition_seconds": self.balance.seconds,
         });
         let all = self.comm.gather_bytes(mine.to_string().as_bytes())?;
         Some(
@@ -724,6 +734,9 @@ impl<R: Real, E: Element> Engine<R, E> {
             courant: _,
             energy_checked: _,
             stored_energy: _,
+            first_touch: _,
+            // Distributed runs take no checkpoints.
+            balance: _,
             // Saved through the field list.
             particles: _,
             // Indices of points: they follow the points (by id) when restored.
@@ -1356,10 +1369,8 @@ impl<R: Real, E: Element> Engine<R, E> {
     }
 
     /// Sends the points that moved into halo elements to the ranks owning those elements and
-    /// takes in the points coming here, keeping the global point order: those from lower ranks
-    /// (earlier in the order) first, then this rank's, then those from higher ranks, so that
-    /// the stable sort by element that follows orders them as one process would. Returns
-    /// whether any point came or went. Collective.
+    /// takes in the points coming here, in the global point order (see [`exchange_points`]).
+    /// Returns whether any point came or went. Collective.
     fn migrate(&mut self) -> bool {
         let owned = self.partition.owned() as u32;
         let p = &mut self.particles;
@@ -1367,44 +1378,147 @@ impl<R: Real, E: Element> Engine<R, E> {
         if self.comm.sum_count(leaving) == 0 {
             return false;
         }
-        let (me, ranks) = (self.comm.rank(), self.comm.ranks());
-        let mut sends = vec![Vec::new(); ranks];
-        let mut keep = vec![true; p.len()];
-        for i in 0..p.len() {
-            let e = p.element[i];
-            if e < owned {
-                continue;
-            }
-            let g = self.partition.global_element(e as usize);
-            p.element[i] = g as u32;
-            p.put_point(i, &mut sends[self.partition.rank_of(g)]);
-            keep[i] = false;
-        }
-        if leaving > 0 {
-            p.retain(&keep);
-        }
-        let got = self.comm.all_to_all_bytes(&sends);
-        let kept = p.len();
-        let mut before = 0;
-        for (q, bytes) in got.iter().enumerate() {
-            if q == me || bytes.is_empty() {
-                continue;
-            }
-            let n = p.push_encoded(bytes);
-            if q < me {
-                before += n;
-            }
-        }
-        // [kept, lower ranks', higher ranks'] → [lower ranks', kept, higher ranks'].
-        p.rotate_front(kept + before, before);
-        for i in (0..before).chain(kept + before..p.len()) {
-            let g = p.element[i] as usize;
-            p.element[i] =
-                self.partition
-                    .local_element(g)
-                    .expect("a point sent to the rank owning its element") as u32;
-        }
+        let partition = &self.partition;
+        exchange_points(
+            self.comm.as_ref(),
+            p,
+            |e| {
+                (e >= owned).then(|| {
+                    let g = partition.global_element(e as usize);
+                    (partition.rank_of(g), g as u32)
+                })
+            },
+            |g| {
+                partition
+                    .local_element(g as usize)
+                    .expect("a point sent to the rank owning its element") as u32
+            },
+        );
+        self.balance.stale = true;
         true
+    }
+
+    /// Between steps of a run over several ranks: measures how evenly the ranks share the
+    /// points (after points migrated) and, when the largest rank holds more than `threshold`
+    /// times the mean, cuts the curve again, balanced by the points each element holds now,
+    /// and moves the points and the rank's share to it. Nothing in the results changes (the
+    /// sums are formed per block of elements, in global order, for any cut). Returns whether
+    /// it re-partitioned. Collective.
+    pub fn rebalance(&mut self, case: &Case, threshold: f64) -> Result<bool, SetupError> {
+        if self.partition.is_whole() || !self.balance.stale {
+            return Ok(false);
+        }
+        self.balance.stale = false;
+        let mut counts = Vec::new();
+        self.comm
+            .all_gather(&[self.particles.len() as f64], &mut counts);
+        let imbalance = imbalance_of(&counts);
+        self.balance.imbalance = imbalance;
+        self.balance.worst = self.balance.worst.max(imbalance);
+        if !(threshold > 0.0 && imbalance > threshold && imbalance > self.balance.declined_at) {
+            return Ok(false);
+        }
+        let t0 = Instant::now();
+        // Every element's points, in global element order (the ranks' ranges follow each other).
+        let mut mine = vec![0.0; self.partition.owned()];
+        for &e in &self.particles.element {
+            mine[e as usize] += 1.0;
+        }
+        let mut weights = Vec::new();
+        self.comm.all_gather(&mine, &mut weights);
+        let weight: Vec<u64> = weights.iter().map(|&w| w as u64).collect();
+        let global = case.mesh::<E, R>()?;
+        let (me, ranks) = (self.comm.rank(), self.comm.ranks());
+        let mut parts = Partition::along_curve(&global, &weight, ranks);
+        let points_of = |p: &Partition| weight[p.elements()].iter().sum::<u64>() as f64;
+        let predicted = imbalance_of(&parts.iter().map(points_of).collect::<Vec<_>>());
+        if parts.len() != ranks || parts.iter().any(|p| p.owned() == 0) || predicted >= imbalance {
+            // The blocks of 64 elements cannot do better: look again when it grows.
+            self.balance.declined_at = imbalance;
+            self.balance.seconds += t0.elapsed().as_secs_f64();
+            return Ok(false);
+        }
+        let new = parts.swap_remove(me);
+        let old = std::mem::replace(&mut self.partition, new);
+        let partition = &self.partition;
+        let p = &mut self.particles;
+        let mut sent = 0;
+        let kept = exchange_points(
+            self.comm.as_ref(),
+            p,
+            |e| {
+                let g = old.global_element(e as usize);
+                let to = partition.rank_of(g);
+                (to != me).then(|| {
+                    sent += 1;
+                    (to, g as u32)
+                })
+            },
+            |g| {
+                partition
+                    .local_element(g as usize)
+                    .expect("a point sent to the rank owning its element") as u32
+            },
+        );
+        for e in &mut p.element[kept] {
+            let g = old.global_element(*e as usize);
+            *e = partition.local_element(g).expect("a point kept here") as u32;
+        }
+        self.balance.points_moved += sent;
+        self.balance.bytes_before += self.layout.halo().map_or(0, |h| h.bytes_sent());
+        self.share(case, global);
+        self.balance.repartitions += 1;
+        self.balance.declined_at = 0.0;
+        self.balance.stale = true;
+        self.balance.seconds += t0.elapsed().as_secs_f64();
+        log::info!(
+            "step {}: points per rank {:.3}× the mean; re-partitioned along the curve (rank {me} now owns global elements {:?}, {} points)",
+            self.steps,
+            imbalance,
+            self.partition.elements(),
+            self.particles.len(),
+        );
+        Ok(true)
+    }
+
+    /// Sets up this rank's share of `global` for the (new) partition, with the points already
+    /// there: the local mesh, its nodes' inputs, the layout and halo, and every buffer sized by
+    /// elements, nodes or blocks.
+    fn share(&mut self, case: &Case, global: Mesh<E, R>) {
+        self.mesh = self.partition.local_mesh(global);
+        let mesh = &self.mesh;
+        let inputs = NodeInputs::of(case, mesh, &self.partition);
+        self.fixed = inputs.fixed;
+        self.liquid_fixed = inputs.liquid_fixed;
+        self.traction = inputs.traction;
+        self.liquid_traction = inputs.liquid_traction;
+        self.input_element = inputs.input_element;
+        self.input_node = inputs.input_node;
+        self.courant.1 = critical_element(case, &self.partition, mesh);
+        let two_phase = self.grid.liquid.is_some();
+        self.grid = Grid::new(mesh.nodes());
+        if two_phase {
+            self.grid.liquid = Some(LiquidNodes::new(mesh.nodes()));
+        }
+        self.layout = layout_of(
+            &self.partition,
+            mesh,
+            &self.particles,
+            self.team.threads,
+            &self.comm,
+        );
+        if self.first_touch {
+            let p = std::mem::take(&mut self.particles);
+            self.particles = first_touch(&self.team, &self.layout, p);
+        }
+        self.slots = self.layout.new_slots();
+        if !self.guard_slots.is_empty() {
+            self.guard_slots = vec![GuardSums::EMPTY; self.layout.blocks()];
+        }
+        self.grid_scratch = grid_update::GridScratch::new(mesh.nodes());
+        self.energy_blocks = vec![(); mesh.nodes().div_ceil(nodal_energy::NODE_BLOCK)];
+        self.energy_values = vec![[0.0; 4]; mesh.nodes()];
+        self.owned_partials = vec![[0.0; 4]; self.layout.owned_blocks()];
     }
 
     /// The liquid's kinetic energy Σ n ρw V_w |w|² / 2 and the energy its compression holds,
@@ -1544,6 +1658,144 @@ fn resolve_point_loads<E: Element, R: Real>(
     Ok(out)
 }
 
+/// The largest of `counts` over their mean (1 for an even share, 0 for none at all).
+fn imbalance_of(counts: &[f64]) -> f64 {
+    let total: f64 = counts.iter().sum();
+    if total == 0.0 {
+        return 0.0;
+    }
+    counts.iter().copied().fold(0.0, f64::max) * counts.len() as f64 / total
+}
+
+/// Sends every point `to` names, as (rank, global element), to that rank with its element
+/// numbered globally, keeps the rest in order, and takes in the points sent here, their
+/// elements numbered by `local`. The points end in the global order one process keeps: those
+/// from lower ranks (earlier along the curve), the kept ones, those from higher ranks, so that
+/// a stable sort by element orders them as one process would. Returns the kept points' new
+/// index range. Collective.
+fn exchange_points<R: Real>(
+    comm: &dyn Communicator,
+    p: &mut Particles<R>,
+    mut to: impl FnMut(u32) -> Option<(usize, u32)>,
+    local: impl Fn(u32) -> u32,
+) -> Range<usize> {
+    let (me, ranks) = (comm.rank(), comm.ranks());
+    let mut sends = vec![Vec::new(); ranks];
+    let mut keep = vec![true; p.len()];
+    let mut leaving = false;
+    for i in 0..p.len() {
+        let Some((rank, g)) = to(p.element[i]) else {
+            continue;
+        };
+        let e = std::mem::replace(&mut p.element[i], g);
+        p.put_point(i, &mut sends[rank]);
+        p.element[i] = e;
+        keep[i] = false;
+        leaving = true;
+    }
+    if leaving {
+        p.retain(&keep);
+    }
+    let got = comm.all_to_all_bytes(&sends);
+    let kept = p.len();
+    let mut before = 0;
+    for (q, bytes) in got.iter().enumerate() {
+        if q == me || bytes.is_empty() {
+            continue;
+        }
+        let n = p.push_encoded(bytes);
+        if q < me {
+            before += n;
+        }
+    }
+    // [kept, lower ranks', higher ranks'] → [lower ranks', kept, higher ranks'].
+    p.rotate_front(kept + before, before);
+    for i in (0..before).chain(kept + before..p.len()) {
+        p.element[i] = local(p.element[i]);
+    }
+    before..before + kept
+}
+
+/// What a rank's nodes and elements take from the case: fixities and face loads per local
+/// node, and the input numbers of its elements and nodes (for messages). Read at set-up and
+/// again whenever the ranks are re-partitioned.
+struct NodeInputs<R: Real> {
+    fixed: Vec<[bool; 3]>,
+    liquid_fixed: Vec<[bool; 3]>,
+    traction: Vec<V3<R>>,
+    liquid_traction: Vec<V3<R>>,
+    input_element: Vec<u32>,
+    input_node: Vec<u32>,
+}
+
+impl<R: Real> NodeInputs<R> {
+    fn of<E: Element>(case: &Case, mesh: &Mesh<E, R>, partition: &Partition) -> Self {
+        let by_node = |f: &dyn Fn(usize) -> [bool; 3]| -> Vec<[bool; 3]> {
+            mesh.model_node.iter().map(|&m| f(m as usize)).collect()
+        };
+        let loads = |f: &[[f64; 3]]| -> Vec<V3<R>> {
+            mesh.model_node
+                .iter()
+                .map(|&m| f[m as usize].map(R::of))
+                .collect()
+        };
+        NodeInputs {
+            fixed: by_node(&|m| case.fixed[m]),
+            liquid_fixed: by_node(&|m| case.liquid_fixed[m]),
+            traction: loads(&case.traction),
+            liquid_traction: loads(&case.liquid_traction),
+            input_element: (0..mesh.elements())
+                .map(|e| case.element_number(partition.global_element(e)) - 1)
+                .collect(),
+            input_node: mesh
+                .model_node
+                .iter()
+                .map(|&m| case.node_number(m as usize))
+                .collect(),
+        }
+    }
+}
+
+/// The local element of `partition` whose crossing time is the shortest among its owned ones
+/// (named by the time-step messages).
+fn critical_element<E: Element, R: Real>(
+    case: &Case,
+    partition: &Partition,
+    mesh: &Mesh<E, R>,
+) -> usize {
+    let own = partition.elements();
+    let (e, _) = crate::input::time_step::shortest_crossing(case, own.clone(), |e| {
+        mesh.min_altitude[e - own.start].f64()
+    });
+    e - own.start
+}
+
+/// The threads' ranges and the nodes' sums for `partition`: on one rank of several, each node
+/// adds its elements' slots in global element order after the halo exchange.
+fn layout_of<E: Element, R: Real>(
+    partition: &Partition,
+    mesh: &Mesh<E, R>,
+    particles: &Particles<R>,
+    threads: usize,
+    comm: &Arc<dyn Communicator>,
+) -> Layout<R, E> {
+    if partition.is_whole() {
+        return Layout::new(mesh, particles, threads);
+    }
+    let halo = Arc::new(crate::parallel::halo::Halo::new(
+        comm.clone(),
+        partition.neighbours(),
+    ));
+    Layout::ordered(
+        mesh,
+        particles,
+        threads,
+        Some(&partition.elements_in_global_order()),
+        partition.owned(),
+        Some(halo),
+    )
+}
+
 /// The particle arrays copied range by range on the threads that own the ranges, so that each
 /// range's pages are first touched (and placed) by its thread.
 fn first_touch<E: Element, R: Real>(
@@ -1584,4 +1836,18 @@ fn first_touch<E: Element, R: Real>(
     }
     p.visit_fields(&mut Copy { team, layout });
     p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::imbalance_of;
+
+    #[test]
+    fn imbalance_is_the_largest_share_over_the_mean() {
+        assert_eq!(imbalance_of(&[10.0, 10.0, 10.0]), 1.0);
+        assert_eq!(imbalance_of(&[30.0, 10.0, 20.0]), 1.5);
+        // A rank with every point of four.
+        assert_eq!(imbalance_of(&[0.0, 8.0, 0.0, 0.0]), 4.0);
+        assert_eq!(imbalance_of(&[0.0, 0.0]), 0.0);
+    }
 }

@@ -371,6 +371,12 @@ pub fn write_summary<R: Real, E: Element>(
         json["elements"] = serde_json::json!(elements);
         json["nodes"] = serde_json::Value::Null;
         json["ranks"] = serde_json::json!(ranks);
+        let b = &engine.balance;
+        json["balance"] = serde_json::json!({
+            "imbalance": b.imbalance,
+            "worst_imbalance": b.worst,
+            "repartitions": b.repartitions,
+        });
     }
     let mut text = serde_json::to_string_pretty(&json).expect("plain JSON");
     text.push('\n');

@@ -111,7 +111,14 @@ pub struct RunOptions {
     pub rethread_after_step: Option<(u64, usize)>,
     /// The processes of the run (MPI ranks); `None`: this process alone.
     pub comm: Option<Arc<dyn crate::parallel::comm::Communicator>>,
+    /// Over several ranks: cut the curve again when the largest rank holds more than this
+    /// many times the mean number of points (0: never).
+    pub rebalance: f64,
 }
+
+/// The imbalance of points between ranks past which a run re-partitions by default: a
+/// rank with a fifth more points than the mean holds the others up by as much each step.
+pub const DEFAULT_REBALANCE: f64 = 1.2;
 
 impl Default for RunOptions {
     fn default() -> Self {
@@ -125,6 +132,7 @@ impl Default for RunOptions {
             abort_after_step: None,
             rethread_after_step: None,
             comm: None,
+            rebalance: DEFAULT_REBALANCE,
         }
     }
 }
@@ -277,9 +285,16 @@ fn drive<R: Real, E: Element>(
     }
     let mut engine = match &options.comm {
         Some(comm) => {
-            // Ranks are placed by the launcher (`mpirun --bind-to`); their threads stay unpinned.
+            // A rank the launcher bound to cores of its own (`mpirun --bind-to socket`) pins
+            // its threads there as one process does; an unbound one would pin onto the same
+            // first cores as every other rank, so its threads stay unpinned.
+            let bound = crate::parallel::machine::bound_to_some_cores();
             let engine_options = crate::driver::engine::Options {
-                pin: crate::parallel::team::Pin::None,
+                pin: if bound {
+                    case.engine.pin
+                } else {
+                    crate::parallel::team::Pin::None
+                },
                 ..case.engine
             };
             Engine::<R, E>::with_communicator(
@@ -457,6 +472,7 @@ fn drive<R: Real, E: Element>(
                     engine.rethread(team.map_err(crate::driver::engine::SetupError::from)?);
                 }
             }
+            engine.rebalance(case, options.rebalance)?;
             if options.drop_lost && engine.lost > 0 {
                 check_lost(&engine, options.max_lost)?;
             }

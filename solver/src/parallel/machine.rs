@@ -159,6 +159,18 @@ pub fn busy_cores(cores: &[usize]) -> Option<Vec<usize>> {
     early.or_else(Look::begin)?.busy(cores)
 }
 
+/// Whether the process may run on fewer cores than the machine has online: a launcher
+/// (`mpirun --bind-to`, `taskset`, a batch system's cgroup) gave it cores of its own. `false`
+/// where the counters cannot be read.
+pub fn bound_to_some_cores() -> bool {
+    let Ok(text) = std::fs::read_to_string("/proc/stat") else {
+        return false;
+    };
+    let online = parse_stat(&text).len();
+    let mine = core_affinity::get_core_ids().map_or(0, |c| c.len());
+    mine > 0 && mine < online
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
