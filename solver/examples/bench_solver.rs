@@ -17,6 +17,10 @@
 //! yield surface and the share that end there with a stress that moved (returned points), from
 //! one more run of the same steps.
 //!
+//! `--mpi` (built with the cargo feature `mpi`, launched by `mpirun -np N`): the same case
+//! over N ranks, each with `--threads` threads; rank 0 prints the line, with the total points
+//! and, per rank, its share, halo and seconds per phase (`rank_reports`).
+//!
 //! `--guards off` skips the per-step guard rails (docs/design.md §4.14), to measure their cost.
 //!
 //! `--order random` renumbers elements and nodes by a fixed pseudo-random permutation (the
@@ -193,6 +197,7 @@ fn main() {
     let flow = (law == "mc-flowing").then_some(0.2);
     // The solver's own choice of precision and element (the case's model picks `Tri3` or
     // `Tet4`), so that the bench times the engine a run of this model would get.
+    let comm = communicator(a.iter().any(|x| x == "--mpi"));
     let result = dispatch(
         &case,
         Measure {
@@ -200,10 +205,20 @@ fn main() {
             steps,
             reps,
             flow,
+            comm: comm.clone(),
         },
     )
     .unwrap();
-    let surface = if law.starts_with("mc-") {
+    if comm.as_ref().is_some_and(|c| c.rank() != 0) {
+        return;
+    }
+    let surface = if comm.is_some() {
+        format!(
+            ", \"ranks\": {}, \"rank_reports\": {}",
+            comm.as_ref().map_or(1, |c| c.ranks()),
+            serde_json::Value::from(result.reports.clone().unwrap_or_default())
+        )
+    } else if law.starts_with("mc-") {
         let friction = if law == "mc-elastic" { 30.0 } else { 10.0 };
         let (on, moved) = if plane {
             on_surface::<Tri3>(&case, steps, flow, friction)
@@ -220,6 +235,7 @@ fn main() {
         info,
         bytes_per_point,
         modelled,
+        ..
     } = result;
     let mut sorted = rates.clone();
     sorted.sort_by(f64::total_cmp);
@@ -273,6 +289,22 @@ struct Measured {
     bytes_per_point: usize,
     /// Modelled bytes per particle-step of each phase.
     modelled: [f64; 5],
+    /// Over MPI ranks: each rank's report of the last repetition (on rank 0).
+    reports: Option<Vec<serde_json::Value>>,
+}
+
+/// The MPI ranks the bench was launched on (`--mpi`; the cargo feature `mpi`), or `None`.
+fn communicator(mpi: bool) -> Option<std::sync::Arc<dyn mpm_solve::parallel::comm::Communicator>> {
+    if !mpi {
+        return None;
+    }
+    #[cfg(feature = "mpi")]
+    {
+        let world = mpm_solve::parallel::mpi_comm::MpiWorld::init().expect("MPI initialises");
+        Some(std::sync::Arc::new(world))
+    }
+    #[cfg(not(feature = "mpi"))]
+    panic!("--mpi needs the example built with --features mpi")
 }
 
 /// [`measure`] with the precision and element [`dispatch`] picks for the case.
@@ -281,13 +313,14 @@ struct Measure<'a> {
     steps: usize,
     reps: usize,
     flow: Option<f64>,
+    comm: Option<std::sync::Arc<dyn mpm_solve::parallel::comm::Communicator>>,
 }
 
 impl Generic for Measure<'_> {
     type Output = Measured;
 
     fn call<R: mpm_solve::real::Real, E: Element>(self) -> Measured {
-        measure::<R, E>(self.case, self.steps, self.reps, self.flow)
+        measure::<R, E>(self.case, self.steps, self.reps, self.flow, self.comm)
     }
 }
 
@@ -297,6 +330,7 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
     steps: usize,
     reps: usize,
     flow: Option<f64>,
+    comm: Option<std::sync::Arc<dyn mpm_solve::parallel::comm::Communicator>>,
 ) -> Measured {
     let mut m = Measured {
         rates: Vec::new(),
@@ -304,18 +338,30 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
         info: (0, 0, Vec::new()),
         bytes_per_point: 0,
         modelled: [0.0; 5],
+        reports: None,
     };
     for _ in 0..reps {
-        let mut engine = Engine::<R, E>::new(case, false).unwrap();
+        let mut engine = match &comm {
+            Some(c) => {
+                Engine::<R, E>::with_communicator(case, false, case.engine, c.clone()).unwrap()
+            }
+            None => Engine::<R, E>::new(case, false).unwrap(),
+        };
         if let Some(rate) = flow {
             compress(&mut engine, rate);
         }
-        let np = engine.particles.len();
+        let np = engine
+            .communicator()
+            .sum_count(engine.particles.len() as u64) as usize;
+        // Every rank starts the clock together (a collective), and the steps' own
+        // collectives keep them together.
+        engine.communicator().sum(0.0);
         let t = Instant::now();
         for _ in 0..steps {
             engine.step(engine.dt, None).unwrap();
         }
-        let secs = t.elapsed().as_secs_f64();
+        let secs = engine.communicator().max(t.elapsed().as_secs_f64());
+        m.reports = engine.rank_report().filter(|_| engine.is_distributed());
         m.rates.push(np as f64 * steps as f64 / secs);
         m.phases.push(engine.phase_seconds);
         m.info = (np, engine.team.threads, engine.team.pinned.clone());

@@ -11,7 +11,7 @@ use crate::input::case::{Case, Guards, Integration, MixedRule};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::comm::{Communicator, SingleProcess};
-use crate::parallel::gather::ordered_total;
+use crate::parallel::gather::exact_total;
 use crate::parallel::gather::{sort_by_element, Layout, Slots, SortScratch};
 use crate::parallel::partition::Partition;
 pub use crate::parallel::team::Options;
@@ -257,8 +257,6 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     energy_values: Vec<[f64; 4]>,
     /// Per block of owned elements, partial sums over its owned nodes or points.
     owned_partials: Vec<[f64; 4]>,
-    /// Every rank's partial sums, gathered.
-    gathered: Vec<f64>,
     /// Per material index: mass per initial volume of its points (t/m³).
     initial_density: Vec<R>,
     /// Strain energy taken up so far, Σ V σ:Δε over the steps (kJ).
@@ -546,7 +544,6 @@ impl<R: Real, E: Element> Engine<R, E> {
             energy_blocks: vec![(); mesh.nodes().div_ceil(nodal_energy::NODE_BLOCK)],
             energy_values: vec![[0.0; 4]; mesh.nodes()],
             owned_partials: vec![[0.0; 4]; layout.owned_blocks()],
-            gathered: Vec::new(),
             initial_density,
             strain_energy: 0.0,
             dissipated: 0.0,
@@ -729,7 +726,6 @@ impl<R: Real, E: Element> Engine<R, E> {
             energy_blocks: _,
             energy_values: _,
             owned_partials: _,
-            gathered: _,
             initial_density: _,
             courant: _,
             energy_checked: _,
@@ -961,10 +957,10 @@ impl<R: Real, E: Element> Engine<R, E> {
         }
         let (forces, liquid_forces) = {
             let (layout, team, comm) = (&self.layout, &self.team, &*self.comm);
-            let (partials, gathered) = (&mut self.owned_partials, &mut self.gathered);
+            let partials = &mut self.owned_partials;
             self.grid_scratch.totals(|values| {
                 layout.sum_owned(team, values, partials);
-                ordered_total(comm, &partials[..layout.owned_blocks()], gathered)
+                exact_total(comm, &partials[..layout.owned_blocks()])
             })
         };
         self.force_error = forces.ratio();
@@ -1085,10 +1081,9 @@ impl<R: Real, E: Element> Engine<R, E> {
         self.layout
             .sum_owned(&self.team, &self.energy_values, &mut self.owned_partials);
         let energy = nodal_energy::NodalEnergy::of_sums(
-            ordered_total(
+            exact_total(
                 &*self.comm,
                 &self.owned_partials[..self.layout.owned_blocks()],
-                &mut self.gathered,
             ),
             dt,
         );
@@ -1129,25 +1124,21 @@ impl<R: Real, E: Element> Engine<R, E> {
         forces: &grid_update::ForceSums,
         energy: &nodal_energy::NodalEnergy,
     ) -> Result<(), StepError> {
-        // The owned blocks' sums of every rank, added in block order.
+        // The owned blocks' sums of every rank, exact; the smallest margin.
+        let mut margin = f64::INFINITY;
         for (p, s) in self
             .owned_partials
             .iter_mut()
             .zip(&self.guard_slots[..self.layout.owned_blocks()])
         {
-            *p = [s.strain, s.kinetic, s.liquid, s.volume_margin];
+            *p = [s.strain, s.kinetic, s.liquid, 0.0];
+            margin = margin.min(s.volume_margin);
         }
-        self.comm.all_gather(
-            self.owned_partials[..self.layout.owned_blocks()].as_flattened(),
-            &mut self.gathered,
+        let [strain, kinetic, liquid, _] = exact_total(
+            &*self.comm,
+            &self.owned_partials[..self.layout.owned_blocks()],
         );
-        let (mut strain, mut kinetic, mut liquid, mut margin) = (0.0, 0.0, 0.0, f64::INFINITY);
-        for s in self.gathered.chunks_exact(4) {
-            strain += s[0];
-            kinetic += s[1];
-            liquid += s[2];
-            margin = margin.min(s[3]);
-        }
+        let margin = self.comm.min(margin);
         // The slots hold twice each energy (see `GuardSums`).
         let (strain, kinetic, liquid) = (0.5 * strain, 0.5 * kinetic, 0.5 * liquid);
         let previous = self.step_kinetic;

@@ -19,6 +19,9 @@ pub trait Communicator: Send + Sync + std::fmt::Debug {
     fn max(&self, local: f64) -> f64;
     /// Sum of counts.
     fn sum_count(&self, local: u64) -> u64;
+    /// Every process's `local` added elementwise into `out` (as long; integer sums: exact, in
+    /// any order). The accumulators of [`crate::parallel::exact::ExactSum`] merge this way.
+    fn sum_integers(&self, local: &[i64], out: &mut [i64]);
     /// Every process's `local`, concatenated in rank order, into `out` (which is resized; its
     /// capacity is kept between calls, so a step that reuses it allocates nothing once warm).
     /// Each process may give a different number of values.
@@ -69,6 +72,10 @@ impl Communicator for SingleProcess {
     fn all_gather(&self, local: &[f64], out: &mut Vec<f64>) {
         out.clear();
         out.extend_from_slice(local);
+    }
+
+    fn sum_integers(&self, local: &[i64], out: &mut [i64]) {
+        out.copy_from_slice(local);
     }
 
     fn exchange(&self, sends: &[(usize, &[f64])], recvs: &mut [(usize, &mut [f64])]) {

@@ -15,6 +15,7 @@ use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::Element;
 use crate::parallel::comm::Communicator;
+use crate::parallel::exact::{self, ExactSum};
 use crate::parallel::halo::Halo;
 use crate::parallel::team::{aligned_to_blocks, balanced_ranges, Shared, Team};
 use crate::real::Real;
@@ -295,7 +296,7 @@ impl<R: Real, E: Element> Layout<R, E> {
 
     /// Per block of owned elements, the sum of `values` over the block's owned nodes, in
     /// order, into `partials` (at least [`Layout::owned_blocks`] long). Added up in block order
-    /// over every rank ([`ordered_total`]), these give a sum over the mesh's nodes that is the
+    /// over every rank ([`exact_total`]), these give a sum over the mesh's nodes that is the
     /// same for any thread and rank count.
     pub fn sum_owned<const K: usize>(
         &self,
@@ -359,22 +360,23 @@ impl<R: Real, E: Element> Layout<R, E> {
     }
 }
 
-/// The sum of every rank's block `partials`, added in block order (rank order, then each
-/// rank's own): the same bits on every rank and for any rank count. `scratch` keeps the
-/// gathered values between calls.
-pub fn ordered_total<const K: usize>(
-    comm: &dyn Communicator,
-    partials: &[[f64; K]],
-    scratch: &mut Vec<f64>,
-) -> [f64; K] {
-    comm.all_gather(partials.as_flattened(), scratch);
-    let mut total = [0.0; K];
-    for block in scratch.chunks_exact(K) {
-        for c in 0..K {
-            total[c] += block[c];
+/// The sum of every rank's block `partials`, component by component, exact and rounded once
+/// ([`ExactSum`]): the same bits on every rank and for any thread or rank count, for one
+/// small all-reduce whatever the number of blocks.
+pub fn exact_total<const K: usize>(comm: &dyn Communicator, partials: &[[f64; K]]) -> [f64; K] {
+    let mut sums = [ExactSum::default(); K];
+    for block in partials {
+        for (s, &v) in sums.iter_mut().zip(block) {
+            s.add(v);
         }
     }
-    total
+    let mut local = [[0i64; exact::WIDTH]; K];
+    for (l, s) in local.iter_mut().zip(&mut sums) {
+        *l = *s.words_mut();
+    }
+    let mut all = [[0i64; exact::WIDTH]; K];
+    comm.sum_integers(local.as_flattened(), all.as_flattened_mut());
+    std::array::from_fn(|c| ExactSum::from_words(all[c]).value())
 }
 
 /// First particle of each element for particles sorted by `element`.

@@ -1,6 +1,7 @@
 //! The thread team and the deterministic parallel sums: who computes what.
 
 pub mod comm;
+pub mod exact;
 pub mod gather;
 pub mod halo;
 pub mod machine;

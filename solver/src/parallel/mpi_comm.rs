@@ -137,23 +137,43 @@ impl Communicator for MpiWorld {
         self.all_gather_f64(&[local]).iter().fold(0.0, |a, b| a + b)
     }
 
+    // Minimum, maximum and integer sums do not depend on the order: MPI's own all-reduce
+    // (log P steps), with NaN, which MPI's MIN and MAX leave undefined, taken out first as
+    // `f64::min` and `f64::max` do.
     fn min(&self, local: f64) -> f64 {
-        self.all_gather_f64(&[local])
-            .iter()
-            .fold(f64::INFINITY, |a, &b| a.min(b))
+        self.on_caller();
+        let mut out = 0.0;
+        let local = if local.is_nan() { f64::INFINITY } else { local };
+        self.world
+            .all_reduce_into(&local, &mut out, mpi::collective::SystemOperation::min());
+        out
     }
 
     fn max(&self, local: f64) -> f64 {
-        self.all_gather_f64(&[local])
-            .iter()
-            .fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+        self.on_caller();
+        let mut out = 0.0;
+        let local = if local.is_nan() {
+            f64::NEG_INFINITY
+        } else {
+            local
+        };
+        self.world
+            .all_reduce_into(&local, &mut out, mpi::collective::SystemOperation::max());
+        out
     }
 
     fn sum_count(&self, local: u64) -> u64 {
         self.on_caller();
-        let mut all = vec![0u64; self.ranks()];
-        self.world.all_gather_into(&local, &mut all[..]);
-        all.iter().sum()
+        let mut out = 0u64;
+        self.world
+            .all_reduce_into(&local, &mut out, mpi::collective::SystemOperation::sum());
+        out
+    }
+
+    fn sum_integers(&self, local: &[i64], out: &mut [i64]) {
+        self.on_caller();
+        self.world
+            .all_reduce_into(local, out, mpi::collective::SystemOperation::sum());
     }
 
     fn all_gather(&self, local: &[f64], out: &mut Vec<f64>) {

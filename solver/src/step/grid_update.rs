@@ -51,7 +51,7 @@ impl<R: Real> GridScratch<R> {
 
     /// The force sums from the per-node terms, (mixture, liquid), with `sum` adding a per-node
     /// array over the mesh ([`crate::parallel::gather::Layout::sum_owned`] and
-    /// [`crate::parallel::gather::ordered_total`]).
+    /// [`crate::parallel::gather::exact_total`]).
     pub fn totals(&self, sum: impl FnOnce(&[[f64; 4]]) -> [f64; 4]) -> (ForceSums, ForceSums) {
         let t = sum(&self.node_sums);
         (
