@@ -214,8 +214,9 @@ fn main() {
     }
     let surface = if comm.is_some() {
         format!(
-            ", \"ranks\": {}, \"rank_reports\": {}",
+            ", \"ranks\": {}, \"traffic_per_step\": {}, \"rank_reports\": {}",
             comm.as_ref().map_or(1, |c| c.ranks()),
+            serde_json::json!(result.traffic),
             serde_json::Value::from(result.reports.clone().unwrap_or_default())
         )
     } else if law.starts_with("mc-") {
@@ -291,6 +292,9 @@ struct Measured {
     modelled: [f64; 5],
     /// Over MPI ranks: each rank's report of the last repetition (on rank 0).
     reports: Option<Vec<serde_json::Value>>,
+    /// Per rank, per timed step of the last repetition: communicator calls, point-to-point
+    /// messages and their bytes.
+    traffic: Vec<Vec<f64>>,
 }
 
 /// The MPI ranks the bench was launched on (`--mpi`; the cargo feature `mpi`), or `None`.
@@ -339,6 +343,7 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
         bytes_per_point: 0,
         modelled: [0.0; 5],
         reports: None,
+        traffic: Vec::new(),
     };
     for _ in 0..reps {
         let mut engine = match &comm {
@@ -356,11 +361,21 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
         // Every rank starts the clock together (a collective), and the steps' own
         // collectives keep them together.
         engine.communicator().sum(0.0);
+        let before = engine.communicator().traffic();
         let t = Instant::now();
         for _ in 0..steps {
             engine.step(engine.dt, None).unwrap();
         }
         let secs = engine.communicator().max(t.elapsed().as_secs_f64());
+        let after = engine.communicator().traffic();
+        let per_step = [
+            (after.calls - before.calls) as f64 / steps as f64,
+            (after.messages - before.messages) as f64 / steps as f64,
+            (after.bytes - before.bytes) as f64 / steps as f64,
+        ];
+        let mut all = Vec::new();
+        engine.communicator().all_gather(&per_step, &mut all);
+        m.traffic = all.chunks(3).map(|c| c.to_vec()).collect();
         m.reports = engine.rank_report().filter(|_| engine.is_distributed());
         m.rates.push(np as f64 * steps as f64 / secs);
         m.phases.push(engine.phase_seconds);

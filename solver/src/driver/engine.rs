@@ -680,6 +680,10 @@ impl<R: Real, E: Element> Engine<R, E> {
             "neighbours": halo.map(|h| h.sizes().iter().map(|&(r, s, g)| serde_json::json!({"rank": r, "sends": s, "receives": g})).collect::<Vec<_>>()).unwrap_or_default(),
             "bytes_sent": self.balance.bytes_before + halo.map_or(0, |h| h.bytes_sent()),
             "pinned_cores": self.team.pinned,
+            "steps": self.steps,
+            "communicator_calls": self.comm.traffic().calls,
+            "messages": self.comm.traffic().messages,
+            "message_bytes": self.comm.traffic().bytes,
             "points_moved_by_repartitions": self.balance.points_moved,
             "repartition_seconds": self.balance.seconds,
         });

@@ -35,9 +35,25 @@ pub trait Communicator: Send + Sync + std::fmt::Debug {
     ///
     /// [`ranks`]: Communicator::ranks
     fn all_to_all_bytes(&self, sends: &[Vec<u8>]) -> Vec<Vec<u8>>;
+    /// What this process has sent so far: calls, point-to-point messages and their bytes
+    /// (zero for one process).
+    fn traffic(&self) -> Traffic {
+        Traffic::default()
+    }
     /// Rank 0 receives every process's bytes, in rank order (its own first); the others get
     /// `None`.
     fn gather_bytes(&self, local: &[u8]) -> Option<Vec<Vec<u8>>>;
+}
+
+/// What a process has sent through its [`Communicator`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Traffic {
+    /// Calls: collectives and point-to-point exchanges (each a round of messages).
+    pub calls: u64,
+    /// Point-to-point messages sent.
+    pub messages: u64,
+    /// Bytes in those messages.
+    pub bytes: u64,
 }
 
 /// One process: every reduction is its own value.

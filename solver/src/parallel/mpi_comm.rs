@@ -9,7 +9,9 @@ use mpi::datatype::PartitionMut;
 use mpi::topology::{Communicator as _, SimpleCommunicator};
 use mpi::traits::*;
 
-use crate::parallel::comm::Communicator;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::parallel::comm::{Communicator, Traffic};
 
 /// `MPI_COMM_WORLD` of an initialised MPI (funneled: only the thread that initialised it calls
 /// MPI).
@@ -19,6 +21,12 @@ pub struct MpiWorld {
     world: SimpleCommunicator,
     /// The one thread that may call MPI.
     caller: ThreadId,
+    /// Calls made (see [`Traffic`]).
+    calls: AtomicU64,
+    /// Point-to-point messages sent.
+    messages: AtomicU64,
+    /// Their bytes.
+    bytes: AtomicU64,
 }
 
 // SAFETY: MPI was initialised at the funneled level, so its calls are valid from the thread
@@ -51,10 +59,15 @@ impl MpiWorld {
             _universe: universe,
             world,
             caller: std::thread::current().id(),
+            calls: AtomicU64::new(0),
+            messages: AtomicU64::new(0),
+            bytes: AtomicU64::new(0),
         })
     }
 
+    /// Every call passes here: checks the thread and counts the call.
     fn on_caller(&self) {
+        self.calls.fetch_add(1, Ordering::Relaxed);
         debug_assert_eq!(
             std::thread::current().id(),
             self.caller,
@@ -78,6 +91,10 @@ impl MpiWorld {
         recvs: &mut [(usize, &mut [T])],
     ) {
         self.on_caller();
+        self.messages
+            .fetch_add(sends.len() as u64, Ordering::Relaxed);
+        let bytes: usize = sends.iter().map(|(_, v)| std::mem::size_of_val(*v)).sum();
+        self.bytes.fetch_add(bytes as u64, Ordering::Relaxed);
         mpi::request::scope(|scope| {
             let incoming: Vec<_> = recvs
                 .iter_mut()
@@ -174,6 +191,14 @@ impl Communicator for MpiWorld {
         self.on_caller();
         self.world
             .all_reduce_into(local, out, mpi::collective::SystemOperation::sum());
+    }
+
+    fn traffic(&self) -> Traffic {
+        Traffic {
+            calls: self.calls.load(Ordering::Relaxed),
+            messages: self.messages.load(Ordering::Relaxed),
+            bytes: self.bytes.load(Ordering::Relaxed),
+        }
     }
 
     fn all_gather(&self, local: &[f64], out: &mut Vec<f64>) {
