@@ -290,6 +290,10 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub balance: Balance,
 }
 
+/// Steps with migrating points after which a declined re-partition is looked at again even
+/// though the imbalance has not grown.
+pub const RELOOK_AFTER_MIGRATIONS: u64 = 100;
+
 /// How evenly the ranks share the material points, and what was done about it.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Balance {
@@ -308,8 +312,10 @@ pub struct Balance {
     /// Whether points came or went since the imbalance was last measured.
     stale: bool,
     /// The imbalance at which the last look found no better partition (0: none), so that the
-    /// element weights are not gathered again until it grows.
+    /// element weights are not gathered again until it grows ...
     declined_at: f64,
+    /// ... or until the points have migrated [`RELOOK_AFTER_MIGRATIONS`] times since.
+    migrations_since_decline: u64,
     /// Halo bytes sent under earlier partitions.
     bytes_before: u64,
 }
@@ -1390,6 +1396,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             },
         );
         self.balance.stale = true;
+        self.balance.migrations_since_decline += 1;
         true
     }
 
@@ -1410,7 +1417,11 @@ impl<R: Real, E: Element> Engine<R, E> {
         let imbalance = imbalance_of(&counts);
         self.balance.imbalance = imbalance;
         self.balance.worst = self.balance.worst.max(imbalance);
-        if !(threshold > 0.0 && imbalance > threshold && imbalance > self.balance.declined_at) {
+        // After a declined look, look again once the imbalance has grown or the points have
+        // migrated for a while (they may have spread so that a cut can do better now).
+        let relook = imbalance > self.balance.declined_at
+            || self.balance.migrations_since_decline >= RELOOK_AFTER_MIGRATIONS;
+        if !(threshold > 0.0 && imbalance > threshold && relook) {
             return Ok(false);
         }
         let t0 = Instant::now();
@@ -1422,17 +1433,32 @@ impl<R: Real, E: Element> Engine<R, E> {
         let mut weights = Vec::new();
         self.comm.all_gather(&mine, &mut weights);
         let weight: Vec<u64> = weights.iter().map(|&w| w as u64).collect();
-        let global = case.mesh::<E, R>()?;
         let (me, ranks) = (self.comm.rank(), self.comm.ranks());
-        let mut parts = Partition::along_curve(&global, &weight, ranks);
-        let points_of = |p: &Partition| weight[p.elements()].iter().sum::<u64>() as f64;
-        let predicted = imbalance_of(&parts.iter().map(points_of).collect::<Vec<_>>());
-        if parts.len() != ranks || parts.iter().any(|p| p.owned() == 0) || predicted >= imbalance {
-            // The blocks of 64 elements cannot do better: look again when it grows.
+        // The cut `Partition::along_curve` will make, judged before the mesh is built for it:
+        // taken when it at least halves the excess over an even share (a smaller gain does not
+        // pay for the move).
+        let ranges = crate::parallel::team::aligned_to_blocks(
+            crate::parallel::team::balanced_ranges(weight.iter().copied(), ranks),
+            weight.len(),
+        );
+        let predicted = imbalance_of(
+            &ranges
+                .iter()
+                .map(|r| weight[r.clone()].iter().sum::<u64>() as f64)
+                .collect::<Vec<_>>(),
+        );
+        if ranges.len() != ranks
+            || ranges.iter().any(|r| r.is_empty())
+            || predicted - 1.0 > 0.5 * (imbalance - 1.0)
+        {
             self.balance.declined_at = imbalance;
+            self.balance.migrations_since_decline = 0;
             self.balance.seconds += t0.elapsed().as_secs_f64();
             return Ok(false);
         }
+        let global = case.mesh::<E, R>()?;
+        let mut parts = Partition::along_curve(&global, &weight, ranks);
+        debug_assert!(parts.iter().zip(&ranges).all(|(p, r)| p.elements() == *r));
         let new = parts.swap_remove(me);
         let old = std::mem::replace(&mut self.partition, new);
         let partition = &self.partition;
@@ -1464,6 +1490,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         self.share(case, global);
         self.balance.repartitions += 1;
         self.balance.declined_at = 0.0;
+        self.balance.migrations_since_decline = 0;
         self.balance.stale = true;
         self.balance.seconds += t0.elapsed().as_secs_f64();
         log::info!(

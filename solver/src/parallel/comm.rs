@@ -26,10 +26,11 @@ pub trait Communicator: Send + Sync + std::fmt::Debug {
     /// capacity is kept between calls, so a step that reuses it allocates nothing once warm).
     /// Each process may give a different number of values.
     fn all_gather(&self, local: &[f64], out: &mut Vec<f64>);
-    /// Point-to-point exchange with neighbours: sends each `(rank, values)` of `sends` and
-    /// fills each `(rank, buffer)` of `recvs` with what that rank sends here (its length must
-    /// match). Every pair must appear on both sides; the messages travel concurrently.
-    fn exchange(&self, sends: &[(usize, &[f64])], recvs: &mut [(usize, &mut [f64])]);
+    /// Point-to-point exchange with neighbours: sends `send[peer.send]` to each peer's rank and
+    /// fills `receive[peer.receive]` with what that rank sends here (the lengths must match;
+    /// the peers' receive ranges follow each other, increasing). Every pair must appear on both
+    /// sides; the messages travel concurrently.
+    fn exchange(&self, peers: &[Peer], send: &[f64], receive: &mut [f64]);
     /// Bytes from each rank to each rank (`sends[q]` goes to rank q); returns what each rank
     /// sent here, by rank. Every process calls it, with a `sends` as long as [`ranks`].
     ///
@@ -43,6 +44,18 @@ pub trait Communicator: Send + Sync + std::fmt::Debug {
     /// Rank 0 receives every process's bytes, in rank order (its own first); the others get
     /// `None`.
     fn gather_bytes(&self, local: &[u8]) -> Option<Vec<Vec<u8>>>;
+}
+
+/// One neighbour of a [`Communicator::exchange`]: its rank, and where its message lies in the
+/// send buffer and its answer in the receive buffer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Peer {
+    /// The neighbour's rank.
+    pub rank: usize,
+    /// Values sent to it.
+    pub send: std::ops::Range<usize>,
+    /// Values received from it.
+    pub receive: std::ops::Range<usize>,
 }
 
 /// What a process has sent through its [`Communicator`].
@@ -94,14 +107,10 @@ impl Communicator for SingleProcess {
         out.copy_from_slice(local);
     }
 
-    fn exchange(&self, sends: &[(usize, &[f64])], recvs: &mut [(usize, &mut [f64])]) {
+    fn exchange(&self, peers: &[Peer], send: &[f64], receive: &mut [f64]) {
         // One process has no neighbours; a message to itself is a copy.
-        for (to, buffer) in recvs.iter_mut() {
-            let (_, values) = sends
-                .iter()
-                .find(|(r, _)| r == to)
-                .expect("a receive without its send");
-            buffer.copy_from_slice(values);
+        for p in peers {
+            receive[p.receive.clone()].copy_from_slice(&send[p.send.clone()]);
         }
     }
 

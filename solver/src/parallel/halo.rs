@@ -5,22 +5,27 @@
 
 use std::sync::{Arc, Mutex};
 
-use crate::parallel::comm::Communicator;
+use crate::parallel::comm::{Communicator, Peer};
 use crate::parallel::partition::Neighbour;
 use crate::real::Real;
 
-/// One neighbour's element lists and message buffers (kept between steps).
-#[derive(Debug)]
-struct Link {
-    neighbour: Neighbour,
+/// The message buffers of the exchanges, kept between steps (resized in place, so a warm
+/// exchange allocates nothing).
+#[derive(Debug, Default)]
+struct Buffers {
+    /// Per neighbour, where its values lie in `out` and `into` (for the current width).
+    peers: Vec<Peer>,
+    /// Values sent, neighbour after neighbour.
     out: Vec<f64>,
+    /// Values received, neighbour after neighbour.
     into: Vec<f64>,
 }
 
 /// The halo exchange of one rank.
 pub struct Halo {
     comm: Arc<dyn Communicator>,
-    links: Mutex<Vec<Link>>,
+    neighbours: Vec<Neighbour>,
+    buffers: Mutex<Buffers>,
     /// Values sent per step so far (all passes), for run.json.
     sent: std::sync::atomic::AtomicU64,
 }
@@ -38,16 +43,18 @@ impl Halo {
     pub fn new(comm: Arc<dyn Communicator>, neighbours: &[Neighbour]) -> Self {
         Halo {
             comm,
-            links: Mutex::new(
-                neighbours
+            neighbours: neighbours.to_vec(),
+            buffers: Mutex::new(Buffers {
+                peers: neighbours
                     .iter()
-                    .map(|n| Link {
-                        neighbour: n.clone(),
-                        out: Vec::new(),
-                        into: Vec::new(),
+                    .map(|n| Peer {
+                        rank: n.rank,
+                        send: 0..0,
+                        receive: 0..0,
                     })
                     .collect(),
-            ),
+                ..Buffers::default()
+            }),
             sent: std::sync::atomic::AtomicU64::new(0),
         }
     }
@@ -59,69 +66,41 @@ impl Halo {
 
     /// Elements sent to and received from each neighbour per exchange: (rank, sent, received).
     pub fn sizes(&self) -> Vec<(usize, usize, usize)> {
-        let links = self.links.lock().expect("halo buffers");
-        links
+        self.neighbours
             .iter()
-            .map(|l| {
-                (
-                    l.neighbour.rank,
-                    l.neighbour.send.len(),
-                    l.neighbour.receive.len(),
-                )
-            })
+            .map(|n| (n.rank, n.send.len(), n.receive.len()))
             .collect()
     }
 
     /// Sends the `per_element` values of each owned border element of `slots` and writes the
     /// neighbours' into their halo elements. Called on the driving thread between the passes.
     pub fn exchange<R: Real>(&self, slots: &mut [R], per_element: usize) {
-        let mut links = self.links.lock().expect("halo buffers");
-        let mut sent = 0;
-        for l in links.iter_mut() {
-            l.out.clear();
-            for &e in &l.neighbour.send {
+        let mut guard = self.buffers.lock().expect("halo buffers");
+        let Buffers { peers, out, into } = &mut *guard;
+        out.clear();
+        let mut received = 0;
+        for (p, n) in peers.iter_mut().zip(&self.neighbours) {
+            let start = out.len();
+            for &e in &n.send {
                 let at = per_element * e as usize;
-                l.out
-                    .extend(slots[at..at + per_element].iter().map(|v| v.f64()));
+                out.extend(slots[at..at + per_element].iter().map(|v| v.f64()));
             }
-            l.into.clear();
-            l.into.resize(per_element * l.neighbour.receive.len(), 0.0);
-            sent += l.out.len();
+            p.send = start..out.len();
+            let count = per_element * n.receive.len();
+            p.receive = received..received + count;
+            received += count;
         }
+        into.clear();
+        into.resize(received, 0.0);
         self.sent
-            .fetch_add(sent as u64, std::sync::atomic::Ordering::Relaxed);
-        // Split each link into its send and receive buffers, which the exchange reads and
-        // fills at once.
-        let (ranks, outs, mut intos): (Vec<usize>, Vec<&Vec<f64>>, Vec<&mut Vec<f64>>) = {
-            let mut ranks = Vec::with_capacity(links.len());
-            let mut outs = Vec::with_capacity(links.len());
-            let mut intos = Vec::with_capacity(links.len());
-            for l in links.iter_mut() {
-                ranks.push(l.neighbour.rank);
-                let Link { out, into, .. } = l;
-                outs.push(&*out);
-                intos.push(into);
-            }
-            (ranks, outs, intos)
-        };
-        let sends: Vec<(usize, &[f64])> =
-            ranks.iter().zip(&outs).map(|(&r, o)| (r, &o[..])).collect();
-        let mut recvs: Vec<(usize, &mut [f64])> = ranks
-            .iter()
-            .zip(intos.iter_mut())
-            .map(|(&r, i)| (r, &mut i[..]))
-            .collect();
-        self.comm.exchange(&sends, &mut recvs);
-        drop(recvs);
-        drop(sends);
-        for l in links.iter() {
-            for (k, &e) in l.neighbour.receive.iter().enumerate() {
+            .fetch_add(out.len() as u64, std::sync::atomic::Ordering::Relaxed);
+        self.comm.exchange(peers, out, into);
+        for (p, n) in peers.iter().zip(&self.neighbours) {
+            let values = into[p.receive.clone()].chunks_exact(per_element);
+            for (&e, v) in n.receive.iter().zip(values) {
                 let at = per_element * e as usize;
-                for (s, &v) in slots[at..at + per_element]
-                    .iter_mut()
-                    .zip(&l.into[per_element * k..per_element * (k + 1)])
-                {
-                    *s = R::of(v);
+                for (s, &x) in slots[at..at + per_element].iter_mut().zip(v) {
+                    *s = R::of(x);
                 }
             }
         }

@@ -11,7 +11,7 @@ use mpi::traits::*;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::parallel::comm::{Communicator, Traffic};
+use crate::parallel::comm::{Communicator, Peer, Traffic};
 
 /// `MPI_COMM_WORLD` of an initialised MPI (funneled: only the thread that initialised it calls
 /// MPI).
@@ -211,8 +211,41 @@ impl Communicator for MpiWorld {
         self.world.all_gather_varcount_into(local, &mut part);
     }
 
-    fn exchange(&self, sends: &[(usize, &[f64])], recvs: &mut [(usize, &mut [f64])]) {
-        self.point_to_point(sends, recvs);
+    fn exchange(&self, peers: &[Peer], send: &[f64], receive: &mut [f64]) {
+        self.on_caller();
+        let bytes: usize = peers.iter().map(|p| 8 * p.send.len()).sum();
+        self.messages
+            .fetch_add(peers.len() as u64, Ordering::Relaxed);
+        self.bytes.fetch_add(bytes as u64, Ordering::Relaxed);
+        mpi::request::scope(|scope| {
+            // The receive buffer cut into the peers' ranges, in order (the requests are MPI's
+            // handles, a few words per neighbour).
+            let mut rest = receive;
+            let mut at = 0;
+            let mut requests = Vec::with_capacity(2 * peers.len());
+            for p in peers {
+                assert!(p.receive.start >= at, "receive ranges in increasing order");
+                let (_, tail) = rest.split_at_mut(p.receive.start - at);
+                let (mine, tail) = tail.split_at_mut(p.receive.len());
+                rest = tail;
+                at = p.receive.end;
+                requests.push(
+                    self.world
+                        .process_at_rank(p.rank as i32)
+                        .immediate_receive_into(scope, mine),
+                );
+            }
+            for p in peers {
+                requests.push(
+                    self.world
+                        .process_at_rank(p.rank as i32)
+                        .immediate_send(scope, &send[p.send.clone()]),
+                );
+            }
+            for r in requests {
+                r.wait();
+            }
+        });
     }
 
     fn all_to_all_bytes(&self, sends: &[Vec<u8>]) -> Vec<Vec<u8>> {
