@@ -102,6 +102,14 @@ pub fn update_stress_and_move<E: Element, R: Real>(
             if points.is_empty() {
                 continue;
             }
+            if let Some(sums) = sums.as_mut() {
+                // A new block of elements: the last one's sums go to its slot.
+                let b = e / ELEMENT_BLOCK;
+                if b != open.block {
+                    open.close(&mut sums[open.block - blocks.start..]);
+                    open = Open::new(b);
+                }
+            }
             let grad = mesh.grad[e].as_ref();
             let corners = mesh.corners[e].as_ref();
             let vel = E::nodes(|k| g.vel[corners[k] as usize]);
@@ -149,12 +157,18 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                         *d -= c;
                     }
                 }
+                let s0 = stress[j];
+                laws[material[j] as usize].update(
+                    &mut stress[j],
+                    &de,
+                    &mut state[k * j..k * j + k],
+                );
                 // Anura3D's objective update (its "Hill" rate): the co-rotation and the change of
                 // volume, -tr(Δε) σ, of the start-of-step stress, added after the law's update as
                 // Anura3D adds them (for a plastic law the order matters: the return sees the
-                // unrotated trial).
-                let s0 = stress[j];
-                let hill = objective.then(|| {
+                // unrotated trial). Formed after the update, from the start-of-step stress the
+                // guard sums keep anyway, so that fewer values live across the law's call.
+                if objective {
                     let w = [
                         half * (l[0][1] - l[1][0]) * dt, // ω_xy
                         half * (l[1][2] - l[2][1]) * dt, // ω_yz
@@ -165,14 +179,6 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     for (h, v) in h.iter_mut().zip(s0) {
                         *h -= ev * v;
                     }
-                    h
-                });
-                laws[material[j] as usize].update(
-                    &mut stress[j],
-                    &de,
-                    &mut state[k * j..k * j + k],
-                );
-                if let Some(h) = hill {
                     for (s, h) in stress[j].iter_mut().zip(h) {
                         *s += h;
                     }
@@ -190,7 +196,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     x[j][a] += dt * dx[a];
                     u[j][a] += dt * dx[a];
                 }
-                if let Some(sums) = sums.as_mut() {
+                if sums.is_some() {
                     // Work of the mean stress over the step (exact for a linear law) on the start
                     // volume; shear components count twice (tensor shear strains).
                     let s1 = stress[j];
@@ -207,11 +213,6 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     // per point.
                     let margin =
                         volume[j] * initial_density[material[j] as usize] - min_ratio * mass[j];
-                    let b = e / ELEMENT_BLOCK;
-                    if b != open.block {
-                        open.close(&mut sums[open.block - blocks.start..]);
-                        open = Open::new(b);
-                    }
                     // Twice the energies: the engine halves the sums (exactly, a power of two).
                     open.strain += (w * v0 + finite).f64();
                     if let Some(pore) = pore {
