@@ -393,10 +393,18 @@ fn drive<R: Real, E: Element>(
         save(&engine, &out, &mut d, &*observer)?;
     }
     let stopped = |engine: &Engine<R, E>| {
-        options
+        let seen = options
             .stop
             .as_ref()
-            .map(|s| s.load(Ordering::SeqCst))
+            .map_or(0, |s| s.load(Ordering::SeqCst));
+        // Over MPI ranks every rank stops at the same step, the outputs being collective: at
+        // the signal any rank has seen (the launcher delivers it to each at its own moment).
+        let seen = if engine.is_distributed() {
+            engine.communicator().max(seen as f64) as usize
+        } else {
+            seen
+        };
+        Some(seen)
             .filter(|&s| s != 0)
             .map(|signal| RunError::Interrupted {
                 signal,
