@@ -38,9 +38,13 @@ pub struct Cps {
 pub enum Multiplier {
     /// Not applied.
     Off,
-    /// The final value from the first step on.
+    /// Constant within each load step, in equal stairs from `start` to `value`: load step k of
+    /// N takes start + (k / N)(value - start), so the last takes `value` (with one load step, or
+    /// equal numbers, `value` from the first step on).
     Step {
-        /// Multiplier applied.
+        /// The first of the two numbers (`value` when only one is given).
+        start: f64,
+        /// Multiplier applied in the last load step.
         value: f64,
     },
     /// Ramped linearly from `start` to `end` over the load step.
@@ -463,9 +467,13 @@ impl Cps {
         };
         match word.as_slice() {
             b"off" => Ok(Multiplier::Off),
-            b"step" => Ok(Multiplier::Step {
-                value: num(2).or_else(|_| num(1))?,
-            }),
+            b"step" => {
+                let value = num(2).or_else(|_| num(1))?;
+                Ok(Multiplier::Step {
+                    start: if toks.len() > 2 { num(1)? } else { value },
+                    value,
+                })
+            }
             b"linear" => Ok(Multiplier::Linear {
                 start: num(1)?,
                 end: num(2)?,
@@ -696,7 +704,13 @@ mod tests {
         assert_eq!(s.courant, 0.5);
         assert_eq!(s.method, Method::MpmMp);
         assert_eq!(s.gravity_load, Multiplier::Off);
-        assert_eq!(s.solid_traction, Multiplier::Step { value: 1.0 });
+        assert_eq!(
+            s.solid_traction,
+            Multiplier::Step {
+                start: 1.0,
+                value: 1.0
+            }
+        );
         assert_eq!(
             s.prescribed_velocity,
             Multiplier::Linear {

@@ -607,7 +607,7 @@ and a `.CPS_001` is loaded with `mpm_solve::input::anura3d::load`. A case it ref
 the loader's message, which names the feature. An accepted case is run; where its \
 `*_expected.BMS` lists material points, every reported point is compared at the reported time \
 (position, displacement, the six stresses, pore pressure; each difference relative to the \
-value, or for near-zero values to 1e-3 of the column's largest |value|): **reproduced** when \
+value, or for near-zero values to 1e-3 of the largest |value| of the field's columns (position, displacement or stress)): **reproduced** when \
 the worst deviation is at most 1 % and the run ends at the reported time, else **differs**. \
 **ran**: accepted and run, with no expected material points to compare; **unreadable**: the \
 files could not be read; **failed**: the run stopped with an error or a panic.\n"

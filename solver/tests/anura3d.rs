@@ -29,92 +29,10 @@ const CASES: &[&str] = &[
     // Single-phase saturated types: drained (buoyant weight) and undrained total.
     "3072_Gravitation_QS_MPMMIXED_Drained_Gravity_Damping",
     "3074_Gravitation_QS_MPMMIXED_UndrainedTotal_Gravity_Damping",
-    // Velocity prescribed on the points of the top elements, one 1e-15 s step (see VARIANTS).
+    // Velocity prescribed on the points of a block, with contact and a moving mesh, one
+    // 1e-15 s step (tests/contact.rs runs it for five load steps against Anura3D itself).
     "4006_PrescribedVelocityMP",
 ];
-
-/// Contact and the moving mesh, which this solver refuses.
-const CONTACT_AND_MOVING_MESH: &[&str] = &[
-    "START_CONTACT_VOLUME",
-    "EXTENDING_MESH_CORNER_NODES",
-    "COMPRESSING_MESH_CORNER_NODES",
-    "MOVING_MESH_CORNER_NODES",
-    "MOVING_MESH_DIRECTION",
-    "MOVING_MESH_REFERENCE_MATERIAL_INDEX",
-];
-
-/// A case run with GOM sections dropped and CPS keys changed.
-struct Variant {
-    /// The benchmark.
-    case: &'static str,
-    /// What the change is, for the report.
-    label: &'static str,
-    /// GOM sections dropped.
-    drop: &'static [&'static str],
-    /// CPS keys and their new values.
-    set: &'static [(&'static str, &'static str)],
-}
-
-/// 4006 has contact and a moving mesh, which this solver refuses; Anura3D itself reports the
-/// same rows without them (CONTACT_FORMULATION 0 and the sections removed), so its reported
-/// points are compared with the case without them. Its unreported points next to the interface
-/// do move differently with contact.
-const VARIANTS: &[Variant] = &[Variant {
-    case: "4006_PrescribedVelocityMP",
-    label: " (without contact and moving mesh)",
-    drop: CONTACT_AND_MOVING_MESH,
-    set: &[("CONTACT_FORMULATION", "0")],
-}];
-
-/// `text` (a GOM or CPS) without the sections `drop` and with the values of the keys `set`
-/// (the line after `$$KEY`) replaced; every key of `set` must be present.
-fn edited(text: &str, drop: &[&str], set: &[(&str, &str)]) -> String {
-    let mut out = String::new();
-    let (mut skipping, mut value, mut found) = (false, None, 0);
-    for line in text.lines() {
-        if let Some(v) = value.take() {
-            out.push_str(v);
-            out.push('\n');
-            continue;
-        }
-        if let Some(k) = line.trim().strip_prefix("$$") {
-            skipping = drop.contains(&k);
-            value = set.iter().find(|(key, _)| *key == k).map(|(_, v)| *v);
-            found += usize::from(value.is_some());
-        }
-        if !skipping {
-            out.push_str(line);
-            out.push('\n');
-        }
-    }
-    assert_eq!(found, set.len(), "a key of {set:?} is missing");
-    out
-}
-
-/// The GOM and CPS of benchmark `name`, edited as [`VARIANTS`] says, written into `dir`
-/// (unchanged cases are used in place).
-fn inputs(name: &str, dir: &Path, drop: &[&str], set: &[(&str, &str)]) -> (PathBuf, PathBuf) {
-    let root = benchmarks().unwrap().join(name);
-    let (gom, cps) = (find(&root, ".GOM"), find(&root, ".CPS_001"));
-    if drop.is_empty() && set.is_empty() {
-        return (gom, cps);
-    }
-    let out = |p: &Path, text: String| {
-        let q = dir.join(p.file_name().unwrap());
-        std::fs::write(&q, text).unwrap();
-        q
-    };
-    (
-        out(
-            &gom,
-            edited(&std::fs::read_to_string(&gom).unwrap(), drop, &[]),
-        ),
-        out(
-            &cps,
-            edited(&std::fs::read_to_string(&cps).unwrap(), &[], set),
-        ),
-    )
-}
 
 /// The benchmark folder: `ANURA3D_BENCHMARKS`, relative to the workspace root when relative.
 /// Unset (or empty): `None`, and the test says it is skipped. Set to a folder that does not
@@ -158,10 +76,7 @@ fn benchmarks_reproduce_the_expected_material_points() {
     let mut report = Vec::new();
     for name in CASES {
         let dir = root.join(name);
-        let variant = VARIANTS.iter().find(|v| v.case == *name);
-        let (drop, set) = variant.map_or((&[][..], &[][..]), |v| (v.drop, v.set));
-        let edits = tempfile::tempdir().unwrap();
-        let (gom, cps) = inputs(name, edits.path(), drop, set);
+        let (gom, cps) = (find(&dir, ".GOM"), find(&dir, ".CPS_001"));
         let expected = read_bms(&find(&dir, "_expected.BMS"));
         assert!(!expected.material_points.is_empty(), "{name}: no rows read");
         let (case, _) = mpm_solve::input::anura3d::load(&gom, &cps).unwrap();
@@ -181,7 +96,7 @@ fn benchmarks_reproduce_the_expected_material_points() {
             "{name}: points {:?} missing",
             c.missing
         );
-        // 1% of the value, or of 1e-3 of the column's largest value for near-zeros; the report
+        // 1% of the value, or of 1e-3 of the field's largest value for near-zeros; the report
         // prints 4 significant digits (0.05% rounding).
         if let Some(w) = c.worst_at {
             assert!(
@@ -194,8 +109,7 @@ fn benchmarks_reproduce_the_expected_material_points() {
             );
         }
         report.push(format!(
-            "{name}{}: {} points, t = {:.4e} s, worst relative difference {:.3}%",
-            variant.map_or("", |v| v.label),
+            "{name}: {} points, t = {:.4e} s, worst relative difference {:.3}%",
             c.points,
             engine.time,
             100.0 * c.worst_plain

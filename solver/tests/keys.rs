@@ -74,12 +74,6 @@ fn refused_example(kind: KeyKind, pattern: &str) -> Option<(String, String)> {
             (pattern, "1\n1 0.0 -0.1 0.0\n".into())
         }
         (KeyKind::GomSection, "START_EXCAVATION_SOLID") => (pattern, "1 1\n".into()),
-        (
-            KeyKind::GomSection,
-            "MOVING_MESH_CORNER_NODES"
-            | "COMPRESSING_MESH_CORNER_NODES"
-            | "EXTENDING_MESH_CORNER_NODES",
-        ) => (pattern, "1\n2\n".into()),
         (KeyKind::CpsKey, "TOTAL_TIME") => (pattern, "0.5".into()),
         (KeyKind::CpsKey, "MASS_SCALING") => (pattern, "1 10.0".into()),
         (KeyKind::CpsKey, "BULK_VISCOSITY_DAMPING") => (pattern, "1 0.06 1.2".into()),
@@ -90,7 +84,8 @@ fn refused_example(kind: KeyKind, pattern: &str) -> Option<(String, String)> {
             | "FIX_SOLID_SKELETON"
             | "APPLY_POROSITY_UPDATE"
             | "APPLY_MATERIAL_UPDATE"
-            | "CONTACT_FORMULATION"
+            | "APPLY_CONTACT_MESH_BOUNDARY"
+            | "APPLY_CONTACT_VELOCITY_SCALING"
             | "SUBMERGED_CALCULATION"
             | "RESET_DISPLACEMENTS"
             | "K0_PROCEDURE"

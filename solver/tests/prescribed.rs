@@ -122,16 +122,20 @@ fn gom_rows_are_read_and_what_is_not_modelled_is_refused() {
         );
     let err = load(&column_gom(&both), CPS).unwrap_err();
     assert!(err.contains("more than once"), "{err}");
-    // Contact and the moving mesh change the results: refused by name.
+    // Contact without its structure, and a moving mesh without a box to compress or stretch:
+    // refused, naming what is missing.
     let err = load(
         &column_gom(&rows(&six)),
         &CPS.replace("$$CONTACT_FORMULATION\n0", "$$CONTACT_FORMULATION\n1"),
     )
     .unwrap_err();
-    assert!(err.contains("$$CONTACT_FORMULATION"), "{err}");
+    assert!(err.contains("$$START_CONTACT_VOLUME: missing"), "{err}");
     let mesh = "$$MOVING_MESH_CORNER_NODES\n1\n2\n3\n4\n5\n6\n7\n8\n$$MOVING_MESH_DIRECTION\ny-direction\n$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n1\n";
     let err = load(&column_gom(&(rows(&six) + mesh)), CPS).unwrap_err();
-    assert!(err.contains("$$MOVING_MESH_CORNER_NODES"), "{err}");
+    assert!(
+        err.contains("$$EXTENDING_MESH_CORNER_NODES") && err.contains("compressing box"),
+        "{err}"
+    );
     // What switches nothing on is accepted: contact volumes with contact off, a direction and a
     // reference material without corner nodes.
     let inert = "$$START_CONTACT_VOLUME\n1\n19 1 \"soil\" 0 0 \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0\n$$MOVING_MESH_DIRECTION\ny-direction\n$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n1\n";

@@ -165,6 +165,7 @@ impl Fingerprint {
             pic_blend,
             integration,
             anura3d_time_step,
+            critical_step,
             damping_rule,
             drag,
             initial_step,
@@ -178,12 +179,14 @@ impl Fingerprint {
             probes,
             prescribed,
             nodal_velocity,
+            moving_mesh,
+            contact,
             // Threads, pinning and first touch: the results do not depend on them.
             engine: _,
             precision,
         } = case;
         let version = env!("CARGO_PKG_VERSION");
-        let items: [(&str, &dyn std::fmt::Debug); 46] = [
+        let items: [(&str, &dyn std::fmt::Debug); 49] = [
             ("solver version", &version),
             ("case name", name),
             ("input files", inputs),
@@ -215,6 +218,7 @@ impl Fingerprint {
             ("PIC blend", pic_blend),
             ("integration", integration),
             ("Anura3D time step", anura3d_time_step),
+            ("critical time step rule", critical_step),
             ("damping rule", damping_rule),
             ("drag (--drag)", drag),
             ("initial step", initial_step),
@@ -228,6 +232,8 @@ impl Fingerprint {
             ("probes (--probe)", probes),
             ("prescribed velocities", prescribed),
             ("prescribed nodal velocities", nodal_velocity),
+            ("moving mesh", moving_mesh),
+            ("contact", contact),
             ("precision (--precision)", precision),
             ("--drop-lost", &drop_lost),
         ];

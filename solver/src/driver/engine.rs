@@ -19,6 +19,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::{Grid, LiquidNodes};
 use crate::state::particles::{self, Field, FieldVisitor, Particles, Value};
+use crate::step::contact::Everyone;
 use crate::step::grid_update::{DampingRule, Drag};
 use crate::step::load_curve::LoadCurve;
 use crate::step::stress::{Guard, GuardSums};
@@ -33,6 +34,9 @@ pub enum StepError {
     /// A material point left the mesh.
     #[error(transparent)]
     Lost(#[from] Lost),
+    /// The moving mesh turned an element inside out.
+    #[error(transparent)]
+    Mesh(#[from] crate::step::moving_mesh::Inverted),
     /// A guard rail tripped (docs/design.md §4.14).
     #[error(transparent)]
     Diverged(Box<Divergence>),
@@ -76,6 +80,9 @@ pub enum SetupError {
     /// The critical time step is not usable.
     #[error(transparent)]
     TimeStep(#[from] crate::input::time_step::TimeStepError),
+    /// The moving mesh has nothing to follow.
+    #[error(transparent)]
+    MovingMesh(#[from] crate::step::moving_mesh::MovingMeshError),
     /// A load on material points has no points to carry it.
     #[error("the load on material points of the face with corner nodes {} has no filled element next to it", crate::driver::units::list(.nodes))]
     UnloadedFace {
@@ -236,6 +243,13 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub prescribed: Option<crate::step::prescribed::Prescribed<R>>,
     /// Velocities prescribed on nodes (only when the case has them).
     pub nodal_velocity: Option<crate::step::nodal_velocity::NodalVelocity<R>>,
+    /// Anura3D's moving mesh (only when the case has one).
+    pub moving_mesh: Option<crate::step::moving_mesh::MovingMesh>,
+    /// The critical time step taken again after every step (Anura3D's rule, GOM input).
+    critical_step: Option<crate::step::time_step::CriticalStep>,
+    /// Contact between a structure and the soil (only when the case has it): the structure's
+    /// nodal arrays, the soil's being [`Engine::grid`].
+    pub contact: Option<crate::step::contact::Contact<R>>,
     /// The prescribed-velocity sets' reactions and imposed displacements
     /// ([`Case::reactions`]'s order), updated every step.
     pub reactions: Vec<crate::step::reaction::Reaction>,
@@ -375,6 +389,8 @@ impl<R: Real, E: Element> Engine<R, E> {
                     !case.point_loads.is_empty(),
                     "loads carried by material points",
                 ),
+                (case.moving_mesh.is_some(), "a moving mesh"),
+                (case.contact.is_some(), "contact between bodies"),
             ];
             if let Some((_, what)) = unmodelled.iter().find(|(on, _)| *on) {
                 return Err(SetupError::Distributed {
@@ -507,6 +523,24 @@ impl<R: Real, E: Element> Engine<R, E> {
             let pv = pv.clone().owned_by(&partition);
             crate::step::prescribed::Prescribed::new(&pv, &mesh, &particles)
         });
+        let moving_mesh = case
+            .moving_mesh
+            .as_ref()
+            .map(|spec| {
+                crate::step::moving_mesh::MovingMesh::new(
+                    spec,
+                    &case.model,
+                    &mesh,
+                    &case.element_material,
+                    &case.points_per_element,
+                    &case.input_node,
+                )
+            })
+            .transpose()?;
+        let contact = case
+            .contact
+            .as_ref()
+            .map(|spec| crate::step::contact::Contact::new(spec, &mesh, &case.element_material));
         let layout = layout_of(&partition, &mesh, &particles, team.threads, &comm);
         if options.first_touch {
             particles = first_touch(&team, &layout, particles);
@@ -561,8 +595,11 @@ impl<R: Real, E: Element> Engine<R, E> {
             stored_energy: 0.0,
             courant: (case.courant, critical_element),
             // Both energy checks need every energy term; prescribed velocities do work that is
-            // not counted.
-            energy_checked: (reactions.is_empty(), reactions.is_empty()),
+            // not counted, and contact takes energy out that is not counted either.
+            energy_checked: (
+                reactions.is_empty() && case.contact.is_none(),
+                reactions.is_empty() && case.contact.is_none(),
+            ),
             comm,
             config: StepConfig::of(case),
             input_element,
@@ -593,6 +630,11 @@ impl<R: Real, E: Element> Engine<R, E> {
             liquid_fixed,
             prescribed,
             nodal_velocity,
+            moving_mesh,
+            contact,
+            critical_step: (case.critical_step
+                == crate::input::case::CriticalStepRule::OccupiedEachStep)
+                .then(|| crate::step::time_step::CriticalStep::new(case, team.threads)),
             reactions,
             locate_outcome: vec![((usize::MAX, 0), 0, false); team.threads],
             team,
@@ -751,6 +793,12 @@ impl<R: Real, E: Element> Engine<R, E> {
             nodal_velocity: _,
             // Saved below, by set.
             reactions,
+            // Saved below: the moved nodes' coordinates.
+            moving_mesh,
+            // Its scratch; the step it set is `dt`.
+            critical_step: _,
+            // Rebuilt at set-up; its arrays are each step's scratch.
+            contact: _,
             // Saved, the time step to check that the set-up matches.
             dt,
             time,
@@ -800,6 +848,9 @@ impl<R: Real, E: Element> Engine<R, E> {
                     .zip(r.force.map(f64::to_bits)),
             );
         }
+        if let Some(mm) = moving_mesh {
+            out.extend(mm.state().into_iter().map(|x| ("moving_mesh", x.to_bits())));
+        }
         out
     }
 
@@ -829,7 +880,10 @@ impl<R: Real, E: Element> Engine<R, E> {
         }
         let v = |k: usize| saved.scalars[k].1;
         let f = |k: usize| f64::from_bits(v(k));
-        if v(0) != self.dt.to_bits() {
+        if self.critical_step.is_some() {
+            // Taken again after every step: the saved one is the next step's.
+            self.dt = f(0);
+        } else if v(0) != self.dt.to_bits() {
             return Err(saved.corrupt(format!(
                 "time step {} s, the case now gives {} s",
                 f(0),
@@ -889,6 +943,13 @@ impl<R: Real, E: Element> Engine<R, E> {
             r.travel = f(at + 4 * k);
             r.force = [1, 2, 3].map(|j| f(at + 4 * k + j));
         }
+        if let Some(mm) = &mut self.moving_mesh {
+            let at = at + 4 * self.reactions.len();
+            let state: Vec<f64> = (at..saved.scalars.len()).map(f).collect();
+            if !mm.restore(&mut self.mesh, &state) {
+                return Err(saved.corrupt("the moving mesh's node positions".into()));
+            }
+        }
         Ok(())
     }
 
@@ -903,16 +964,35 @@ impl<R: Real, E: Element> Engine<R, E> {
             *gv = case.gravity.map(|g| R::of(g * gm * ratio));
         }
         let tm = R::of(case.traction_curve.at(self.time + dt));
-        particle_to_grid::particle_to_grid(
-            &self.team,
-            &self.layout,
-            &mut self.slots,
-            &self.mesh,
-            &self.particles,
-            &self.gravity_by_material,
-            self.mixed.as_mut(),
-            &mut self.grid,
-        );
+        match &mut self.contact {
+            None => particle_to_grid::particle_to_grid(
+                &self.team,
+                &self.layout,
+                &mut self.slots,
+                &self.mesh,
+                &self.particles,
+                &self.gravity_by_material,
+                self.mixed.as_mut(),
+                &mut self.grid,
+                Everyone,
+            ),
+            Some(c) => {
+                // Each body to its own nodes: the soil to the engine's grid.
+                for (grid, body) in [(&mut self.grid, c.soil()), (&mut c.grid, c.structure)] {
+                    particle_to_grid::particle_to_grid(
+                        &self.team,
+                        &self.layout,
+                        &mut self.slots,
+                        &self.mesh,
+                        &self.particles,
+                        &self.gravity_by_material,
+                        self.mixed.as_mut(),
+                        grid,
+                        body,
+                    );
+                }
+            }
+        }
         particle_to_grid::liquid_to_grid(
             &self.team,
             &self.layout,
@@ -964,6 +1044,22 @@ impl<R: Real, E: Element> Engine<R, E> {
                 case.damping_rule,
                 &*self.comm,
             );
+            if let Some(c) = &mut self.contact {
+                // The structure's nodes (no loads on nodes with contact: the soil's traction
+                // array is zero), then the force sums over both bodies.
+                grid_update::grid_update(
+                    &self.team,
+                    &mut c.scratch,
+                    &mut c.grid,
+                    &self.traction,
+                    tm,
+                    &self.fixed,
+                    R::of(case.damping),
+                    case.damping_rule,
+                    &*self.comm,
+                );
+                c.force_sums(&self.grid, &self.fixed, &mut self.grid_scratch.node_sums);
+            }
         }
         let (forces, liquid_forces) = {
             let (layout, team, comm) = (&self.layout, &self.team, &*self.comm);
@@ -981,8 +1077,34 @@ impl<R: Real, E: Element> Engine<R, E> {
             .as_ref()
             .map_or(R::ZERO, |pr| R::of(pr.multiplier(self.time + dt)));
         if let Some(pr) = &self.prescribed {
-            pr.after_grid_update(&mut self.grid, &mut self.particles, pm);
-            self.reactions[0].force = pr.reaction(&self.grid, &self.traction, tm);
+            // With contact the prescribed points are the structure's: its nodes are the masked
+            // ones.
+            let g = self
+                .contact
+                .as_mut()
+                .map_or(&mut self.grid, |c| &mut c.grid);
+            pr.after_grid_update(g, &mut self.particles, pm);
+            self.reactions[0].force = pr.reaction(g, &self.traction, tm);
+        }
+        if let Some(c) = &mut self.contact {
+            if let Some(pr) = &mut self.prescribed {
+                pr.mean_of_marked(&self.mesh, &self.particles);
+            }
+            let pr = self.prescribed.as_ref();
+            c.correct(
+                &mut self.grid,
+                &self.layout,
+                &self.particles,
+                &self.fixed,
+                &|n| pr.and_then(|pr| pr.masked(n)),
+                R::of(case.damping),
+                case.damping_rule,
+                dt,
+            );
+            if let Some(pr) = pr {
+                // Anura3D's second override, before the points take the accelerations.
+                pr.after_grid_update(&mut c.grid, &mut self.particles, pm);
+            }
         }
         if let Some(nv) = &mut self.nodal_velocity {
             nv.after_grid_update(
@@ -997,18 +1119,44 @@ impl<R: Real, E: Element> Engine<R, E> {
         for r in &mut self.reactions {
             r.advance(self.time + dt, dt);
         }
-        grid_to_particle::grid_to_particle(
-            &self.team,
-            &self.layout,
-            &mut self.slots,
-            &self.mesh,
-            &mut self.particles,
-            &mut self.grid,
-            &self.fixed,
-            R::of(dt),
-            R::of(case.pic_blend),
-            self.guards.enabled.then_some(&mut self.guard_slots[..]),
-        );
+        match &mut self.contact {
+            None => grid_to_particle::grid_to_particle(
+                &self.team,
+                &self.layout,
+                &mut self.slots,
+                &self.mesh,
+                &mut self.particles,
+                &mut self.grid,
+                &self.fixed,
+                R::of(dt),
+                R::of(case.pic_blend),
+                self.guards.enabled.then_some(&mut self.guard_slots[..]),
+                Everyone,
+                true,
+            ),
+            Some(c) => {
+                let bodies = [
+                    (&mut self.grid, c.soil(), true),
+                    (&mut c.grid, c.structure, false),
+                ];
+                for (grid, body, begin) in bodies {
+                    grid_to_particle::grid_to_particle(
+                        &self.team,
+                        &self.layout,
+                        &mut self.slots,
+                        &self.mesh,
+                        &mut self.particles,
+                        grid,
+                        &self.fixed,
+                        R::of(dt),
+                        R::of(case.pic_blend),
+                        self.guards.enabled.then_some(&mut self.guard_slots[..]),
+                        body,
+                        begin,
+                    );
+                }
+            }
+        }
         grid_to_particle::liquid_to_particles(
             &self.team,
             &self.layout,
@@ -1022,7 +1170,11 @@ impl<R: Real, E: Element> Engine<R, E> {
             self.guards.enabled.then_some(&mut self.guard_slots[..]),
         );
         if let Some(pr) = &mut self.prescribed {
-            pr.after_remap(&self.mesh, &mut self.grid, &mut self.particles, pm);
+            let g = self
+                .contact
+                .as_mut()
+                .map_or(&mut self.grid, |c| &mut c.grid);
+            pr.after_remap(&self.mesh, g, &mut self.particles, pm);
         }
         if let Some(nv) = &self.nodal_velocity {
             nv.after_remap(&mut self.grid);
@@ -1051,24 +1203,45 @@ impl<R: Real, E: Element> Engine<R, E> {
             self.smoothing.as_ref(),
             R::of(dt),
         );
-        stress::update_stress_and_move(
-            &self.team,
-            &self.layout,
-            &self.mesh,
-            &mut self.particles,
-            &self.grid,
-            &self.laws,
-            case.objective_stress,
-            case.hoop_in_volume,
-            self.smoothing.as_ref(),
-            R::of(dt),
-            self.guards.enabled.then_some(Guard {
+        // Each body's points strain and move with its own nodes' velocities.
+        let bodies: [(&Grid<R>, Option<crate::step::contact::OneBody>); 2] = match &self.contact {
+            None => [(&self.grid, None), (&self.grid, None)],
+            Some(c) => [(&self.grid, Some(c.soil())), (&c.grid, Some(c.structure))],
+        };
+        for (k, (grid, body)) in bodies.into_iter().enumerate() {
+            if k == 1 && body.is_none() {
+                break;
+            }
+            let guard = self.guards.enabled.then_some(Guard {
                 slots: &mut self.guard_slots,
                 initial_density: &self.initial_density,
                 fluids: &self.fluids,
                 min_volume_ratio: R::of(self.guards.min_volume_ratio),
-            }),
-        );
+            });
+            let args = (
+                &self.team,
+                &self.layout,
+                &self.mesh,
+                &mut self.particles,
+                grid,
+                &self.laws,
+                case.objective_stress,
+                case.hoop_in_volume,
+                self.smoothing.as_ref(),
+                R::of(dt),
+                guard,
+            );
+            match body {
+                None => stress::update_stress_and_move(
+                    args.0, args.1, args.2, args.3, args.4, args.5, args.6, args.7, args.8, args.9,
+                    args.10, Everyone,
+                ),
+                Some(b) => stress::update_stress_and_move(
+                    args.0, args.1, args.2, args.3, args.4, args.5, args.6, args.7, args.8, args.9,
+                    args.10, b,
+                ),
+            }
+        }
         if let Some(m) = &self.mixed {
             m.after_stress(&self.team, &self.layout, &mut self.particles);
         }
@@ -1097,6 +1270,42 @@ impl<R: Real, E: Element> Engine<R, E> {
             ),
             dt,
         );
+        // With contact the structure's nodes add their power, work and dissipation; Anura3D's
+        // nodal kinetic energy (its convergence check) is the soil's alone.
+        let energy = match &self.contact {
+            None => energy,
+            Some(c) => {
+                nodal_energy::nodal_energy(
+                    &self.team,
+                    &mut self.energy_values,
+                    &mut self.energy_blocks,
+                    &c.grid,
+                    &nodal_energy::Loads {
+                        traction: (&self.traction, tm),
+                        liquid_traction: (&self.liquid_traction, liquid_scale),
+                        liquid_load_on_mixture: case.liquid_load_on_mixture,
+                        fixed: &self.fixed,
+                        liquid_fixed: &self.liquid_fixed,
+                        gravity,
+                    },
+                );
+                self.layout
+                    .sum_owned(&self.team, &self.energy_values, &mut self.owned_partials);
+                let structure = nodal_energy::NodalEnergy::of_sums(
+                    exact_total(
+                        &*self.comm,
+                        &self.owned_partials[..self.layout.owned_blocks()],
+                    ),
+                    dt,
+                );
+                nodal_energy::NodalEnergy {
+                    power_end: energy.power_end + structure.power_end,
+                    kinetic: energy.kinetic,
+                    work: energy.work + structure.work,
+                    dissipated: energy.dissipated + structure.dissipated,
+                }
+            }
+        };
         let w = energy.power_end;
         self.nodal_kinetic = energy.kinetic;
         self.external_work += w * dt;
@@ -1109,9 +1318,39 @@ impl<R: Real, E: Element> Engine<R, E> {
             self.check_step(dt, w, &forces, &energy)?;
         }
         let t4 = Instant::now();
+        if let Some(mm) = &mut self.moving_mesh {
+            // After the stresses and the points' move (with the shape functions of the mesh
+            // before it moves), before the points are located in the moved mesh: Anura3D's
+            // order.
+            // With contact the mesh follows the structure's nodes.
+            let vel = self
+                .contact
+                .as_ref()
+                .map_or(&self.grid.vel, |c| &c.grid.vel);
+            if let Err(e) = mm.advance(&mut self.mesh, vel, dt) {
+                return Err(crate::step::moving_mesh::Inverted {
+                    element: self.input_element[e] + 1,
+                    step: self.steps,
+                    time: self.time,
+                }
+                .into());
+            }
+        }
         self.locate()?;
         if let Some(m) = &self.mixed {
             m.after_locate(&self.team, &self.layout, &mut self.particles);
+        }
+        if let Some(cs) = &mut self.critical_step {
+            let (crossing, element) =
+                cs.shortest_crossing(&self.team, &self.layout, &self.mesh, &self.particles);
+            let shortest = self.comm.min(crossing);
+            // With no point left in the mesh the last step stands.
+            if shortest.is_finite() {
+                self.dt = crate::step::time_step::step_of(self.courant.0, shortest);
+                if crossing == shortest {
+                    self.courant.1 = element as usize;
+                }
+            }
         }
         let t5 = Instant::now();
         for (k, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5)]

@@ -27,6 +27,9 @@ pub enum RunError {
     /// A material point left the mesh.
     #[error(transparent)]
     Lost(#[from] crate::driver::engine::Lost),
+    /// The moving mesh turned an element inside out.
+    #[error(transparent)]
+    Mesh(#[from] crate::step::moving_mesh::Inverted),
     /// A guard rail tripped: the run diverged (`run.json` says where and why).
     #[error(transparent)]
     Diverged(Box<crate::driver::guard::Divergence>),
@@ -82,6 +85,7 @@ impl From<crate::driver::engine::StepError> for RunError {
     fn from(e: crate::driver::engine::StepError) -> Self {
         match e {
             crate::driver::engine::StepError::Lost(l) => RunError::Lost(l),
+            crate::driver::engine::StepError::Mesh(m) => RunError::Mesh(m),
             crate::driver::engine::StepError::Diverged(d) => RunError::Diverged(d),
         }
     }

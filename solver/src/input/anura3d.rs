@@ -53,11 +53,51 @@ fn unsupported(file: &str, item: &str, message: impl Into<String>) -> CaseError 
     }
 }
 
-/// A multiplier as a load curve over the calculation's total time `total`.
-fn curve(m: Multiplier, total: f64, file: &str, key: &str) -> Result<(f64, LoadCurve), CaseError> {
+/// How the load steps of a calculation run: how many, how long each, and whether they end on
+/// convergence (quasi-static) rather than at their end time.
+#[derive(Debug, Clone, Copy)]
+struct LoadSteps {
+    count: u32,
+    duration: f64,
+    quasi_static: bool,
+}
+
+/// A multiplier as a load curve over the calculation's load steps: (scale, curve), the
+/// multiplier at time t being scale × curve(t).
+fn curve(
+    m: Multiplier,
+    steps: LoadSteps,
+    file: &str,
+    key: &str,
+) -> Result<(f64, LoadCurve), CaseError> {
+    let total = f64::from(steps.count) * steps.duration;
     Ok(match m {
         Multiplier::Off => (0.0, LoadCurve::Step),
-        Multiplier::Step { value } => (value, LoadCurve::Step),
+        Multiplier::Step { start, value } if start == value || steps.count == 1 => {
+            (value, LoadCurve::Step)
+        }
+        Multiplier::Step { start, value } => {
+            if steps.quasi_static {
+                // Its load steps end on convergence, not at a time the curve could read.
+                return Err(unsupported(
+                    file,
+                    key,
+                    format!(
+                        "a step multiplier that changes from load step to load step ({start} to {value} over {} load steps) is not supported with $$QUASISTATIC_CONVERGENCE 1",
+                        steps.count
+                    ),
+                ));
+            }
+            (
+                1.0,
+                LoadCurve::Stairs {
+                    from: start,
+                    to: value,
+                    load_step: steps.duration,
+                    steps: steps.count,
+                },
+            )
+        }
         // A "linear" multiplier that does not change is a constant one.
         Multiplier::Linear { start, end } if start == end => (end, LoadCurve::Step),
         Multiplier::Linear { start, end } => {
@@ -344,13 +384,24 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         }
     }
     let total = s.load_steps as f64 * s.time_per_load_step;
-    let (tm, traction_curve) = curve(s.solid_traction, total, &cfile, "$$SOLID_TRACTION")?;
+    let steps = LoadSteps {
+        count: s.load_steps,
+        duration: s.time_per_load_step,
+        quasi_static: s.quasi_static,
+    };
+    let (tm, traction_curve) = curve(s.solid_traction, steps, &cfile, "$$SOLID_TRACTION")?;
     for t in traction.iter_mut() {
         for v in t.iter_mut() {
             *v *= tm;
         }
     }
-    let (lm, liquid_curve) = curve(s.liquid_pressure, total, &cfile, "$$LIQUID_PRESSURE")?;
+    // The multiplier scales the loads carried by material points as it scales those on nodes.
+    for load in &mut point_loads {
+        for v in load.force.iter_mut() {
+            *v *= tm;
+        }
+    }
+    let (lm, liquid_curve) = curve(s.liquid_pressure, steps, &cfile, "$$LIQUID_PRESSURE")?;
     for t in liquid_traction.iter_mut() {
         for v in t.iter_mut() {
             *v *= lm;
@@ -364,8 +415,33 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             "loads the liquid, but no material is saturated",
         ));
     }
-    let prescribed = prescribed_velocity(&model, &s, &materials, total, &gfile, &cfile)?;
-    let nodal_velocity = nodal_velocity(&model, &s, &materials, total, &gfile, &cfile)?;
+    let prescribed = prescribed_velocity(&model, &s, &materials, steps, &gfile, &cfile)?;
+    let nodal_velocity = nodal_velocity(&model, &s, &materials, steps, &gfile, &cfile)?;
+    let moving_mesh = crate::step::moving_mesh::read(&model)
+        .map_err(|(item, why)| unsupported(&gfile, &item, why))?;
+    if let Some(mm) = &moving_mesh {
+        if !matches!(materials.get(mm.material as usize), Some(Some(_))) {
+            return Err(unsupported(
+                &gfile,
+                "$$MOVING_MESH_REFERENCE_MATERIAL_INDEX",
+                format!("material {} is not defined", mm.material),
+            ));
+        }
+    }
+    let contact = contact(
+        &model,
+        &cps,
+        &materials,
+        &element_material,
+        &points_per_element,
+        ContactCase {
+            has_nodal_load: traction.iter().flatten().any(|&v| v != 0.0),
+            has_point_load: !point_loads.is_empty(),
+            has_nodal_velocity: !nodal_velocity.is_empty(),
+        },
+        &gfile,
+        &cfile,
+    )?;
     let initial_stress = k0_procedure(
         &model,
         &cps,
@@ -379,7 +455,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         &gfile,
         &cfile,
     )?;
-    let (gm, gravity_curve) = curve(s.gravity_load, total, &cfile, "$$GRAVITY_LOAD")?;
+    let (gm, gravity_curve) = curve(s.gravity_load, steps, &cfile, "$$GRAVITY_LOAD")?;
     let g = s.gravity_vector.map(|v| v * s.gravity_acceleration * gm);
     let output_times = (1..=s.load_steps)
         .map(|k| k as f64 * s.time_per_load_step)
@@ -423,6 +499,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         pic_blend: 0.0,
         integration,
         anura3d_time_step: true,
+        critical_step: crate::input::case::CriticalStepRule::OccupiedEachStep,
         damping_rule: crate::input::case::DampingRule::Anura3d,
         drag: crate::input::case::Drag::Implicit,
         initial_step: Some(ANURA3D_FIRST_STEP),
@@ -441,10 +518,91 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         probes,
         prescribed,
         nodal_velocity,
+        moving_mesh,
+        contact,
         engine: Default::default(),
         precision: crate::input::case::Precision::F64,
     };
     Ok((case, s))
+}
+
+/// What the loader knows of the case when it reads the contact.
+struct ContactCase {
+    has_nodal_load: bool,
+    has_point_load: bool,
+    has_nodal_velocity: bool,
+}
+
+/// The contact between a structure and the soil (CPS `$$CONTACT_FORMULATION 1` with GOM
+/// `$$START_CONTACT_VOLUME`; `step::contact`), `None` when it is off. Refused by name what it
+/// does not model with it: 2D models, saturated materials, loads on nodes or on material points,
+/// prescribed nodal velocities and strain smoothing (Anura3D gives each of them rules of its own
+/// for the two bodies).
+#[allow(clippy::too_many_arguments)]
+fn contact(
+    model: &Model,
+    cps: &Cps,
+    materials: &[Option<MaterialSpec>],
+    element_material: &[u32],
+    points: &[u32],
+    with: ContactCase,
+    gfile: &str,
+    cfile: &str,
+) -> Result<Option<crate::step::contact::ContactSpec>, CaseError> {
+    let key = "$$CONTACT_FORMULATION";
+    let value = cps
+        .get("CONTACT_FORMULATION")
+        .and_then(|e| e.lines.first())
+        .and_then(|l| l.split_whitespace().next())
+        .unwrap_or("0");
+    match value {
+        "0" => return Ok(None),
+        "1" => {}
+        other => {
+            return Err(unsupported(
+                cfile,
+                key,
+                format!("expected 0 or 1, got {other:?}"),
+            ))
+        }
+    }
+    let refuse = |what: &str| {
+        Err(unsupported(
+            cfile,
+            key,
+            format!("contact is not modelled {what}"),
+        ))
+    };
+    if model.dimension.coords() != 3 {
+        return refuse("in 2D models (3D only)");
+    }
+    if materials.iter().flatten().any(|m| m.liquid.is_some()) {
+        return refuse("with saturated materials (dry materials only)");
+    }
+    if with.has_nodal_load {
+        return refuse("with loads on nodes");
+    }
+    if with.has_point_load {
+        return refuse("with loads on material points");
+    }
+    if with.has_nodal_velocity {
+        return refuse("with prescribed nodal velocities");
+    }
+    if cps.get("STRAIN_SMOOTHING").is_some_and(|e| {
+        e.lines
+            .first()
+            .and_then(|l| l.split_whitespace().next())
+            .is_some_and(|w| w != "0")
+    }) {
+        return refuse("with $$STRAIN_SMOOTHING 1");
+    }
+    let names: Vec<(u32, String)> = model
+        .materials()
+        .iter()
+        .map(|m| (m.index.max(0) as u32, m.name.clone()))
+        .collect();
+    crate::step::contact::read(model, element_material, &names, points)
+        .map_err(|(item, why)| unsupported(gfile, &item, why))
 }
 
 /// What the K0 procedure reads of one GOM material.
@@ -490,26 +648,13 @@ fn cps_number(cps: &Cps, key: &str, file: &str) -> Result<Option<f64>, CaseError
 
 /// A load multiplier's value at the start of the calculation, as Anura3D sets it when it reads
 /// the key: the first of its two numbers (0 when off or absent).
-fn initial_multiplier(cps: &Cps, key: &str, m: Multiplier, file: &str) -> Result<f64, CaseError> {
-    Ok(match m {
+fn initial_multiplier(m: Multiplier) -> f64 {
+    match m {
         Multiplier::Off => 0.0,
-        Multiplier::Linear { start, .. } | Multiplier::File { start, .. } => start,
-        Multiplier::Step { .. } => {
-            // The parsed multiplier keeps the final value; the start is the first number.
-            let word = cps
-                .get(key)
-                .and_then(|e| e.lines.first())
-                .and_then(|l| l.split_whitespace().nth(1))
-                .unwrap_or("");
-            word.parse::<f64>().map_err(|_| {
-                unsupported(
-                    file,
-                    &format!("$${key}"),
-                    format!("expected a number after step, got {word:?}"),
-                )
-            })?
-        }
-    })
+        Multiplier::Linear { start, .. }
+        | Multiplier::File { start, .. }
+        | Multiplier::Step { start, .. } => start,
+    }
 }
 
 /// Anura3D's K0 procedure (`$$K0_PROCEDURE 1`) resolved into initial stresses; `None` when it
@@ -591,14 +736,14 @@ fn k0_procedure(
             )
         })?;
     }
-    let traction = initial_multiplier(cps, "SOLID_TRACTION", s.solid_traction, cfile)?;
+    let traction = initial_multiplier(s.solid_traction);
     let k0 = K0Procedure {
         surface_point: [
             0.0,
             cps_number(cps, "SURFACE_ELEVATION", cfile)?.unwrap_or(0.0),
         ],
         gravity_direction: [g[0], g[1]],
-        gravity_factor: initial_multiplier(cps, "GRAVITY_LOAD", s.gravity_load, cfile)?,
+        gravity_factor: initial_multiplier(s.gravity_load),
         surface_load: load * traction,
         max_suction: cps_number(cps, "K0_MAX_SUCTION", cfile)?.unwrap_or(DEFAULT_MAX_SUCTION),
     };
@@ -721,7 +866,7 @@ fn prescribed_velocity(
     model: &Model,
     s: &Settings,
     materials: &[Option<MaterialSpec>],
-    total: f64,
+    steps: LoadSteps,
     gfile: &str,
     cfile: &str,
 ) -> Result<Option<crate::step::prescribed::PrescribedVelocity>, CaseError> {
@@ -741,7 +886,7 @@ fn prescribed_velocity(
             "prescribed velocities are not supported yet in cases with a saturated material",
         ));
     }
-    let (scale, curve) = curve(s.prescribed_velocity, total, cfile, "$$PRESCRIBED_VELOCITY")?;
+    let (scale, curve) = curve(s.prescribed_velocity, steps, cfile, "$$PRESCRIBED_VELOCITY")?;
     Ok(Some(crate::step::prescribed::PrescribedVelocity {
         name: crate::step::prescribed::SECTIONS
             .iter()
@@ -759,7 +904,7 @@ fn nodal_velocity(
     model: &Model,
     s: &Settings,
     materials: &[Option<MaterialSpec>],
-    total: f64,
+    steps: LoadSteps,
     gfile: &str,
     cfile: &str,
 ) -> Result<Vec<crate::step::nodal_velocity::NodalVelocitySet>, CaseError> {
@@ -780,7 +925,7 @@ fn nodal_velocity(
             "prescribed velocities are not supported yet in cases with a saturated material",
         ));
     }
-    let (scale, curve) = curve(s.prescribed_velocity, total, cfile, "$$PRESCRIBED_VELOCITY")?;
+    let (scale, curve) = curve(s.prescribed_velocity, steps, cfile, "$$PRESCRIBED_VELOCITY")?;
     Ok(vec![crate::step::nodal_velocity::NodalVelocitySet {
         name,
         rows,

@@ -144,20 +144,18 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "INITIAL_VELOCITY_MATERIAL_POINT",
         RefusedUnlessInert("initial material-point velocities (with CPS $$INITIAL_VELOCITY 1); inert: an empty list"),
     ),
-    (
-        GomSection,
-        "START_CONTACT_VOLUME",
-        Ignored("the bodies of the contact algorithm, which acts only with CPS $$CONTACT_FORMULATION 1 (refused)"),
-    ),
+    // The structure of the contact algorithm (`step::contact`), read with CPS
+    // $$CONTACT_FORMULATION 1, ignored otherwise.
+    (GomSection, "START_CONTACT_VOLUME", Modelled),
     (
         GomSection,
         "START_BODY_CONTACT_2D",
-        Ignored("2D contact; 2D cases are refused"),
+        Ignored("2D contact, which acts only with CPS $$CONTACT_FORMULATION 1 (refused in 2D)"),
     ),
     (
         GomSection,
         "START_BOUNDARY_CONTACT_2D",
-        Ignored("2D contact; 2D cases are refused"),
+        Ignored("2D contact, which acts only with CPS $$CONTACT_FORMULATION 1 (refused in 2D)"),
     ),
     (
         GomSection,
@@ -205,32 +203,12 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "BOUNDARY_HYDRAULIC_HEAD_AREA",
         Ignored("only used with CPS $$HYDRAULIC_HEAD"),
     ),
-    // --- GOM: moving mesh.
-    (
-        GomSection,
-        "MOVING_MESH_CORNER_NODES",
-        RefusedUnlessInert("moving mesh (on when corner nodes are given); inert: absent or empty"),
-    ),
-    (
-        GomSection,
-        "COMPRESSING_MESH_CORNER_NODES",
-        RefusedUnlessInert("moving mesh, compressed part; inert: absent or empty"),
-    ),
-    (
-        GomSection,
-        "EXTENDING_MESH_CORNER_NODES",
-        RefusedUnlessInert("moving mesh, extended part; inert: absent or empty"),
-    ),
-    (
-        GomSection,
-        "MOVING_MESH_DIRECTION",
-        Ignored("only used with $$MOVING_MESH_CORNER_NODES"),
-    ),
-    (
-        GomSection,
-        "MOVING_MESH_REFERENCE_MATERIAL_INDEX",
-        Ignored("only used with $$MOVING_MESH_CORNER_NODES"),
-    ),
+    // --- GOM: moving mesh (`step::moving_mesh`).
+    (GomSection, "MOVING_MESH_CORNER_NODES", Modelled),
+    (GomSection, "COMPRESSING_MESH_CORNER_NODES", Modelled),
+    (GomSection, "EXTENDING_MESH_CORNER_NODES", Modelled),
+    (GomSection, "MOVING_MESH_DIRECTION", Modelled),
+    (GomSection, "MOVING_MESH_REFERENCE_MATERIAL_INDEX", Modelled),
     // --- GOM material blocks.
     (MaterialKey, "MATERIAL_INDEX", Modelled),
     (MaterialKey, "MATERIAL_NAME", Ignored("a label")),
@@ -413,10 +391,47 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "APPLY_MATERIAL_UPDATE",
         RefusedUnlessInert("material changes between stages; inert: 0"),
     ),
+    // Contact between a structure and the soil (`step::contact`): 3D, dry.
+    (CpsKey, "CONTACT_FORMULATION", Modelled),
     (
         CpsKey,
-        "CONTACT_FORMULATION",
-        RefusedUnlessInert("contact algorithm; inert: 0"),
+        "APPLY_CONTACT_MESH_BOUNDARY",
+        RefusedUnlessInert("contact faces found on the mesh boundary; inert: 0"),
+    ),
+    (
+        CpsKey,
+        "APPLY_CONTACT_VELOCITY_SCALING",
+        RefusedUnlessInert("a limit on the contact's velocity correction; inert: 0"),
+    ),
+    (
+        CpsKey,
+        "VELOCITY_SCALING_FACTOR",
+        Ignored("only used with $$APPLY_CONTACT_VELOCITY_SCALING 1 (refused)"),
+    ),
+    (
+        CpsKey,
+        "APPLY_TRACTION_CONTACT",
+        Ignored("Anura3D computes the nodal contact traction but never uses it"),
+    ),
+    (
+        CpsKey,
+        "MONOPILE_SLICE_CONTACT",
+        Ignored("only used for the rotated boundaries of 3D cylindrical models (refused)"),
+    ),
+    (
+        CpsKey,
+        "APPLY_CONTACT_NORMAL_CORRECTION",
+        Ignored("corrected normals are read for 2D contact only (refused)"),
+    ),
+    (
+        CpsKey,
+        "NUMBER_OF_CORRECTED_NORMALS",
+        Ignored("corrected normals are read for 2D contact only (refused)"),
+    ),
+    (
+        CpsKey,
+        "NODE_NORMAL_DATA",
+        Ignored("corrected normals are read for 2D contact only (refused)"),
     ),
     (
         CpsKey,

@@ -286,6 +286,8 @@ pub struct Case {
     /// Take Anura3D's two-phase critical time step (explicit drag and consolidation terms)
     /// rather than the implicit-drag one, so that Anura3D inputs step as Anura3D does.
     pub anura3d_time_step: bool,
+    /// Over which elements, and how often, the critical time step is taken.
+    pub critical_step: CriticalStepRule,
     /// How local damping is applied (Anura3D's rule for GOM input, the mixture rule in scenes).
     pub damping_rule: DampingRule,
     /// How the Darcy drag between the phases is integrated in time.
@@ -325,6 +327,10 @@ pub struct Case {
     /// Velocities prescribed on nodes (Anura3D's `$$PRESCRIBED_NODAL_VELOCITY_*`, scenes'
     /// `[[velocity]]` on surfaces and planes), one reaction each.
     pub nodal_velocity: Vec<crate::step::nodal_velocity::NodalVelocitySet>,
+    /// Anura3D's moving mesh (`$$MOVING_MESH_CORNER_NODES` and its companions), when given.
+    pub moving_mesh: Option<crate::step::moving_mesh::MovingMeshSpec>,
+    /// Contact between a structure and the soil (Anura3D's `$$CONTACT_FORMULATION 1`), when on.
+    pub contact: Option<crate::step::contact::ContactSpec>,
     /// Threads, pinning and first touch of the run (not physics: results do not depend on it).
     pub engine: crate::parallel::team::Options,
     /// Floating-point precision of the particle and grid state.
@@ -538,6 +544,14 @@ impl Case {
             .into_iter()
             .map(|s| s.renumbered(&o.node_new))
             .collect();
+        self.moving_mesh = self.moving_mesh.take().map(|m| m.renumbered(&o.node_new));
+        if let Some(c) = self.contact.take() {
+            let mut new_of_old = vec![0u32; o.order.len()];
+            for (new, &old) in o.order.iter().enumerate() {
+                new_of_old[old as usize] = new as u32;
+            }
+            self.contact = Some(c.renumbered(&new_of_old));
+        }
         self.model = model;
         Ok(self)
     }
@@ -631,6 +645,7 @@ impl Case {
             pic_blend: 0.0,
             integration: Integration::MaterialPoints,
             anura3d_time_step: false,
+            critical_step: CriticalStepRule::AllElements,
             damping_rule: DampingRule::Phases,
             drag: Drag::Implicit,
             initial_step: None,
@@ -644,10 +659,24 @@ impl Case {
             probes: Vec::new(),
             prescribed: None,
             nodal_velocity: Vec::new(),
+            moving_mesh: None,
+            contact: None,
             engine: Default::default(),
             precision: Precision::F64,
         }
     }
+}
+
+/// Over which elements, and how often, the critical time step is taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CriticalStepRule {
+    /// Once, at the start, over every element: an empty element at the fastest material's
+    /// speed, since points may move into it (scenes).
+    AllElements,
+    /// After every step, over the elements that hold points then, each at the speed of the
+    /// fastest material among its points (Anura3D's rule: GOM input;
+    /// [`crate::step::time_step`]).
+    OccupiedEachStep,
 }
 
 /// How the run starts.

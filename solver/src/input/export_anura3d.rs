@@ -165,6 +165,10 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
                     "Anura3D ramps a load linearly over the whole run only: use 0 (sudden) or {end} (the end time), not {over}"
                 ),
             )),
+            LoadCurve::Stairs { .. } => Err(refuse(
+                item,
+                "a load in stairs (from Anura3D input) is not written back".to_string(),
+            )),
         }
     };
     let gravity_on = case.gravity.iter().any(|&g| g != 0.0);

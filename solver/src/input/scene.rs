@@ -1043,6 +1043,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         pic_blend: scene.pic_blend,
         integration,
         anura3d_time_step: false,
+        critical_step: crate::input::case::CriticalStepRule::AllElements,
         damping_rule,
         drag: crate::input::case::Drag::Implicit,
         initial_step: None,
@@ -1056,6 +1057,8 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         probes: scene.probes.clone(),
         prescribed,
         nodal_velocity,
+        moving_mesh: None,
+        contact: None,
         engine: Default::default(),
         precision,
     };

@@ -2,7 +2,7 @@
 //! to cross an element. The engine steps with it and the pre-flight check predicts the step
 //! count from it, so both read it from here.
 
-use crate::input::case::{Case, Drag};
+use crate::input::case::{Case, CriticalStepRule, Drag};
 
 /// The critical time step is not a positive number.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -29,7 +29,9 @@ pub fn critical(
 }
 
 /// The element (the case's numbering) a wave crosses fastest, and that time (s): the critical
-/// step is the Courant number times it. `(elements.start, ∞)` for no elements.
+/// step is the Courant number times it. `(elements.start, ∞)` for no elements. Under
+/// [`CriticalStepRule::OccupiedEachStep`] only the elements that hold points at the start count
+/// (the engine takes the step again after every step: [`crate::step::time_step`]).
 pub fn shortest_crossing(
     case: &Case,
     elements: std::ops::Range<usize>,
@@ -39,7 +41,12 @@ pub fn shortest_crossing(
     // be resolved by the step too: Mieremet's speed has its term.
     let anura3d_step = case.anura3d_time_step || case.drag == Drag::Explicit;
     let mut best = (elements.start, f64::INFINITY);
+    let occupied_only = case.critical_step == CriticalStepRule::OccupiedEachStep;
     for e in elements {
+        if occupied_only && case.points_per_element[e] == 0 {
+            // Anura3D's rule: only elements that hold points count.
+            continue;
+        }
         let dx = min_altitude(e);
         let m = case.element_material[e] as usize;
         let c = match case.materials.get(m).and_then(|s| s.as_ref()) {

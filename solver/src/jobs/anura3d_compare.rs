@@ -3,8 +3,9 @@
 //! reported time.
 //!
 //! Each difference is taken relative to the expected value, or, for values near zero, to 1e-3
-//! of the largest |value| of its column (Anura3D prints round-off such as 1e-27 where the
-//! answer is 0), with a floor of 1e-10. The report prints 4 significant digits, so 1 % is the
+//! of the largest |value| of its field (the position, displacement or stress columns together;
+//! Anura3D prints round-off such as 1e-27 where the answer is 0), with a floor of 1e-10
+//! (1e-20 m for displacements). The report prints 4 significant digits, so 1 % is the
 //! usual tolerance.
 
 use mpm_shared::bms::{Bms, MaterialPointRecord};
@@ -29,6 +30,16 @@ pub const COLUMNS: [&str; 13] = [
     "SigmaZX",
     "WPressure",
 ];
+
+/// The columns of the field column `c` belongs to (indices into [`COLUMNS`]).
+fn field_columns(c: usize) -> std::ops::Range<usize> {
+    match c {
+        0..3 => 0..3,
+        3..6 => 3..6,
+        6..12 => 6..12,
+        _ => 12..13,
+    }
+}
 
 /// The compared values of a reported point, in the order of [`COLUMNS`].
 pub fn values_of(r: &MaterialPointRecord) -> [f64; 13] {
@@ -62,8 +73,8 @@ pub struct Comparison {
     pub expected_time: f64,
     /// The run's time (s).
     pub time: f64,
-    /// The largest deviation, each relative to its value or, near zero, to 1e-3 of its
-    /// column's largest |value| (see the module notes); 0 when nothing was compared.
+    /// The largest deviation, each relative to its value or, near zero, to 1e-3 of the
+    /// largest |value| of its field (see the module notes); 0 when nothing was compared.
     pub worst: f64,
     /// Where [`Comparison::worst`] is.
     pub worst_at: Option<Worst>,
@@ -92,11 +103,16 @@ pub fn compare<R: Real, E: Element>(engine: &Engine<R, E>, expected: &Bms) -> Co
     let records = expected.records();
     let last = records.iter().map(|r| r.load_step).max().unwrap_or(0);
     let rows: Vec<&MaterialPointRecord> = records.iter().filter(|r| r.load_step == last).collect();
-    // Each column's scale: values far below it are round-off in Anura3D's report.
+    // Each field's scale (position, displacement, stress, pore pressure: the largest |value|
+    // of its columns): values far below it are round-off in Anura3D's report, such as the
+    // 1e-21 m a 2D footing case reports for the horizontal displacement of points that move
+    // down by 1e-3 m.
     let mut scale = [0.0f64; 13];
     for r in &rows {
-        for (s, v) in scale.iter_mut().zip(values_of(r)) {
-            *s = s.max(v.abs());
+        for (c, v) in values_of(r).into_iter().enumerate() {
+            for s in &mut scale[field_columns(c)] {
+                *s = s.max(v.abs());
+            }
         }
     }
     let p = &engine.particles;

@@ -9,6 +9,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::step::contact::Keep;
 use crate::step::stress::GuardSums;
 
 /// Updates particle velocities from nodal accelerations (FLIP; with `pic` > 0 blended with
@@ -17,9 +18,11 @@ use crate::step::stress::GuardSums;
 /// (see [`crate::step::stress`]). With `guard` (one slot per block of
 /// [`crate::parallel::gather::ELEMENT_BLOCK`] elements), each block's slot is begun anew at its
 /// first element and summed over its elements in order with their points' Σ m |v|² (twice
-/// their kinetic energy), the velocities at hand.
+/// their kinetic energy), the velocities at hand. Only the points `keep` keeps take part (one
+/// body of a contact pair, [`crate::step::contact`]); the second body's pass adds its kinetic
+/// energy to the slots the first began (`begin` false).
 #[allow(clippy::too_many_arguments)]
-pub fn grid_to_particle<E: Element, R: Real>(
+pub fn grid_to_particle<E: Element, R: Real, K: Keep>(
     team: &Team,
     layout: &Layout<R, E>,
     slots: &mut Slots<R>,
@@ -30,10 +33,12 @@ pub fn grid_to_particle<E: Element, R: Real>(
     dt: R,
     pic: R,
     guard: Option<&mut [GuardSums]>,
+    keep: K,
+    begin: bool,
 ) {
     let guard = guard.map(Shared::new);
     let vel = Shared::new(&mut p.v);
-    let (x, mass, active) = (&p.x, &p.mass, &p.active);
+    let (x, mass, active, material) = (&p.x, &p.mass, &p.active, &p.material);
     let (acc, momentum, node_mass, empty) = (&g.acc, &g.momentum, &g.mass, g.empty_below);
     let flip = R::ONE - pic;
     // One element's points; with `want`, their kinetic energy. Two scatters below, each with
@@ -44,15 +49,16 @@ pub fn grid_to_particle<E: Element, R: Real>(
         // indexes without bounds checks.
         let range = layout.particles_of(e);
         let count = range.len();
-        let (x, mass, active) = (
+        let (x, mass, active, material) = (
             &x[range.clone()][..count],
             &mass[range.clone()][..count],
             &active[range.clone()][..count],
+            &material[range.clone()][..count],
         );
         // SAFETY: the points of element e belong to this thread only.
         let vel = unsafe { &mut vel.range(range)[..count] };
         for i in 0..count {
-            if !active[i] {
+            if !active[i] || !keep.keep(material[i]) {
                 continue;
             }
             let n = mesh.shape(e, &x[i]);
@@ -104,7 +110,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
             // and the thread's elements hold whole blocks (aligned ranges): no other thread
             // touches block b, and its first element comes first.
             let slot = unsafe { &mut guard.range(b..b + 1)[0] };
-            if e % ELEMENT_BLOCK == 0 {
+            if begin && e % ELEMENT_BLOCK == 0 {
                 *slot = GuardSums {
                     kinetic,
                     ..GuardSums::EMPTY

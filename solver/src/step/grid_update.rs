@@ -72,7 +72,7 @@ impl<R: Real> GridScratch<R> {
 /// rule damps it against the motion it is about to cause (sign of f), which is what Anura3D's
 /// tiny first step amounts to for the first full step.
 #[inline]
-fn damp<R: Real>(rule: DampingRule, alpha: R, f: R, v: R) -> R {
+pub(crate) fn damp<R: Real>(rule: DampingRule, alpha: R, f: R, v: R) -> R {
     let s = if v != R::ZERO {
         v.sign()
     } else {

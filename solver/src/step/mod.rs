@@ -1,9 +1,11 @@
 //! The phases of one explicit MUSL step, in the order they run, and what they read from the configuration (load curves, damping rule, drag, prescribed velocities).
 
+pub mod contact;
 pub mod grid_to_particle;
 pub mod grid_update;
 pub mod load_curve;
 pub mod mixed;
+pub mod moving_mesh;
 pub mod nodal_energy;
 pub mod nodal_velocity;
 pub mod particle_to_grid;
@@ -11,3 +13,4 @@ pub mod prescribed;
 pub mod reaction;
 pub mod smoothing;
 pub mod stress;
+pub mod time_step;

@@ -111,12 +111,24 @@ pub fn read_rows(model: &Model) -> Result<Option<NodalSection>, (String, String)
         let bad = |what: &str| {
             (
                 item.clone(),
-                format!("row {}: {what} (expected 'node fx fy fz vx vy vz')", k + 1),
+                format!(
+                    "row {}: {what} (expected '{}')",
+                    k + 1,
+                    if model.dimension.coords() == 2 {
+                        "node fx fy vx vy"
+                    } else {
+                        "node fx fy fz vx vy vz"
+                    }
+                ),
             )
         };
-        let (node, directions, velocity) =
-            crate::step::prescribed::entity_flags_velocity(r, nodes, "node")
-                .map_err(|m| bad(&m))?;
+        let (node, directions, velocity) = crate::step::prescribed::entity_flags_velocity(
+            r,
+            nodes,
+            "node",
+            model.dimension.coords(),
+        )
+        .map_err(|m| bad(&m))?;
         out.push(PrescribedNode {
             node,
             directions,

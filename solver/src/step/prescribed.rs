@@ -32,14 +32,16 @@ use crate::state::particles::Particles;
 use crate::step::load_curve::LoadCurve;
 
 /// One row `entity fx fy fz vx vy vz` of an Anura3D prescribed-velocity section (material
-/// points or nodes): the 0-based entity (checked against `count`, named `what` in messages),
-/// the direction flags and the velocity. The error says what is wrong with the row.
+/// points or nodes), `entity fx fy vx vy` in a 2D model (`dim` 2): the 0-based entity (checked
+/// against `count`, named `what` in messages), the direction flags and the velocity (z free and
+/// zero in 2D). The error says what is wrong with the row.
 pub(crate) fn entity_flags_velocity(
     r: &[mpm_shared::model::Token],
     count: usize,
     what: &str,
+    dim: usize,
 ) -> Result<(u32, [bool; 3], [f64; 3]), String> {
-    if r.len() < 7 {
+    if r.len() < 1 + 2 * dim {
         return Err("too few values".into());
     }
     let entity = r[0].as_int().unwrap_or(0);
@@ -50,7 +52,7 @@ pub(crate) fn entity_flags_velocity(
         ));
     }
     let mut directions = [false; 3];
-    for (d, flag) in directions.iter_mut().enumerate() {
+    for (d, flag) in directions.iter_mut().enumerate().take(dim) {
         *flag = match r[1 + d].as_int() {
             Some(0) => false,
             Some(1) => true,
@@ -58,8 +60,8 @@ pub(crate) fn entity_flags_velocity(
         };
     }
     let mut velocity = [0.0; 3];
-    for (d, v) in velocity.iter_mut().enumerate() {
-        *v = r[4 + d]
+    for (d, v) in velocity.iter_mut().enumerate().take(dim) {
+        *v = r[1 + dim + d]
             .as_f64()
             .filter(|v| v.is_finite())
             .ok_or_else(|| "velocities must be numbers".to_string())?;
@@ -179,13 +181,19 @@ pub fn read_rows(model: &Model) -> Result<Vec<PrescribedElement>, (String, Strin
             (
                 item.clone(),
                 format!(
-                    "row {}: {what} (expected 'element fx fy fz vx vy vz')",
-                    k + 1
+                    "row {}: {what} (expected '{}')",
+                    k + 1,
+                    if model.dimension.coords() == 2 {
+                        "element fx fy vx vy"
+                    } else {
+                        "element fx fy fz vx vy vz"
+                    }
                 ),
             )
         };
         let (element, directions, velocity) =
-            entity_flags_velocity(r, elements, "element").map_err(|m| bad(&m))?;
+            entity_flags_velocity(r, elements, "element", model.dimension.coords())
+                .map_err(|m| bad(&m))?;
         out.push(PrescribedElement {
             element,
             directions,
@@ -347,6 +355,21 @@ impl<R: Real> Prescribed<R> {
         scale: R,
     ) {
         self.impose_on_points(p, scale);
+        self.mean_of_marked(mesh, p);
+        for (s, &n) in self.nodes.iter().enumerate() {
+            let v = self.mean(s);
+            for d in 0..3 {
+                if self.directions[d] {
+                    g.vel[n as usize][d] = v[d];
+                }
+            }
+        }
+    }
+
+    /// The masked nodes' mean velocity of the marked points in the listed elements, as they
+    /// move now (Σ m N v / Σ m N per node, relative to the first contributing point's velocity),
+    /// for [`Prescribed::masked`].
+    pub fn mean_of_marked<E: Element>(&mut self, mesh: &Mesh<E, R>, p: &Particles<R>) {
         self.seen.fill(false);
         self.mass.fill(R::ZERO);
         for &(i, _) in &self.points {
@@ -375,18 +398,24 @@ impl<R: Real> Prescribed<R> {
                 }
             }
         }
-        for (s, &n) in self.nodes.iter().enumerate() {
-            let m = self.mass[s];
-            for d in 0..3 {
-                if self.directions[d] {
-                    g.vel[n as usize][d] = if self.seen[s] && m != R::ZERO {
-                        self.first[s][d] + self.sum[s][d] / m
-                    } else {
-                        R::ZERO
-                    };
-                }
-            }
+    }
+
+    /// Masked node `s`'s (index into [`Prescribed::masked_nodes`]) mean velocity from the last
+    /// [`Prescribed::mean_of_marked`] (zero where no marked point contributes).
+    fn mean(&self, s: usize) -> V3<R> {
+        let m = self.mass[s];
+        if self.seen[s] && m != R::ZERO {
+            [0, 1, 2].map(|d| self.first[s][d] + self.sum[s][d] / m)
+        } else {
+            [R::ZERO; 3]
         }
+    }
+
+    /// At a masked node (computational id), the prescribed components and the marked points'
+    /// mean velocity from the last [`Prescribed::mean_of_marked`]; `None` elsewhere.
+    pub fn masked(&self, node: u32) -> Option<([bool; 3], V3<R>)> {
+        let s = self.nodes.binary_search(&node).ok()?;
+        Some((self.directions, self.mean(s)))
     }
 
     /// Follows a re-sort of the points: `new_of_old[i]` is point i's new index.

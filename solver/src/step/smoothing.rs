@@ -6,7 +6,8 @@
 //! increment per phase, ε_e = Δt div v (linear tetrahedra); node i takes the volume-weighted
 //! mean ε̄_i = Σ_e V_e ε_e / Σ_e V_e over those elements; every point of m in e then takes the
 //! plain mean of its element's nodal values as its volumetric strain increment. The solid
-//! keeps its deviatoric and shear increments (the three normal increments are shifted equally);
+//! keeps its deviatoric and shear increments (its normal increments, the two in-plane ones in
+//! plane strain, are shifted equally);
 //! the pore pressure takes Δp = (K_w / n) (n ε̄_w + (1 - n) ε̄_s).
 
 use crate::element::mesh::Mesh;

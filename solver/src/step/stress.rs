@@ -10,21 +10,23 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::step::contact::Keep;
 use crate::step::smoothing::StrainSmoothing;
 
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
 /// the rotation Δω σ - σ Δω with Δω = skew(L) Δt and -tr(Δε) σ); V *= 1 + tr Δε; x += Δt Σ N_n v_n. With `smoothing`, the
-/// three normal increments are shifted equally so that tr Δε is the smoothed volumetric
-/// increment ([`crate::step::smoothing`]). In an axisymmetric section (x the radius) Δε_zz is
+/// normal increments (the two in-plane ones in plane strain) are shifted equally so that
+/// tr Δε is the smoothed volumetric increment ([`crate::step::smoothing`]). In an axisymmetric section (x the radius) Δε_zz is
 /// the hoop increment Δt Σ N_n v_n,x / x, and `hoop_in_volume` says whether it changes V. Each thread updates the particles of its elements.
 ///
 /// With `guard`, the [`GuardSums`] of the active points of each block of
 /// [`ELEMENT_BLOCK`] elements are completed in its slot, point by point in order (strain-energy
 /// increment, the liquid's compression energy, the volume check; grid to particle began it with
 /// the kinetic energy): the guard rails' sums, formed in passes that read the points anyway so
-/// that they cost no pass of their own.
+/// that they cost no pass of their own. Only the points `keep` keeps move, with `g`'s velocities
+/// (one body of a contact pair, [`crate::step::contact`]).
 #[allow(clippy::too_many_arguments)]
-pub fn update_stress_and_move<E: Element, R: Real>(
+pub fn update_stress_and_move<E: Element, R: Real, K: Keep>(
     team: &Team,
     layout: &Layout<R, E>,
     mesh: &Mesh<E, R>,
@@ -36,6 +38,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     smoothing: Option<&StrainSmoothing<R>>,
     dt: R,
     guard: Option<Guard<'_, R>>,
+    keep: K,
 ) {
     let half = R::of(0.5);
     let third = R::ONE / R::of(3.0);
@@ -124,7 +127,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 }
             }
             for j in points.start - r.start..points.end - r.start {
-                if !active[j] {
+                if !active[j] || !keep.keep(material[j]) {
                     continue;
                 }
                 debug_assert_eq!(element[j] as usize, e, "points not sorted by element");
@@ -151,9 +154,16 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     half * (l[2][0] + l[0][2]) * dt,
                 ];
                 if let Some(sm) = smoothing {
+                    // The normal increments in the section's plane take the correction: all
+                    // three in 3D, the two in-plane ones in plane strain (Anura3D's rule; its
+                    // ε_zz stays zero). Axisymmetric sections do not smooth.
                     let [es, _] = sm.element_mean(mesh, e, material[j]);
-                    let c = (de[0] + de[1] + de[2] - es) * third;
-                    for d in de.iter_mut().take(3) {
+                    let c = if E::DIM == 2 {
+                        (de[0] + de[1] - es) * half
+                    } else {
+                        (de[0] + de[1] + de[2] - es) * third
+                    };
+                    for d in de.iter_mut().take(E::DIM) {
                         *d -= c;
                     }
                 }

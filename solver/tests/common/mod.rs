@@ -3,6 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
+pub mod gom;
+
 /// A file of the workspace's `testdata/`.
 pub fn testdata(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,0 +1,555 @@
+//! Anura3D's contact between a structure and the soil (CPS `$$CONTACT_FORMULATION 1` with the
+//! structure's elements in the GOM's `$$START_CONTACT_VOLUME`): Bardenhagen's two-body
+//! correction of the nodal velocities, so that a pile or a footing pushed into the soil
+//! neither sticks to it nor pulls it back, with Coulomb friction and adhesion on the interface.
+//!
+//! The points of the structure's material form one body (the *structure*), every other point
+//! the other (the *soil*); each body is mapped to nodal arrays of its own (mass, momentum,
+//! forces, accelerations, re-mapped velocities: [`crate::state::grid::Grid`]), the soil's being
+//! the engine's usual grid, and the grid update runs on each (local damping against each
+//! body's own velocity). Then, at every *interface node* (a corner of a face of the structure
+//! that borders an empty element or another material, found once, at the start):
+//!
+//! 1. the system's velocity v_s = (p₁ + p₂ + (R₁ + R₂) Δt) / (m₁ + m₂) (R the damped nodal
+//!    forces; fixed components zero) is formed beside each body's own v_b = p_b / m_b + a_b Δt,
+//!    and where the structure's velocity is prescribed both take the prescribed velocity;
+//! 2. for each body at the node whose velocity differs from the system's: with n the unit
+//!    normal out of that body (the structure's outward normal, area-weighted over its interface
+//!    faces and fixed at the start; reversed for the soil), Δv = v_b - v_s and d = Δv·n, a body
+//!    that approaches (d > 0) loses its normal relative velocity and, along the tangential
+//!    direction t of its relative velocity, d (μ + c A Δt / (m_b d)) of the tangential one, at
+//!    most all of it (full stick): v_b ← v_b - d (n + min(μ + c A Δt / (m_b d), |Δv × n| / d) t),
+//!    μ and c the friction and adhesion between the structure and the node's soil material,
+//!    A the node's share of the interface faces' area; its acceleration becomes
+//!    (v_b - p_b / m_b) / Δt. A body that moves away is left alone.
+//!
+//! The bodies' points then take their own nodes' accelerations (FLIP) and re-map their own
+//! momentum; strains, stresses and positions follow each body's nodal velocities. As Anura3D:
+//! the normals, areas and interface nodes are those of the initial mesh; a node with no soil
+//! material around it sticks (μ = 10, c = 1000 kPa), and the friction of the node's soil
+//! material is the one of the lowest material index present around it.
+//!
+//! Modelled for dry 3D cases; the work is over the interface nodes, in a fixed order, on the
+//! calling thread.
+
+use mpm_shared::model::{Body, Token};
+use mpm_shared::Model;
+
+use crate::element::mesh::Mesh;
+use crate::element::Element;
+use crate::parallel::gather::Layout;
+use crate::real::{Real, V3};
+use crate::state::grid::Grid;
+use crate::state::particles::Particles;
+use crate::step::grid_update::DampingRule;
+
+/// Which points a pass maps: every point, or one body of a contact pair.
+pub trait Keep: Copy + Send + Sync {
+    /// Whether a point of material `material` is mapped.
+    fn keep(&self, material: u32) -> bool;
+}
+
+/// Every point (runs without contact: the test folds away).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Everyone;
+
+impl Keep for Everyone {
+    #[inline(always)]
+    fn keep(&self, _material: u32) -> bool {
+        true
+    }
+}
+
+/// One body of a contact pair: the points of the structure's material, or all the others.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OneBody {
+    /// The structure's material index.
+    pub structure_material: u32,
+    /// The structure (else the soil).
+    pub structure: bool,
+}
+
+impl Keep for OneBody {
+    #[inline(always)]
+    fn keep(&self, material: u32) -> bool {
+        (material == self.structure_material) == self.structure
+    }
+}
+
+/// The contact as the input gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactSpec {
+    /// The structure's material index (that of the first listed element).
+    pub material: u32,
+    /// The structure's elements (0-based, the case's order), ascending.
+    pub elements: Vec<u32>,
+    /// Per material index: (friction coefficient, adhesion in kPa) between that material and
+    /// the structure (0 for a material the rows do not name).
+    pub interfaces: Vec<(f64, f64)>,
+}
+
+impl ContactSpec {
+    /// The spec with its elements renumbered: `new_of_old[e]` is element e's new index.
+    pub fn renumbered(mut self, new_of_old: &[u32]) -> Self {
+        for e in &mut self.elements {
+            *e = new_of_old[*e as usize];
+        }
+        self.elements.sort_unstable();
+        self
+    }
+}
+
+/// Reads `$$START_CONTACT_VOLUME` of `model`: rows `element n "material" μ c "material" μ c
+/// "material" μ c "material" μ c` ("NAN" for an unused slot). `element_material` is each
+/// element's material index (0: empty), `names` each material index's name. Returns the section
+/// and what is wrong with it when the rows ask for what is not modelled:
+///
+/// * rows with different materials, frictions or adhesions (Anura3D takes the names from the
+///   first row and each face's numbers from its own row, with an off-by-one on one face side);
+/// * a structure that is not one whole material (every listed element of one material, every
+///   filled element of that material listed): the bodies here are materials;
+/// * a structure that is not the last material index (Anura3D looks up the frictions of the
+///   other materials only).
+pub fn read(
+    model: &Model,
+    element_material: &[u32],
+    names: &[(u32, String)],
+    points: &[u32],
+) -> Result<Option<ContactSpec>, (String, String)> {
+    const KEY: &str = "START_CONTACT_VOLUME";
+    let item = format!("$${KEY}");
+    let Some(section) = model.section(KEY) else {
+        return Err((
+            item,
+            "missing: contact ($$CONTACT_FORMULATION 1) needs the structure's elements".into(),
+        ));
+    };
+    let Body::Table { rows, .. } = &section.body else {
+        return Err((item, "expected a count and rows".into()));
+    };
+    let text = |t: &Token| match t {
+        Token::Text(s) => s.trim_matches('"').to_string(),
+        Token::Int(i) => i.to_string(),
+        Token::Real(x) => x.to_string(),
+    };
+    let mut elements = Vec::new();
+    let mut first: Option<Vec<String>> = None;
+    for (k, r) in rows.rows().enumerate() {
+        let bad = |what: String| (item.clone(), format!("row {}: {what}", k + 1));
+        if r.len() < 14 {
+            return Err(bad(
+                "expected 'element n' and four 'material friction adhesion' triples".into(),
+            ));
+        }
+        let e = r[0].as_int().unwrap_or(0);
+        if e < 1 || e as usize > element_material.len() {
+            return Err(bad(format!(
+                "element {} is not in the mesh (1..={})",
+                text(&r[0]),
+                element_material.len()
+            )));
+        }
+        elements.push(e as u32 - 1);
+        let rest: Vec<String> = r[2..14].iter().map(text).collect();
+        for t in [1, 2, 4, 5, 7, 8, 10, 11] {
+            if rest[t].parse::<f64>().map_or(true, |v| !v.is_finite()) {
+                return Err(bad(format!(
+                    "friction and adhesion must be numbers, got {}",
+                    rest[t]
+                )));
+            }
+        }
+        match &first {
+            None => first = Some(rest),
+            Some(f) if *f != rest => {
+                return Err(bad(
+                    "its materials, frictions or adhesions differ from row 1's; give every row the same (Anura3D mixes the rows' values face by face)".into(),
+                ))
+            }
+            Some(_) => {}
+        }
+    }
+    let Some(slots) = first else {
+        return Err((
+            item,
+            "no rows: contact needs the structure's elements".into(),
+        ));
+    };
+    let material = element_material[elements[0] as usize];
+    if material == 0 {
+        return Err((
+            item,
+            format!(
+                "element {} is empty: the structure must be filled",
+                elements[0] + 1
+            ),
+        ));
+    }
+    elements.sort_unstable();
+    elements.dedup();
+    for e in 0..element_material.len() {
+        let listed = elements.binary_search(&(e as u32)).is_ok();
+        let of_it = element_material[e] == material;
+        if listed && !of_it {
+            return Err((
+                item,
+                format!(
+                    "element {} is of material {}, the structure (row 1's element) of material {material}: the structure must be one material",
+                    e + 1,
+                    element_material[e]
+                ),
+            ));
+        }
+        if of_it && !listed && points[e] > 0 {
+            return Err((
+                item,
+                format!(
+                    "element {} is of the structure's material {material} but not listed: the structure must be every element of its material",
+                    e + 1
+                ),
+            ));
+        }
+    }
+    let last = names.iter().map(|n| n.0).max().unwrap_or(0);
+    if material != last {
+        return Err((
+            item,
+            format!(
+                "the structure is material {material}; Anura3D takes it to be the last material ({last})"
+            ),
+        ));
+    }
+    let mut interfaces = vec![(0.0, 0.0); last as usize + 1];
+    for k in 0..4 {
+        let name = &slots[3 * k];
+        if name.eq_ignore_ascii_case("NAN") {
+            continue;
+        }
+        let Some(&(m, _)) = names.iter().find(|n| &n.1 == name) else {
+            return Err((
+                item,
+                format!("row 1 names material \"{name}\", which is not defined"),
+            ));
+        };
+        let number = |t: usize| slots[3 * k + t].parse::<f64>().unwrap_or(0.0);
+        interfaces[m as usize] = (number(1), number(2));
+    }
+    Ok(Some(ContactSpec {
+        material,
+        elements,
+        interfaces,
+    }))
+}
+
+/// Anura3D's numbering of a tetrahedron's sides by its corners (0-based): the side's normal
+/// (x₂ - x₁) × (x₃ - x₁) in this order points into the element.
+const SIDES: [[usize; 3]; 4] = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
+
+/// The contact of a run, resolved on its mesh.
+#[derive(Debug, Clone)]
+pub struct Contact<R: Real> {
+    /// Which points are the structure.
+    pub structure: OneBody,
+    /// The structure's nodal arrays (the soil's are the engine's grid).
+    pub grid: Grid<R>,
+    /// The grid update's scratch for the structure's arrays.
+    pub scratch: crate::step::grid_update::GridScratch<R>,
+    /// Interface nodes (computational), ascending.
+    nodes: Vec<u32>,
+    /// Per interface node: the structure's outward unit normal.
+    normal: Vec<[f64; 3]>,
+    /// Per interface node: its share of the interface faces' area (m²).
+    area: Vec<f64>,
+    /// Per material index: (friction, adhesion) with the structure.
+    interfaces: Vec<(f64, f64)>,
+    /// Elements around each interface node: `around[start[k]..start[k + 1]]`.
+    around: Vec<u32>,
+    start: Vec<u32>,
+    /// Per interface node, the start-of-step velocity of each body (scratch).
+    before: Vec<[V3<R>; 2]>,
+}
+
+impl<R: Real> Contact<R> {
+    /// Resolves `spec` on `mesh` (the whole mesh, the case's element order; 3D):
+    /// `element_material` says which elements are filled (material 0: empty).
+    pub fn new<E: Element>(
+        spec: &ContactSpec,
+        mesh: &Mesh<E, R>,
+        element_material: &[u32],
+    ) -> Self {
+        debug_assert_eq!(E::NODES, 4, "contact is modelled for tetrahedra");
+        let x = |n: u32| -> [f64; 3] { mesh.x[n as usize].map(|c| c.f64()) };
+        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        // Interface faces: a side of a listed element whose neighbour is empty or of another
+        // material (a side on the mesh boundary is not one).
+        let mut faces: Vec<(u32, [u32; 3])> = Vec::new();
+        for &e in &spec.elements {
+            let c = mesh.corners[e as usize].as_ref();
+            for side in SIDES {
+                let nodes = side.map(|k| c[k]);
+                let neighbour = (0..E::FACES).find_map(|f| {
+                    let face = E::face(f);
+                    let same = face.len() == 3 && face.iter().all(|&j| nodes.contains(&c[j]));
+                    same.then(|| mesh.neighbour[e as usize].as_ref()[f])
+                });
+                let Some(nb) = neighbour.filter(|&nb| nb != u32::MAX) else {
+                    continue;
+                };
+                let m = element_material[nb as usize];
+                if m == 0 || m != spec.material {
+                    faces.push((e, nodes));
+                }
+            }
+        }
+        let mut nodes: Vec<u32> = faces.iter().flat_map(|f| f.1).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        let slot = |n: u32| nodes.binary_search(&n).expect("an interface node");
+        let mut sum = vec![[0.0f64; 3]; nodes.len()];
+        let mut area = vec![0.0; nodes.len()];
+        for &(_, f) in &faces {
+            let (a, b) = (sub(x(f[1]), x(f[0])), sub(x(f[2]), x(f[0])));
+            let c = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            let third = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() / 2.0 / 3.0;
+            for &n in &f {
+                area[slot(n)] += third;
+            }
+        }
+        // Normals: each element's last interface side only (Anura3D keeps one side per
+        // element), its unnormalised inward normal summed at its corners.
+        for (k, &(e, f)) in faces.iter().enumerate() {
+            if faces.get(k + 1).is_some_and(|next| next.0 == e) {
+                continue;
+            }
+            let (a, b) = (sub(x(f[1]), x(f[0])), sub(x(f[2]), x(f[0])));
+            let c = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            for &n in &f {
+                let s = &mut sum[slot(n)];
+                for d in 0..3 {
+                    s[d] += c[d];
+                }
+            }
+        }
+        let normal = sum
+            .iter()
+            .map(|s| {
+                let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt() + 1e-60;
+                s.map(|c| -c / len)
+            })
+            .collect();
+        // The elements around each interface node.
+        let mut start = vec![0u32; nodes.len() + 1];
+        let mut pairs: Vec<(usize, u32)> = Vec::new();
+        for e in 0..mesh.elements() {
+            for &n in mesh.corners[e].as_ref() {
+                if let Ok(k) = nodes.binary_search(&n) {
+                    pairs.push((k, e as u32));
+                }
+            }
+        }
+        pairs.sort_unstable();
+        for &(k, _) in &pairs {
+            start[k + 1] += 1;
+        }
+        for k in 0..nodes.len() {
+            start[k + 1] += start[k];
+        }
+        let n = mesh.nodes();
+        Contact {
+            structure: OneBody {
+                structure_material: spec.material,
+                structure: true,
+            },
+            grid: Grid::new(n),
+            scratch: crate::step::grid_update::GridScratch::new(n),
+            before: vec![[[R::ZERO; 3]; 2]; nodes.len()],
+            nodes,
+            normal,
+            area,
+            interfaces: spec.interfaces.clone(),
+            around: pairs.into_iter().map(|p| p.1).collect(),
+            start,
+        }
+    }
+
+    /// The soil's body (every point not of the structure's material).
+    pub fn soil(&self) -> OneBody {
+        OneBody {
+            structure: false,
+            ..self.structure
+        }
+    }
+
+    /// Number of interface nodes.
+    pub fn interface_nodes(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The contact correction after the grid update of both bodies (the soil's arrays `soil`,
+    /// the structure's [`Contact::grid`]) and the first override of prescribed velocities
+    /// (`prescribed(node)`: the structure's prescribed velocity there and its components, for a
+    /// masked node). Corrects the bodies' accelerations at the interface nodes (see the module's
+    /// description). `alpha`, `rule`: the local damping; `dt`: the step.
+    #[allow(clippy::too_many_arguments)]
+    pub fn correct<E: Element>(
+        &mut self,
+        soil: &mut Grid<R>,
+        layout: &Layout<R, E>,
+        p: &Particles<R>,
+        fixed: &[[bool; 3]],
+        prescribed: &dyn Fn(u32) -> Option<([bool; 3], V3<R>)>,
+        alpha: R,
+        rule: DampingRule,
+        dt: f64,
+    ) {
+        let structure = self.structure;
+        let dtr = R::of(dt);
+        for (k, &node) in self.nodes.iter().enumerate() {
+            let n = node as usize;
+            // The bodies and the lowest soil material in the elements around the node.
+            let (mut bodies, mut lowest) = ([false; 2], u32::MAX);
+            for &e in &self.around[self.start[k] as usize..self.start[k + 1] as usize] {
+                for i in layout.particles_of(e as usize) {
+                    if !p.active[i] {
+                        continue;
+                    }
+                    let m = p.material[i];
+                    let b = usize::from(structure.keep(m));
+                    bodies[b] = true;
+                    if b == 0 {
+                        lowest = lowest.min(m);
+                    }
+                }
+            }
+            if !bodies[0] && !bodies[1] {
+                continue;
+            }
+            // Each body's start-of-step velocity, damped force and updated velocity.
+            let mut v = [[R::ZERO; 3]; 2];
+            let mut force = [[R::ZERO; 3]; 2];
+            let (mut mass, mut momentum) = (R::ZERO, [R::ZERO; 3]);
+            let masses = [soil.mass[n], self.grid.mass[n]];
+            for b in 0..2 {
+                let g: &Grid<R> = if b == 0 { soil } else { &self.grid };
+                let m = g.mass[n];
+                mass += m;
+                for d in 0..3 {
+                    momentum[d] += g.momentum[n][d];
+                }
+                if m <= g.empty_below {
+                    self.before[k][b] = [R::ZERO; 3];
+                    continue;
+                }
+                for d in 0..3 {
+                    if fixed[n][d] {
+                        self.before[k][b][d] = R::ZERO;
+                        continue;
+                    }
+                    let prev = g.momentum[n][d] / m;
+                    self.before[k][b][d] = prev;
+                    let f = g.f_int[n][d] + g.f_ext[n][d];
+                    force[b][d] = crate::step::grid_update::damp(rule, alpha, f, g.momentum[n][d]);
+                    v[b][d] = prev + g.acc[n][d] * dtr;
+                }
+            }
+            let mut system = [R::ZERO; 3];
+            if mass > R::ZERO {
+                for d in 0..3 {
+                    if !fixed[n][d] {
+                        system[d] = momentum[d] / mass + (force[0][d] + force[1][d]) / mass * dtr;
+                    }
+                }
+            }
+            if let Some((dirs, vp)) = prescribed(node) {
+                for d in 0..3 {
+                    if dirs[d] {
+                        v[1][d] = vp[d];
+                        system[d] = vp[d];
+                    }
+                }
+            }
+            let (mu, c) = if lowest == u32::MAX {
+                // No soil material around: stick (Anura3D's values).
+                (10.0, 1000.0)
+            } else {
+                let (mu, c) = self
+                    .interfaces
+                    .get(lowest as usize)
+                    .copied()
+                    .unwrap_or((0.0, 0.0));
+                (mu, c * self.area[k])
+            };
+            for b in 0..2 {
+                if !bodies[b] || (0..3).all(|d| v[b][d] == system[d]) {
+                    continue;
+                }
+                let sign = if b == 0 { -1.0 } else { 1.0 };
+                let normal = self.normal[k].map(|c| sign * c);
+                let dv: [f64; 3] = [0, 1, 2].map(|d| (v[b][d] - system[d]).f64());
+                let approach = dv[0] * normal[0] + dv[1] * normal[1] + dv[2] * normal[2];
+                if approach <= 0.0 {
+                    continue;
+                }
+                let m = masses[b].f64();
+                let adhesion = c * dt / (m * (approach + 1e-60));
+                let cross = [
+                    dv[1] * normal[2] - dv[2] * normal[1],
+                    dv[2] * normal[0] - dv[0] * normal[2],
+                    dv[0] * normal[1] - dv[1] * normal[0],
+                ];
+                let size = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
+                let omega = if size != 0.0 {
+                    cross.map(|c| c / size)
+                } else {
+                    [0.0; 3]
+                };
+                let slip = (mu + adhesion).min(size / approach);
+                let t = [
+                    normal[1] * omega[2] - normal[2] * omega[1],
+                    normal[2] * omega[0] - normal[0] * omega[2],
+                    normal[0] * omega[1] - normal[1] * omega[0],
+                ];
+                let g: &mut Grid<R> = if b == 0 { soil } else { &mut self.grid };
+                for d in 0..3 {
+                    let corrected = v[b][d].f64() - approach * (normal[d] + slip * t[d]);
+                    g.acc[n][d] = R::of((corrected - self.before[k][b][d].f64()) / dt);
+                }
+            }
+        }
+    }
+
+    /// The per-node force sums of Anura3D's convergence check over both bodies: |f₁ + f₂| and
+    /// |f_ext,1 + f_ext,2| over the free components of every node (written to `sums`, as the
+    /// grid update writes its own).
+    pub fn force_sums(&self, soil: &Grid<R>, fixed: &[[bool; 3]], sums: &mut [[f64; 4]]) {
+        for (n, sum) in sums.iter_mut().enumerate() {
+            let (mut out2, mut ext2) = (0.0, 0.0);
+            let mut any = false;
+            for g in [soil, &self.grid] {
+                any |= g.mass[n] > g.empty_below;
+            }
+            if !any {
+                *sum = [0.0; 4];
+                continue;
+            }
+            for d in 0..3 {
+                if fixed[n][d] {
+                    continue;
+                }
+                let ext = soil.f_ext[n][d].f64() + self.grid.f_ext[n][d].f64();
+                let f = soil.f_int[n][d].f64() + self.grid.f_int[n][d].f64() + ext;
+                out2 += f * f;
+                ext2 += ext * ext;
+            }
+            *sum = [out2.sqrt(), ext2.sqrt(), 0.0, 0.0];
+        }
+    }
+}

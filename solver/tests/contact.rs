@@ -1,0 +1,328 @@
+//! Contact between a structure and the soil (`step::contact`, Anura3D's
+//! `$$CONTACT_FORMULATION 1`): a pile pushed into the soil with friction and adhesion on its
+//! shaft (the mesh moving with it, as Anura3D's contact expects), and benchmark 4006 run for
+//! five load steps, against Anura3D itself (`ANURA3D_ORACLE`,
+//! `ANURA3D_BENCHMARKS`), point by point at every load step; the same outputs for any thread
+//! count; what contact does not model, refused by name. The comparisons say "skipped" when
+//! their variables are unset.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::gom;
+use mpm_solve::compare::tolerance::Tolerances;
+
+const BIN: &str = env!("CARGO_BIN_EXE_mpm-solve");
+
+/// A pile (material 2, the structure) 0.5 m wide and 1 m long, its top at the surface of a
+/// soil (material 1) 3 m deep and 1.5 m wide, on the symmetry plane x = 0, pushed down at
+/// 0.1 m/s by a velocity prescribed on its points; friction `mu` and adhesion `c` (kPa) on its
+/// shaft and tip. The mesh follows it (Anura3D's moving mesh, which keeps the structure in its
+/// elements and so on its interface): the box around it moves, the soil's box below is
+/// compressed, the empty one above stretched. Sides fixed normally, the base fixed; gravity.
+/// `load_steps` of 0.5 s. `cps` adds or replaces CPS keys, `more` GOM text.
+fn pile(
+    dir: &Path,
+    name: &str,
+    load_steps: u32,
+    mu: f64,
+    c: f64,
+    cps: &[(&str, &str)],
+    more: &str,
+) -> (PathBuf, PathBuf) {
+    let model = gom::box_model(
+        [3, 8, 1],
+        [1.5, 4.0, 0.5],
+        &[
+            gom::Material {
+                name: "soil",
+                porosity: 0.3,
+                density: 1800.0,
+                young: 2000.0,
+            },
+            gom::Material {
+                name: "pile",
+                porosity: 0.0,
+                density: 2400.0,
+                young: 50000.0,
+            },
+        ],
+        |p| match (p[0], p[1]) {
+            (_, y) if y >= 3.0 => 0,
+            (x, y) if x < 0.5 && y >= 2.0 => 2,
+            _ => 1,
+        },
+        |p| {
+            let at = |v: f64, w: f64| (v - w).abs() < 1e-9;
+            [
+                at(p[0], 0.0) || at(p[0], 1.5),
+                at(p[1], 0.0),
+                at(p[2], 0.0) || at(p[2], 0.5),
+            ]
+        },
+    );
+    let pile = gom::elements_of(&model, 2);
+    let corners = |lo: f64, hi: f64| -> String {
+        gom::box_corners(&model, [0.0, lo, 0.0], [1.5, hi, 0.5])
+            .iter()
+            .map(|n| format!("{n}\n"))
+            .collect()
+    };
+    let mut extra = gom::prescribed_section(&pile, [0, 1, 0], [0.0, -0.1, 0.0]);
+    extra.push_str(&format!("$$START_CONTACT_VOLUME\n{}\n", pile.len()));
+    for e in &pile {
+        extra.push_str(&format!(
+            "{e} 1 \"soil\" {mu} {c} \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0\n"
+        ));
+    }
+    extra.push_str(&format!(
+        "$$EXTENDING_MESH_CORNER_NODES\n{}$$COMPRESSING_MESH_CORNER_NODES\n{}$$MOVING_MESH_CORNER_NODES\n{}$$MOVING_MESH_DIRECTION\ny-direction\n$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n2\n",
+        corners(3.0, 4.0),
+        corners(0.0, 2.0),
+        corners(2.0, 3.0)
+    ));
+    extra.push_str(more);
+    let steps = load_steps.to_string();
+    // Undamped: local damping takes the sign of each nodal velocity, and the pile's sideways
+    // velocities are round-off, whose sign need not be the same in two codes; damped, the codes
+    // part by 1e-6 after a few steps (a damped run is compared as a whole in
+    // `contact_outputs_do_not_depend_on_the_thread_count` and the 4006 run).
+    let mut keys = vec![
+        ("NUMBER_OF_LOADSTEPS", steps.as_str()),
+        ("TIME_PER_LOADSTEP", "0.5"),
+        ("CONTACT_FORMULATION", "1"),
+        ("HOMOGENEOUS_LOCAL_DAMPING", "0 0.05"),
+    ];
+    keys.extend_from_slice(cps);
+    gom::write(dir, name, &model, &extra, &keys)
+}
+
+fn solve(gom: &Path, out: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(BIN)
+        .arg(gom)
+        .args(["-q", "--out", out.to_str().unwrap()])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Worst differences (relative to each field's largest Anura3D value) of position,
+/// displacement and stress over the load steps, and the number of load steps compared.
+fn against_anura3d(anura: &Path, ours: &Path) -> ([f64; 3], usize) {
+    let report = mpm_solve::compare::compare(anura, ours, &Tolerances::default())
+        .unwrap_or_else(|e| panic!("cannot compare with Anura3D: {e}"));
+    let worst = |field: &str| {
+        report
+            .outputs
+            .iter()
+            .flat_map(|o| o.fields.iter().filter(|f| f.field == field))
+            .map(|f| f.max_rel)
+            .fold(0.0f64, f64::max)
+    };
+    (
+        ["position", "displacement", "stress"].map(worst),
+        report.outputs.len(),
+    )
+}
+
+#[test]
+fn a_pile_pushed_into_soil_with_friction_matches_anura3d() {
+    let Some(bin) = common::oracle("contact against Anura3D") else {
+        return;
+    };
+    for (mu, c) in [(0.4, 2.0), (0.0, 0.0)] {
+        let dir = tempfile::tempdir().unwrap();
+        let (gom, _) = pile(dir.path(), "pile", 3, mu, c, &[], "");
+        common::run_oracle(&bin, dir.path(), "pile");
+        let out = dir.path().join("ours");
+        let o = solve(&gom, &out, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let (worst, steps) = against_anura3d(dir.path(), &out);
+        eprintln!(
+            "pile pushed, μ = {mu}, c = {c}: position {:.1e}, displacement {:.1e}, stress {:.1e}",
+            worst[0], worst[1], worst[2]
+        );
+        assert_eq!(steps, 3);
+        for (w, f) in worst.iter().zip(["position", "displacement", "stress"]) {
+            assert!(
+                *w <= 1e-10,
+                "μ = {mu}: {f} differs by {w:.2e} of its largest value"
+            );
+        }
+    }
+}
+
+#[test]
+fn benchmark_4006_over_five_load_steps_matches_anura3d() {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let suite = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    let Some(bin) = common::oracle("4006 with contact against Anura3D") else {
+        return;
+    };
+    let Some(suite) = suite else {
+        mpm_shared::suite::skipped("4006 against Anura3D (ANURA3D_BENCHMARKS not set)");
+        return;
+    };
+    // 4006: a block pushed down into the soil at 0.2 m/s, with contact and a moving mesh; run
+    // five dynamic load steps of 1 s instead of its single 1e-15 s time step.
+    let src = suite
+        .join("Benchmarks/Pre-Commit_Tests/4006_PrescribedVelocityMP/prescribedVelocityMP.A3D");
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        src.join("prescribedVelocityMP.GOM"),
+        dir.path().join("b.GOM"),
+    )
+    .unwrap();
+    let cps = std::fs::read_to_string(src.join("prescribedVelocityMP.CPS_001")).unwrap();
+    let mut lines: Vec<String> = cps.lines().map(str::to_string).collect();
+    for (key, value) in [
+        ("$$QUASISTATIC_CONVERGENCE", "0"),
+        ("$$TIME_PER_LOADSTEP", "1.0"),
+        ("$$NUMBER_OF_LOADSTEPS", "5"),
+    ] {
+        let k = lines.iter().position(|l| l.trim() == key).unwrap();
+        lines[k + 1] = value.to_string();
+    }
+    std::fs::write(dir.path().join("b.CPS_001"), lines.join("\n") + "\n").unwrap();
+    common::run_oracle(&bin, dir.path(), "b");
+    let out = dir.path().join("ours");
+    let o = solve(&dir.path().join("b.GOM"), &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (worst, steps) = against_anura3d(dir.path(), &out);
+    eprintln!(
+        "4006 over 5 load steps: position {:.1e}, displacement {:.1e}, stress {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert_eq!(steps, 5);
+    for (w, f) in worst.iter().zip(["position", "displacement", "stress"]) {
+        assert!(*w <= 1e-10, "{f} differs by {w:.2e} of its largest value");
+    }
+}
+
+#[test]
+fn contact_outputs_do_not_depend_on_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let (gom, _) = pile(dir.path(), "slide", 2, 0.4, 2.0, &[], "");
+    let (one, three) = (dir.path().join("one"), dir.path().join("three"));
+    for (out, threads) in [(&one, "1"), (&three, "3")] {
+        let o = solve(&gom, out, &["--threads", threads]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let (a, b) = (common::outputs(&one), common::outputs(&three));
+    assert_eq!(a.len(), b.len());
+    for (f, g) in a.iter().zip(&b) {
+        assert_eq!(f.0, g.0);
+        assert!(f.1 == g.1, "{} differs between 1 and 3 threads", f.0);
+    }
+}
+
+#[test]
+fn friction_on_the_shaft_adds_to_the_settlement_of_the_soil_beside_the_pile() {
+    let dir = tempfile::tempdir().unwrap();
+    // How much more the soil beside the shaft settles than the soil away from it, per friction.
+    let mut dragged = Vec::new();
+    for mu in [0.0, 0.4] {
+        let (gom, _) = pile(dir.path(), &format!("mu{mu}"), 2, mu, 0.0, &[], "");
+        let out = dir.path().join(format!("out{mu}"));
+        let o = solve(&gom, &out, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+        assert_eq!(json["status"], "completed");
+        let sets = mpm_shared::vtu_read::read_pvd_file(&out.join("run.pvd")).unwrap();
+        let last = sets.last().unwrap();
+        let vtu = mpm_shared::vtu_read::read_vtu_file(&out.join(&last.file)).unwrap();
+        let material = vtu.point_data("material").unwrap();
+        let u = vtu.point_data("displacement").unwrap();
+        let x = vtu.coordinates().unwrap();
+        let settlement = |near: bool| {
+            let set: Vec<usize> = (0..material.len())
+                .filter(|&i| {
+                    material.get(i, 0) == 1.0 && (x.get(i, 0) < 1.0) == near && x.get(i, 1) > 2.2
+                })
+                .collect();
+            set.iter().map(|&i| -u.get(i, 1)).sum::<f64>() / set.len() as f64
+        };
+        dragged.push(settlement(true) - settlement(false));
+    }
+    eprintln!(
+        "settlement of the soil beside the shaft less that away from it: frictionless {:.3e} m, μ = 0.4 {:.3e} m",
+        dragged[0], dragged[1]
+    );
+    // Anura3D's friction acts while the soil approaches the shaft, so it adds a share, not all.
+    assert!(
+        dragged[0] > 0.0 && dragged[1] > 1.05 * dragged[0],
+        "{dragged:?}"
+    );
+}
+
+/// A refusal's test: the CPS keys set and what the error must say.
+type Refusal<'a> = (&'a str, &'a [(&'a str, &'a str)], &'a str);
+
+/// A refusal's test: an edit of the GOM's text and what the error must say.
+type Edit<'a> = (&'a str, &'a dyn Fn(String) -> String, &'a str);
+
+#[test]
+fn what_contact_does_not_model_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [Refusal; 3] = [
+        (
+            "smoothing",
+            &[("STRAIN_SMOOTHING", "1")],
+            "contact is not modelled with $$STRAIN_SMOOTHING 1",
+        ),
+        (
+            "scaling",
+            &[("APPLY_CONTACT_VELOCITY_SCALING", "1")],
+            "$$APPLY_CONTACT_VELOCITY_SCALING",
+        ),
+        ("value", &[("CONTACT_FORMULATION", "2")], "expected 0 or 1"),
+    ];
+    for (name, cps, want) in cases {
+        let (gom, _) = pile(dir.path(), name, 1, 0.4, 0.0, cps, "");
+        let o = solve(&gom, &dir.path().join(name), &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(want), "{name}: {err}");
+    }
+    // The contact rows edited: `edit` of the GOM text, and what the error must say.
+    let edits: [Edit; 2] = [
+        (
+            "rows",
+            &|t| t.replacen("\"soil\" 0.4", "\"soil\" 0.5", 1),
+            "differ from row 1",
+        ),
+        (
+            "whole",
+            // The last row dropped: one element of the structure's material is not listed.
+            &|t| {
+                let head = t.find("$$START_CONTACT_VOLUME\n").unwrap();
+                let rows = head + "$$START_CONTACT_VOLUME\n".len();
+                let count_end = rows + t[rows..].find('\n').unwrap();
+                let n: usize = t[rows..count_end].parse().unwrap();
+                let body = &t[count_end + 1..];
+                let last_row = body.split_inclusive('\n').take(n).collect::<Vec<_>>();
+                let kept: String = last_row[..n - 1].concat();
+                format!(
+                    "{}{}\n{kept}{}",
+                    &t[..rows],
+                    n - 1,
+                    &body[last_row.concat().len()..]
+                )
+            },
+            "not listed",
+        ),
+    ];
+    for (name, edit, want) in edits {
+        let (gom, _) = pile(dir.path(), name, 1, 0.4, 0.0, &[], "");
+        let text = std::fs::read_to_string(&gom).unwrap();
+        std::fs::write(&gom, edit(text)).unwrap();
+        let o = solve(&gom, &dir.path().join(format!("{name}_out")), &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("START_CONTACT_VOLUME") && err.contains(want),
+            "{name}: {err}"
+        );
+    }
+}

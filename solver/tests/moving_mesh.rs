@@ -1,0 +1,254 @@
+//! Anura3D's moving mesh (`step::moving_mesh`) on GOM input: a block pushed down a soil column
+//! at a prescribed velocity, the mesh around it following, the soil ahead compressed and the
+//! empty mesh behind stretched. Against Anura3D itself (`ANURA3D_ORACLE`), point by point at
+//! every load step; the 2D foundation benchmark 4001 run for four load steps against the 2D
+//! oracle (`ANURA3D_ORACLE_2D`, `ANURA3D_BENCHMARKS`); a run killed and resumed ends
+//! byte-identical; a mesh moved past its room stops with the element named. The comparisons
+//! say "skipped" when their variables are unset.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::gom;
+use mpm_solve::compare::tolerance::Tolerances;
+
+const BIN: &str = env!("CARGO_BIN_EXE_mpm-solve");
+
+/// The block's speed (m/s, downwards).
+const SPEED: f64 = 0.1;
+
+/// Writes `dir/NAME.GOM` and `dir/NAME.CPS_001`: a 1 × 4 × 1 m column of 1 × 8 × 1 cells,
+/// soil (material 1) up to y = 2.5 m, a stiffer block (material 2) from 2.5 to 3 m moved down
+/// at [`SPEED`] by a prescribed velocity on its points, empty elements above. The moving box is
+/// the block's, the compressing box the soil's, the extending box the empty part's (with `up`,
+/// the block is pulled up instead, and the boxes swap: the soil's extends, the empty part's is
+/// compressed). Sides fixed normally, the base fixed; gravity. `load_steps` of `duration` s.
+fn block_in_column(
+    dir: &Path,
+    name: &str,
+    load_steps: u32,
+    duration: f64,
+    up: bool,
+) -> (PathBuf, PathBuf) {
+    let model = gom::box_model(
+        [1, 8, 1],
+        [1.0, 4.0, 1.0],
+        &[
+            gom::Material {
+                name: "soil",
+                porosity: 0.3,
+                density: 1800.0,
+                young: 1000.0,
+            },
+            gom::Material {
+                name: "block",
+                porosity: 0.0,
+                density: 2000.0,
+                young: 20000.0,
+            },
+        ],
+        |c| match c[1] {
+            y if y < 2.5 => 1,
+            y if y < 3.0 => 2,
+            _ => 0,
+        },
+        |p| {
+            let side = |v: f64| v.abs() < 1e-9 || (v - 1.0).abs() < 1e-9;
+            [side(p[0]), p[1].abs() < 1e-9, side(p[2])]
+        },
+    );
+    let corners = |lo: f64, hi: f64| -> String {
+        gom::box_corners(&model, [0.0, lo, 0.0], [1.0, hi, 1.0])
+            .iter()
+            .map(|n| format!("{n}\n"))
+            .collect()
+    };
+    let (extending, compressing) = if up {
+        (corners(0.0, 2.5), corners(3.0, 4.0))
+    } else {
+        (corners(3.0, 4.0), corners(0.0, 2.5))
+    };
+    let extra = format!(
+        "{}$$EXTENDING_MESH_CORNER_NODES\n{extending}$$COMPRESSING_MESH_CORNER_NODES\n{compressing}$$MOVING_MESH_CORNER_NODES\n{}$$MOVING_MESH_DIRECTION\ny-direction\n$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n2\n",
+        gom::prescribed_section(
+            &gom::elements_of(&model, 2),
+            [0, 1, 0],
+            [0.0, if up { SPEED } else { -SPEED }, 0.0]
+        ),
+        corners(2.5, 3.0),
+    );
+    gom::write(
+        dir,
+        name,
+        &model,
+        &extra,
+        &[
+            ("NUMBER_OF_LOADSTEPS", &load_steps.to_string()),
+            ("TIME_PER_LOADSTEP", &duration.to_string()),
+        ],
+    )
+}
+
+/// Runs `mpm-solve` on `gom` into `out` with `args`; its stderr.
+fn solve(gom: &Path, out: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(BIN)
+        .arg(gom)
+        .args(["-q", "--out", out.to_str().unwrap()])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Worst differences (relative to each field's largest Anura3D value) of position,
+/// displacement and stress over the load steps, with the number of load steps compared.
+fn against_anura3d(anura: &Path, ours: &Path) -> ([f64; 3], usize) {
+    let report = mpm_solve::compare::compare(anura, ours, &Tolerances::default())
+        .unwrap_or_else(|e| panic!("cannot compare with Anura3D: {e}"));
+    let worst = |field: &str| {
+        report
+            .outputs
+            .iter()
+            .flat_map(|o| o.fields.iter().filter(|f| f.field == field))
+            .map(|f| f.max_rel)
+            .fold(0.0f64, f64::max)
+    };
+    (
+        ["position", "displacement", "stress"].map(worst),
+        report.outputs.len(),
+    )
+}
+
+#[test]
+fn the_block_and_its_mesh_move_as_in_anura3d() {
+    let Some(bin) = common::oracle("moving mesh against Anura3D") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (gom, _) = block_in_column(dir.path(), "block", 4, 0.5, false);
+    common::run_oracle(&bin, dir.path(), "block");
+    let out = dir.path().join("ours");
+    let o = solve(&gom, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (worst, steps) = against_anura3d(dir.path(), &out);
+    eprintln!(
+        "block in column, 4 load steps: position {:.1e}, displacement {:.1e}, stress {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert_eq!(steps, 4);
+    for (w, f) in worst.iter().zip(["position", "displacement", "stress"]) {
+        assert!(*w <= 1e-10, "{f} differs by {w:.2e} of its largest value");
+    }
+    // The block went down 0.2 m with its mesh: the top of the compressed soil box is there.
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(json["status"], "completed", "{json}");
+}
+
+#[test]
+fn the_2d_footing_benchmark_moves_as_in_anura3d_over_four_load_steps() {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let oracle = mpm_shared::suite::anura3d_oracle_2d(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    let suite = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    let (Some(bin), Some(suite)) = (oracle, suite) else {
+        mpm_shared::suite::skipped(
+            "2D moving mesh against Anura3D (ANURA3D_ORACLE_2D or ANURA3D_BENCHMARKS not set)",
+        );
+        return;
+    };
+    // 4001: a rough footing (its points' velocity prescribed, 0.5 m/s, in load-step stairs)
+    // pushed into Mohr-Coulomb soil under K0 stresses, MPM-MIXED with strain smoothing; run
+    // four load steps of 0.05 s instead of the benchmark's one time step.
+    let name = "4001_foundation_k0_movingmesh_prescribedveloMP_step";
+    let src = suite
+        .join("Benchmarks/Pre-Commit_Tests")
+        .join(name)
+        .join(format!("{name}.A3D"));
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(src.join(format!("{name}.GOM")), dir.path().join("f.GOM")).unwrap();
+    let cps = std::fs::read_to_string(src.join(format!("{name}.CPS_001"))).unwrap();
+    let mut lines: Vec<String> = cps.lines().map(str::to_string).collect();
+    for (key, value) in [
+        ("$$QUASISTATIC_CONVERGENCE", "0"),
+        ("$$TIME_PER_LOADSTEP", "0.05"),
+        ("$$NUMBER_OF_LOADSTEPS", "4"),
+    ] {
+        let k = lines.iter().position(|l| l.trim() == key).unwrap();
+        lines[k + 1] = value.to_string();
+    }
+    std::fs::write(dir.path().join("f.CPS_001"), lines.join("\n") + "\n").unwrap();
+    common::run_oracle(&bin, dir.path(), "f");
+    let out = dir.path().join("ours");
+    let o = solve(&dir.path().join("f.GOM"), &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (worst, steps) = against_anura3d(dir.path(), &out);
+    eprintln!(
+        "4001 over 4 load steps: position {:.1e}, displacement {:.1e}, stress {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert_eq!(steps, 4);
+    for (w, f) in worst.iter().zip(["position", "displacement", "stress"]) {
+        assert!(*w <= 1e-10, "{f} differs by {w:.2e} of its largest value");
+    }
+}
+
+/// The files of a run folder that must not depend on how it got there (all but run.json, the
+/// checkpoint and the lock).
+fn same_outputs(a: &Path, b: &Path) {
+    let (x, y) = (common::outputs(a), common::outputs(b));
+    assert_eq!(
+        x.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        y.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    for (f, g) in x.iter().zip(&y) {
+        assert!(f.1 == g.1, "{} differs", f.0);
+    }
+}
+
+#[test]
+fn a_moving_mesh_run_killed_and_resumed_ends_as_the_uninterrupted_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let (gom, _) = block_in_column(dir.path(), "block", 4, 0.25, false);
+    let full = dir.path().join("full");
+    let o = solve(&gom, &full, &["--threads", "1"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for (at, every) in [("150", "7"), ("230", "50")] {
+        let cut = dir.path().join(format!("cut{at}"));
+        let o = solve(
+            &gom,
+            &cut,
+            &[
+                "--threads",
+                "2",
+                "--abort-after-step",
+                at,
+                "--checkpoint-every",
+                every,
+            ],
+        );
+        assert!(!o.status.success(), "the run was to abort after step {at}");
+        let o = Command::new(BIN)
+            .arg(&gom)
+            .args(["-q", "--resume", cut.to_str().unwrap(), "--threads", "3"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        same_outputs(&full, &cut);
+    }
+}
+
+#[test]
+fn a_mesh_moved_past_its_room_stops_naming_the_element() {
+    let dir = tempfile::tempdir().unwrap();
+    // Pulled up at 0.1 m/s for 15 s, the block would go 1.5 m up an empty box 1 m high.
+    let (gom, _) = block_in_column(dir.path(), "block", 1, 15.0, true);
+    let out = dir.path().join("out");
+    let o = solve(&gom, &out, &[]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("the moving mesh turned element") && err.contains("inside out"),
+        "{err}"
+    );
+}
