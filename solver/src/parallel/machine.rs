@@ -171,9 +171,65 @@ pub fn bound_to_some_cores() -> bool {
     mine > 0 && mine < online
 }
 
+/// The order in which threads are pinned to `cores` (logical cpu ids, as the process may use
+/// them): one hardware thread of each physical core first, in the given order, then the second
+/// thread of each, and so on, so that a team smaller than the machine gets whole cores (on a
+/// machine that numbers a core's two threads next to each other, 0 and 1, two threads pinned to
+/// cores 0 and 1 would share one core). The topology is the kernel's
+/// (`/sys/devices/system/cpu/cpuN/topology`); where it cannot be read, the given order.
+pub fn spread(cores: &[usize]) -> Vec<usize> {
+    let read = |c: usize, what: &str| -> Option<u32> {
+        std::fs::read_to_string(format!("/sys/devices/system/cpu/cpu{c}/topology/{what}"))
+            .ok()?
+            .trim()
+            .parse()
+            .ok()
+    };
+    spread_by(cores, |c| {
+        Some((read(c, "physical_package_id")?, read(c, "core_id")?))
+    })
+}
+
+/// [`spread`] with the physical core of each logical cpu from `core` (package, core); the
+/// given order when any is unknown.
+pub fn spread_by(cores: &[usize], core: impl Fn(usize) -> Option<(u32, u32)>) -> Vec<usize> {
+    let Some(keys) = cores.iter().map(|&c| core(c)).collect::<Option<Vec<_>>>() else {
+        return cores.to_vec();
+    };
+    // Each cpu's rank among the cpus of its physical core, in the given order.
+    let rank: Vec<usize> = (0..cores.len())
+        .map(|i| keys[..i].iter().filter(|&&k| k == keys[i]).count())
+        .collect();
+    let mut order: Vec<usize> = (0..cores.len()).collect();
+    order.sort_by_key(|&i| rank[i]);
+    order.into_iter().map(|i| cores[i]).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn threads_take_whole_cores_first_whatever_the_numbering() {
+        // Siblings numbered next to each other (0 and 1 share core 0), as many VMs do.
+        let adjacent = |c: usize| Some((0, (c / 2) as u32));
+        assert_eq!(
+            spread_by(&[0, 1, 2, 3, 4, 5, 6, 7], adjacent),
+            vec![0, 2, 4, 6, 1, 3, 5, 7]
+        );
+        // Siblings half the machine apart (bare-metal Linux): the order stands.
+        let apart = |c: usize| Some((0, (c % 4) as u32));
+        assert_eq!(
+            spread_by(&[0, 1, 2, 3, 4, 5, 6, 7], apart),
+            vec![0, 1, 2, 3, 4, 5, 6, 7]
+        );
+        // Two sockets with the same core ids: different cores.
+        let sockets = |c: usize| Some(((c / 4) as u32, (c % 2) as u32));
+        assert_eq!(spread_by(&[0, 1, 4, 5], sockets), vec![0, 1, 4, 5]);
+        // An unknown topology keeps the given order; so does a restricted set.
+        assert_eq!(spread_by(&[3, 1, 2], |_| None), vec![3, 1, 2]);
+        assert_eq!(spread_by(&[1, 0], adjacent), vec![1, 0]);
+    }
 
     const SAMPLE: &str = "cpu  100 0 50 1000 10 0 0 0 0 0\n\
 cpu0 50 0 25 500 5 0 0 0 0 0\n\

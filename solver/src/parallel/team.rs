@@ -19,7 +19,8 @@ pub const ELEMENT_BLOCK: usize = 64;
 pub enum Pin {
     /// Let the OS place them.
     None,
-    /// Thread k on the k-th core available to the process.
+    /// Thread k on the k-th core available to the process, one hardware thread of every
+    /// physical core before a second one ([`crate::parallel::machine::spread`]).
     Cores,
     /// Thread k on the k-th free core when every thread has a free core of its own; else left
     /// to the OS (a pinned thread sharing its core with another process stalls the team at
@@ -95,6 +96,14 @@ impl Team {
             Pin::Auto if threads <= free.len() => free,
             Pin::Auto | Pin::None => Vec::new(),
         };
+        // Whole physical cores first (a team smaller than the machine would otherwise put two
+        // threads on one core where the kernel numbers a core's threads next to each other).
+        let order =
+            crate::parallel::machine::spread(&cores.iter().map(|c| c.id).collect::<Vec<_>>());
+        let cores: Vec<core_affinity::CoreId> = order
+            .into_iter()
+            .map(|id| core_affinity::CoreId { id })
+            .collect();
         let granted: Vec<std::sync::Mutex<Option<usize>>> =
             (0..threads).map(|_| std::sync::Mutex::new(None)).collect();
         let granted = std::sync::Arc::new(granted);
