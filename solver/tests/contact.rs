@@ -9,12 +9,8 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use common::gom;
-use mpm_solve::compare::tolerance::Tolerances;
-
-const BIN: &str = env!("CARGO_BIN_EXE_mpm-solve");
 
 /// A pile (material 2, the structure) 0.5 m wide and 1 m long, its top at the surface of a
 /// soil (material 1) 3 m deep and 1.5 m wide, on the symmetry plane x = 0, pushed down at
@@ -99,34 +95,6 @@ fn pile(
     gom::write(dir, name, &model, &extra, &keys)
 }
 
-fn solve(gom: &Path, out: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(BIN)
-        .arg(gom)
-        .args(["-q", "--out", out.to_str().unwrap()])
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-/// Worst differences (relative to each field's largest Anura3D value) of position,
-/// displacement and stress over the load steps, and the number of load steps compared.
-fn against_anura3d(anura: &Path, ours: &Path) -> ([f64; 3], usize) {
-    let report = mpm_solve::compare::compare(anura, ours, &Tolerances::default())
-        .unwrap_or_else(|e| panic!("cannot compare with Anura3D: {e}"));
-    let worst = |field: &str| {
-        report
-            .outputs
-            .iter()
-            .flat_map(|o| o.fields.iter().filter(|f| f.field == field))
-            .map(|f| f.max_rel)
-            .fold(0.0f64, f64::max)
-    };
-    (
-        ["position", "displacement", "stress"].map(worst),
-        report.outputs.len(),
-    )
-}
-
 #[test]
 fn a_pile_pushed_into_soil_with_friction_matches_anura3d() {
     let Some(bin) = common::oracle("contact against Anura3D") else {
@@ -134,23 +102,14 @@ fn a_pile_pushed_into_soil_with_friction_matches_anura3d() {
     };
     for (mu, c) in [(0.4, 2.0), (0.0, 0.0)] {
         let dir = tempfile::tempdir().unwrap();
-        let (gom, _) = pile(dir.path(), "pile", 3, mu, c, &[], "");
-        common::run_oracle(&bin, dir.path(), "pile");
-        let out = dir.path().join("ours");
-        let o = solve(&gom, &out, &[]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let (worst, steps) = against_anura3d(dir.path(), &out);
-        eprintln!(
-            "pile pushed, μ = {mu}, c = {c}: position {:.1e}, displacement {:.1e}, stress {:.1e}",
-            worst[0], worst[1], worst[2]
+        pile(dir.path(), "pile", 3, mu, c, &[], "");
+        common::agrees_with_anura3d(
+            &bin,
+            dir.path(),
+            "pile",
+            3,
+            &format!("pile pushed, μ = {mu}, c = {c}"),
         );
-        assert_eq!(steps, 3);
-        for (w, f) in worst.iter().zip(["position", "displacement", "stress"]) {
-            assert!(
-                *w <= 1e-10,
-                "μ = {mu}: {f} differs by {w:.2e} of its largest value"
-            );
-        }
     }
 }
 
@@ -169,36 +128,18 @@ fn benchmark_4006_over_five_load_steps_matches_anura3d() {
     // five dynamic load steps of 1 s instead of its single 1e-15 s time step.
     let src = suite
         .join("Benchmarks/Pre-Commit_Tests/4006_PrescribedVelocityMP/prescribedVelocityMP.A3D");
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::copy(
-        src.join("prescribedVelocityMP.GOM"),
-        dir.path().join("b.GOM"),
-    )
-    .unwrap();
-    let cps = std::fs::read_to_string(src.join("prescribedVelocityMP.CPS_001")).unwrap();
-    let mut lines: Vec<String> = cps.lines().map(str::to_string).collect();
-    for (key, value) in [
-        ("$$QUASISTATIC_CONVERGENCE", "0"),
-        ("$$TIME_PER_LOADSTEP", "1.0"),
-        ("$$NUMBER_OF_LOADSTEPS", "5"),
-    ] {
-        let k = lines.iter().position(|l| l.trim() == key).unwrap();
-        lines[k + 1] = value.to_string();
-    }
-    std::fs::write(dir.path().join("b.CPS_001"), lines.join("\n") + "\n").unwrap();
-    common::run_oracle(&bin, dir.path(), "b");
-    let out = dir.path().join("ours");
-    let o = solve(&dir.path().join("b.GOM"), &out, &[]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let (worst, steps) = against_anura3d(dir.path(), &out);
-    eprintln!(
-        "4006 over 5 load steps: position {:.1e}, displacement {:.1e}, stress {:.1e}",
-        worst[0], worst[1], worst[2]
+    common::benchmark_agrees_with_anura3d(
+        &bin,
+        &src,
+        "prescribedVelocityMP",
+        &[
+            ("$$QUASISTATIC_CONVERGENCE", "0"),
+            ("$$TIME_PER_LOADSTEP", "1.0"),
+            ("$$NUMBER_OF_LOADSTEPS", "5"),
+        ],
+        5,
+        "4006 over 5 load steps",
     );
-    assert_eq!(steps, 5);
-    for (w, f) in worst.iter().zip(["position", "displacement", "stress"]) {
-        assert!(*w <= 1e-10, "{f} differs by {w:.2e} of its largest value");
-    }
 }
 
 #[test]
@@ -207,7 +148,7 @@ fn contact_outputs_do_not_depend_on_the_thread_count() {
     let (gom, _) = pile(dir.path(), "slide", 2, 0.4, 2.0, &[], "");
     let (one, three) = (dir.path().join("one"), dir.path().join("three"));
     for (out, threads) in [(&one, "1"), (&three, "3")] {
-        let o = solve(&gom, out, &["--threads", threads]);
+        let o = common::solve(&gom, out, &["--threads", threads]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     let (a, b) = (common::outputs(&one), common::outputs(&three));
@@ -226,7 +167,7 @@ fn friction_on_the_shaft_adds_to_the_settlement_of_the_soil_beside_the_pile() {
     for mu in [0.0, 0.4] {
         let (gom, _) = pile(dir.path(), &format!("mu{mu}"), 2, mu, 0.0, &[], "");
         let out = dir.path().join(format!("out{mu}"));
-        let o = solve(&gom, &out, &[]);
+        let o = common::solve(&gom, &out, &[]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let json: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
@@ -282,7 +223,7 @@ fn what_contact_does_not_model_is_refused_by_name() {
     ];
     for (name, cps, want) in cases {
         let (gom, _) = pile(dir.path(), name, 1, 0.4, 0.0, cps, "");
-        let o = solve(&gom, &dir.path().join(name), &[]);
+        let o = common::solve(&gom, &dir.path().join(name), &[]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains(want), "{name}: {err}");
     }
@@ -318,7 +259,7 @@ fn what_contact_does_not_model_is_refused_by_name() {
         let (gom, _) = pile(dir.path(), name, 1, 0.4, 0.0, &[], "");
         let text = std::fs::read_to_string(&gom).unwrap();
         std::fs::write(&gom, edit(text)).unwrap();
-        let o = solve(&gom, &dir.path().join(format!("{name}_out")), &[]);
+        let o = common::solve(&gom, &dir.path().join(format!("{name}_out")), &[]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
             !o.status.success() && err.contains("START_CONTACT_VOLUME") && err.contains(want),

@@ -6,7 +6,6 @@
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
-use mpm_solve::compare::tolerance::Tolerances;
 use mpm_solve::driver::dispatch::{dispatch, Generic};
 use mpm_solve::driver::run::{run, RunError};
 use mpm_solve::element::tri3::Tri3;
@@ -347,17 +346,11 @@ fn anura3d_2d_cases_agree_with_the_2d_oracle_point_by_point() {
         case.drag = Drag::Explicit;
         let ours = tempfile::tempdir().unwrap();
         run_points(&case, ours.path());
-        let report = mpm_solve::compare::compare(dir.path(), ours.path(), &Tolerances::default())
-            .unwrap_or_else(|e| panic!("{case_dir}: cannot compare: {e}"));
-        let worst = |field: &str| {
-            report
-                .outputs
-                .iter()
-                .flat_map(|o| o.fields.iter().filter(|f| f.field == field))
-                .map(|f| f.max_rel)
-                .fold(0.0f64, f64::max)
-        };
-        let w = ["position", "displacement", "stress", "pore_pressure"].map(worst);
+        let (w, _) = common::worst_against_anura3d(
+            dir.path(),
+            ours.path(),
+            ["position", "displacement", "stress", "pore_pressure"],
+        );
         eprintln!(
             "| {} | {:.1e} | {:.1e} | {:.1e} | {:.1e} |",
             case_dir.rsplit('/').next().unwrap(),

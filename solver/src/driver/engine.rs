@@ -22,6 +22,7 @@ use crate::state::particles::{self, Field, FieldVisitor, Particles, Value};
 use crate::step::contact::Everyone;
 use crate::step::grid_update::{DampingRule, Drag};
 use crate::step::load_curve::LoadCurve;
+use crate::step::nodal_energy::NodalEnergy;
 use crate::step::stress::{Guard, GuardSums};
 use crate::step::{grid_to_particle, grid_update, nodal_energy, particle_to_grid, stress};
 use std::sync::Arc;
@@ -1246,66 +1247,47 @@ impl<R: Real, E: Element> Engine<R, E> {
             m.after_stress(&self.team, &self.layout, &mut self.particles);
         }
         // The step's energy terms at the nodes, with the remapped velocities: Anura3D's
-        // external power and nodal kinetic energy, and the guard's work and dissipation.
-        nodal_energy::nodal_energy(
-            &self.team,
-            &mut self.energy_values,
-            &mut self.energy_blocks,
-            &self.grid,
-            &nodal_energy::Loads {
-                traction: (&self.traction, tm),
-                liquid_traction: (&self.liquid_traction, liquid_scale),
-                liquid_load_on_mixture: case.liquid_load_on_mixture,
-                fixed: &self.fixed,
-                liquid_fixed: &self.liquid_fixed,
-                gravity,
-            },
-        );
-        self.layout
-            .sum_owned(&self.team, &self.energy_values, &mut self.owned_partials);
-        let energy = nodal_energy::NodalEnergy::of_sums(
-            exact_total(
-                &*self.comm,
-                &self.owned_partials[..self.layout.owned_blocks()],
-            ),
-            dt,
-        );
-        // With contact the structure's nodes add their power, work and dissipation; Anura3D's
-        // nodal kinetic energy (its convergence check) is the soil's alone.
-        let energy = match &self.contact {
-            None => energy,
-            Some(c) => {
-                nodal_energy::nodal_energy(
-                    &self.team,
-                    &mut self.energy_values,
-                    &mut self.energy_blocks,
-                    &c.grid,
-                    &nodal_energy::Loads {
-                        traction: (&self.traction, tm),
-                        liquid_traction: (&self.liquid_traction, liquid_scale),
-                        liquid_load_on_mixture: case.liquid_load_on_mixture,
-                        fixed: &self.fixed,
-                        liquid_fixed: &self.liquid_fixed,
-                        gravity,
-                    },
-                );
-                self.layout
-                    .sum_owned(&self.team, &self.energy_values, &mut self.owned_partials);
-                let structure = nodal_energy::NodalEnergy::of_sums(
-                    exact_total(
-                        &*self.comm,
-                        &self.owned_partials[..self.layout.owned_blocks()],
-                    ),
-                    dt,
-                );
-                nodal_energy::NodalEnergy {
-                    power_end: energy.power_end + structure.power_end,
-                    kinetic: energy.kinetic,
-                    work: energy.work + structure.work,
-                    dissipated: energy.dissipated + structure.dissipated,
-                }
-            }
+        // external power and nodal kinetic energy, and the guard's work and dissipation. With
+        // contact the structure's nodes add their power, work and dissipation; Anura3D's nodal
+        // kinetic energy (its convergence check) is the soil's alone.
+        let loads = nodal_energy::Loads {
+            traction: (&self.traction, tm),
+            liquid_traction: (&self.liquid_traction, liquid_scale),
+            liquid_load_on_mixture: case.liquid_load_on_mixture,
+            fixed: &self.fixed,
+            liquid_fixed: &self.liquid_fixed,
+            gravity,
         };
+        let mut energy = NodalEnergy::default();
+        let grids = std::iter::once(&self.grid).chain(self.contact.as_ref().map(|c| &c.grid));
+        for (k, grid) in grids.enumerate() {
+            nodal_energy::nodal_energy(
+                &self.team,
+                &mut self.energy_values,
+                &mut self.energy_blocks,
+                grid,
+                &loads,
+            );
+            self.layout
+                .sum_owned(&self.team, &self.energy_values, &mut self.owned_partials);
+            let body = NodalEnergy::of_sums(
+                exact_total(
+                    &*self.comm,
+                    &self.owned_partials[..self.layout.owned_blocks()],
+                ),
+                dt,
+            );
+            energy = if k == 0 {
+                body
+            } else {
+                NodalEnergy {
+                    power_end: energy.power_end + body.power_end,
+                    kinetic: energy.kinetic,
+                    work: energy.work + body.work,
+                    dissipated: energy.dissipated + body.dissipated,
+                }
+            };
+        }
         let w = energy.power_end;
         self.nodal_kinetic = energy.kinetic;
         self.external_work += w * dt;

@@ -81,6 +81,96 @@ pub fn oracle(what: &str) -> Option<PathBuf> {
     found
 }
 
+/// The worst difference, relative to each field's largest Anura3D value, of each field of
+/// `fields` over the outputs of `ours` paired with Anura3D's run in `anura`, and the number of
+/// outputs paired.
+pub fn worst_against_anura3d<const N: usize>(
+    anura: &Path,
+    ours: &Path,
+    fields: [&str; N],
+) -> ([f64; N], usize) {
+    let report = mpm_solve::compare::compare(
+        anura,
+        ours,
+        &mpm_solve::compare::tolerance::Tolerances::default(),
+    )
+    .unwrap_or_else(|e| panic!("cannot compare {} with Anura3D: {e}", ours.display()));
+    let worst = |field: &str| {
+        report
+            .outputs
+            .iter()
+            .flat_map(|o| o.fields.iter().filter(|f| f.field == field))
+            .map(|f| f.max_rel)
+            .fold(0.0f64, f64::max)
+    };
+    (fields.map(worst), report.outputs.len())
+}
+
+/// Benchmark `name` of Anura3D's suite (its `.A3D` folder `src`) run with the CPS keys `set`
+/// (`$$KEY`, value line) by Anura3D (`bin`) and by the solver in a temporary folder: every
+/// point's position, displacement and stress agree within 1e-10 of each field's largest
+/// Anura3D value at each of the `outputs` outputs; prints the worst differences under `label`.
+pub fn benchmark_agrees_with_anura3d(
+    bin: &Path,
+    src: &Path,
+    name: &str,
+    set: &[(&str, &str)],
+    outputs: usize,
+    label: &str,
+) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(src.join(format!("{name}.GOM")), dir.path().join("b.GOM")).unwrap();
+    let cps = std::fs::read_to_string(src.join(format!("{name}.CPS_001"))).unwrap();
+    let mut lines: Vec<String> = cps.lines().map(str::to_string).collect();
+    for (key, value) in set {
+        let k = lines.iter().position(|l| l.trim() == *key).unwrap();
+        lines[k + 1] = value.to_string();
+    }
+    std::fs::write(dir.path().join("b.CPS_001"), lines.join("\n") + "\n").unwrap();
+    agrees_with_anura3d(bin, dir.path(), "b", outputs, label);
+}
+
+/// `dir/NAME.GOM` + `dir/NAME.CPS_001` run by Anura3D (`bin`) and by the solver (into
+/// `dir/ours`, returned): every point's position, displacement and stress agree within 1e-10
+/// of each field's largest Anura3D value at each of the `outputs` outputs; prints the worst
+/// differences under `label`.
+pub fn agrees_with_anura3d(
+    bin: &Path,
+    dir: &Path,
+    name: &str,
+    outputs: usize,
+    label: &str,
+) -> PathBuf {
+    run_oracle(bin, dir, name);
+    let out = dir.join("ours");
+    let o = solve(&dir.join(format!("{name}.GOM")), &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fields = ["position", "displacement", "stress"];
+    let (worst, steps) = worst_against_anura3d(dir, &out, fields);
+    eprintln!(
+        "{label}: position {:.1e}, displacement {:.1e}, stress {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert_eq!(steps, outputs);
+    for (w, f) in worst.iter().zip(fields) {
+        assert!(
+            *w <= 1e-10,
+            "{label}: {f} differs by {w:.2e} of its largest value"
+        );
+    }
+    out
+}
+
+/// Runs the `mpm-solve` binary on `input` into `out`, quietly, with `args`.
+pub fn solve(input: &Path, out: &Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_mpm-solve"))
+        .arg(input)
+        .args(["-q", "--out", out.to_str().unwrap()])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 /// Runs Anura3D on `dir/NAME.GOM` + `dir/NAME.CPS_001` in `dir`; fails unless it finishes.
 pub fn run_oracle(bin: &Path, dir: &Path, name: &str) {
     let out = std::process::Command::new(bin)
