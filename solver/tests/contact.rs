@@ -266,4 +266,21 @@ fn what_contact_does_not_model_is_refused_by_name() {
             "{name}: {err}"
         );
     }
+    // A velocity prescribed on a soil element: with contact it acts on the structure's nodes.
+    let (gom, _) = pile(dir.path(), "soil_pushed", 1, 0.4, 0.0, &[], "");
+    let text = std::fs::read_to_string(&gom).unwrap();
+    let head = "$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME\n";
+    let at = text.find(head).unwrap() + head.len();
+    let first_row = at + text[at..].find('\n').unwrap() + 1;
+    let element_end = first_row + text[first_row..].find(' ').unwrap();
+    let edited = format!("{}1{}", &text[..first_row], &text[element_end..]);
+    std::fs::write(&gom, edited).unwrap();
+    let o = common::solve(&gom, &dir.path().join("soil_pushed_out"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME")
+            && err.contains("element 1 is not of the structure's material 2"),
+        "{err}"
+    );
 }

@@ -19,7 +19,6 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::{Grid, LiquidNodes};
 use crate::state::particles::{self, Field, FieldVisitor, Particles, Value};
-use crate::step::contact::Everyone;
 use crate::step::grid_update::{DampingRule, Drag};
 use crate::step::load_curve::LoadCurve;
 use crate::step::nodal_energy::NodalEnergy;
@@ -965,8 +964,15 @@ impl<R: Real, E: Element> Engine<R, E> {
             *gv = case.gravity.map(|g| R::of(g * gm * ratio));
         }
         let tm = R::of(case.traction_curve.at(self.time + dt));
-        match &mut self.contact {
-            None => particle_to_grid::particle_to_grid(
+        // Each body to its own nodes (one pass of every point without contact): the soil to the
+        // engine's grid, the structure to the contact's.
+        let soil = self.contact.as_ref().map(|c| c.soil());
+        let structure = self
+            .contact
+            .as_mut()
+            .map(|c| (&mut c.grid, Some(c.structure)));
+        for (grid, body) in std::iter::once((&mut self.grid, soil)).chain(structure) {
+            particle_to_grid::particle_to_grid(
                 &self.team,
                 &self.layout,
                 &mut self.slots,
@@ -974,25 +980,9 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &self.particles,
                 &self.gravity_by_material,
                 self.mixed.as_mut(),
-                &mut self.grid,
-                Everyone,
-            ),
-            Some(c) => {
-                // Each body to its own nodes: the soil to the engine's grid.
-                for (grid, body) in [(&mut self.grid, c.soil()), (&mut c.grid, c.structure)] {
-                    particle_to_grid::particle_to_grid(
-                        &self.team,
-                        &self.layout,
-                        &mut self.slots,
-                        &self.mesh,
-                        &self.particles,
-                        &self.gravity_by_material,
-                        self.mixed.as_mut(),
-                        grid,
-                        body,
-                    );
-                }
-            }
+                grid,
+                body,
+            );
         }
         particle_to_grid::liquid_to_grid(
             &self.team,
@@ -1059,7 +1049,12 @@ impl<R: Real, E: Element> Engine<R, E> {
                     case.damping_rule,
                     &*self.comm,
                 );
-                c.force_sums(&self.grid, &self.fixed, &mut self.grid_scratch.node_sums);
+                c.force_sums(
+                    &self.team,
+                    &self.grid,
+                    &self.fixed,
+                    &mut self.grid_scratch.node_sums,
+                );
             }
         }
         let (forces, liquid_forces) = {
@@ -1120,43 +1115,29 @@ impl<R: Real, E: Element> Engine<R, E> {
         for r in &mut self.reactions {
             r.advance(self.time + dt, dt);
         }
-        match &mut self.contact {
-            None => grid_to_particle::grid_to_particle(
+        let soil = self.contact.as_ref().map(|c| c.soil());
+        let structure = self
+            .contact
+            .as_mut()
+            .map(|c| (&mut c.grid, Some(c.structure)));
+        for (k, (grid, body)) in std::iter::once((&mut self.grid, soil))
+            .chain(structure)
+            .enumerate()
+        {
+            grid_to_particle::grid_to_particle(
                 &self.team,
                 &self.layout,
                 &mut self.slots,
                 &self.mesh,
                 &mut self.particles,
-                &mut self.grid,
+                grid,
                 &self.fixed,
                 R::of(dt),
                 R::of(case.pic_blend),
                 self.guards.enabled.then_some(&mut self.guard_slots[..]),
-                Everyone,
-                true,
-            ),
-            Some(c) => {
-                let bodies = [
-                    (&mut self.grid, c.soil(), true),
-                    (&mut c.grid, c.structure, false),
-                ];
-                for (grid, body, begin) in bodies {
-                    grid_to_particle::grid_to_particle(
-                        &self.team,
-                        &self.layout,
-                        &mut self.slots,
-                        &self.mesh,
-                        &mut self.particles,
-                        grid,
-                        &self.fixed,
-                        R::of(dt),
-                        R::of(case.pic_blend),
-                        self.guards.enabled.then_some(&mut self.guard_slots[..]),
-                        body,
-                        begin,
-                    );
-                }
-            }
+                body,
+                k == 0,
+            );
         }
         grid_to_particle::liquid_to_particles(
             &self.team,
@@ -1205,21 +1186,10 @@ impl<R: Real, E: Element> Engine<R, E> {
             R::of(dt),
         );
         // Each body's points strain and move with its own nodes' velocities.
-        let bodies: [(&Grid<R>, Option<crate::step::contact::OneBody>); 2] = match &self.contact {
-            None => [(&self.grid, None), (&self.grid, None)],
-            Some(c) => [(&self.grid, Some(c.soil())), (&c.grid, Some(c.structure))],
-        };
-        for (k, (grid, body)) in bodies.into_iter().enumerate() {
-            if k == 1 && body.is_none() {
-                break;
-            }
-            let guard = self.guards.enabled.then_some(Guard {
-                slots: &mut self.guard_slots,
-                initial_density: &self.initial_density,
-                fluids: &self.fluids,
-                min_volume_ratio: R::of(self.guards.min_volume_ratio),
-            });
-            let args = (
+        let soil = self.contact.as_ref().map(|c| c.soil());
+        let structure = self.contact.as_ref().map(|c| (&c.grid, Some(c.structure)));
+        for (grid, body) in std::iter::once((&self.grid, soil)).chain(structure) {
+            stress::update_stress_and_move(
                 &self.team,
                 &self.layout,
                 &self.mesh,
@@ -1230,18 +1200,14 @@ impl<R: Real, E: Element> Engine<R, E> {
                 case.hoop_in_volume,
                 self.smoothing.as_ref(),
                 R::of(dt),
-                guard,
+                self.guards.enabled.then_some(Guard {
+                    slots: &mut self.guard_slots,
+                    initial_density: &self.initial_density,
+                    fluids: &self.fluids,
+                    min_volume_ratio: R::of(self.guards.min_volume_ratio),
+                }),
+                body,
             );
-            match body {
-                None => stress::update_stress_and_move(
-                    args.0, args.1, args.2, args.3, args.4, args.5, args.6, args.7, args.8, args.9,
-                    args.10, Everyone,
-                ),
-                Some(b) => stress::update_stress_and_move(
-                    args.0, args.1, args.2, args.3, args.4, args.5, args.6, args.7, args.8, args.9,
-                    args.10, b,
-                ),
-            }
         }
         if let Some(m) = &self.mixed {
             m.after_stress(&self.team, &self.layout, &mut self.particles);

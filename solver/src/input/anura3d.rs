@@ -438,6 +438,10 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             has_nodal_load: traction.iter().flatten().any(|&v| v != 0.0),
             has_point_load: !point_loads.is_empty(),
             has_nodal_velocity: !nodal_velocity.is_empty(),
+            prescribed_elements: prescribed
+                .as_ref()
+                .map(|p| p.rows.iter().map(|r| r.element).collect())
+                .unwrap_or_default(),
         },
         &gfile,
         &cfile,
@@ -531,6 +535,8 @@ struct ContactCase {
     has_nodal_load: bool,
     has_point_load: bool,
     has_nodal_velocity: bool,
+    /// Elements (0-based) whose points have a prescribed velocity.
+    prescribed_elements: Vec<u32>,
 }
 
 /// The contact between a structure and the soil (CPS `$$CONTACT_FORMULATION 1` with GOM
@@ -601,8 +607,25 @@ fn contact(
         .iter()
         .map(|m| (m.index.max(0) as u32, m.name.clone()))
         .collect();
-    crate::step::contact::read(model, element_material, &names, points)
-        .map_err(|(item, why)| unsupported(gfile, &item, why))
+    let spec = crate::step::contact::read(model, element_material, &names, points)
+        .map_err(|(item, why)| unsupported(gfile, &item, why))?;
+    // The prescribed velocity acts on the structure's nodes (Anura3D's hard entity).
+    if let Some(e) = with
+        .prescribed_elements
+        .iter()
+        .find(|&&e| element_material[e as usize] != spec.material)
+    {
+        return Err(unsupported(
+            gfile,
+            "$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME",
+            format!(
+                "element {} is not of the structure's material {}: with contact, velocities are prescribed on the structure only",
+                e + 1,
+                spec.material
+            ),
+        ));
+    }
+    Ok(Some(spec))
 }
 
 /// What the K0 procedure reads of one GOM material.

@@ -38,27 +38,11 @@ use mpm_shared::Model;
 use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::parallel::gather::Layout;
+use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::grid_update::DampingRule;
-
-/// Which points a pass maps: every point, or one body of a contact pair.
-pub trait Keep: Copy + Send + Sync {
-    /// Whether a point of material `material` is mapped.
-    fn keep(&self, material: u32) -> bool;
-}
-
-/// Every point (runs without contact: the test folds away).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Everyone;
-
-impl Keep for Everyone {
-    #[inline(always)]
-    fn keep(&self, _material: u32) -> bool {
-        true
-    }
-}
+use crate::step::grid_update::{DampingRule, NODE_BLOCK};
 
 /// One body of a contact pair: the points of the structure's material, or all the others.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -69,11 +53,19 @@ pub struct OneBody {
     pub structure: bool,
 }
 
-impl Keep for OneBody {
+impl OneBody {
+    /// Whether a point of material `material` belongs to this body.
     #[inline(always)]
-    fn keep(&self, material: u32) -> bool {
+    pub fn keeps(&self, material: u32) -> bool {
         (material == self.structure_material) == self.structure
     }
+}
+
+/// Whether a pass of `body` (`None`: a run without contact, every point) maps a point of
+/// `material`: one predictable branch on a material the kernels read anyway, or beside it.
+#[inline(always)]
+pub fn maps(body: Option<OneBody>, material: u32) -> bool {
+    body.map_or(true, |b| b.keeps(material))
 }
 
 /// The contact as the input gives it.
@@ -102,7 +94,7 @@ impl ContactSpec {
 /// Reads `$$START_CONTACT_VOLUME` of `model`: rows `element n "material" μ c "material" μ c
 /// "material" μ c "material" μ c` ("NAN" for an unused slot). `element_material` is each
 /// element's material index (0: empty), `names` each material index's name. Returns the section
-/// and what is wrong with it when the rows ask for what is not modelled:
+/// and what is wrong with it when it is missing or the rows ask for what is not modelled:
 ///
 /// * rows with different materials, frictions or adhesions (Anura3D takes the names from the
 ///   first row and each face's numbers from its own row, with an off-by-one on one face side);
@@ -115,7 +107,7 @@ pub fn read(
     element_material: &[u32],
     names: &[(u32, String)],
     points: &[u32],
-) -> Result<Option<ContactSpec>, (String, String)> {
+) -> Result<ContactSpec, (String, String)> {
     const KEY: &str = "START_CONTACT_VOLUME";
     let item = format!("$${KEY}");
     let Some(section) = model.section(KEY) else {
@@ -234,11 +226,11 @@ pub fn read(
         let number = |t: usize| slots[3 * k + t].parse::<f64>().unwrap_or(0.0);
         interfaces[m as usize] = (number(1), number(2));
     }
-    Ok(Some(ContactSpec {
+    Ok(ContactSpec {
         material,
         elements,
         interfaces,
-    }))
+    })
 }
 
 /// Anura3D's numbering of a tetrahedron's sides by its corners (0-based): the side's normal
@@ -267,6 +259,8 @@ pub struct Contact<R: Real> {
     start: Vec<u32>,
     /// Per interface node, the start-of-step velocity of each body (scratch).
     before: Vec<[V3<R>; 2]>,
+    /// The force sums' blocks of nodes (scratch).
+    blocks: Vec<()>,
 }
 
 impl<R: Real> Contact<R> {
@@ -371,6 +365,7 @@ impl<R: Real> Contact<R> {
             grid: Grid::new(n),
             scratch: crate::step::grid_update::GridScratch::new(n),
             before: vec![[[R::ZERO; 3]; 2]; nodes.len()],
+            blocks: vec![(); n.div_ceil(NODE_BLOCK)],
             nodes,
             normal,
             area,
@@ -422,7 +417,7 @@ impl<R: Real> Contact<R> {
                         continue;
                     }
                     let m = p.material[i];
-                    let b = usize::from(structure.keep(m));
+                    let b = usize::from(structure.keeps(m));
                     bodies[b] = true;
                     if b == 0 {
                         lowest = lowest.min(m);
@@ -528,28 +523,37 @@ impl<R: Real> Contact<R> {
 
     /// The per-node force sums of Anura3D's convergence check over both bodies: |f₁ + f₂| and
     /// |f_ext,1 + f_ext,2| over the free components of every node (written to `sums`, as the
-    /// grid update writes its own).
-    pub fn force_sums(&self, soil: &Grid<R>, fixed: &[[bool; 3]], sums: &mut [[f64; 4]]) {
-        for (n, sum) in sums.iter_mut().enumerate() {
-            let (mut out2, mut ext2) = (0.0, 0.0);
-            let mut any = false;
-            for g in [soil, &self.grid] {
-                any |= g.mass[n] > g.empty_below;
-            }
-            if !any {
-                *sum = [0.0; 4];
-                continue;
-            }
-            for d in 0..3 {
-                if fixed[n][d] {
+    /// grid update writes its own), on the team in the grid update's blocks of nodes.
+    pub fn force_sums(
+        &mut self,
+        team: &Team,
+        soil: &Grid<R>,
+        fixed: &[[bool; 3]],
+        sums: &mut [[f64; 4]],
+    ) {
+        let structure = &self.grid;
+        let out = Shared::new(sums);
+        team.for_blocks(soil.mass.len(), NODE_BLOCK, &mut self.blocks, |r| {
+            // SAFETY: the nodes of this block are this call's only.
+            let sums = unsafe { out.range(r.clone()) };
+            for (n, sum) in r.zip(sums) {
+                let (mut out2, mut ext2) = (0.0, 0.0);
+                let any = [soil, structure].iter().any(|g| g.mass[n] > g.empty_below);
+                if !any {
+                    *sum = [0.0; 4];
                     continue;
                 }
-                let ext = soil.f_ext[n][d].f64() + self.grid.f_ext[n][d].f64();
-                let f = soil.f_int[n][d].f64() + self.grid.f_int[n][d].f64() + ext;
-                out2 += f * f;
-                ext2 += ext * ext;
+                for d in 0..3 {
+                    if fixed[n][d] {
+                        continue;
+                    }
+                    let ext = soil.f_ext[n][d].f64() + structure.f_ext[n][d].f64();
+                    let f = soil.f_int[n][d].f64() + structure.f_int[n][d].f64() + ext;
+                    out2 += f * f;
+                    ext2 += ext * ext;
+                }
+                *sum = [out2.sqrt(), ext2.sqrt(), 0.0, 0.0];
             }
-            *sum = [out2.sqrt(), ext2.sqrt(), 0.0, 0.0];
-        }
+        });
     }
 }

@@ -9,7 +9,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::contact::Keep;
+use crate::step::contact::{maps, OneBody};
 use crate::step::stress::GuardSums;
 
 /// Updates particle velocities from nodal accelerations (FLIP; with `pic` > 0 blended with
@@ -18,11 +18,11 @@ use crate::step::stress::GuardSums;
 /// (see [`crate::step::stress`]). With `guard` (one slot per block of
 /// [`crate::parallel::gather::ELEMENT_BLOCK`] elements), each block's slot is begun anew at its
 /// first element and summed over its elements in order with their points' Σ m |v|² (twice
-/// their kinetic energy), the velocities at hand. Only the points `keep` keeps take part (one
-/// body of a contact pair, [`crate::step::contact`]); the second body's pass adds its kinetic
-/// energy to the slots the first began (`begin` false).
+/// their kinetic energy), the velocities at hand. Only the points of `body` take part (all of
+/// them for `None`; one body of a contact pair, [`crate::step::contact`]); the second body's
+/// pass adds its kinetic energy to the slots the first began (`begin` false).
 #[allow(clippy::too_many_arguments)]
-pub fn grid_to_particle<E: Element, R: Real, K: Keep>(
+pub fn grid_to_particle<E: Element, R: Real>(
     team: &Team,
     layout: &Layout<R, E>,
     slots: &mut Slots<R>,
@@ -33,7 +33,7 @@ pub fn grid_to_particle<E: Element, R: Real, K: Keep>(
     dt: R,
     pic: R,
     guard: Option<&mut [GuardSums]>,
-    keep: K,
+    body: Option<OneBody>,
     begin: bool,
 ) {
     let guard = guard.map(Shared::new);
@@ -58,7 +58,7 @@ pub fn grid_to_particle<E: Element, R: Real, K: Keep>(
         // SAFETY: the points of element e belong to this thread only.
         let vel = unsafe { &mut vel.range(range)[..count] };
         for i in 0..count {
-            if !active[i] || !keep.keep(material[i]) {
+            if !active[i] || !maps(body, material[i]) {
                 continue;
             }
             let n = mesh.shape(e, &x[i]);

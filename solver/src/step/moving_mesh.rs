@@ -269,8 +269,6 @@ pub struct MovingMesh {
     model_xyz: Vec<[f64; 3]>,
     /// Elements (local) with a node that moves, ascending.
     elements: Vec<u32>,
-    /// Computational node of each model node that moves and is one (`u32::MAX` otherwise).
-    node_of_model: Vec<u32>,
 }
 
 impl MovingMesh {
@@ -377,7 +375,6 @@ impl MovingMesh {
                 .map(|n| [0, 1, 2].map(|a| coord(n, a) - origin[a]))
                 .collect(),
             elements,
-            node_of_model: mesh.node_of_model.clone(),
         })
     }
 
@@ -405,23 +402,19 @@ impl MovingMesh {
         dt: f64,
     ) -> Result<(), usize> {
         let delta = self.shift(mesh, vel, dt);
-        // The storage boxes' lengths before this step's move.
-        let lengths: Vec<f64> = self
-            .storage
-            .iter()
-            .map(|s| {
-                let mut longest = -1.0f64;
-                for &i in &s.corners {
-                    for &j in &s.corners {
-                        if i != j {
-                            longest = longest
-                                .max((self.along[i as usize] - self.along[j as usize]).abs());
-                        }
+        // The storage boxes' lengths before this step's move (at most two boxes: no
+        // allocation in the step).
+        let mut lengths = [-1.0f64; 2];
+        for (s, length) in self.storage.iter().zip(&mut lengths) {
+            for &i in &s.corners {
+                for &j in &s.corners {
+                    if i != j {
+                        *length =
+                            length.max((self.along[i as usize] - self.along[j as usize]).abs());
                     }
                 }
-                longest
-            })
-            .collect();
+            }
+        }
         for &n in &self.carried {
             self.along[n as usize] += delta;
         }
@@ -447,7 +440,7 @@ impl MovingMesh {
         let a = self.axis;
         let origin = mesh.origin[a];
         for n in self.moved() {
-            let c = self.node_of_model[n as usize];
+            let c = mesh.node_of_model[n as usize];
             if c != u32::MAX {
                 mesh.x[c as usize][a] = R::of(self.along[n as usize] - origin);
             }

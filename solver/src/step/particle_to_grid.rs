@@ -11,7 +11,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::contact::Keep;
+use crate::step::contact::{maps, OneBody};
 use crate::step::mixed::Mixed;
 
 /// f = σ ∇N for symmetric σ (xx yy zz xy yz zx); in a 2D element (∂N/∂z = 0) only the
@@ -58,11 +58,11 @@ fn vector<E: Element, R: Real>(s: &[R], at: usize) -> V3<R> {
 /// gives the weight of material m's points from their mass.
 /// Under mixed integration the effective-stress force of full elements comes from their Gauss
 /// point instead of their points (the element sums are formed here too, over all the element's
-/// points). Only the points `keep` keeps are mapped (one body of a contact pair,
+/// points). Only the points of `body` are mapped (all for `None`; one body of a contact pair,
 /// [`crate::step::contact`]); a full element's Gauss point belongs to the body of its first
 /// active point (a full element holds one material).
 #[allow(clippy::too_many_arguments)]
-pub fn particle_to_grid<E: Element, R: Real, K: Keep>(
+pub fn particle_to_grid<E: Element, R: Real>(
     team: &Team,
     layout: &Layout<R, E>,
     slots: &mut Slots<R>,
@@ -71,7 +71,7 @@ pub fn particle_to_grid<E: Element, R: Real, K: Keep>(
     gravity: &[V3<R>],
     mixed: Option<&mut Mixed<R>>,
     g: &mut Grid<R>,
-    keep: K,
+    body: Option<OneBody>,
 ) {
     let mixed_sums = mixed.map(|m| {
         let filling = R::of(m.filling);
@@ -125,7 +125,7 @@ pub fn particle_to_grid<E: Element, R: Real, K: Keep>(
             let ours = range
                 .clone()
                 .find(|&i| p.active[i])
-                .is_some_and(|i| keep.keep(p.material[i]));
+                .is_some_and(|i| maps(body, p.material[i]));
             if full && ours {
                 let ve = mesh.volume[e];
                 // The Gauss point's total stress: effective plus pore pressure.
@@ -159,7 +159,7 @@ pub fn particle_to_grid<E: Element, R: Real, K: Keep>(
         );
         let pore = p.liquid.as_ref().map(|l| &l.p[range][..count]);
         for i in 0..count {
-            if !active[i] || !keep.keep(material[i]) {
+            if !active[i] || !maps(body, material[i]) {
                 continue;
             }
             let n = mesh.shape(e, &x[i]);

@@ -10,7 +10,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::contact::Keep;
+use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
 
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
@@ -23,10 +23,10 @@ use crate::step::smoothing::StrainSmoothing;
 /// [`ELEMENT_BLOCK`] elements are completed in its slot, point by point in order (strain-energy
 /// increment, the liquid's compression energy, the volume check; grid to particle began it with
 /// the kinetic energy): the guard rails' sums, formed in passes that read the points anyway so
-/// that they cost no pass of their own. Only the points `keep` keeps move, with `g`'s velocities
-/// (one body of a contact pair, [`crate::step::contact`]).
+/// that they cost no pass of their own. Only the points of `body` move, with `g`'s velocities
+/// (all of them for `None`; one body of a contact pair, [`crate::step::contact`]).
 #[allow(clippy::too_many_arguments)]
-pub fn update_stress_and_move<E: Element, R: Real, K: Keep>(
+pub fn update_stress_and_move<E: Element, R: Real>(
     team: &Team,
     layout: &Layout<R, E>,
     mesh: &Mesh<E, R>,
@@ -38,7 +38,7 @@ pub fn update_stress_and_move<E: Element, R: Real, K: Keep>(
     smoothing: Option<&StrainSmoothing<R>>,
     dt: R,
     guard: Option<Guard<'_, R>>,
-    keep: K,
+    body: Option<OneBody>,
 ) {
     let half = R::of(0.5);
     let third = R::ONE / R::of(3.0);
@@ -127,7 +127,7 @@ pub fn update_stress_and_move<E: Element, R: Real, K: Keep>(
                 }
             }
             for j in points.start - r.start..points.end - r.start {
-                if !active[j] || !keep.keep(material[j]) {
+                if !active[j] || !maps(body, material[j]) {
                     continue;
                 }
                 debug_assert_eq!(element[j] as usize, e, "points not sorted by element");
