@@ -1024,24 +1024,15 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &*self.comm,
             );
         } else {
-            grid_update::grid_update(
-                &self.team,
-                &mut self.grid_scratch,
-                &mut self.grid,
-                &self.traction,
-                tm,
-                &self.fixed,
-                R::of(case.damping),
-                case.damping_rule,
-                &*self.comm,
-            );
-            if let Some(c) = &mut self.contact {
-                // The structure's nodes (no loads on nodes with contact: the soil's traction
-                // array is zero), then the force sums over both bodies.
+            // Each body's nodes (no loads on nodes with contact: the soil's traction array is
+            // zero for the structure too), then, with contact, the force sums over both.
+            let structure = self.contact.as_mut().map(|c| (&mut c.scratch, &mut c.grid));
+            let bodies = std::iter::once((&mut self.grid_scratch, &mut self.grid)).chain(structure);
+            for (scratch, grid) in bodies {
                 grid_update::grid_update(
                     &self.team,
-                    &mut c.scratch,
-                    &mut c.grid,
+                    scratch,
+                    grid,
                     &self.traction,
                     tm,
                     &self.fixed,
@@ -1049,6 +1040,8 @@ impl<R: Real, E: Element> Engine<R, E> {
                     case.damping_rule,
                     &*self.comm,
                 );
+            }
+            if let Some(c) = &mut self.contact {
                 c.force_sums(
                     &self.team,
                     &self.grid,
