@@ -385,6 +385,7 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
             &engine.particles,
             engine.mesh.elements(),
             engine.mesh.nodes(),
+            engine.layout.slot_share(),
         );
     }
     m

@@ -15,8 +15,9 @@ use common::{golden_scene, testdata};
 const BIN: &str = env!("CARGO_BIN_EXE_mpm-solve");
 
 /// Keys of run.json that describe this process rather than the results: wall times, rates,
-/// memory, and the threads (outputs do not depend on them).
-const RUN_SPECIFIC: [&str; 9] = [
+/// memory, and the threads (outputs do not depend on them), with the traffic model, whose
+/// slots are those of the threads' borders.
+const RUN_SPECIFIC: [&str; 10] = [
     "wall_seconds",
     "particle_steps_per_second",
     "phase_seconds",
@@ -26,6 +27,7 @@ const RUN_SPECIFIC: [&str; 9] = [
     "pinning",
     "pinned_cores",
     "busy_cores",
+    "modelled_bytes_per_particle_step",
 ];
 
 /// A longer dry column: 0.2 s in 40 outputs (about 2,100 steps), for signals from outside.

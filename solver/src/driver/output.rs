@@ -298,6 +298,7 @@ pub fn write_summary<R: Real, E: Element>(
         &engine.particles,
         engine.mesh.elements(),
         engine.mesh.nodes(),
+        engine.layout.slot_share(),
     );
     let bytes: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
         .iter()

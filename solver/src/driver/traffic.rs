@@ -5,8 +5,9 @@
 //! The point arrays come from the one field list ([`Particles::read_fields`]) and a table of
 //! which phase reads or rewrites which field, so a field added to the list is counted by
 //! every phase that names it. Element data (map, gradients, corners, volume) are read once per
-//! element and shared by its points; every parallel sum writes its slots and reads them back
-//! (W values per slot, [`crate::parallel::gather`]); nodal arrays are counted once per node;
+//! element and shared by its points; a parallel sum writes the slots of the element corners at
+//! the threads' borders and reads them back (W values per slot, [`crate::parallel::gather`]),
+//! and the other nodes' accumulators once each way; nodal arrays are counted once per node;
 //! nodal values gathered by a point are taken as cache hits (a node's neighbours read it in
 //! turn). The re-sort after points change element is left out: it moves every field, but only
 //! when points have moved, not every step.
@@ -90,11 +91,13 @@ fn point_bytes<R: Real>(p: &Particles<R>, fields: &[(&str, Access)]) -> usize {
 }
 
 /// The modelled bytes per particle-step of each phase of a case with `p`'s points on a mesh of
-/// `elements` elements of type `E` and `nodes` nodes.
+/// `elements` elements of type `E` and `nodes` nodes, of whose element corners the share
+/// `slot_share` sums through the slots ([`crate::parallel::gather::Layout::slot_share`]).
 pub fn modelled_bytes<R: Real, E: Element>(
     p: &Particles<R>,
     elements: usize,
     nodes: usize,
+    slot_share: f64,
 ) -> [f64; 5] {
     let s = std::mem::size_of::<R>();
     let liquid = p.liquid.is_some();
@@ -105,8 +108,13 @@ pub fn modelled_bytes<R: Real, E: Element>(
         + s) as f64
         * elements as f64
         / points;
-    // A sum `width` values wide: each element's node slots written, then read back.
-    let slots = |width: usize| (2 * E::NODES * width * s) as f64 * elements as f64 / points;
+    // A sum `width` values wide: the border corners' slots written, then read back; the other
+    // nodes' accumulators (as many values per node) likewise, once per node.
+    let slots = |width: usize| {
+        let border = (2 * E::NODES * width * s) as f64 * elements as f64 * slot_share;
+        let direct = (2 * width * s) as f64 * nodes as f64 * (1.0 - slot_share);
+        (border + direct) / points
+    };
     let per_node = |bytes: f64| bytes * nodes as f64 / points;
     let (d, v) = (E::DIM, 3 * s);
     let both = |dry: f64, wet: f64| if liquid { dry + wet } else { dry };
@@ -166,12 +174,12 @@ mod tests {
     #[test]
     fn the_model_counts_the_field_list_and_what_the_liquid_adds() {
         // A dry tetrahedral column, 4 points per element, 20 points per node.
-        let dry = modelled_bytes::<f64, Tet4>(&points(80, false), 20, 4);
+        let dry = modelled_bytes::<f64, Tet4>(&points(80, false), 20, 4, 1.0);
         // Locate: x read (24), element rewritten (8), active (1), plus the element's data
         // (map 72 + 4 x (24 + 4) gradients and corners + 8 volume = 192) over 4 points.
         assert_eq!(dry[4], 24.0 + 8.0 + 1.0 + 192.0 / 4.0);
         // The liquid adds to every phase but locate.
-        let wet = modelled_bytes::<f64, Tet4>(&points(80, true), 20, 4);
+        let wet = modelled_bytes::<f64, Tet4>(&points(80, true), 20, 4, 1.0);
         for k in 0..4 {
             assert!(wet[k] > dry[k], "phase {k}");
         }
@@ -183,10 +191,17 @@ mod tests {
             active: vec![true; 80],
             ..Default::default()
         };
-        let half = modelled_bytes::<f32, Tet4>(&f32_points, 20, 4);
+        let half = modelled_bytes::<f32, Tet4>(&f32_points, 20, 4, 1.0);
         assert_eq!(half[4], 12.0 + 8.0 + 1.0 + (36.0 + 4.0 * 16.0 + 4.0) / 4.0);
         // A triangle's slots are narrower: its particle-to-grid traffic per point is less.
-        let tri = modelled_bytes::<f64, Tri3>(&points(60, false), 20, 4);
+        let tri = modelled_bytes::<f64, Tri3>(&points(60, false), 20, 4, 1.0);
         assert!(tri[0] < dry[0] + 1e-9);
+        // Corners summed straight into their nodes' accumulators spare the slots: 20 elements'
+        // 80 corner slots of 10 values, written and read, against 4 nodes' accumulators.
+        let direct = modelled_bytes::<f64, Tet4>(&points(80, false), 20, 4, 0.0);
+        assert_eq!(
+            dry[0] - direct[0],
+            (2.0 * 80.0 * 10.0 * 8.0 - 2.0 * 4.0 * 10.0 * 8.0) / 80.0
+        );
     }
 }

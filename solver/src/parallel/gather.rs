@@ -8,6 +8,14 @@
 //! the slots of the node's elements in element order. Every node's sum is thus taken in an
 //! order fixed by the mesh and the particle order, whatever the thread count, with no locks or
 //! atomics.
+//!
+//! On one process most nodes have all their elements in one thread's range. Their slots would be
+//! written and read back only to be added in element order, which that thread's own element loop
+//! already follows: it adds such a node's values straight into an accumulator per node instead
+//! (the first element's as 0 + v, as the slot pass starts its sum from 0, so that even the
+//! sign of a zero is the same). Only the nodes at the ranges' borders go through the slots. The
+//! sums are the same bits either way; the slots' bytes, the largest stream of the pass, are
+//! spared for the interior (docs/design.md §5).
 
 use std::ops::Range;
 
@@ -56,13 +64,29 @@ pub struct Layout<R: Real, E: Element = Tet4> {
     order: Option<Vec<u32>>,
     /// Number of owned elements (the halo's follow).
     owned: usize,
+    /// For each slot (NODES e + k), the node it adds straight into ([`DIRECT_FIRST`] set on the
+    /// node's first element), or [`TO_SLOT`] for a node whose elements more than one thread
+    /// holds (and for every slot on a rank of several, whose sums cross the halo).
+    direct: Vec<u32>,
+    /// Whether node n is summed straight into its accumulator (all its elements one thread's).
+    direct_node: Vec<bool>,
     _types: std::marker::PhantomData<(R, E)>,
 }
 
-/// Per-node partial sums: room for `NODES × elements` slots of up to [`WIDTH`] values. A pass
-/// of width W packs its slots W values apart, so that it writes and reads W values per slot,
-/// not [`WIDTH`] (a 2-wide pass moves a sixth of the bytes of a 12-wide one).
+/// Per-node partial sums: room for `NODES × elements` slots of up to [`WIDTH`] values, then one
+/// accumulator of up to [`WIDTH`] values per node. A pass of width W packs its slots (and its
+/// accumulators) W values apart, so that it writes and reads W values per slot, not [`WIDTH`]
+/// (a 2-wide pass moves a sixth of the bytes of a 12-wide one).
 pub type Slots<R> = Vec<R>;
+
+/// [`Layout`]'s `direct` entry of a slot that goes through the slots.
+const TO_SLOT: u32 = u32::MAX;
+
+/// Set in a `direct` entry on the node's first element: its accumulator starts there.
+const DIRECT_FIRST: u32 = 1 << 31;
+
+/// Most nodes an element has (the scatter's element buffer is sized for it).
+const MAX_NODES: usize = 4;
 
 /// The slots of one element's nodes in a scatter's closure, `width` values each: `width` must
 /// be the scatter's W (checked in debug builds).
@@ -160,6 +184,11 @@ impl<R: Real, E: Element> Layout<R, E> {
             }
         }
         owned_start.push(owned_node.len() as u32);
+        let (direct, direct_node) = if halo.is_none() {
+            direct_slots::<E>(&element_ranges, &node_start, &node_slot)
+        } else {
+            (vec![TO_SLOT; E::NODES * ne], vec![false; nn])
+        };
         let layout = Layout {
             elem_start,
             element_ranges,
@@ -171,6 +200,8 @@ impl<R: Real, E: Element> Layout<R, E> {
             halo: halo.clone(),
             order: halo.as_ref().map(|_| order.to_vec()),
             owned,
+            direct,
+            direct_node,
             _types: std::marker::PhantomData,
         };
         layout.debug_check();
@@ -234,10 +265,22 @@ impl<R: Real, E: Element> Layout<R, E> {
         (self.elem_start.len() - 1).div_ceil(ELEMENT_BLOCK)
     }
 
-    /// Zeroed slots for this layout (allocated zeroed, so pages are placed by the threads that
-    /// first write them).
+    /// Zeroed slots and node accumulators for this layout (allocated zeroed, so pages are
+    /// placed by the threads that first write them).
     pub fn new_slots(&self) -> Slots<R> {
-        vec![R::ZERO; WIDTH * E::NODES * (self.elem_start.len() - 1)]
+        vec![R::ZERO; self.accumulators() + WIDTH * self.direct_node.len()]
+    }
+
+    /// Where the node accumulators start in the slots.
+    fn accumulators(&self) -> usize {
+        WIDTH * E::NODES * (self.elem_start.len() - 1)
+    }
+
+    /// The share of element corners whose sums go through the slots (the rest add straight into
+    /// their node's accumulator): what the slot traffic of a pass is scaled by.
+    pub fn slot_share(&self) -> f64 {
+        let through = self.direct.iter().filter(|&&d| d == TO_SLOT).count();
+        through as f64 / self.direct.len().max(1) as f64
     }
 
     /// Particles of thread `k`.
@@ -252,24 +295,57 @@ impl<R: Real, E: Element> Layout<R, E> {
         self.elem_start[e] as usize..self.elem_start[e + 1] as usize
     }
 
-    /// Pass 1: on every thread, for each of its elements, zeroes the slots of the element's
-    /// nodes ([`Element::NODES`] slots of `W` values, one after the other) and calls
-    /// `element(e, slots)`; [`node_slots`] splits them by node.
+    /// Pass 1: on every thread, for each of its elements, zeroes a buffer for the values of the
+    /// element's nodes ([`Element::NODES`] slots of `W` values, one after the other), calls
+    /// `element(e, buffer)` ([`node_slots`] splits it by node), and hands each node's values on:
+    /// into the node's accumulator when the node is this thread's alone, else into its slot.
     pub fn scatter<const W: usize, F>(&self, team: &Team, slots: &mut Slots<R>, element: F)
     where
         F: Fn(usize, &mut [R]) + Sync,
     {
         const { assert!(W <= WIDTH) };
+        const { assert!(E::NODES <= MAX_NODES) };
         let per_element = E::NODES * W;
+        let acc_at = self.accumulators();
+        debug_assert_eq!(slots.len(), acc_at + WIDTH * self.direct_node.len());
         let shared = Shared::new(slots);
         let ranges = &self.element_ranges;
+        let direct = &self.direct;
         team.run(|k| {
             let r = ranges[k].clone();
             // SAFETY: the element ranges are disjoint, so are their slots.
             let mine = unsafe { shared.range(per_element * r.start..per_element * r.end) };
-            for (own, e) in mine.chunks_exact_mut(per_element).zip(r) {
+            let mut buffer = [R::ZERO; WIDTH * MAX_NODES];
+            let own = &mut buffer[..per_element];
+            for (slot, e) in mine.chunks_exact_mut(per_element).zip(r) {
                 own.fill(R::ZERO);
                 element(e, own);
+                let targets = &direct[E::NODES * e..E::NODES * e + E::NODES];
+                for ((values, to), &target) in own
+                    .chunks_exact(W)
+                    .zip(slot.chunks_exact_mut(W))
+                    .zip(targets)
+                {
+                    if target == TO_SLOT {
+                        to.copy_from_slice(values);
+                        continue;
+                    }
+                    let n = (target & !DIRECT_FIRST) as usize;
+                    // SAFETY: a node with a `direct` entry has every element in this thread's
+                    // range (`direct_slots`), so no other thread touches its accumulator, and
+                    // the accumulators lie past every slot.
+                    let acc = unsafe { shared.range(acc_at + W * n..acc_at + W * n + W) };
+                    if target & DIRECT_FIRST != 0 {
+                        // 0 + v, not v: the slot pass's sum starts from 0 (and 0 + -0 is +0).
+                        for (a, &v) in acc.iter_mut().zip(values) {
+                            *a = R::ZERO + v;
+                        }
+                    } else {
+                        for (a, &v) in acc.iter_mut().zip(values) {
+                            *a += v;
+                        }
+                    }
+                }
             }
         });
         if let Some(h) = &self.halo {
@@ -343,8 +419,14 @@ impl<R: Real, E: Element> Layout<R, E> {
     where
         F: Fn(usize, [R; W]) + Sync,
     {
+        let acc_at = self.accumulators();
         team.run(|k| {
             for n in self.node_ranges[k].clone() {
+                if self.direct_node[n] {
+                    let at = acc_at + W * n;
+                    node(n, std::array::from_fn(|c| slots[at + c]));
+                    continue;
+                }
                 let mut sum = [R::ZERO; W];
                 for &s in
                     &self.node_slot[self.node_start[n] as usize..self.node_start[n + 1] as usize]
@@ -377,6 +459,49 @@ pub fn exact_total<const K: usize>(comm: &dyn Communicator, partials: &[[f64; K]
     let mut all = [[0i64; exact::WIDTH]; K];
     comm.sum_integers(local.as_flattened(), all.as_flattened_mut());
     std::array::from_fn(|c| ExactSum::from_words(all[c]).value())
+}
+
+/// The `direct` entries of [`Layout`] (and which nodes they cover) for one process: a node all
+/// of whose slots (`node_slot[node_start[n]..node_start[n + 1]]`, in element order) belong to
+/// elements of one thread's range adds straight into its accumulator, its first element
+/// marked.
+fn direct_slots<E: Element>(
+    element_ranges: &[Range<usize>],
+    node_start: &[u32],
+    node_slot: &[u32],
+) -> (Vec<u32>, Vec<bool>) {
+    let elements = element_ranges.last().map_or(0, |r| r.end);
+    let mut thread = vec![0u32; elements];
+    for (k, r) in element_ranges.iter().enumerate() {
+        thread[r.clone()].fill(k as u32);
+    }
+    let nodes = node_start.len() - 1;
+    assert!(
+        nodes < DIRECT_FIRST as usize,
+        "more nodes than a slot entry can name"
+    );
+    let mut direct = vec![TO_SLOT; E::NODES * elements];
+    let mut direct_node = vec![false; nodes];
+    for n in 0..nodes {
+        let list = &node_slot[node_start[n] as usize..node_start[n + 1] as usize];
+        let Some(&first) = list.first() else {
+            continue;
+        };
+        let home = thread[first as usize / E::NODES];
+        if list.iter().any(|&s| thread[s as usize / E::NODES] != home) {
+            continue;
+        }
+        debug_assert!(
+            list.windows(2).all(|w| w[0] < w[1]),
+            "a node's slots out of element order"
+        );
+        direct_node[n] = true;
+        direct[first as usize] = n as u32 | DIRECT_FIRST;
+        for &s in &list[1..] {
+            direct[s as usize] = n as u32;
+        }
+    }
+    (direct, direct_node)
 }
 
 /// First particle of each element for particles sorted by `element`.
@@ -522,6 +647,56 @@ mod tests {
             .collect();
         assert_eq!(chunks, want);
         assert_eq!(single, [0, 2, 1, 6, 3, 4, 5]);
+    }
+
+    #[test]
+    fn nodes_of_one_thread_sum_directly_and_border_nodes_through_slots() {
+        // Three tetrahedra in a row: 0 (nodes 0 1 2 3), 1 (1 2 3 4), 2 (2 3 4 5); thread 0
+        // holds elements 0 and 1, thread 1 element 2.
+        let corners = [[0u32, 1, 2, 3], [1, 2, 3, 4], [2, 3, 4, 5]];
+        let mut node_start = vec![0u32; 7];
+        for c in &corners {
+            for &n in c {
+                node_start[n as usize + 1] += 1;
+            }
+        }
+        for n in 0..6 {
+            node_start[n + 1] += node_start[n];
+        }
+        let mut fill = node_start.clone();
+        let mut node_slot = vec![0u32; 12];
+        for (e, c) in corners.iter().enumerate() {
+            for (k, &n) in c.iter().enumerate() {
+                node_slot[fill[n as usize] as usize] = (4 * e + k) as u32;
+                fill[n as usize] += 1;
+            }
+        }
+        let (direct, nodes) = direct_slots::<Tet4>(&[0..2, 2..3], &node_start, &node_slot);
+        // Nodes 0 and 1 are thread 0's alone, 5 thread 1's; 2, 3 and 4 straddle the border.
+        assert_eq!(nodes, [true, true, false, false, false, true]);
+        let first = |n: u32| n | DIRECT_FIRST;
+        assert_eq!(
+            direct,
+            [
+                first(0),
+                first(1),
+                TO_SLOT,
+                TO_SLOT,
+                1,
+                TO_SLOT,
+                TO_SLOT,
+                TO_SLOT,
+                TO_SLOT,
+                TO_SLOT,
+                TO_SLOT,
+                first(5)
+            ]
+        );
+        // One thread: every node direct, each first on its first element.
+        let one_thread: [Range<usize>; 1] = [Range { start: 0, end: 3 }];
+        let (direct, nodes) = direct_slots::<Tet4>(&one_thread, &node_start, &node_slot);
+        assert!(nodes.iter().all(|&d| d));
+        assert_eq!(direct[4..8], [1, 2, 3, first(4)]);
     }
 
     #[test]

@@ -53,6 +53,54 @@ fn vector<E: Element, R: Real>(s: &[R], at: usize) -> V3<R> {
     v
 }
 
+/// Lanes of a per-element sum: one per element node, padded to four (a triangle's fourth lane
+/// carries zeros and is never stored).
+const LANES: usize = 4;
+
+/// An element's sums held value by value across its nodes (`sums[c][k]`: value c of node k), so
+/// that each value's update is one operation over the nodes, which the compiler turns into
+/// vector instructions. Each node's arithmetic is the one a node-by-node loop does, in the same
+/// order, so the sums are the same bits.
+type Lanes<R, const W: usize> = [[R; LANES]; W];
+
+/// One value of `per_node` for each node of the element, zero past its last.
+#[inline(always)]
+fn lanes<E: Element, R: Real>(per_node: impl Fn(usize) -> R) -> [R; LANES] {
+    std::array::from_fn(|k| if k < E::NODES { per_node(k) } else { R::ZERO })
+}
+
+/// Component `a` of σ ∇N_k for every node k, from the gradients by component (`grad[b][k]`
+/// = ∂N_k/∂x_b): [`traction`] lane by lane.
+#[inline(always)]
+fn tractions<E: Element, R: Real>(s: &[R; 6], grad: &[[R; LANES]; 3], a: usize) -> [R; LANES] {
+    // Row a of the symmetric σ (xx yy zz xy yz zx).
+    const ROWS: [[usize; 3]; 3] = [[0, 3, 5], [3, 1, 4], [5, 4, 2]];
+    let r = ROWS[a];
+    std::array::from_fn(|k| {
+        if E::DIM == 2 {
+            s[r[0]] * grad[0][k] + s[r[1]] * grad[1][k]
+        } else {
+            s[r[0]] * grad[0][k] + s[r[1]] * grad[1][k] + s[r[2]] * grad[2][k]
+        }
+    })
+}
+
+/// The element's gradients by component, `[b][k]` = ∂N_k/∂x_b, padded with zeros.
+#[inline(always)]
+fn gradients_by_component<E: Element, R: Real>(grad: &[V3<R>]) -> [[R; LANES]; 3] {
+    std::array::from_fn(|b| lanes::<E, R>(|k| grad[k][b]))
+}
+
+/// Stores the element's sums into the scatter's buffer, node by node (`width` values each).
+#[inline(always)]
+fn store<E: Element, R: Real, const W: usize>(sums: &Lanes<R, W>, four: &mut [R], width: usize) {
+    for (k, slot) in node_slots::<E, R>(four, width).enumerate() {
+        for (c, v) in slot.iter_mut().enumerate() {
+            *v = sums[c][k];
+        }
+    }
+}
+
 /// Maps every active particle to the nodes of its element: mass, momentum, internal force
 /// -Σ V (σ' + p I) ∇N and gravity. `gravity[m]` is the acceleration (multiplier applied) that
 /// gives the weight of material m's points from their mass.
@@ -85,6 +133,10 @@ pub fn particle_to_grid<E: Element, R: Real>(
     });
     let element = |e: usize, four: &mut [R]| {
         let grad = mesh.grad[e].as_ref();
+        let by_component = gradients_by_component::<E, R>(grad);
+        // The element's sums, value by value across its nodes (stored into `four` at the end).
+        let mut sums: Lanes<R, 10> = [[R::ZERO; LANES]; 10];
+        const { assert!(solid_width::<Tet4>() <= 10) };
         let range = layout.particles_of(e);
         // Mixed integration: is the element full, and its mean stress.
         let mut full = false;
@@ -135,10 +187,10 @@ pub fn particle_to_grid<E: Element, R: Real>(
                         *c += pm;
                     }
                 }
-                for (k, slot) in node_slots::<E, R>(four, solid_width::<E>()).enumerate() {
+                for k in 0..E::NODES {
                     let f = traction::<E, R>(&s, &grad[k]);
                     for a in 0..E::DIM {
-                        slot[1 + E::DIM + a] -= ve * f[a];
+                        sums[1 + E::DIM + a][k] -= ve * f[a];
                     }
                 }
             }
@@ -181,20 +233,27 @@ pub fn particle_to_grid<E: Element, R: Real>(
             } else {
                 R::ZERO
             };
-            for (k, slot) in node_slots::<E, R>(four, solid_width::<E>()).enumerate() {
-                let w = m * n[k];
-                let f = traction::<E, R>(&s, &grad[k]);
-                slot[0] += w;
-                for a in 0..E::DIM {
-                    slot[1 + a] += w * v[a];
-                    slot[1 + E::DIM + a] -= f[a];
-                    slot[1 + 2 * E::DIM + a] += w * gravity[a];
+            // Node by node the same operations as σ ∇N_k and m N_k (v, g) node after node.
+            let w = lanes::<E, R>(|k| m * n[k]);
+            for k in 0..LANES {
+                sums[0][k] += w[k];
+            }
+            for a in 0..E::DIM {
+                let f = tractions::<E, R>(&s, &by_component, a);
+                for k in 0..LANES {
+                    sums[1 + a][k] += w[k] * v[a];
+                    sums[1 + E::DIM + a][k] -= f[k];
+                    sums[1 + 2 * E::DIM + a][k] += w[k] * gravity[a];
                 }
-                if E::AXISYMMETRIC {
-                    slot[1 + E::DIM] -= hoop * n[k];
+            }
+            if E::AXISYMMETRIC {
+                let nk = lanes::<E, R>(|k| n[k]);
+                for k in 0..LANES {
+                    sums[1 + E::DIM][k] -= hoop * nk[k];
                 }
             }
         }
+        store::<E, R, 10>(&sums, four, solid_width::<E>());
     };
     let mass = Shared::new(&mut g.mass);
     let momentum = Shared::new(&mut g.momentum);
@@ -266,14 +325,18 @@ pub fn liquid_to_grid<E: Element, R: Real>(
     };
     let element = |e: usize, four: &mut [R]| {
         let grad = mesh.grad[e].as_ref();
+        let by_component = gradients_by_component::<E, R>(grad);
+        // The element's sums, value by value across its nodes (stored into `four` at the end).
+        let mut sums: Lanes<R, 12> = [[R::ZERO; LANES]; 12];
+        const { assert!(liquid_width::<Tet4>() <= 12) };
         // A full element under mixed integration takes its pore-pressure force at the Gauss
         // point (its volume times the mean pore pressure), as the solid pass does.
         let full = mixed.is_some_and(|m| m.full[e]);
         if let (true, Some(m)) = (full, mixed) {
             let vp = mesh.volume[e] * m.pressure[e];
-            for (k, slot) in node_slots::<E, R>(four, liquid_width::<E>()).enumerate() {
+            for k in 0..E::NODES {
                 for a in 0..E::DIM {
-                    slot[3 + E::DIM + a] -= vp * grad[k][a];
+                    sums[3 + E::DIM + a][k] -= vp * grad[k][a];
                 }
             }
         }
@@ -299,21 +362,31 @@ pub fn liquid_to_grid<E: Element, R: Real>(
             } else {
                 R::ZERO
             };
-            for (k, slot) in node_slots::<E, R>(four, liquid_width::<E>()).enumerate() {
-                let nk = n[k];
-                slot[0] += mw * nk;
-                slot[1] += f.n * mw * nk;
-                slot[2] += f.drag * vw * nk;
-                for a in 0..E::DIM {
-                    slot[3 + a] += mw * nk * w[a];
-                    slot[3 + E::DIM + a] += mw * nk * gravity[a] - pw * grad[k][a];
-                    slot[3 + 2 * E::DIM + a] += f.n * mw * nk * gravity[a];
+            // Node by node the same operations as a loop over the nodes.
+            let nk = lanes::<E, R>(|k| n[k]);
+            let (mn, nmw) = (
+                lanes::<E, R>(|k| mw * n[k]),
+                lanes::<E, R>(|k| f.n * mw * n[k]),
+            );
+            for k in 0..LANES {
+                sums[0][k] += mn[k];
+                sums[1][k] += nmw[k];
+                sums[2][k] += f.drag * vw * nk[k];
+            }
+            for a in 0..E::DIM {
+                for k in 0..LANES {
+                    sums[3 + a][k] += mn[k] * w[a];
+                    sums[3 + E::DIM + a][k] += mn[k] * gravity[a] - pw * by_component[a][k];
+                    sums[3 + 2 * E::DIM + a][k] += nmw[k] * gravity[a];
                 }
-                if E::AXISYMMETRIC {
-                    slot[3 + E::DIM] -= hoop * nk;
+            }
+            if E::AXISYMMETRIC {
+                for k in 0..LANES {
+                    sums[3 + E::DIM][k] -= hoop * nk[k];
                 }
             }
         }
+        store::<E, R, 12>(&sums, four, liquid_width::<E>());
     };
     let mass = Shared::new(&mut gl.mass);
     let mass_n = Shared::new(&mut gl.mass_n);
