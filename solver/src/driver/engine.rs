@@ -971,6 +971,11 @@ impl<R: Real, E: Element> Engine<R, E> {
             .contact
             .as_mut()
             .map(|c| (&mut c.grid, Some(c.structure)));
+        // The liquid goes with the soil's pass (contact refuses saturated materials).
+        let mut liquid = Some(particle_to_grid::LiquidLoads {
+            fluids: &self.fluids,
+            gravity,
+        });
         for (grid, body) in std::iter::once((&mut self.grid, soil)).chain(structure) {
             particle_to_grid::particle_to_grid(
                 &self.team,
@@ -982,19 +987,9 @@ impl<R: Real, E: Element> Engine<R, E> {
                 self.mixed.as_mut(),
                 grid,
                 body,
+                liquid.take(),
             );
         }
-        particle_to_grid::liquid_to_grid(
-            &self.team,
-            &self.layout,
-            &mut self.slots,
-            &self.mesh,
-            &self.particles,
-            &self.fluids,
-            gravity,
-            self.mixed.as_ref(),
-            &mut self.grid,
-        );
         particle_to_grid::add_point_loads(
             &self.mesh,
             &self.particles,
@@ -1130,20 +1125,13 @@ impl<R: Real, E: Element> Engine<R, E> {
                 self.guards.enabled.then_some(&mut self.guard_slots[..]),
                 body,
                 k == 0,
+                // The liquid goes with the soil's pass (contact refuses saturated materials).
+                (k == 0).then_some(grid_to_particle::LiquidRemap {
+                    fluids: &self.fluids,
+                    fixed: &self.liquid_fixed,
+                }),
             );
         }
-        grid_to_particle::liquid_to_particles(
-            &self.team,
-            &self.layout,
-            &mut self.slots,
-            &self.mesh,
-            &mut self.particles,
-            &mut self.grid,
-            &self.fluids,
-            &self.liquid_fixed,
-            R::of(dt),
-            self.guards.enabled.then_some(&mut self.guard_slots[..]),
-        );
         if let Some(pr) = &mut self.prescribed {
             let g = self
                 .contact
@@ -1166,7 +1154,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                 R::of(dt),
             );
         }
-        stress::update_pore_pressure(
+        let rate_pending = stress::update_pore_pressure(
             &self.team,
             &self.layout,
             &mut self.slots,
@@ -1181,7 +1169,20 @@ impl<R: Real, E: Element> Engine<R, E> {
         // Each body's points strain and move with its own nodes' velocities.
         let soil = self.contact.as_ref().map(|c| c.soil());
         let structure = self.contact.as_ref().map(|c| (&c.grid, Some(c.structure)));
-        for (grid, body) in std::iter::once((&self.grid, soil)).chain(structure) {
+        // The smoothed pore-pressure rates reach the points in the stress pass.
+        let pore_rate = self
+            .grid
+            .liquid
+            .as_ref()
+            .filter(|_| rate_pending)
+            .map(|gl| stress::PoreRate {
+                nodal: &gl.rate,
+                fluids: &self.fluids,
+            });
+        for (k, (grid, body)) in std::iter::once((&self.grid, soil))
+            .chain(structure)
+            .enumerate()
+        {
             stress::update_stress_and_move(
                 &self.team,
                 &self.layout,
@@ -1200,6 +1201,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                     min_volume_ratio: R::of(self.guards.min_volume_ratio),
                 }),
                 body,
+                pore_rate.filter(|_| k == 0),
             );
         }
         if let Some(m) = &self.mixed {

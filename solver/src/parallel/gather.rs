@@ -29,8 +29,9 @@ use crate::parallel::team::{aligned_to_blocks, balanced_ranges, Shared, Team};
 use crate::real::Real;
 use crate::state::particles::{Field, FieldVisitor, Particles, Value};
 
-/// Widest slot (values per element node) a pass uses.
-pub const WIDTH: usize = 12;
+/// Widest slot (values per element node) a pass uses: particle to grid's, the solid's 10 and
+/// the liquid's 12 values of a tetrahedron's node.
+pub const WIDTH: usize = 22;
 
 pub use crate::parallel::team::ELEMENT_BLOCK;
 
@@ -303,6 +304,21 @@ impl<R: Real, E: Element> Layout<R, E> {
     where
         F: Fn(usize, &mut [R]) + Sync,
     {
+        self.scatter_with::<W, (), _>(team, slots, |_| (), |e, own, _| element(e, own));
+    }
+
+    /// [`Layout::scatter`] with a state of each thread's own, made by `init(thread)` before
+    /// its first element and handed to every `element(e, buffer, state)` call of the thread, in
+    /// element order (for sums a pass keeps beside its slots).
+    pub fn scatter_with<const W: usize, S, F>(
+        &self,
+        team: &Team,
+        slots: &mut Slots<R>,
+        init: impl Fn(usize) -> S + Sync,
+        element: F,
+    ) where
+        F: Fn(usize, &mut [R], &mut S) + Sync,
+    {
         const { assert!(W <= WIDTH) };
         const { assert!(E::NODES <= MAX_NODES) };
         let per_element = E::NODES * W;
@@ -317,9 +333,10 @@ impl<R: Real, E: Element> Layout<R, E> {
             let mine = unsafe { shared.range(per_element * r.start..per_element * r.end) };
             let mut buffer = [R::ZERO; WIDTH * MAX_NODES];
             let own = &mut buffer[..per_element];
+            let mut state = init(k);
             for (slot, e) in mine.chunks_exact_mut(per_element).zip(r) {
                 own.fill(R::ZERO);
-                element(e, own);
+                element(e, own, &mut state);
                 let targets = &direct[E::NODES * e..E::NODES * e + E::NODES];
                 for ((values, to), &target) in own
                     .chunks_exact(W)

@@ -12,6 +12,16 @@ use crate::state::particles::Particles;
 use crate::step::contact::{maps, OneBody};
 use crate::step::stress::GuardSums;
 
+/// What the liquid's share of grid to particle needs (two-phase cases): each material's fluid
+/// (`None` for a dry material) and the liquid's fixities.
+#[derive(Clone, Copy)]
+pub struct LiquidRemap<'a, R: Real> {
+    /// Per material, its fluid.
+    pub fluids: &'a [Option<Fluid<R>>],
+    /// Per node, the liquid's fixed components.
+    pub fixed: &'a [[bool; 3]],
+}
+
 /// Updates particle velocities from nodal accelerations (FLIP; with `pic` > 0 blended with
 /// the nodes' updated velocities, PIC), then re-maps momentum to get the nodal velocities
 /// (fixed components and empty nodes zero) that drive strain, stress, volume and position
@@ -21,6 +31,15 @@ use crate::step::stress::GuardSums;
 /// their kinetic energy), the velocities at hand. Only the points of `body` take part (all of
 /// them for `None`; one body of a contact pair, [`crate::step::contact`]); the second body's
 /// pass adds its kinetic energy to the slots the first began (`begin` false).
+///
+/// With `liquid` (a two-phase case), the same pass updates the liquid velocities of the points
+/// of materials with a fluid from the nodal liquid accelerations (FLIP) and re-maps the liquid
+/// momentum to nodal liquid velocities (zero in the liquid's fixed components and at empty
+/// nodes); with `guard`, each block's slot then takes the liquid's n ρw V_w |w|² (twice its
+/// kinetic energy) element by element after the solid's sums of the block, the order of a
+/// liquid pass of its own. One pass computes each point's shape functions and reads its
+/// position once for both phases. The liquid goes with every body (`body` `None`): contact
+/// refuses saturated materials.
 #[allow(clippy::too_many_arguments)]
 pub fn grid_to_particle<E: Element, R: Real>(
     team: &Team,
@@ -35,16 +54,31 @@ pub fn grid_to_particle<E: Element, R: Real>(
     guard: Option<&mut [GuardSums]>,
     body: Option<OneBody>,
     begin: bool,
+    liquid: Option<LiquidRemap<'_, R>>,
 ) {
+    let liquid = liquid.filter(|_| p.liquid.is_some() && g.liquid.is_some());
+    debug_assert!(
+        liquid.is_none() || body.is_none(),
+        "the liquid re-mapped with one body of a contact pair"
+    );
     let guard = guard.map(Shared::new);
     let vel = Shared::new(&mut p.v);
-    let (x, mass, active, material) = (&p.x, &p.mass, &p.active, &p.material);
+    let (x, mass, active, material, volume) = (&p.x, &p.mass, &p.active, &p.material, &p.volume);
+    let (liquid_vel, volume0) = match &mut p.liquid {
+        Some(lp) => (Some(Shared::new(&mut lp.w)), lp.volume0.as_deref()),
+        None => (None, None),
+    };
+    let liquid_acc = g.liquid.as_ref().map(|gl| &gl.acc[..]);
     let (acc, momentum, node_mass, empty) = (&g.acc, &g.momentum, &g.mass, g.empty_below);
     let flip = R::ONE - pic;
-    // One element's points; with `want`, their kinetic energy. Two scatters below, each with
-    // `want` fixed, so that the run without guards keeps the loop it had without them.
+    // Values per node of the re-map: the solid's momentum, then the liquid's.
+    let width = if liquid.is_some() { 2 * E::DIM } else { E::DIM };
+    let elements = mesh.elements();
+    // One element's points; with `want`, their kinetic energy (solid, liquid). Two scatters
+    // below, each with `want` fixed, so that the run without guards keeps the loop it had
+    // without them.
     let element = |e: usize, four: &mut [R], want: bool| {
-        let mut kinetic = 0.0;
+        let (mut kinetic, mut kinetic_w) = (0.0, 0.0);
         // The element's points, each array sliced to them once (one length): the loop then
         // indexes without bounds checks.
         let range = layout.particles_of(e);
@@ -56,7 +90,12 @@ pub fn grid_to_particle<E: Element, R: Real>(
             &material[range.clone()][..count],
         );
         // SAFETY: the points of element e belong to this thread only.
-        let vel = unsafe { &mut vel.range(range)[..count] };
+        let vel = unsafe { &mut vel.range(range.clone())[..count] };
+        // SAFETY: as above.
+        let mut w_pts = liquid_vel
+            .as_ref()
+            .filter(|_| liquid.is_some())
+            .map(|w| unsafe { &mut w.range(range.clone())[..count] });
         for i in 0..count {
             if !active[i] || !maps(body, material[i]) {
                 continue;
@@ -87,7 +126,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
                     v[c] = flip * v[c] + pic * grid_v[c];
                 }
             }
-            for (k, slot) in node_slots::<E, R>(four, E::DIM).enumerate() {
+            for (k, slot) in node_slots::<E, R>(four, width).enumerate() {
                 let w = mass[i] * n[k];
                 for c in 0..E::DIM {
                     slot[c] += w * v[c];
@@ -96,15 +135,41 @@ pub fn grid_to_particle<E: Element, R: Real>(
             if want {
                 kinetic += (mass[i] * dot::<E, R>(v, v)).f64();
             }
+            // The liquid of the point, if its material has one.
+            let (Some(l), Some(w_pts), Some(acc_w)) = (liquid, w_pts.as_mut(), liquid_acc) else {
+                continue;
+            };
+            let Some(f) = l.fluids[material[i] as usize] else {
+                continue;
+            };
+            let dw = interpolate(mesh, e, n, acc_w);
+            let w = &mut w_pts[i];
+            for c in 0..E::DIM {
+                w[c] += dt * dw[c];
+            }
+            // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
+            let j = range.start + i;
+            let mw = f.rho_w * volume0.map_or(volume[j], |v0| v0[j]);
+            for (k, slot) in node_slots::<E, R>(four, width).enumerate() {
+                for c in 0..E::DIM {
+                    slot[E::DIM + c] += mw * n[k] * w[c];
+                }
+            }
+            if want {
+                kinetic_w += (f.n * mw * dot::<E, R>(w, w)).f64();
+            }
         }
-        kinetic
+        (kinetic, kinetic_w)
     };
+    // The liquid's kinetic sums of the block's elements so far, added to the block's slot
+    // after its last element (after the solid's sums of the block).
+    let init = |_| [0.0f64; ELEMENT_BLOCK];
     match &guard {
-        None => scatter::<E, R>(layout, team, slots, |e, four| {
+        None => scatter::<E, R, _>(layout, team, slots, width, init, |e, four, _| {
             element(e, four, false);
         }),
-        Some(guard) => scatter::<E, R>(layout, team, slots, |e, four| {
-            let kinetic = element(e, four, true);
+        Some(guard) => scatter::<E, R, _>(layout, team, slots, width, init, |e, four, pending| {
+            let (kinetic, kinetic_w) = element(e, four, true);
             let b = e / ELEMENT_BLOCK;
             // SAFETY: the scatter hands element e to one thread only, once, in element order,
             // and the thread's elements hold whole blocks (aligned ranges): no other thread
@@ -118,6 +183,14 @@ pub fn grid_to_particle<E: Element, R: Real>(
             } else {
                 slot.kinetic += kinetic;
             }
+            if liquid.is_some() {
+                pending[e % ELEMENT_BLOCK] = kinetic_w;
+                if e % ELEMENT_BLOCK == ELEMENT_BLOCK - 1 || e + 1 == elements {
+                    for &k in &pending[..=e % ELEMENT_BLOCK] {
+                        slot.kinetic += k;
+                    }
+                }
+            }
         }),
     }
     nodal_velocity(
@@ -128,6 +201,11 @@ pub fn grid_to_particle<E: Element, R: Real>(
         g.empty_below,
         fixed,
         &mut g.vel,
+        g.liquid
+            .as_mut()
+            .filter(|_| liquid.is_some())
+            .zip(liquid)
+            .map(|(gl, l)| (&gl.mass[..], l.fixed, &mut gl.vel[..])),
     );
 }
 
@@ -159,22 +237,52 @@ fn dot<E: Element, R: Real>(v: &V3<R>, w: &V3<R>) -> R {
     s
 }
 
-/// A scatter of one vector per node, as wide as the element's dimension.
-fn scatter<E: Element, R: Real>(
+/// A scatter of the re-mapped momenta, `width` values per node: the solid's, as wide as the
+/// element's dimension, then the liquid's when there is one.
+fn scatter<E: Element, R: Real, S>(
     layout: &Layout<R, E>,
     team: &Team,
     slots: &mut Slots<R>,
-    element: impl Fn(usize, &mut [R]) + Sync,
+    width: usize,
+    init: impl Fn(usize) -> S + Sync,
+    element: impl Fn(usize, &mut [R], &mut S) + Sync,
 ) {
-    if E::DIM == 2 {
-        layout.scatter::<2, _>(team, slots, element);
-    } else {
-        layout.scatter::<3, _>(team, slots, element);
+    match width {
+        2 => layout.scatter_with::<2, _, _>(team, slots, init, element),
+        3 => layout.scatter_with::<3, _, _>(team, slots, init, element),
+        4 => layout.scatter_with::<4, _, _>(team, slots, init, element),
+        6 => layout.scatter_with::<6, _, _>(team, slots, init, element),
+        _ => unreachable!("a re-map {width} values wide"),
     }
 }
 
+/// The velocity of a node of `mass` from its re-mapped `momentum`: zero at an empty node and in
+/// fixed components.
+#[inline(always)]
+fn velocity<E: Element, R: Real>(
+    momentum: &[R],
+    mass: R,
+    empty_below: R,
+    fixed: &[bool; 3],
+) -> V3<R> {
+    let mut v = [R::ZERO; 3];
+    if mass > empty_below {
+        for c in 0..E::DIM {
+            if !fixed[c] {
+                v[c] = momentum[c] / mass;
+            }
+        }
+    }
+    v
+}
+
+/// A phase's nodal masses, fixities and velocities (the velocities written).
+type PhaseNodes<'a, R> = (&'a [R], &'a [[bool; 3]], &'a mut [V3<R>]);
+
 /// Nodal velocities from the re-mapped momentum in `slots`: zero at empty nodes and in fixed
-/// components.
+/// components; with `liquid` (its nodal masses, fixities and velocities), the liquid's from the
+/// values after the solid's.
+#[allow(clippy::too_many_arguments)]
 fn nodal_velocity<E: Element, R: Real>(
     team: &Team,
     layout: &Layout<R, E>,
@@ -183,93 +291,24 @@ fn nodal_velocity<E: Element, R: Real>(
     empty_below: R,
     fixed: &[[bool; 3]],
     vel: &mut [V3<R>],
+    liquid: Option<PhaseNodes<'_, R>>,
 ) {
     let out = Shared::new(vel);
+    let liquid = liquid.map(|(m, f, v)| (m, f, Shared::new(v)));
     let node = |n: usize, momentum: &[R]| {
-        let mut v = [R::ZERO; 3];
-        if mass[n] > empty_below {
-            for c in 0..E::DIM {
-                if !fixed[n][c] {
-                    v[c] = momentum[c] / mass[n];
-                }
-            }
-        }
+        let v = velocity::<E, R>(momentum, mass[n], empty_below, &fixed[n]);
         // SAFETY: node n is this thread's only.
         unsafe { out.write(n, v) };
+        if let Some((mass, fixed, out)) = &liquid {
+            let w = velocity::<E, R>(&momentum[E::DIM..], mass[n], empty_below, &fixed[n]);
+            // SAFETY: as above.
+            unsafe { out.write(n, w) };
+        }
     };
-    if E::DIM == 2 {
-        layout.gather::<2, _>(team, slots, |n, m| node(n, &m));
-    } else {
-        layout.gather::<3, _>(team, slots, |n, m| node(n, &m));
+    match (E::DIM, liquid.is_some()) {
+        (2, false) => layout.gather::<2, _>(team, slots, |n, m| node(n, &m)),
+        (3, false) => layout.gather::<3, _>(team, slots, |n, m| node(n, &m)),
+        (2, true) => layout.gather::<4, _>(team, slots, |n, m| node(n, &m)),
+        _ => layout.gather::<6, _>(team, slots, |n, m| node(n, &m)),
     }
-}
-
-/// The liquid's share of grid to particle: liquid velocities of the points updated from the
-/// nodal liquid accelerations (FLIP), then the liquid momentum re-mapped to nodal liquid
-/// velocities (zero in fixed components and at nodes without liquid). With `guard`, the
-/// liquid's n ρw V_w |w|² (twice its kinetic energy) is added, element by element, to each
-/// block's slot, which [`grid_to_particle`] began.
-#[allow(clippy::too_many_arguments)]
-pub fn liquid_to_particles<E: Element, R: Real>(
-    team: &Team,
-    layout: &Layout<R, E>,
-    slots: &mut Slots<R>,
-    mesh: &Mesh<E, R>,
-    p: &mut Particles<R>,
-    g: &mut Grid<R>,
-    fluids: &[Option<Fluid<R>>],
-    liquid_fixed: &[[bool; 3]],
-    dt: R,
-    guard: Option<&mut [GuardSums]>,
-) {
-    let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
-        return;
-    };
-    let guard = guard.map(Shared::new);
-    let w_out = Shared::new(&mut lp.w);
-    let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
-    let acc = &gl.acc;
-    scatter::<E, R>(layout, team, slots, |e, four| {
-        let mut kinetic = 0.0;
-        for i in layout.particles_of(e) {
-            let Some(f) = fluids[material[i] as usize] else {
-                continue;
-            };
-            if !active[i] {
-                continue;
-            }
-            let n = mesh.shape(e, &x[i]);
-            let n = n.as_ref();
-            let dw = interpolate(mesh, e, n, acc);
-            // SAFETY: particle i (of element e) belongs to this thread only.
-            let w = unsafe { &mut w_out.range(i..i + 1)[0] };
-            for c in 0..E::DIM {
-                w[c] += dt * dw[c];
-            }
-            // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
-            let mw = f.rho_w * lp.volume0.as_ref().map_or(volume[i], |v0| v0[i]);
-            for (k, slot) in node_slots::<E, R>(four, E::DIM).enumerate() {
-                for c in 0..E::DIM {
-                    slot[c] += mw * n[k] * w[c];
-                }
-            }
-            if guard.is_some() {
-                kinetic += (f.n * mw * dot::<E, R>(w, w)).f64();
-            }
-        }
-        if let Some(guard) = &guard {
-            let b = e / ELEMENT_BLOCK;
-            // SAFETY: as in `grid_to_particle`: block b belongs to this thread alone.
-            unsafe { guard.range(b..b + 1)[0].kinetic += kinetic };
-        }
-    });
-    nodal_velocity(
-        team,
-        layout,
-        slots,
-        &gl.mass,
-        g.empty_below,
-        liquid_fixed,
-        &mut gl.vel,
-    );
 }

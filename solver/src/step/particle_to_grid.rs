@@ -91,14 +91,31 @@ fn gradients_by_component<E: Element, R: Real>(grad: &[V3<R>]) -> [[R; LANES]; 3
     std::array::from_fn(|b| lanes::<E, R>(|k| grad[k][b]))
 }
 
-/// Stores the element's sums into the scatter's buffer, node by node (`width` values each).
+/// Stores the element's sums into the scatter's buffer, node by node: `width` values of each
+/// node's `stride`, from `offset` on.
 #[inline(always)]
-fn store<E: Element, R: Real, const W: usize>(sums: &Lanes<R, W>, four: &mut [R], width: usize) {
-    for (k, slot) in node_slots::<E, R>(four, width).enumerate() {
-        for (c, v) in slot.iter_mut().enumerate() {
+fn store<E: Element, R: Real, const W: usize>(
+    sums: &Lanes<R, W>,
+    four: &mut [R],
+    stride: usize,
+    offset: usize,
+    width: usize,
+) {
+    for (k, slot) in node_slots::<E, R>(four, stride).enumerate() {
+        for (c, v) in slot[offset..offset + width].iter_mut().enumerate() {
             *v = sums[c][k];
         }
     }
+}
+
+/// What the liquid's share of particle to grid needs (two-phase cases): each material's fluid
+/// (`None` for a dry material) and the gravity acceleration (multiplier applied).
+#[derive(Clone, Copy)]
+pub struct LiquidLoads<'a, R: Real> {
+    /// Per material, its fluid.
+    pub fluids: &'a [Option<Fluid<R>>],
+    /// The acceleration that gives the liquid's weight.
+    pub gravity: V3<R>,
 }
 
 /// Maps every active particle to the nodes of its element: mass, momentum, internal force
@@ -109,6 +126,15 @@ fn store<E: Element, R: Real, const W: usize>(sums: &Lanes<R, W>, four: &mut [R]
 /// points). Only the points of `body` are mapped (all for `None`; one body of a contact pair,
 /// [`crate::step::contact`]); a full element's Gauss point belongs to the body of its first
 /// active point (a full element holds one material).
+///
+/// With `liquid` (a two-phase case), the same pass over the points also forms the liquid's
+/// share (two-phase, docs/design.md §4): liquid masses M_w and M̄_w, drag Q, liquid momentum,
+/// the liquid force -Σ V p ∇N + M_w g, and the liquid's weight added to the mixture's external
+/// force, from the points of materials with a fluid. Under mixed integration, full elements
+/// integrate the pore-pressure force at their Gauss point. One pass for both phases computes
+/// each point's shape functions and reads its position once, and each node's values are summed
+/// as the two passes summed them. The liquid is mapped with every body (`body` `None`): contact
+/// refuses saturated materials.
 #[allow(clippy::too_many_arguments)]
 pub fn particle_to_grid<E: Element, R: Real>(
     team: &Team,
@@ -120,7 +146,19 @@ pub fn particle_to_grid<E: Element, R: Real>(
     mixed: Option<&mut Mixed<R>>,
     g: &mut Grid<R>,
     body: Option<OneBody>,
+    liquid: Option<LiquidLoads<'_, R>>,
 ) {
+    let liquid = match (liquid, &p.liquid) {
+        (Some(l), Some(lp)) if g.liquid.is_some() => Some((l, lp)),
+        _ => None,
+    };
+    debug_assert!(
+        liquid.is_none() || body.is_none(),
+        "the liquid mapped with one body of a contact pair"
+    );
+    // Values per node: the solid's, then the liquid's when there is one.
+    let (sw, lw) = (solid_width::<E>(), liquid_width::<E>());
+    let stride = if liquid.is_some() { sw + lw } else { sw };
     let mixed_sums = mixed.map(|m| {
         let filling = R::of(m.filling);
         (
@@ -137,6 +175,9 @@ pub fn particle_to_grid<E: Element, R: Real>(
         // The element's sums, value by value across its nodes (stored into `four` at the end).
         let mut sums: Lanes<R, 10> = [[R::ZERO; LANES]; 10];
         const { assert!(solid_width::<Tet4>() <= 10) };
+        // The liquid's, likewise.
+        let mut wet: Lanes<R, 12> = [[R::ZERO; LANES]; 12];
+        const { assert!(liquid_width::<Tet4>() <= 12) };
         let range = layout.particles_of(e);
         // Mixed integration: is the element full, and its mean stress.
         let mut full = false;
@@ -194,6 +235,16 @@ pub fn particle_to_grid<E: Element, R: Real>(
                     }
                 }
             }
+            // A full element takes its pore-pressure force at the Gauss point too (its volume
+            // times the mean pore pressure).
+            if full && liquid.is_some() {
+                let vp = mesh.volume[e] * pm;
+                for k in 0..E::NODES {
+                    for a in 0..E::DIM {
+                        wet[3 + E::DIM + a][k] -= vp * grad[k][a];
+                    }
+                }
+            }
         }
         // The element's points, every array sliced to them once (one length), so that the loop
         // indexes without bounds checks.
@@ -209,7 +260,14 @@ pub fn particle_to_grid<E: Element, R: Real>(
             &p.volume[range.clone()][..count],
             &p.stress[range.clone()][..count],
         );
-        let pore = p.liquid.as_ref().map(|l| &l.p[range][..count]);
+        let pore = p.liquid.as_ref().map(|l| &l.p[range.clone()][..count]);
+        let liquid_points = liquid.map(|(loads, lp)| {
+            (
+                loads,
+                &lp.w[range.clone()][..count],
+                lp.volume0.as_ref().map(|v0| &v0[range.clone()][..count]),
+            )
+        });
         for i in 0..count {
             if !active[i] || !maps(body, material[i]) {
                 continue;
@@ -252,28 +310,101 @@ pub fn particle_to_grid<E: Element, R: Real>(
                     sums[1 + E::DIM][k] -= hoop * nk[k];
                 }
             }
+            let Some((loads, w_all, volume0)) = liquid_points else {
+                continue;
+            };
+            let (Some(f), Some(pore)) = (loads.fluids[material[i] as usize], pore) else {
+                continue;
+            };
+            let vol = volume[i];
+            // The liquid's mass, weight and drag are taken on the initial volume where the
+            // case holds the liquid mass fixed.
+            let vw = volume0.map_or(vol, |v0| v0[i]);
+            let mw = f.rho_w * vw;
+            let pw = if full { R::ZERO } else { pore[i] * vol };
+            let w = w_all[i];
+            // The pore pressure's hoop force, as the solid's (axisymmetric sections).
+            let hoop = if E::AXISYMMETRIC {
+                pw / x[i][0]
+            } else {
+                R::ZERO
+            };
+            // Node by node the same operations as a loop over the nodes.
+            let nk = lanes::<E, R>(|k| n[k]);
+            let (mn, nmw) = (
+                lanes::<E, R>(|k| mw * n[k]),
+                lanes::<E, R>(|k| f.n * mw * n[k]),
+            );
+            for k in 0..LANES {
+                wet[0][k] += mn[k];
+                wet[1][k] += nmw[k];
+                wet[2][k] += f.drag * vw * nk[k];
+            }
+            for a in 0..E::DIM {
+                for k in 0..LANES {
+                    wet[3 + a][k] += mn[k] * w[a];
+                    wet[3 + E::DIM + a][k] += mn[k] * loads.gravity[a] - pw * by_component[a][k];
+                    wet[3 + 2 * E::DIM + a][k] += nmw[k] * loads.gravity[a];
+                }
+            }
+            if E::AXISYMMETRIC {
+                for k in 0..LANES {
+                    wet[3 + E::DIM][k] -= hoop * nk[k];
+                }
+            }
         }
-        store::<E, R, 10>(&sums, four, solid_width::<E>());
+        store::<E, R, 10>(&sums, four, stride, 0, sw);
+        if liquid.is_some() {
+            store::<E, R, 12>(&wet, four, stride, sw, lw);
+        }
     };
     let mass = Shared::new(&mut g.mass);
     let momentum = Shared::new(&mut g.momentum);
     let f_int = Shared::new(&mut g.f_int);
     let f_ext = Shared::new(&mut g.f_ext);
+    let liquid_nodes = g.liquid.as_mut().filter(|_| liquid.is_some()).map(|gl| {
+        (
+            Shared::new(&mut gl.mass),
+            Shared::new(&mut gl.mass_n),
+            Shared::new(&mut gl.drag),
+            Shared::new(&mut gl.momentum),
+            Shared::new(&mut gl.force),
+        )
+    });
     let node = |n: usize, s: &[R]| {
+        let mut fe = vector::<E, R>(s, 1 + 2 * E::DIM);
         // SAFETY: node n is this thread's only.
         unsafe {
             mass.write(n, s[0]);
             momentum.write(n, vector::<E, R>(s, 1));
             f_int.write(n, vector::<E, R>(s, 1 + E::DIM));
-            f_ext.write(n, vector::<E, R>(s, 1 + 2 * E::DIM));
+            if let Some((mass, mass_n, drag, momentum, force)) = &liquid_nodes {
+                let l = &s[sw..];
+                mass.write(n, l[0]);
+                mass_n.write(n, l[1]);
+                drag.write(n, l[2]);
+                momentum.write(n, vector::<E, R>(l, 3));
+                force.write(n, vector::<E, R>(l, 3 + E::DIM));
+                // The liquid's weight, added to the mixture's.
+                for a in 0..E::DIM {
+                    fe[a] += l[3 + 2 * E::DIM + a];
+                }
+            }
+            f_ext.write(n, fe);
         }
     };
-    // The pass as wide as the element's dimension needs (7 values in 2D, 10 in 3D).
-    const { assert!(solid_width::<Tri3>() == 7 && solid_width::<Tet4>() == 10) };
-    if solid_width::<E>() == 7 {
-        layout.sum_to_nodes::<7, _, _>(team, slots, element, node);
-    } else {
-        layout.sum_to_nodes::<10, _, _>(team, slots, element, node);
+    // The pass as wide as the element's dimension and the phases need: 7 or 10 values for the
+    // solid in 2D or 3D, 7 + 9 or 10 + 12 with the liquid.
+    const {
+        assert!(solid_width::<Tri3>() == 7 && solid_width::<Tet4>() == 10);
+        assert!(liquid_width::<Tri3>() == 9 && liquid_width::<Tet4>() == 12);
+    };
+    match stride {
+        7 => layout.sum_to_nodes::<7, _, _>(team, slots, element, node),
+        10 => layout.sum_to_nodes::<10, _, _>(team, slots, element, node),
+        16 => layout.sum_to_nodes::<16, _, _>(team, slots, element, node),
+        22 => layout.sum_to_nodes::<22, _, _>(team, slots, element, node),
+        _ => unreachable!("a pass {stride} values wide"),
     }
 }
 
@@ -300,119 +431,5 @@ pub fn add_point_loads<E: Element, R: Real>(
                 g.f_ext[node][a] += n[k] * scale * f[a];
             }
         }
-    }
-}
-
-/// The liquid's share of particle to grid (two-phase, docs/design.md §4): liquid masses M_w and M̄_w,
-/// drag Q, liquid momentum, the liquid force -Σ V p ∇N + M_w g, and the liquid's weight added to
-/// the mixture's external force. Points of dry materials (`fluids[m]` is `None`) add nothing.
-/// Under `mixed` integration, full elements (as the solid pass found them) integrate the
-/// pore-pressure force at their Gauss point.
-#[allow(clippy::too_many_arguments)]
-pub fn liquid_to_grid<E: Element, R: Real>(
-    team: &Team,
-    layout: &Layout<R, E>,
-    slots: &mut Slots<R>,
-    mesh: &Mesh<E, R>,
-    p: &Particles<R>,
-    fluids: &[Option<Fluid<R>>],
-    gravity: V3<R>,
-    mixed: Option<&Mixed<R>>,
-    g: &mut Grid<R>,
-) {
-    let (Some(lp), Some(gl)) = (&p.liquid, &mut g.liquid) else {
-        return;
-    };
-    let element = |e: usize, four: &mut [R]| {
-        let grad = mesh.grad[e].as_ref();
-        let by_component = gradients_by_component::<E, R>(grad);
-        // The element's sums, value by value across its nodes (stored into `four` at the end).
-        let mut sums: Lanes<R, 12> = [[R::ZERO; LANES]; 12];
-        const { assert!(liquid_width::<Tet4>() <= 12) };
-        // A full element under mixed integration takes its pore-pressure force at the Gauss
-        // point (its volume times the mean pore pressure), as the solid pass does.
-        let full = mixed.is_some_and(|m| m.full[e]);
-        if let (true, Some(m)) = (full, mixed) {
-            let vp = mesh.volume[e] * m.pressure[e];
-            for k in 0..E::NODES {
-                for a in 0..E::DIM {
-                    sums[3 + E::DIM + a][k] -= vp * grad[k][a];
-                }
-            }
-        }
-        for i in layout.particles_of(e) {
-            let Some(f) = fluids[p.material[i] as usize] else {
-                continue;
-            };
-            if !p.active[i] {
-                continue;
-            }
-            let n = mesh.shape(e, &p.x[i]);
-            let n = n.as_ref();
-            let vol = p.volume[i];
-            // The liquid's mass, weight and drag are taken on the initial volume where the
-            // case holds the liquid mass fixed.
-            let vw = lp.volume0.as_ref().map_or(vol, |v0| v0[i]);
-            let mw = f.rho_w * vw;
-            let pw = if full { R::ZERO } else { lp.p[i] * vol };
-            let w = lp.w[i];
-            // The pore pressure's hoop force, as the solid's (axisymmetric sections).
-            let hoop = if E::AXISYMMETRIC {
-                pw / p.x[i][0]
-            } else {
-                R::ZERO
-            };
-            // Node by node the same operations as a loop over the nodes.
-            let nk = lanes::<E, R>(|k| n[k]);
-            let (mn, nmw) = (
-                lanes::<E, R>(|k| mw * n[k]),
-                lanes::<E, R>(|k| f.n * mw * n[k]),
-            );
-            for k in 0..LANES {
-                sums[0][k] += mn[k];
-                sums[1][k] += nmw[k];
-                sums[2][k] += f.drag * vw * nk[k];
-            }
-            for a in 0..E::DIM {
-                for k in 0..LANES {
-                    sums[3 + a][k] += mn[k] * w[a];
-                    sums[3 + E::DIM + a][k] += mn[k] * gravity[a] - pw * by_component[a][k];
-                    sums[3 + 2 * E::DIM + a][k] += nmw[k] * gravity[a];
-                }
-            }
-            if E::AXISYMMETRIC {
-                for k in 0..LANES {
-                    sums[3 + E::DIM][k] -= hoop * nk[k];
-                }
-            }
-        }
-        store::<E, R, 12>(&sums, four, liquid_width::<E>());
-    };
-    let mass = Shared::new(&mut gl.mass);
-    let mass_n = Shared::new(&mut gl.mass_n);
-    let drag = Shared::new(&mut gl.drag);
-    let momentum = Shared::new(&mut gl.momentum);
-    let force = Shared::new(&mut gl.force);
-    let f_ext = Shared::new(&mut g.f_ext);
-    let node = |n: usize, s: &[R]| {
-        // SAFETY: node n is this thread's only; f_ext[n] was written by this thread's range in
-        // the solid pass (same node ranges).
-        unsafe {
-            mass.write(n, s[0]);
-            mass_n.write(n, s[1]);
-            drag.write(n, s[2]);
-            momentum.write(n, vector::<E, R>(s, 3));
-            force.write(n, vector::<E, R>(s, 3 + E::DIM));
-            let fe = &mut f_ext.range(n..n + 1)[0];
-            for a in 0..E::DIM {
-                fe[a] += s[3 + 2 * E::DIM + a];
-            }
-        }
-    };
-    const { assert!(liquid_width::<Tri3>() == 9 && liquid_width::<Tet4>() == 12) };
-    if liquid_width::<E>() == 9 {
-        layout.sum_to_nodes::<9, _, _>(team, slots, element, node);
-    } else {
-        layout.sum_to_nodes::<12, _, _>(team, slots, element, node);
     }
 }

@@ -12,14 +12,17 @@
 
 use crate::element::mesh::Mesh;
 use crate::element::Element;
-use crate::parallel::gather::{node_slots, Layout, Slots, WIDTH};
+use crate::parallel::gather::{node_slots, Layout, Slots};
 use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 
 /// Materials summed in one pass over the slots: three values each (V ε_s, V ε_w, V).
-const PER_PASS: usize = WIDTH / 3;
+const PER_PASS: usize = PASS_WIDTH / 3;
+
+/// Values per node of one smoothing pass (three per material).
+const PASS_WIDTH: usize = 12;
 
 /// Nodal smoothed strains and the buffers of the smoothing, allocated once.
 #[derive(Debug, Clone)]
@@ -74,7 +77,7 @@ impl<R: Real> StrainSmoothing<R> {
         let wvel = g.liquid.as_ref().map(|l| &l.vel);
         for lo in (0..columns).step_by(PER_PASS) {
             let hi = (lo + PER_PASS).min(columns);
-            layout.scatter::<WIDTH, _>(team, slots, |e, four| {
+            layout.scatter::<PASS_WIDTH, _>(team, slots, |e, four| {
                 let mut present = [false; PER_PASS];
                 for i in layout.particles_of(e) {
                     let c = column[p.material[i] as usize];
@@ -102,7 +105,7 @@ impl<R: Real> StrainSmoothing<R> {
                 let ve = mesh.volume[e];
                 let (es, ew) = (es * dt * ve, ew * dt * ve);
                 for (j, _) in present.iter().enumerate().filter(|(_, &on)| on) {
-                    for slot in node_slots::<E, R>(four, WIDTH) {
+                    for slot in node_slots::<E, R>(four, PASS_WIDTH) {
                         slot[3 * j] += es;
                         slot[3 * j + 1] += ew;
                         slot[3 * j + 2] += ve;
@@ -110,7 +113,7 @@ impl<R: Real> StrainSmoothing<R> {
                 }
             });
             let nodal = Shared::new(&mut self.nodal);
-            layout.gather::<WIDTH, _>(team, slots, |n, s| {
+            layout.gather::<PASS_WIDTH, _>(team, slots, |n, s| {
                 // SAFETY: node n is this thread's only, and with it its columns.
                 let out = unsafe { nodal.range(n * columns + lo..n * columns + hi) };
                 for (j, o) in out.iter_mut().enumerate() {

@@ -39,7 +39,12 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     dt: R,
     guard: Option<Guard<'_, R>>,
     body: Option<OneBody>,
+    pore_rate: Option<PoreRate<'_, R>>,
 ) {
+    debug_assert!(
+        pore_rate.is_none() || body.is_none(),
+        "pore pressures moved with one body of a contact pair"
+    );
     let half = R::of(0.5);
     let third = R::ONE / R::of(3.0);
     let (guard_slots, initial_density, fluids, min_ratio) = match guard {
@@ -52,7 +57,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         None => (None, &[][..], &[][..], R::ZERO),
     };
     let mass = &p.mass;
-    let pore = p.liquid.as_ref().map(|l| &l.p[..]);
+    let pores = p.liquid.as_mut().map(|l| Shared::new(&mut l.p));
     let xs = Shared::new(&mut p.x);
     let us = Shared::new(&mut p.u);
     let stresses = Shared::new(&mut p.stress);
@@ -96,7 +101,10 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         );
         let (active, element, material) = (&active[..n], &element[..n], &material[..n]);
         let mass = &mass[r.clone()][..n];
-        let pore = pore.map(|p| &p[r.clone()][..n]);
+        // SAFETY: as above.
+        let mut pore = pores
+            .as_ref()
+            .map(|p| unsafe { &mut p.range(r.clone())[..n] });
         // Element by element (the points are sorted by element): a linear element's velocity
         // gradient is the same at all its points, so it is formed once per element, from its
         // nodes' velocities gathered once.
@@ -133,6 +141,17 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 debug_assert_eq!(element[j] as usize, e, "points not sorted by element");
                 let n = mesh.shape(e, &x[j]);
                 let n = n.as_ref();
+                // The pore pressure's smoothed rate, from the nodes at the start-of-step
+                // position (the points move below).
+                if let (Some(rate), Some(pore)) = (&pore_rate, pore.as_mut()) {
+                    if rate.fluids[material[j] as usize].is_some() {
+                        let mut change = R::ZERO;
+                        for k in 0..E::NODES {
+                            change += n[k] * rate.nodal[corners[k] as usize];
+                        }
+                        pore[j] += change * dt;
+                    }
+                }
                 let mut dx = [R::ZERO; 3];
                 for k in 0..E::NODES {
                     for a in 0..E::DIM {
@@ -225,7 +244,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                         volume[j] * initial_density[material[j] as usize] - min_ratio * mass[j];
                     // Twice the energies: the engine halves the sums (exactly, a power of two).
                     open.strain += (w * v0 + finite).f64();
-                    if let Some(pore) = pore {
+                    if let Some(pore) = pore.as_deref() {
                         // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work
                         // on Δp = (K_w/n) Δε_mix. A non-finite pore pressure makes the sum NaN.
                         let p = pore[j];
@@ -306,6 +325,17 @@ impl GuardSums {
     };
 }
 
+/// Smoothed pore-pressure rates at the nodes that [`update_pore_pressure`] left for the stress
+/// pass to interpolate to the points (Δp = Δt Σ N_k ṗ_k), which visits each point with its
+/// shape functions anyway.
+#[derive(Clone, Copy)]
+pub struct PoreRate<'a, R: Real> {
+    /// Per node, the smoothed rate.
+    pub nodal: &'a [R],
+    /// Per material index, its liquid (dry materials' points keep their pressure).
+    pub fluids: &'a [Option<Fluid<R>>],
+}
+
 /// What [`update_stress_and_move`] needs to form the guard rails' sums.
 pub struct Guard<'a, R: Real> {
     /// One slot per element.
@@ -341,9 +371,9 @@ pub fn update_pore_pressure<E: Element, R: Real>(
     smooth: bool,
     smoothing: Option<&StrainSmoothing<R>>,
     dt: R,
-) {
+) -> bool {
     let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
-        return;
+        return false;
     };
     if let Some(sm) = smoothing {
         let pressure = Shared::new(&mut lp.p);
@@ -360,7 +390,7 @@ pub fn update_pore_pressure<E: Element, R: Real>(
                 }
             }
         });
-        return;
+        return false;
     }
     let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
     let (vel, wvel) = (&g.vel, &gl.vel);
@@ -405,7 +435,7 @@ pub fn update_pore_pressure<E: Element, R: Real>(
                 }
             }
         });
-        return;
+        return false;
     }
     layout.scatter::<2, _>(team, slots, |e, four| {
         let points = layout.particles_of(e);
@@ -432,23 +462,8 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         // SAFETY: node n is this thread's only.
         unsafe { nodal.write(n, r) };
     });
-    let nodal = &gl.rate;
-    team.run(|t| {
-        for i in layout.particle_range(t) {
-            if !active[i] || fluids[material[i] as usize].is_none() {
-                continue;
-            }
-            let e = p.element[i] as usize;
-            let n = mesh.shape(e, &x[i]);
-            let n = n.as_ref();
-            let mut rate = R::ZERO;
-            for k in 0..E::NODES {
-                rate += n[k] * nodal[mesh.corners[e].as_ref()[k] as usize];
-            }
-            // SAFETY: particle i belongs to this thread only.
-            unsafe { pressure.range(i..i + 1)[0] += rate * dt };
-        }
-    });
+    // The points take their rate in the stress pass ([`PoreRate`]).
+    true
 }
 
 /// Adds Ω σ - σ Ω to `s` for the skew increment Ω with Ω_xy = `w[0]`, Ω_yz = `w[1]`, Ω_zx = `w[2]`
