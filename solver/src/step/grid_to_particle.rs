@@ -72,12 +72,14 @@ pub fn grid_to_particle<E: Element, R: Real>(
     let (acc, momentum, node_mass, empty) = (&g.acc, &g.momentum, &g.mass, g.empty_below);
     let flip = R::ONE - pic;
     // Values per node of the re-map: the solid's momentum, then the liquid's.
-    let width = if liquid.is_some() { 2 * E::DIM } else { E::DIM };
+    let width = |with_liquid: bool| if with_liquid { 2 * E::DIM } else { E::DIM };
     let elements = mesh.elements();
     // One element's points; with `want`, their kinetic energy (solid, liquid). Two scatters
     // below, each with `want` fixed, so that the run without guards keeps the loop it had
     // without them.
-    let element = |e: usize, four: &mut [R], want: bool| {
+    // `want` and `with_liquid` are constants at each call below, so that each variant compiles
+    // without the code it does not need.
+    let element = |e: usize, four: &mut [R], want: bool, with_liquid: bool| {
         let (mut kinetic, mut kinetic_w) = (0.0, 0.0);
         // The element's points, each array sliced to them once (one length): the loop then
         // indexes without bounds checks.
@@ -94,7 +96,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
         // SAFETY: as above.
         let mut w_pts = liquid_vel
             .as_ref()
-            .filter(|_| liquid.is_some())
+            .filter(|_| with_liquid)
             .map(|w| unsafe { &mut w.range(range.clone())[..count] });
         for i in 0..count {
             if !active[i] || !maps(body, material[i]) {
@@ -126,7 +128,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
                     v[c] = flip * v[c] + pic * grid_v[c];
                 }
             }
-            for (k, slot) in node_slots::<E, R>(four, width).enumerate() {
+            for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
                 let w = mass[i] * n[k];
                 for c in 0..E::DIM {
                     slot[c] += w * v[c];
@@ -136,6 +138,9 @@ pub fn grid_to_particle<E: Element, R: Real>(
                 kinetic += (mass[i] * dot::<E, R>(v, v)).f64();
             }
             // The liquid of the point, if its material has one.
+            if !with_liquid {
+                continue;
+            }
             let (Some(l), Some(w_pts), Some(acc_w)) = (liquid, w_pts.as_mut(), liquid_acc) else {
                 continue;
             };
@@ -150,7 +155,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
             // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
             let j = range.start + i;
             let mw = f.rho_w * volume0.map_or(volume[j], |v0| v0[j]);
-            for (k, slot) in node_slots::<E, R>(four, width).enumerate() {
+            for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
                 for c in 0..E::DIM {
                     slot[E::DIM + c] += mw * n[k] * w[c];
                 }
@@ -164,33 +169,50 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // The liquid's kinetic sums of the block's elements so far, added to the block's slot
     // after its last element (after the solid's sums of the block).
     let init = |_| [0.0f64; ELEMENT_BLOCK];
-    match &guard {
-        None => scatter::<E, R, _>(layout, team, slots, width, init, |e, four, _| {
-            element(e, four, false);
-        }),
-        Some(guard) => scatter::<E, R, _>(layout, team, slots, width, init, |e, four, pending| {
-            let (kinetic, kinetic_w) = element(e, four, true);
-            let b = e / ELEMENT_BLOCK;
-            // SAFETY: the scatter hands element e to one thread only, once, in element order,
-            // and the thread's elements hold whole blocks (aligned ranges): no other thread
-            // touches block b, and its first element comes first.
-            let slot = unsafe { &mut guard.range(b..b + 1)[0] };
-            if begin && e % ELEMENT_BLOCK == 0 {
-                *slot = GuardSums {
-                    kinetic,
-                    ..GuardSums::EMPTY
-                };
-            } else {
-                slot.kinetic += kinetic;
-            }
-            if liquid.is_some() {
-                pending[e % ELEMENT_BLOCK] = kinetic_w;
-                if e % ELEMENT_BLOCK == ELEMENT_BLOCK - 1 || e + 1 == elements {
-                    for &k in &pending[..=e % ELEMENT_BLOCK] {
-                        slot.kinetic += k;
-                    }
+    // The guarded variant: each element's kinetic sums into its block's slot, the liquid's
+    // after the block's last element.
+    let guarded = |guard: &Shared<'_, GuardSums>,
+                   e: usize,
+                   four: &mut [R],
+                   pending: &mut [f64; ELEMENT_BLOCK],
+                   with_liquid: bool| {
+        let (kinetic, kinetic_w) = element(e, four, true, with_liquid);
+        let b = e / ELEMENT_BLOCK;
+        // SAFETY: the scatter hands element e to one thread only, once, in element order,
+        // and the thread's elements hold whole blocks (aligned ranges): no other thread
+        // touches block b, and its first element comes first.
+        let slot = unsafe { &mut guard.range(b..b + 1)[0] };
+        if begin && e % ELEMENT_BLOCK == 0 {
+            *slot = GuardSums {
+                kinetic,
+                ..GuardSums::EMPTY
+            };
+        } else {
+            slot.kinetic += kinetic;
+        }
+        if with_liquid {
+            pending[e % ELEMENT_BLOCK] = kinetic_w;
+            if e % ELEMENT_BLOCK == ELEMENT_BLOCK - 1 || e + 1 == elements {
+                for &k in &pending[..=e % ELEMENT_BLOCK] {
+                    slot.kinetic += k;
                 }
             }
+        }
+    };
+    match (&guard, liquid.is_some()) {
+        (None, false) => scatter::<E, R, _>(layout, team, slots, width(false), init, |e, f, _| {
+            element(e, f, false, false);
+        }),
+        (None, true) => scatter::<E, R, _>(layout, team, slots, width(true), init, |e, f, _| {
+            element(e, f, false, true);
+        }),
+        (Some(g), false) => {
+            scatter::<E, R, _>(layout, team, slots, width(false), init, |e, f, p| {
+                guarded(g, e, f, p, false)
+            })
+        }
+        (Some(g), true) => scatter::<E, R, _>(layout, team, slots, width(true), init, |e, f, p| {
+            guarded(g, e, f, p, true)
         }),
     }
     nodal_velocity(
