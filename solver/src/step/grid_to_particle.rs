@@ -77,143 +77,166 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // One element's points; with `want`, their kinetic energy (solid, liquid). Two scatters
     // below, each with `want` fixed, so that the run without guards keeps the loop it had
     // without them.
-    // `want` and `with_liquid` are constants at each call below, so that each variant compiles
-    // without the code it does not need.
-    let element = |e: usize, four: &mut [R], want: bool, with_liquid: bool| {
-        let (mut kinetic, mut kinetic_w) = (0.0, 0.0);
-        // The element's points, each array sliced to them once (one length): the loop then
-        // indexes without bounds checks.
-        let range = layout.particles_of(e);
-        let count = range.len();
-        let (x, mass, active, material) = (
-            &x[range.clone()][..count],
-            &mass[range.clone()][..count],
-            &active[range.clone()][..count],
-            &material[range.clone()][..count],
-        );
-        // SAFETY: the points of element e belong to this thread only.
-        let vel = unsafe { &mut vel.range(range.clone())[..count] };
-        // SAFETY: as above.
-        let mut w_pts = liquid_vel
-            .as_ref()
-            .filter(|_| with_liquid)
-            .map(|w| unsafe { &mut w.range(range.clone())[..count] });
-        for i in 0..count {
-            if !active[i] || !maps(body, material[i]) {
-                continue;
-            }
-            let n = mesh.shape(e, &x[i]);
-            let n = n.as_ref();
-            let dv = interpolate(mesh, e, n, acc);
-            let v = &mut vel[i];
-            for c in 0..E::DIM {
-                v[c] += dt * dv[c];
-            }
-            if pic > R::ZERO {
-                // The nodes' velocities after the step, v + a Δt (zero where fixed or empty).
-                let mut grid_v = [R::ZERO; 3];
-                for (k, &nk) in n.iter().enumerate().take(E::NODES) {
-                    let node = mesh.corners[e].as_ref()[k] as usize;
-                    let m = node_mass[node];
-                    if m <= empty {
+    // One element's points, written once and expanded for each variant (`want` the guard's
+    // kinetic sums, `with_liquid` the liquid's share), constants in each, so that every
+    // variant compiles without the code it does not need and, with one caller, is inlined
+    // into its scatter (one closure for four variants was left a call, its re-map width a
+    // value at run time).
+    macro_rules! element_pass {
+        ($want:expr, $with_liquid:expr) => {
+            |e: usize, four: &mut [R]| {
+                let (want, with_liquid): (bool, bool) = ($want, $with_liquid);
+                let (mut kinetic, mut kinetic_w) = (0.0, 0.0);
+                // The element's points, each array sliced to them once (one length): the loop then
+                // indexes without bounds checks.
+                let range = layout.particles_of(e);
+                let count = range.len();
+                let (x, mass, active, material) = (
+                    &x[range.clone()][..count],
+                    &mass[range.clone()][..count],
+                    &active[range.clone()][..count],
+                    &material[range.clone()][..count],
+                );
+                // SAFETY: the points of element e belong to this thread only.
+                let vel = unsafe { &mut vel.range(range.clone())[..count] };
+                // SAFETY: as above.
+                let mut w_pts = liquid_vel
+                    .as_ref()
+                    .filter(|_| with_liquid)
+                    .map(|w| unsafe { &mut w.range(range.clone())[..count] });
+                for i in 0..count {
+                    if !active[i] || !maps(body, material[i]) {
                         continue;
                     }
+                    let n = mesh.shape(e, &x[i]);
+                    let n = n.as_ref();
+                    let dv = interpolate(mesh, e, n, acc);
+                    let v = &mut vel[i];
                     for c in 0..E::DIM {
-                        if !fixed[node][c] {
-                            grid_v[c] += nk * (momentum[node][c] / m + dt * acc[node][c]);
+                        v[c] += dt * dv[c];
+                    }
+                    if pic > R::ZERO {
+                        // The nodes' velocities after the step, v + a Δt (zero where fixed or empty).
+                        let mut grid_v = [R::ZERO; 3];
+                        for (k, &nk) in n.iter().enumerate().take(E::NODES) {
+                            let node = mesh.corners[e].as_ref()[k] as usize;
+                            let m = node_mass[node];
+                            if m <= empty {
+                                continue;
+                            }
+                            for c in 0..E::DIM {
+                                if !fixed[node][c] {
+                                    grid_v[c] += nk * (momentum[node][c] / m + dt * acc[node][c]);
+                                }
+                            }
+                        }
+                        for c in 0..E::DIM {
+                            v[c] = flip * v[c] + pic * grid_v[c];
                         }
                     }
+                    for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
+                        let w = mass[i] * n[k];
+                        for c in 0..E::DIM {
+                            slot[c] += w * v[c];
+                        }
+                    }
+                    if want {
+                        kinetic += (mass[i] * dot::<E, R>(v, v)).f64();
+                    }
+                    // The liquid of the point, if its material has one.
+                    if !with_liquid {
+                        continue;
+                    }
+                    let (Some(l), Some(w_pts), Some(acc_w)) = (liquid, w_pts.as_mut(), liquid_acc) else {
+                        continue;
+                    };
+                    let Some(f) = l.fluids[material[i] as usize] else {
+                        continue;
+                    };
+                    let dw = interpolate(mesh, e, n, acc_w);
+                    let w = &mut w_pts[i];
+                    for c in 0..E::DIM {
+                        w[c] += dt * dw[c];
+                    }
+                    // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
+                    let j = range.start + i;
+                    let mw = f.rho_w * volume0.map_or(volume[j], |v0| v0[j]);
+                    for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
+                        for c in 0..E::DIM {
+                            slot[E::DIM + c] += mw * n[k] * w[c];
+                        }
+                    }
+                    if want {
+                        kinetic_w += (f.n * mw * dot::<E, R>(w, w)).f64();
+                    }
                 }
-                for c in 0..E::DIM {
-                    v[c] = flip * v[c] + pic * grid_v[c];
-                }
+                (kinetic, kinetic_w)
             }
-            for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
-                let w = mass[i] * n[k];
-                for c in 0..E::DIM {
-                    slot[c] += w * v[c];
-                }
-            }
-            if want {
-                kinetic += (mass[i] * dot::<E, R>(v, v)).f64();
-            }
-            // The liquid of the point, if its material has one.
-            if !with_liquid {
-                continue;
-            }
-            let (Some(l), Some(w_pts), Some(acc_w)) = (liquid, w_pts.as_mut(), liquid_acc) else {
-                continue;
-            };
-            let Some(f) = l.fluids[material[i] as usize] else {
-                continue;
-            };
-            let dw = interpolate(mesh, e, n, acc_w);
-            let w = &mut w_pts[i];
-            for c in 0..E::DIM {
-                w[c] += dt * dw[c];
-            }
-            // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
-            let j = range.start + i;
-            let mw = f.rho_w * volume0.map_or(volume[j], |v0| v0[j]);
-            for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
-                for c in 0..E::DIM {
-                    slot[E::DIM + c] += mw * n[k] * w[c];
-                }
-            }
-            if want {
-                kinetic_w += (f.n * mw * dot::<E, R>(w, w)).f64();
-            }
-        }
-        (kinetic, kinetic_w)
-    };
+        };
+    }
     // The liquid's kinetic sums of the block's elements so far, added to the block's slot
     // after its last element (after the solid's sums of the block).
     let init = |_| [0.0f64; ELEMENT_BLOCK];
-    // The guarded variant: each element's kinetic sums into its block's slot, the liquid's
+    // The guarded variants: each element's kinetic sums into its block's slot, the liquid's
     // after the block's last element.
-    let guarded = |guard: &Shared<'_, GuardSums>,
-                   e: usize,
-                   four: &mut [R],
-                   pending: &mut [f64; ELEMENT_BLOCK],
-                   with_liquid: bool| {
-        let (kinetic, kinetic_w) = element(e, four, true, with_liquid);
-        let b = e / ELEMENT_BLOCK;
-        // SAFETY: the scatter hands element e to one thread only, once, in element order,
-        // and the thread's elements hold whole blocks (aligned ranges): no other thread
-        // touches block b, and its first element comes first.
-        let slot = unsafe { &mut guard.range(b..b + 1)[0] };
-        if begin && e % ELEMENT_BLOCK == 0 {
-            *slot = GuardSums {
-                kinetic,
-                ..GuardSums::EMPTY
-            };
-        } else {
-            slot.kinetic += kinetic;
-        }
-        if with_liquid {
-            pending[e % ELEMENT_BLOCK] = kinetic_w;
-            if e % ELEMENT_BLOCK == ELEMENT_BLOCK - 1 || e + 1 == elements {
-                for &k in &pending[..=e % ELEMENT_BLOCK] {
-                    slot.kinetic += k;
+    macro_rules! guarded_pass {
+        ($guard:expr, $with_liquid:expr) => {
+            |e: usize, four: &mut [R], pending: &mut [f64; ELEMENT_BLOCK]| {
+                let element = element_pass!(true, $with_liquid);
+                let (kinetic, kinetic_w) = element(e, four);
+                let b = e / ELEMENT_BLOCK;
+                // SAFETY: the scatter hands element e to one thread only, once, in element
+                // order, and the thread's elements hold whole blocks (aligned ranges): no other
+                // thread touches block b, and its first element comes first.
+                let slot = unsafe { &mut $guard.range(b..b + 1)[0] };
+                if begin && e % ELEMENT_BLOCK == 0 {
+                    *slot = GuardSums {
+                        kinetic,
+                        ..GuardSums::EMPTY
+                    };
+                } else {
+                    slot.kinetic += kinetic;
+                }
+                if $with_liquid {
+                    pending[e % ELEMENT_BLOCK] = kinetic_w;
+                    if e % ELEMENT_BLOCK == ELEMENT_BLOCK - 1 || e + 1 == elements {
+                        for &k in &pending[..=e % ELEMENT_BLOCK] {
+                            slot.kinetic += k;
+                        }
+                    }
                 }
             }
-        }
-    };
+        };
+    }
     match (&guard, liquid.is_some()) {
-        (None, false) => scatter::<E, R, _>(layout, team, slots, width(false), init, |e, f, _| {
-            element(e, f, false, false);
-        }),
-        (None, true) => scatter::<E, R, _>(layout, team, slots, width(true), init, |e, f, _| {
-            element(e, f, false, true);
-        }),
-        (Some(g), false) => {
-            scatter::<E, R, _>(layout, team, slots, width(false), init, |e, f, p| {
-                guarded(g, e, f, p, false)
+        (None, false) => {
+            let element = element_pass!(false, false);
+            scatter::<E, R, _>(layout, team, slots, width(false), init, |e, f, _| {
+                element(e, f);
             })
         }
-        (Some(g), true) => scatter::<E, R, _>(layout, team, slots, width(true), init, |e, f, p| {
-            guarded(g, e, f, p, true)
-        }),
+        (None, true) => {
+            let element = element_pass!(false, true);
+            scatter::<E, R, _>(layout, team, slots, width(true), init, |e, f, _| {
+                element(e, f);
+            })
+        }
+        (Some(g), false) => scatter::<E, R, _>(
+            layout,
+            team,
+            slots,
+            width(false),
+            init,
+            guarded_pass!(g, false),
+        ),
+        (Some(g), true) => scatter::<E, R, _>(
+            layout,
+            team,
+            slots,
+            width(true),
+            init,
+            guarded_pass!(g, true),
+        ),
     }
     nodal_velocity(
         team,
