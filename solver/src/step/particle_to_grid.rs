@@ -14,25 +14,6 @@ use crate::state::particles::Particles;
 use crate::step::contact::{maps, OneBody};
 use crate::step::mixed::Mixed;
 
-/// f = σ ∇N for symmetric σ (xx yy zz xy yz zx); in a 2D element (∂N/∂z = 0) only the
-/// in-plane components, the z-component left 0.
-#[inline(always)]
-fn traction<E: Element, R: Real>(s: &[R; 6], dn: &V3<R>) -> V3<R> {
-    if E::DIM == 2 {
-        [
-            s[0] * dn[0] + s[3] * dn[1],
-            s[3] * dn[0] + s[1] * dn[1],
-            R::ZERO,
-        ]
-    } else {
-        [
-            s[0] * dn[0] + s[3] * dn[1] + s[5] * dn[2],
-            s[3] * dn[0] + s[1] * dn[1] + s[4] * dn[2],
-            s[5] * dn[0] + s[4] * dn[1] + s[2] * dn[2],
-        ]
-    }
-}
-
 /// Values per node of the solid pass: the mass, then momentum, internal force and weight with
 /// [`Element::DIM`] components each (a 2D element's z-components are 0 and not summed).
 const fn solid_width<E: Element>() -> usize {
@@ -69,8 +50,9 @@ fn lanes<E: Element, R: Real>(per_node: impl Fn(usize) -> R) -> [R; LANES] {
     std::array::from_fn(|k| if k < E::NODES { per_node(k) } else { R::ZERO })
 }
 
-/// Component `a` of σ ∇N_k for every node k, from the gradients by component (`grad[b][k]`
-/// = ∂N_k/∂x_b): [`traction`] lane by lane.
+/// Component `a` of f = σ ∇N_k (σ symmetric, xx yy zz xy yz zx) for every node k, from the
+/// gradients by component (`grad[b][k]` = ∂N_k/∂x_b); in a 2D element (∂N/∂z = 0) the sum runs
+/// over the in-plane components only.
 #[inline(always)]
 fn tractions<E: Element, R: Real>(s: &[R; 6], grad: &[[R; LANES]; 3], a: usize) -> [R; LANES] {
     // Row a of the symmetric σ (xx yy zz xy yz zx).
@@ -235,10 +217,10 @@ pub fn particle_to_grid<E: Element, R: Real>(
                                 *c += pm;
                             }
                         }
-                        for k in 0..E::NODES {
-                            let f = traction::<E, R>(&s, &grad[k]);
-                            for a in 0..E::DIM {
-                                sums[1 + E::DIM + a][k] -= ve * f[a];
+                        for a in 0..E::DIM {
+                            let f = tractions::<E, R>(&s, &by_component, a);
+                            for k in 0..LANES {
+                                sums[1 + E::DIM + a][k] -= ve * f[k];
                             }
                         }
                     }
