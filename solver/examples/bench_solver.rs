@@ -6,7 +6,7 @@
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
 //!  --order morton|random|none --precision f64|f32 --guards on|off
-//!  --law linear|mc-elastic|mc-plastic|mc-flowing --dim 3|2`
+//!  --law linear|mc-elastic|mc-plastic|mc-flowing --dim 3|2 --shear RATE`
 //!
 //! `--dim 2` runs the plane-strain twin: a rectangle of `--cells NX NY` square cells of 1 cm
 //! (the 3D column's cell size at NY = 100, so the time step and the motion per step compare),
@@ -20,6 +20,11 @@
 //! `--mpi` (built with the cargo feature `mpi`, launched by `mpirun -np N`): the same case
 //! over N ranks, each with `--threads` threads; rank 0 prints the line, with the total points
 //! and, per rank, its share, halo and seconds per phase (`rank_reports`).
+//!
+//! `--shear RATE` starts every point with the horizontal velocity RATE·(y − y_bottom) (1/s):
+//! points cross element faces at every step, out of the curve's order, so that the locate
+//! phase re-sorts them each step, as in a run-out or a collapse (the quasi-static columns
+//! never do).
 //!
 //! `--guards off` skips the per-step guard rails (docs/design.md §4.14), to measure their cost.
 //!
@@ -194,7 +199,10 @@ fn main() {
     // Vertical velocity -rate·(y - y_bottom): compression at a strain of about 1e-5 per step,
     // its elastic ratio of lateral to vertical increment (ν/(1-ν) = 0.43) below the active
     // ratio, so every trial lies beyond the surface.
-    let flow = (law == "mc-flowing").then_some(0.2);
+    let flow = match arg(&a, "--shear") {
+        Some(r) => Some(Flow::Shear(r.parse().unwrap())),
+        None => (law == "mc-flowing").then_some(Flow::Compress(0.2)),
+    };
     // The solver's own choice of precision and element (the case's model picks `Tri3` or
     // `Tet4`), so that the bench times the engine a run of this model would get.
     let comm = communicator(a.iter().any(|x| x == "--mpi"));
@@ -233,6 +241,8 @@ fn main() {
     let Measured {
         rates,
         phases,
+        loads,
+        thread_busy,
         info,
         bytes_per_point,
         modelled,
@@ -247,6 +257,21 @@ fn main() {
         .zip(phases[k])
         .map(|(n, s)| format!("\"{n}\": {:.6e}", s / steps as f64))
         .collect();
+    // Where the threads' time went, per step: the runs' wall time, the busiest thread's and
+    // the mean thread's (their gaps: waiting for the slowest thread, and for the pool).
+    let team: Vec<String> = PHASES[..5]
+        .iter()
+        .zip(loads[k])
+        .map(|(n, l)| {
+            let s = steps as f64;
+            format!(
+                "\"{n}\": [{:.6e}, {:.6e}, {:.6e}]",
+                l.wall / s,
+                l.busiest / s,
+                l.mean / s
+            )
+        })
+        .collect();
     let modelled_bytes: Vec<String> = PHASES[..5]
         .iter()
         .zip(modelled)
@@ -258,7 +283,7 @@ fn main() {
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
     println!(
-        "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"modelled_bytes_per_particle_step\": {{{}}}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}{}}}",
+        "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"modelled_bytes_per_particle_step\": {{{}}}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}, \"phase_team_per_step\": {{{}}}, \"thread_busy_per_step\": {:?}{}}}",
         if saturated { "saturated" } else { "dry" },
         if plane { 2 } else { 3 },
         arg(&a, "--law").unwrap_or("linear"),
@@ -278,6 +303,8 @@ fn main() {
         rates,
         median,
         per_phase.join(", "),
+        team.join(", "),
+        thread_busy[k],
         surface
     );
 }
@@ -286,6 +313,10 @@ fn main() {
 struct Measured {
     rates: Vec<f64>,
     phases: Vec<[f64; 6]>,
+    /// Per repetition and phase: the team's wall, busiest-thread and mean-thread seconds.
+    loads: Vec<[mpm_solve::parallel::team::TeamLoad; 6]>,
+    /// Per repetition: each thread's busy seconds per step.
+    thread_busy: Vec<Vec<f64>>,
     info: (usize, usize, Vec<Option<usize>>),
     bytes_per_point: usize,
     /// Modelled bytes per particle-step of each phase.
@@ -316,7 +347,7 @@ struct Measure<'a> {
     case: &'a Case,
     steps: usize,
     reps: usize,
-    flow: Option<f64>,
+    flow: Option<Flow>,
     comm: Option<std::sync::Arc<dyn mpm_solve::parallel::comm::Communicator>>,
 }
 
@@ -333,27 +364,31 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
     case: &Case,
     steps: usize,
     reps: usize,
-    flow: Option<f64>,
+    flow: Option<Flow>,
     comm: Option<std::sync::Arc<dyn mpm_solve::parallel::comm::Communicator>>,
 ) -> Measured {
     let mut m = Measured {
         rates: Vec::new(),
         phases: Vec::new(),
+        loads: Vec::new(),
+        thread_busy: Vec::new(),
         info: (0, 0, Vec::new()),
         bytes_per_point: 0,
         modelled: [0.0; 5],
         reports: None,
         traffic: Vec::new(),
     };
+    // A sheared column loses a few points over its top corners: they are dropped.
+    let drop_lost = matches!(flow, Some(Flow::Shear(_)));
     for _ in 0..reps {
         let mut engine = match &comm {
             Some(c) => {
-                Engine::<R, E>::with_communicator(case, false, case.engine, c.clone()).unwrap()
+                Engine::<R, E>::with_communicator(case, drop_lost, case.engine, c.clone()).unwrap()
             }
-            None => Engine::<R, E>::new(case, false).unwrap(),
+            None => Engine::<R, E>::new(case, drop_lost).unwrap(),
         };
-        if let Some(rate) = flow {
-            compress(&mut engine, rate);
+        if let Some(flow) = flow {
+            set_flow(&mut engine, flow);
         }
         let np = engine
             .communicator()
@@ -362,6 +397,7 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
         // collectives keep them together.
         engine.communicator().sum(0.0);
         let before = engine.communicator().traffic();
+        engine.team.take_thread_busy();
         let t = Instant::now();
         for _ in 0..steps {
             engine.step(engine.dt, None).unwrap();
@@ -379,6 +415,15 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
         m.reports = engine.rank_report().filter(|_| engine.is_distributed());
         m.rates.push(np as f64 * steps as f64 / secs);
         m.phases.push(engine.phase_seconds);
+        m.loads.push(engine.phase_load);
+        m.thread_busy.push(
+            engine
+                .team
+                .take_thread_busy()
+                .iter()
+                .map(|b| b / steps as f64)
+                .collect(),
+        );
         m.info = (np, engine.team.threads, engine.team.pinned.clone());
         m.bytes_per_point = engine.particles.bytes_per_point();
         m.modelled = mpm_solve::driver::traffic::modelled_bytes::<R, E>(
@@ -391,12 +436,25 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
     m
 }
 
-/// Sets every point's velocity to uniform vertical compression at `rate` (1/s).
-fn compress<R: mpm_solve::real::Real, E: Element>(engine: &mut Engine<R, E>, rate: f64) {
+/// A velocity field the points start with.
+#[derive(Debug, Clone, Copy)]
+enum Flow {
+    /// Uniform vertical compression at this rate (1/s).
+    Compress(f64),
+    /// Horizontal simple shear at this rate (1/s).
+    Shear(f64),
+}
+
+/// Sets every point's velocity to `flow`, proportional to its height above the bottom.
+fn set_flow<R: mpm_solve::real::Real, E: Element>(engine: &mut Engine<R, E>, flow: Flow) {
     let p = &mut engine.particles;
     let bottom = p.x.iter().fold(f64::MAX, |m, x| m.min(x[1].f64()));
     for (v, x) in p.v.iter_mut().zip(&p.x) {
-        *v = [R::ZERO, R::of(-rate * (x[1].f64() - bottom)), R::ZERO];
+        let h = x[1].f64() - bottom;
+        *v = match flow {
+            Flow::Compress(rate) => [R::ZERO, R::of(-rate * h), R::ZERO],
+            Flow::Shear(rate) => [R::of(rate * h), R::ZERO, R::ZERO],
+        };
     }
 }
 
@@ -406,15 +464,15 @@ fn compress<R: mpm_solve::real::Real, E: Element>(engine: &mut Engine<R, E>, rat
 fn on_surface<E: Element>(
     case: &Case,
     steps: usize,
-    flow: Option<f64>,
+    flow: Option<Flow>,
     friction: f64,
 ) -> (f64, f64) {
     use mpm_solve::material::mohr_coulomb::Surface;
     use mpm_solve::material::principal::principal;
     let surface = Surface::<f64>::new(friction, 0.0, 0.0, 0.0);
     let mut engine = Engine::<f64, E>::new(case, false).unwrap();
-    if let Some(rate) = flow {
-        compress(&mut engine, rate);
+    if let Some(flow) = flow {
+        set_flow(&mut engine, flow);
     }
     let (mut on, mut moved, mut all) = (0usize, 0usize, 0usize);
     for _ in 0..steps {

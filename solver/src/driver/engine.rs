@@ -12,8 +12,9 @@ use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::comm::{Communicator, SingleProcess};
 use crate::parallel::gather::exact_total;
-use crate::parallel::gather::{sort_by_element, Layout, Slots, SortScratch};
+use crate::parallel::gather::{Layout, Slots};
 use crate::parallel::partition::Partition;
+use crate::parallel::sort::SortScratch;
 pub use crate::parallel::team::Options;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
@@ -201,6 +202,9 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub external_work: f64,
     /// Seconds spent per phase (see [`PHASES`]).
     pub phase_seconds: [f64; 6],
+    /// Per phase, where the thread team's time went in the steps (the output phase is the
+    /// caller's and stays empty): the runs' wall time against their busiest and mean thread.
+    pub phase_load: [crate::parallel::team::TeamLoad; 6],
     /// Points deactivated under `--drop-lost`.
     pub lost: u64,
     /// Deactivate points that leave the mesh instead of stopping.
@@ -619,6 +623,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             steps: 0,
             external_work: 0.0,
             phase_seconds: [0.0; 6],
+            phase_load: Default::default(),
             lost: 0,
             drop_lost,
             point_loads,
@@ -761,6 +766,8 @@ impl<R: Real, E: Element> Engine<R, E> {
             drop_lost: _,
             mixed: _,
             team: _,
+            // How the threads spent their time: this run's, like the team.
+            phase_load: _,
             layout: _,
             slots: _,
             sort_scratch: _,
@@ -957,6 +964,8 @@ impl<R: Real, E: Element> Engine<R, E> {
     /// ends on an output time (so times print as given, not as sums of steps).
     pub fn step(&mut self, dt: f64, snap_to: Option<f64>) -> Result<(), StepError> {
         let t0 = Instant::now();
+        // Team runs between steps (energies, output) are not the step's.
+        self.team.take_load();
         let case = &self.config;
         let gm = case.gravity_curve.at(self.time + dt);
         let gravity = case.gravity.map(|g| R::of(g * gm));
@@ -998,6 +1007,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             &mut self.grid,
         );
         let t1 = Instant::now();
+        self.phase_load[0] += self.team.take_load();
         let liquid_scale = R::of(case.liquid_curve.at(self.time + dt));
         if self.grid.liquid.is_some() {
             grid_update::grid_update_two_phase(
@@ -1056,6 +1066,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         self.force_error = forces.ratio();
         self.liquid_force_error = liquid_forces.ratio();
         let t2 = Instant::now();
+        self.phase_load[1] += self.team.take_load();
         let pm = self
             .prescribed
             .as_ref()
@@ -1143,6 +1154,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             nv.after_remap(&mut self.grid);
         }
         let t3 = Instant::now();
+        self.phase_load[2] += self.team.take_load();
         if let Some(sm) = &mut self.smoothing {
             sm.compute(
                 &self.team,
@@ -1261,6 +1273,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             self.check_step(dt, w, &forces, &energy)?;
         }
         let t4 = Instant::now();
+        self.phase_load[3] += self.team.take_load();
         if let Some(mm) = &mut self.moving_mesh {
             // After the stresses and the points' move (with the shape functions of the mesh
             // before it moves), before the points are located in the moved mesh: Anura3D's
@@ -1296,6 +1309,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             }
         }
         let t5 = Instant::now();
+        self.phase_load[4] += self.team.take_load();
         for (k, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4), (t4, t5)]
             .into_iter()
             .enumerate()
@@ -1523,15 +1537,12 @@ impl<R: Real, E: Element> Engine<R, E> {
         if !self.partition.is_whole() {
             moved |= self.migrate();
         }
-        let p = &mut self.particles;
-        let mesh = &self.mesh;
-        let permuted = sort_by_element(p, mesh.elements(), &mut self.sort_scratch);
-        // A point can change element and still be in order (the last point of an element
-        // moving into the next): the elements' point ranges must follow it all the same, or
-        // the passes that walk elements would take it with its old element's nodes.
-        if moved || permuted {
-            self.layout.set_particle_elements(&p.element);
-        }
+        let permuted = self.layout.resort(
+            &self.team,
+            &mut self.particles,
+            moved,
+            &mut self.sort_scratch,
+        );
         if permuted {
             // Point loads and prescribed points follow their points: old index → new index.
             if !self.point_loads.is_empty() || self.prescribed.is_some() {

@@ -25,9 +25,10 @@ use crate::element::Element;
 use crate::parallel::comm::Communicator;
 use crate::parallel::exact::{self, ExactSum};
 use crate::parallel::halo::Halo;
+use crate::parallel::sort::{resort, SortScratch};
 use crate::parallel::team::{aligned_to_blocks, balanced_ranges, Shared, Team};
 use crate::real::Real;
-use crate::state::particles::{Field, FieldVisitor, Particles, Value};
+use crate::state::particles::Particles;
 
 /// Widest slot (values per element node) a pass uses: particle to grid's, the solid's 10 and
 /// the liquid's 12 values of a tetrahedron's node.
@@ -232,6 +233,29 @@ impl<R: Real, E: Element> Layout<R, E> {
                 "particle starts decrease"
             );
         }
+    }
+
+    /// After the points were located: sorts them by element again (stable, every per-point
+    /// array, by the whole team) and re-reads where each element's points start, when a point
+    /// changed element (`moved`) or the order changed ([`crate::parallel::sort`]). Returns
+    /// true when the points were permuted; `scratch.order` then maps new indices to old ones.
+    pub fn resort(
+        &mut self,
+        team: &Team,
+        p: &mut Particles<R>,
+        moved: bool,
+        scratch: &mut SortScratch,
+    ) -> bool {
+        let permuted = resort(
+            team,
+            &self.element_ranges,
+            &mut self.elem_start,
+            p,
+            moved,
+            scratch,
+        );
+        self.debug_check();
+        permuted
     }
 
     /// Re-reads where each element's particles start after the particles were re-sorted by
@@ -533,138 +557,9 @@ pub fn element_starts(element: &[u32], elements: usize) -> Vec<u32> {
     start
 }
 
-/// Scratch of [`sort_by_element`], kept between steps so that re-sorting allocates nothing.
-#[derive(Debug, Default)]
-pub struct SortScratch {
-    /// New index → old index.
-    pub order: Vec<u32>,
-    /// Old index → new index, for callers that need it.
-    pub inverse: Vec<u32>,
-    next: Vec<u32>,
-    done: Vec<bool>,
-}
-
-/// Stable counting sort of the particles by element when some are out of order, permuting
-/// every array in place (cycle by cycle). Returns true when it permuted; `scratch.order` then
-/// holds the permutation (new index → old index).
-pub fn sort_by_element<R: Real>(
-    p: &mut Particles<R>,
-    elements: usize,
-    scratch: &mut SortScratch,
-) -> bool {
-    if p.element.windows(2).all(|w| w[0] <= w[1]) {
-        return false;
-    }
-    let n = p.len();
-    scratch.next.clear();
-    scratch.next.resize(elements + 1, 0);
-    for &e in &p.element {
-        scratch.next[e as usize + 1] += 1;
-    }
-    for e in 0..elements {
-        scratch.next[e + 1] += scratch.next[e];
-    }
-    scratch.order.resize(n, 0);
-    for (i, &e) in p.element.iter().enumerate() {
-        scratch.order[scratch.next[e as usize] as usize] = i as u32;
-        scratch.next[e as usize] += 1;
-    }
-    struct Permute<'a> {
-        order: &'a [u32],
-        done: &'a mut Vec<bool>,
-    }
-    impl FieldVisitor for Permute<'_> {
-        fn field<T: Value>(&mut self, field: Field, v: &mut Vec<T>) {
-            match field.per_point {
-                0 => {}
-                1 => v.permute(self.order, self.done),
-                k => permute_chunks(v, k, self.order, self.done),
-            }
-        }
-    }
-    p.visit_fields(&mut Permute {
-        order: &scratch.order,
-        done: &mut scratch.done,
-    });
-    true
-}
-
-/// `new[i] = old[order[i]]` for the `k`-value chunks of `v`, following the permutation's cycles
-/// by swapping chunks (no scratch copy).
-fn permute_chunks<T>(v: &mut [T], k: usize, order: &[u32], done: &mut Vec<bool>) {
-    done.clear();
-    done.resize(order.len(), false);
-    for start in 0..order.len() {
-        if done[start] {
-            continue;
-        }
-        // Position i takes the chunk at order[i]; swapping i with order[i] moves the carried
-        // start chunk along the cycle until it lands where order points back to start.
-        let mut i = start;
-        done[i] = true;
-        while order[i] as usize != start {
-            let j = order[i] as usize;
-            let (lo, hi) = (i.min(j), i.max(j));
-            let (a, b) = v.split_at_mut(hi * k);
-            a[lo * k..lo * k + k].swap_with_slice(&mut b[..k]);
-            done[j] = true;
-            i = j;
-        }
-    }
-}
-
-/// An array that can be permuted in place.
-trait Permutable {
-    /// `new[i] = old[order[i]]`, following the permutation's cycles; `done` is scratch.
-    fn permute(&mut self, order: &[u32], done: &mut Vec<bool>);
-}
-
-impl<T: Copy> Permutable for Vec<T> {
-    fn permute(&mut self, order: &[u32], done: &mut Vec<bool>) {
-        done.clear();
-        done.resize(order.len(), false);
-        for start in 0..order.len() {
-            if done[start] {
-                continue;
-            }
-            let first = self[start];
-            let mut i = start;
-            loop {
-                done[i] = true;
-                let j = order[i] as usize;
-                if j == start {
-                    self[i] = first;
-                    break;
-                }
-                self[i] = self[j];
-                i = j;
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn chunks_permute_like_their_first_values() {
-        // A permutation with a fixed point, a 2-cycle and a 4-cycle.
-        let order = [0u32, 2, 1, 6, 3, 4, 5];
-        let mut done = Vec::new();
-        let mut single: Vec<u32> = (0..7).collect();
-        single.permute(&order, &mut done);
-        let mut chunks: Vec<u32> = (0..7)
-            .flat_map(|i| [10 * i, 10 * i + 1, 10 * i + 2])
-            .collect();
-        permute_chunks(&mut chunks, 3, &order, &mut done);
-        let want: Vec<u32> = single
-            .iter()
-            .flat_map(|&i| [10 * i, 10 * i + 1, 10 * i + 2])
-            .collect();
-        assert_eq!(chunks, want);
-        assert_eq!(single, [0, 2, 1, 6, 3, 4, 5]);
-    }
 
     #[test]
     fn nodes_of_one_thread_sum_directly_and_border_nodes_through_slots() {
@@ -714,15 +609,5 @@ mod tests {
         let (direct, nodes) = direct_slots::<Tet4>(&one_thread, &node_start, &node_slot);
         assert!(nodes.iter().all(|&d| d));
         assert_eq!(direct[4..8], [1, 2, 3, first(4)]);
-    }
-
-    #[test]
-    fn in_place_permutation_matches_a_gather() {
-        let order: Vec<u32> = vec![3, 0, 4, 1, 2, 6, 5, 7];
-        let old: Vec<u32> = (10..18).collect();
-        let mut v = old.clone();
-        v.permute(&order, &mut Vec::new());
-        let want: Vec<u32> = order.iter().map(|&i| old[i as usize]).collect();
-        assert_eq!(v, want);
     }
 }

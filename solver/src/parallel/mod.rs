@@ -8,4 +8,5 @@ pub mod machine;
 #[cfg(feature = "mpi")]
 pub mod mpi_comm;
 pub mod partition;
+pub mod sort;
 pub mod team;

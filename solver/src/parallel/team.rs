@@ -7,6 +7,8 @@
 //! [`crate::parallel::gather`] and [`Team::sum_blocks`]).
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
 
 /// The threads' element ranges start at multiples of this many elements (the last ends with
 /// the mesh), so that a sum over a block of consecutive elements is formed by one thread in
@@ -46,6 +48,67 @@ pub struct Team {
     watching: bool,
     /// The look under way while the team runs.
     look: Option<crate::parallel::machine::Look>,
+    /// Where the team's time went since the last [`Team::take_load`].
+    load: LoadCounters,
+}
+
+/// One counter on a cache line of its own, so that threads writing neighbours do not share
+/// a line.
+#[repr(align(128))]
+#[derive(Default)]
+struct Padded(AtomicU64);
+
+/// The counters behind [`Team::take_load`] (nanoseconds).
+#[derive(Default)]
+struct LoadCounters {
+    /// Per thread: its time inside the closure of the last [`Team::run`].
+    last: Vec<Padded>,
+    /// Per thread: its time inside every closure since the last [`Team::take_thread_busy`].
+    total: Vec<Padded>,
+    /// Sum over runs of the run's wall time (as the caller saw it).
+    wall: AtomicU64,
+    /// Sum over runs of the busiest thread's time in the run.
+    busiest: AtomicU64,
+    /// Sum over runs of all threads' time in the run.
+    busy: AtomicU64,
+    /// Runs counted.
+    runs: AtomicU64,
+}
+
+/// Where a team's time went over some [`Team::run`] calls (seconds): a thread's time in a run
+/// is its time inside the closure; the rest of the run's wall time it waited, for the busiest
+/// thread (imbalance) or for the pool to start and join (overhead).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TeamLoad {
+    /// Wall time of the runs, as the calling thread saw it.
+    pub wall: f64,
+    /// Sum over the runs of the busiest thread's time.
+    pub busiest: f64,
+    /// Sum over the runs of the mean thread's time.
+    pub mean: f64,
+    /// Number of runs.
+    pub runs: u64,
+}
+
+impl TeamLoad {
+    /// The share of the threads' time in the runs spent waiting: `1 − mean / wall` (0 when
+    /// nothing ran).
+    pub fn waiting_share(&self) -> f64 {
+        if self.wall > 0.0 {
+            (1.0 - self.mean / self.wall).max(0.0)
+        } else {
+            0.0
+        }
+    }
+}
+
+impl std::ops::AddAssign for TeamLoad {
+    fn add_assign(&mut self, o: TeamLoad) {
+        self.wall += o.wall;
+        self.busiest += o.busiest;
+        self.mean += o.mean;
+        self.runs += o.runs;
+    }
 }
 
 impl std::fmt::Debug for Team {
@@ -139,6 +202,11 @@ impl Team {
             auto_threads,
             watching,
             look: None,
+            load: LoadCounters {
+                last: (0..threads).map(|_| Padded::default()).collect(),
+                total: (0..threads).map(|_| Padded::default()).collect(),
+                ..LoadCounters::default()
+            },
         })
     }
 
@@ -188,9 +256,53 @@ impl Team {
         Ok(team)
     }
 
-    /// Runs `f(k)` on every thread k = 0..threads, each on its own worker, and waits.
+    /// Runs `f(k)` on every thread k = 0..threads, each on its own worker, and waits. Each
+    /// thread's time inside `f` is counted for [`Team::take_load`] (two clock reads per thread).
     pub fn run<F: Fn(usize) + Sync>(&self, f: F) {
-        self.pool.broadcast(|ctx| f(ctx.index()));
+        let start = Instant::now();
+        let (last, total) = (&self.load.last, &self.load.total);
+        self.pool.broadcast(|ctx| {
+            let k = ctx.index();
+            let t = Instant::now();
+            f(k);
+            let busy = t.elapsed().as_nanos() as u64;
+            last[k].0.store(busy, Ordering::Relaxed);
+            total[k].0.fetch_add(busy, Ordering::Relaxed);
+        });
+        let wall = start.elapsed().as_nanos() as u64;
+        // The broadcast has joined: every thread's store is visible here.
+        let (busiest, busy) = last.iter().fold((0, 0), |(m, s), c| {
+            let b = c.0.load(Ordering::Relaxed);
+            (m.max(b), s + b)
+        });
+        let l = &self.load;
+        l.wall.fetch_add(wall, Ordering::Relaxed);
+        l.busiest.fetch_add(busiest, Ordering::Relaxed);
+        l.busy.fetch_add(busy, Ordering::Relaxed);
+        l.runs.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Each thread's time inside the runs' closures since the last call (seconds; the
+    /// counters start again from zero): which threads the others waited for.
+    pub fn take_thread_busy(&self) -> Vec<f64> {
+        self.load
+            .total
+            .iter()
+            .map(|c| c.0.swap(0, Ordering::Relaxed) as f64 * 1e-9)
+            .collect()
+    }
+
+    /// Where the team's time went in the runs since the last call (the counters start again
+    /// from zero).
+    pub fn take_load(&self) -> TeamLoad {
+        let l = &self.load;
+        let ns = |c: &AtomicU64| c.swap(0, Ordering::Relaxed) as f64 * 1e-9;
+        TeamLoad {
+            wall: ns(&l.wall),
+            busiest: ns(&l.busiest),
+            mean: ns(&l.busy) / self.threads.max(1) as f64,
+            runs: l.runs.swap(0, Ordering::Relaxed),
+        }
     }
 
     /// Sum of `f(block)` over fixed blocks `0..n` in blocks of `BLOCK` items, added in block
@@ -341,6 +453,30 @@ mod tests {
         for x in &r {
             assert_eq!(x.len(), 250);
         }
+    }
+
+    #[test]
+    fn load_counts_each_run_and_the_waiting() {
+        let team = Team::new(2, Pin::None).unwrap();
+        team.take_load();
+        team.take_thread_busy();
+        // Thread 1 works, thread 0 waits for it.
+        team.run(|k| {
+            if k == 1 {
+                std::thread::sleep(std::time::Duration::from_millis(20));
+            }
+        });
+        team.run(|_| ());
+        let l = team.take_load();
+        assert_eq!(l.runs, 2);
+        assert!(l.busiest >= 0.02 && l.wall >= l.busiest, "{l:?}");
+        assert!((l.mean - l.busiest / 2.0).abs() < 0.005, "{l:?}");
+        assert!(l.waiting_share() > 0.4 && l.waiting_share() < 0.6, "{l:?}");
+        assert_eq!(team.take_load().runs, 0);
+        // Thread 1 was the busy one.
+        let busy = team.take_thread_busy();
+        assert!(busy[1] >= 0.02 && busy[0] < 0.01, "{busy:?}");
+        assert!(team.take_thread_busy().iter().all(|&b| b == 0.0));
     }
 
     #[test]
