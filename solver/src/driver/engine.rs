@@ -1453,12 +1453,19 @@ impl<R: Real, E: Element> Engine<R, E> {
         let elements = Shared::new(&mut p.element);
         let actives = Shared::new(&mut p.active);
         let x = &p.x;
-        // Per thread: the first point it found outside (index, element) and how many.
-        let outcome = Shared::new(&mut self.locate_outcome);
+        // Per thread: the first point it found outside (index, element), how many, and whether
+        // a point changed element, over the chunks it walked.
+        for o in &mut self.locate_outcome {
+            *o = ((usize::MAX, 0), 0, false);
+        }
+        let outcomes = Shared::new(&mut self.locate_outcome);
         let drop_lost = self.drop_lost;
-        self.team.run(|t| {
-            let r = layout.particle_range(t);
-            // SAFETY: the particle ranges of the threads are disjoint.
+        // In chunks handed out while the walk runs (a thread slowed by its core leaves the rest
+        // of its chunks to the others): the lowest lost point, the count and the moved flag
+        // are the same whichever thread walks a chunk.
+        self.team.run_chunks(layout.thread_chunks(), |t, c| {
+            let r = layout.chunk_particles(c);
+            // SAFETY: the particle ranges of the chunks are disjoint, and each chunk runs once.
             let (el, active) = unsafe { (elements.range(r.clone()), actives.range(r.clone())) };
             let (mut first, mut count, mut moved) = ((usize::MAX, 0u32), 0u64, false);
             for (j, i) in r.enumerate() {
@@ -1497,8 +1504,11 @@ impl<R: Real, E: Element> Engine<R, E> {
                     }
                 }
             }
-            // SAFETY: slot t is this thread's only.
-            unsafe { outcome.write(t, (first, count, moved)) };
+            // SAFETY: slot t is this thread's only (a thread runs its chunks one after another).
+            let mine = unsafe { &mut outcomes.range(t..t + 1)[0] };
+            mine.0 = mine.0.min(first);
+            mine.1 += count;
+            mine.2 |= moved;
         });
         let outside = self.locate_outcome.iter().map(|o| o.1).sum::<u64>();
         let outside_anywhere = self.comm.sum_count(outside);

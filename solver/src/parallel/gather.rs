@@ -36,6 +36,11 @@ pub const WIDTH: usize = 22;
 
 pub use crate::parallel::team::ELEMENT_BLOCK;
 
+/// Element blocks per chunk of the passes that hand out work while they run (1,024 elements,
+/// about 4,000 points: a few dozen chunks per thread on a million points, each long enough
+/// that claiming it costs nothing next to its work).
+pub const CHUNK_BLOCKS: usize = 16;
+
 /// Layout and scratch of the parallel step.
 #[derive(Debug)]
 ///
@@ -72,6 +77,11 @@ pub struct Layout<R: Real, E: Element = Tet4> {
     direct: Vec<u32>,
     /// Whether node n is summed straight into its accumulator (all its elements one thread's).
     direct_node: Vec<bool>,
+    /// The elements of each chunk that [`Team::run_chunks`] hands out: each thread's elements
+    /// cut, in order, into pieces of [`CHUNK_BLOCKS`] whole blocks.
+    chunks: Vec<Range<usize>>,
+    /// The chunks of each thread.
+    thread_chunks: Vec<Range<usize>>,
     _types: std::marker::PhantomData<(R, E)>,
 }
 
@@ -191,8 +201,11 @@ impl<R: Real, E: Element> Layout<R, E> {
         } else {
             (vec![TO_SLOT; E::NODES * ne], vec![false; nn])
         };
+        let (chunks, thread_chunks) = chunks_of(&element_ranges);
         let layout = Layout {
             elem_start,
+            chunks,
+            thread_chunks,
             element_ranges,
             node_ranges,
             node_start,
@@ -306,6 +319,28 @@ impl<R: Real, E: Element> Layout<R, E> {
     pub fn slot_share(&self) -> f64 {
         let through = self.direct.iter().filter(|&&d| d == TO_SLOT).count();
         through as f64 / self.direct.len().max(1) as f64
+    }
+
+    /// The chunks of each thread, for [`Team::run_chunks`].
+    pub fn thread_chunks(&self) -> &[Range<usize>] {
+        &self.thread_chunks
+    }
+
+    /// Elements of chunk `c` (whole blocks, but for the last of a thread).
+    pub fn chunk_elements(&self, c: usize) -> Range<usize> {
+        self.chunks[c].clone()
+    }
+
+    /// Particles of chunk `c`.
+    pub fn chunk_particles(&self, c: usize) -> Range<usize> {
+        let r = &self.chunks[c];
+        self.elem_start[r.start] as usize..self.elem_start[r.end] as usize
+    }
+
+    /// The element blocks of chunk `c`, which no other chunk's elements share.
+    pub fn chunk_blocks(&self, c: usize) -> Range<usize> {
+        let r = &self.chunks[c];
+        r.start / ELEMENT_BLOCK..r.end.div_ceil(ELEMENT_BLOCK)
     }
 
     /// Particles of thread `k`.
@@ -545,6 +580,25 @@ fn direct_slots<E: Element>(
     (direct, direct_node)
 }
 
+/// The threads' element ranges cut into chunks of [`CHUNK_BLOCKS`] blocks (the ranges start
+/// on block boundaries, so every chunk holds whole blocks but a thread's last): the chunks,
+/// and each thread's.
+fn chunks_of(ranges: &[Range<usize>]) -> (Vec<Range<usize>>, Vec<Range<usize>>) {
+    let size = CHUNK_BLOCKS * ELEMENT_BLOCK;
+    let mut chunks = Vec::new();
+    let mut own = Vec::with_capacity(ranges.len());
+    for r in ranges {
+        let first = chunks.len();
+        let mut e = r.start;
+        while e < r.end {
+            chunks.push(e..(e + size).min(r.end));
+            e += size;
+        }
+        own.push(first..chunks.len());
+    }
+    (chunks, own)
+}
+
 /// First particle of each element for particles sorted by `element`.
 pub fn element_starts(element: &[u32], elements: usize) -> Vec<u32> {
     let mut start = vec![0u32; elements + 1];
@@ -560,6 +614,28 @@ pub fn element_starts(element: &[u32], elements: usize) -> Vec<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn chunks_cut_each_thread_in_whole_blocks() {
+        let size = CHUNK_BLOCKS * ELEMENT_BLOCK;
+        let ranges = [
+            0..size + 64,
+            size + 64..size + 64,
+            size + 64..3 * size + 100,
+        ];
+        let (chunks, own) = chunks_of(&ranges);
+        assert_eq!(
+            chunks,
+            [
+                0..size,
+                size..size + 64,
+                size + 64..2 * size + 64,
+                2 * size + 64..3 * size + 64,
+                3 * size + 64..3 * size + 100
+            ]
+        );
+        assert_eq!(own, [0..2, 2..2, 2..5]);
+    }
 
     #[test]
     fn nodes_of_one_thread_sum_directly_and_border_nodes_through_slots() {

@@ -50,6 +50,8 @@ pub struct Team {
     look: Option<crate::parallel::machine::Look>,
     /// Where the team's time went since the last [`Team::take_load`].
     load: LoadCounters,
+    /// Per thread: the next of its chunks to hand out in [`Team::run_chunks`].
+    cursors: Vec<Padded>,
 }
 
 /// One counter on a cache line of its own, so that threads writing neighbours do not share
@@ -207,6 +209,7 @@ impl Team {
                 total: (0..threads).map(|_| Padded::default()).collect(),
                 ..LoadCounters::default()
             },
+            cursors: (0..threads).map(|_| Padded::default()).collect(),
         })
     }
 
@@ -290,6 +293,34 @@ impl Team {
             .iter()
             .map(|c| c.0.swap(0, Ordering::Relaxed) as f64 * 1e-9)
             .collect()
+    }
+
+    /// Runs `f(t, c)` once for every chunk `c` of `owned`, on some thread `t` (one range of chunk numbers per thread,
+    /// disjoint): each thread takes its own chunks in order, then, its own done, the chunks
+    /// still left of the threads after it (in turn), so that a thread its core slows down
+    /// does not hold the others at the barrier. Which thread runs a chunk varies from run to
+    /// run: `f` must write only what belongs to the chunk, so that results do not depend on it.
+    pub fn run_chunks<F: Fn(usize, usize) + Sync>(&self, owned: &[Range<usize>], f: F) {
+        assert_eq!(owned.len(), self.threads, "a range of chunks per thread");
+        for (c, r) in self.cursors.iter().zip(owned) {
+            c.0.store(r.start as u64, Ordering::Relaxed);
+        }
+        let cursors = &self.cursors;
+        let threads = self.threads;
+        // The broadcast orders the stores above before every worker's first claim.
+        self.run(|t| {
+            for v in (t..threads).chain(0..t) {
+                let end = owned[v].end as u64;
+                loop {
+                    // Each number is handed out once: the claim is one atomic add.
+                    let c = cursors[v].0.fetch_add(1, Ordering::Relaxed);
+                    if c >= end {
+                        break;
+                    }
+                    f(t, c as usize);
+                }
+            }
+        });
     }
 
     /// Where the team's time went in the runs since the last call (the counters start again
@@ -477,6 +508,32 @@ mod tests {
         let busy = team.take_thread_busy();
         assert!(busy[1] >= 0.02 && busy[0] < 0.01, "{busy:?}");
         assert!(team.take_thread_busy().iter().all(|&b| b == 0.0));
+    }
+
+    #[test]
+    fn every_chunk_runs_once_and_the_idle_thread_takes_the_slow_ones() {
+        let team = Team::new(2, Pin::None).unwrap();
+        let ran: Vec<AtomicU64> = (0..40).map(|_| AtomicU64::new(0)).collect();
+        let by: Vec<AtomicU64> = (0..40).map(|_| AtomicU64::new(9)).collect();
+        let owned = [0..20, 20..40];
+        team.run_chunks(&owned, |t, c| {
+            ran[c].fetch_add(1, Ordering::Relaxed);
+            // Thread 0's chunks are slow: thread 1 finishes its own and takes some of them.
+            if c < 20 {
+                std::thread::sleep(std::time::Duration::from_millis(2));
+            }
+            by[c].store(t as u64, Ordering::Relaxed);
+        });
+        assert!(ran.iter().all(|r| r.load(Ordering::Relaxed) == 1));
+        let helped = (0..20)
+            .filter(|&c| by[c].load(Ordering::Relaxed) == 1)
+            .count();
+        assert!(helped > 0, "thread 1 took none of thread 0's chunks");
+        // Run again: the cursors start over.
+        team.run_chunks(&owned, |_, c| {
+            ran[c].fetch_add(1, Ordering::Relaxed);
+        });
+        assert!(ran.iter().all(|r| r.load(Ordering::Relaxed) == 2));
     }
 
     #[test]

@@ -65,9 +65,12 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     let k = p.state_len;
     let states = Shared::new(&mut p.state);
     let (active, element, material) = (&p.active, &p.element, &p.material);
-    team.run(|t| {
-        let r = layout.particle_range(t);
-        // SAFETY: the particle ranges of the threads are disjoint.
+    // In chunks handed out while the pass runs: a thread slowed by its core leaves the rest of
+    // its chunks to the others (each point's update and each block's sums are the same
+    // whichever thread computes them).
+    team.run_chunks(layout.thread_chunks(), |_, c| {
+        let r = layout.chunk_particles(c);
+        // SAFETY: the particle ranges of the chunks are disjoint, and each chunk runs once.
         let (x, u, stress, volume) = unsafe {
             (
                 xs.range(r.clone()),
@@ -78,8 +81,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         };
         // SAFETY: as above; each point's state is its own `k` values.
         let state = unsafe { states.range(k * r.start..k * r.end) };
-        let blocks = layout.block_range(t);
-        // SAFETY: the threads' element ranges are disjoint and hold whole blocks; this thread's
+        let blocks = layout.chunk_blocks(c);
+        // SAFETY: the chunks' element ranges are disjoint and hold whole blocks; this chunk's
         // points lie in its own elements.
         let mut sums = guard_slots
             .as_ref()
@@ -108,7 +111,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         // Element by element (the points are sorted by element): a linear element's velocity
         // gradient is the same at all its points, so it is formed once per element, from its
         // nodes' velocities gathered once.
-        for e in layout.element_range(t) {
+        for e in layout.chunk_elements(c) {
             let points = layout.particles_of(e);
             if points.is_empty() {
                 continue;
