@@ -75,6 +75,7 @@ fn writes_every_output_and_repeats_byte_for_byte() {
         "particle_steps_per_second",
         "phase_seconds",
         "phase_ns_per_particle_step",
+        "phase_threads_ns_per_particle_step",
         "modelled_bytes_per_particle_step",
         "bytes_per_particle",
         "peak_rss_bytes",
@@ -88,6 +89,23 @@ fn writes_every_output_and_repeats_byte_for_byte() {
             .as_f64()
             .unwrap();
         assert!(b > 0.0 && b.is_finite(), "{phase}: {b}");
+    }
+    // Where the threads' time went: the mean thread's work is positive in every step phase,
+    // and no part is negative beyond the clocks' resolution.
+    for phase in [
+        "particle_to_grid",
+        "grid_update",
+        "grid_to_particle",
+        "stress",
+        "locate",
+    ] {
+        let t = &run["phase_threads_ns_per_particle_step"][phase];
+        let work = t["work"].as_f64().unwrap();
+        assert!(work > 0.0 && work.is_finite(), "{phase}: {t}");
+        for part in ["imbalance", "pool"] {
+            let v = t[part].as_f64().unwrap();
+            assert!(v >= 0.0 && v.is_finite(), "{phase} {part}: {t}");
+        }
     }
     assert_eq!(run["precision"], "f64");
 }

@@ -17,11 +17,12 @@ const BIN: &str = env!("CARGO_BIN_EXE_mpm-solve");
 /// Keys of run.json that describe this process rather than the results: wall times, rates,
 /// memory, and the threads (outputs do not depend on them), with the traffic model, whose
 /// slots are those of the threads' borders.
-const RUN_SPECIFIC: [&str; 10] = [
+const RUN_SPECIFIC: [&str; 11] = [
     "wall_seconds",
     "particle_steps_per_second",
     "phase_seconds",
     "phase_ns_per_particle_step",
+    "phase_threads_ns_per_particle_step",
     "peak_rss_bytes",
     "threads",
     "pinning",

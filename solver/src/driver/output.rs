@@ -294,6 +294,29 @@ pub fn write_summary<R: Real, E: Element>(
             (k.to_string(), serde_json::json!(ns))
         })
         .collect();
+    // Where the threads' time went in each step phase, in ns per particle-step: the mean
+    // thread's work, the wait for the busiest thread, the pool's start and join.
+    let per_ps = |v: f64| {
+        if particle_steps > 0.0 {
+            v * 1e9 / particle_steps
+        } else {
+            0.0
+        }
+    };
+    let threads_ns: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES[..5]
+        .iter()
+        .zip(engine.phase_load)
+        .map(|(k, l)| {
+            (
+                k.to_string(),
+                serde_json::json!({
+                    "work": per_ps(l.mean),
+                    "imbalance": per_ps(l.busiest - l.mean),
+                    "pool": per_ps(l.wall - l.busiest),
+                }),
+            )
+        })
+        .collect();
     let modelled = crate::driver::traffic::modelled_bytes::<R, E>(
         &engine.particles,
         engine.mesh.elements(),
@@ -330,6 +353,7 @@ pub fn write_summary<R: Real, E: Element>(
         "particle_steps_per_second": ps,
         "phase_seconds": phases,
         "phase_ns_per_particle_step": phase_ns,
+        "phase_threads_ns_per_particle_step": threads_ns,
         "modelled_bytes_per_particle_step": bytes,
         "bytes_per_particle": engine.particles.bytes_per_point() as f64 + grid_bytes,
         "peak_rss_bytes": peak_rss_bytes(),
