@@ -8,5 +8,6 @@ pub mod machine;
 #[cfg(feature = "mpi")]
 pub mod mpi_comm;
 pub mod partition;
+pub mod pool;
 pub mod sort;
 pub mod team;

@@ -32,7 +32,7 @@ pub enum Pin {
 
 /// A pool of `threads` workers.
 pub struct Team {
-    pool: rayon::ThreadPool,
+    pool: crate::parallel::pool::Pool,
     /// Number of threads.
     pub threads: usize,
     /// The core each thread was pinned to (`None` where pinning was not asked for or refused).
@@ -173,24 +173,32 @@ impl Team {
             (0..threads).map(|_| std::sync::Mutex::new(None)).collect();
         let granted = std::sync::Arc::new(granted);
         let g = granted.clone();
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .thread_name(|k| format!("mpm-worker-{k}"))
-            .start_handler(move |k| {
-                if !cores.is_empty() {
-                    let core = cores[k % cores.len()];
-                    if core_affinity::set_for_current(core) {
-                        *g[k].lock().expect("not poisoned") = Some(core.id);
-                    }
+        // One thread works on the caller's own thread: no hand-over at all. It is pinned only
+        // when asked for by `Pin::Cores` (the caller stays pinned for the rest of the process;
+        // `Pin::Auto` leaves a lone thread to the OS, which moves it off a busy core).
+        let inline = threads == 1;
+        if inline && pin == Pin::Cores {
+            if let Some(&core) = cores.first() {
+                if core_affinity::set_for_current(core) {
+                    *granted[0].lock().expect("not poisoned") = Some(core.id);
                 }
-            })
-            .build()
-            .map_err(|e| TeamError {
-                threads,
-                reason: e.to_string(),
-            })?;
-        // Let every worker run its start handler before the pinning is read.
-        pool.broadcast(|_| ());
+            }
+        }
+        let workers = if inline { 0 } else { threads };
+        let pool = crate::parallel::pool::Pool::new(workers, move |k| {
+            if !cores.is_empty() {
+                let core = cores[k % cores.len()];
+                if core_affinity::set_for_current(core) {
+                    *g[k].lock().expect("not poisoned") = Some(core.id);
+                }
+            }
+        })
+        .map_err(|e| TeamError {
+            threads,
+            reason: e.to_string(),
+        })?;
+        // Every worker has placed itself once it has run a pass.
+        pool.run(&|_| ());
         let pinned: Vec<Option<usize>> = granted
             .iter()
             .map(|m| *m.lock().expect("not poisoned"))
@@ -259,21 +267,26 @@ impl Team {
         Ok(team)
     }
 
-    /// Runs `f(k)` on every thread k = 0..threads, each on its own worker, and waits. Each
-    /// thread's time inside `f` is counted for [`Team::take_load`] (two clock reads per thread).
+    /// Runs `f(k)` on every thread k = 0..threads, each on its own worker (a team of one on the
+    /// calling thread), and waits. Each thread's time inside `f` is counted for
+    /// [`Team::take_load`] (two clock reads per thread).
     pub fn run<F: Fn(usize) + Sync>(&self, f: F) {
         let start = Instant::now();
         let (last, total) = (&self.load.last, &self.load.total);
-        self.pool.broadcast(|ctx| {
-            let k = ctx.index();
+        let timed = |k: usize| {
             let t = Instant::now();
             f(k);
             let busy = t.elapsed().as_nanos() as u64;
             last[k].0.store(busy, Ordering::Relaxed);
             total[k].0.fetch_add(busy, Ordering::Relaxed);
-        });
+        };
+        if self.threads == 1 {
+            timed(0);
+        } else {
+            self.pool.run(&timed);
+        }
         let wall = start.elapsed().as_nanos() as u64;
-        // The broadcast has joined: every thread's store is visible here.
+        // The pass has joined: every thread's store is visible here.
         let (busiest, busy) = last.iter().fold((0, 0), |(m, s), c| {
             let b = c.0.load(Ordering::Relaxed);
             (m.max(b), s + b)

@@ -1,0 +1,295 @@
+//! The team's worker threads and the hand-over of each parallel pass to them (docs/design.md
+//! §5.1).
+//!
+//! A time step hands a dozen and more passes to the team, each a few microseconds to a few
+//! milliseconds of work. A general-purpose pool (rayon's `broadcast`, used until 2026-11-26)
+//! puts its idle workers to sleep and its caller too, so every pass paid two or three
+//! wake-ups of the operating system: on the README's default job (4,104 points, about a
+//! millisecond of work per step) that was 45 % of a one-thread run. Here the workers wait for
+//! the next pass spinning for a short while ([`SPIN`]) before they sleep, and so does the
+//! caller for the end of the pass; between the passes of a step nobody sleeps, and a run that
+//! stops stepping (output, the end) leaves its workers asleep after [`SPIN`].
+//!
+//! A pass is handed over as a borrowed closure: [`Pool::run`] does not return before every
+//! worker has finished with it (and has let go of it), which is what makes lending the
+//! borrow to the workers sound. A worker that panics does not take the others down: the panic
+//! is caught, the pass completes on the other workers, and [`Pool::run`] resumes it on the
+//! caller.
+
+use std::any::Any;
+use std::cell::UnsafeCell;
+use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering::SeqCst};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// How long a waiting thread spins before it sleeps: longer than the gap between two passes
+/// of a step (a reduction, a few node loops), far shorter than a time slice.
+const SPIN: Duration = Duration::from_micros(50);
+
+/// A pass: the closure every worker runs with its index, its lifetime erased (see
+/// [`Pool::run`]).
+type Job = *const (dyn Fn(usize) + Sync);
+
+/// What the caller and the workers share.
+struct Shared {
+    /// Incremented for every pass; a worker runs the job when it sees a new value.
+    epoch: AtomicU64,
+    /// The current pass: written by the caller only while no worker runs one (before the
+    /// epoch that announces it), read by the workers after they saw that epoch.
+    job: UnsafeCell<Option<SendJob>>,
+    /// Workers still running the current pass.
+    remaining: AtomicUsize,
+    /// The first panic of the current pass.
+    panic: Mutex<Option<Box<dyn Any + Send>>>,
+    /// Set when the pool is dropped.
+    stop: AtomicBool,
+    /// Workers asleep (or going to sleep) on `wake`.
+    sleepers: AtomicUsize,
+    wake_lock: Mutex<()>,
+    wake: Condvar,
+    /// Whether the caller is asleep (or going to sleep) on `done`.
+    caller_sleeps: AtomicBool,
+    done_lock: Mutex<()>,
+    done: Condvar,
+}
+
+/// The job pointer, sent to the workers.
+#[derive(Clone, Copy)]
+struct SendJob(Job);
+
+// SAFETY: the closure behind the pointer is `Sync` (shared by reference between threads), and
+// it outlives every use: `Pool::run` waits for all workers before it returns.
+unsafe impl Send for SendJob {}
+
+// SAFETY: every field but `job` is a synchronisation type; `job` is written by the caller only
+// while every worker waits for the next epoch, and read by a worker only after it has seen the
+// epoch the write came before (sequentially consistent store and load: the write happens
+// before the read), so no read and write of it overlap.
+unsafe impl Sync for Shared {}
+
+/// `threads` workers, each started by `start(k)` (its placement) and then waiting for passes.
+pub struct Pool {
+    shared: Arc<Shared>,
+    handles: Vec<JoinHandle<()>>,
+}
+
+impl Pool {
+    /// Starts `threads` workers named `mpm-worker-K`; each first runs `start(K)`.
+    pub fn new(
+        threads: usize,
+        start: impl Fn(usize) + Send + Sync + 'static,
+    ) -> std::io::Result<Pool> {
+        let shared = Arc::new(Shared {
+            epoch: AtomicU64::new(0),
+            job: UnsafeCell::new(None),
+            remaining: AtomicUsize::new(0),
+            panic: Mutex::new(None),
+            stop: AtomicBool::new(false),
+            sleepers: AtomicUsize::new(0),
+            wake_lock: Mutex::new(()),
+            wake: Condvar::new(),
+            caller_sleeps: AtomicBool::new(false),
+            done_lock: Mutex::new(()),
+            done: Condvar::new(),
+        });
+        let start = Arc::new(start);
+        let mut pool = Pool {
+            shared: shared.clone(),
+            handles: Vec::with_capacity(threads),
+        };
+        for k in 0..threads {
+            let (shared, start) = (shared.clone(), start.clone());
+            let handle = std::thread::Builder::new()
+                .name(format!("mpm-worker-{k}"))
+                .spawn(move || {
+                    start(k);
+                    worker(&shared, k);
+                })?;
+            // A failed spawn drops `pool`, which stops and joins the workers started so far.
+            pool.handles.push(handle);
+        }
+        Ok(pool)
+    }
+
+    /// Number of workers.
+    pub fn threads(&self) -> usize {
+        self.handles.len()
+    }
+
+    /// Runs `f(k)` on every worker k and returns when all have finished; a worker's panic is
+    /// resumed here once the others are done.
+    pub fn run(&self, f: &(dyn Fn(usize) + Sync)) {
+        let s = &*self.shared;
+        let n = self.handles.len();
+        if n == 0 {
+            return;
+        }
+        // SAFETY: only the lifetime is erased (same fat pointer); the workers drop their copy
+        // before they count themselves done, and this function returns only after every worker
+        // has (below), so the closure is never used after its borrow ends.
+        let job: Job = unsafe {
+            std::mem::transmute::<&(dyn Fn(usize) + Sync), &'static (dyn Fn(usize) + Sync)>(f)
+        };
+        debug_assert_eq!(s.remaining.load(SeqCst), 0, "a pass still running");
+        // SAFETY: no worker reads `job` now: the last pass ended (every worker counted itself
+        // done, so each waits for the next epoch), and the next read follows the epoch below.
+        unsafe { *s.job.get() = Some(SendJob(job)) };
+        s.remaining.store(n, SeqCst);
+        s.epoch.fetch_add(1, SeqCst);
+        // A worker that went to sleep before the new epoch is woken; one that counts itself a
+        // sleeper after it reads the epoch again under the lock (sequentially consistent on
+        // both sides, so one of the two sees the other).
+        if s.sleepers.load(SeqCst) > 0 {
+            let _g = s.wake_lock.lock().expect("not poisoned");
+            s.wake.notify_all();
+        }
+        wait_until(
+            || s.remaining.load(SeqCst) == 0,
+            || {
+                let mut g = s.done_lock.lock().expect("not poisoned");
+                s.caller_sleeps.store(true, SeqCst);
+                while s.remaining.load(SeqCst) != 0 {
+                    g = s.done.wait(g).expect("not poisoned");
+                }
+                s.caller_sleeps.store(false, SeqCst);
+            },
+        );
+        debug_assert_eq!(s.remaining.load(SeqCst), 0, "a worker still on the pass");
+        // Out of the lock before unwinding (a guard held through a panic poisons it).
+        let panic = s.panic.lock().expect("not poisoned").take();
+        if let Some(p) = panic {
+            resume_unwind(p);
+        }
+    }
+}
+
+impl Drop for Pool {
+    fn drop(&mut self) {
+        let s = &*self.shared;
+        s.stop.store(true, SeqCst);
+        {
+            let _g = s.wake_lock.lock().unwrap_or_else(|e| e.into_inner());
+            s.wake.notify_all();
+        }
+        for h in self.handles.drain(..) {
+            // A worker's own panics are caught per pass; a join error has nothing left to say.
+            let _ = h.join();
+        }
+    }
+}
+
+/// Spins on `ready` for [`SPIN`], then calls `sleep` (which returns once ready).
+fn wait_until(ready: impl Fn() -> bool, sleep: impl FnOnce()) {
+    if ready() {
+        return;
+    }
+    let t = Instant::now();
+    let mut spins = 0u32;
+    while !ready() {
+        std::hint::spin_loop();
+        spins += 1;
+        // The clock only now and then: spinning is for the next few microseconds.
+        if spins % 64 == 0 {
+            if t.elapsed() > SPIN {
+                sleep();
+                return;
+            }
+            // Let a thread that shares this core have it: the caller's serial work between
+            // passes on a machine with no core to spare, or another process (measured: on 2
+            // cores, 2 threads spinning without yielding ran the default job 4× slower).
+            std::thread::yield_now();
+        }
+    }
+}
+
+/// A worker: waits for each new epoch, runs the pass, counts itself done.
+fn worker(s: &Shared, k: usize) {
+    let mut seen = 0u64;
+    loop {
+        wait_until(
+            || s.epoch.load(SeqCst) != seen || s.stop.load(SeqCst),
+            || {
+                let mut g = s.wake_lock.lock().expect("not poisoned");
+                s.sleepers.fetch_add(1, SeqCst);
+                while s.epoch.load(SeqCst) == seen && !s.stop.load(SeqCst) {
+                    g = s.wake.wait(g).expect("not poisoned");
+                }
+                s.sleepers.fetch_sub(1, SeqCst);
+            },
+        );
+        if s.stop.load(SeqCst) {
+            return;
+        }
+        seen = s.epoch.load(SeqCst);
+        // SAFETY: the caller wrote the job before the epoch this worker saw, and writes it
+        // again only after this worker counts itself done (below).
+        let job = unsafe { *s.job.get() }.expect("a job with the epoch");
+        // SAFETY: `Pool::run` keeps the closure alive until `remaining` reaches 0, which this
+        // worker's decrement below comes after.
+        let f = unsafe { &*job.0 };
+        if let Err(p) = catch_unwind(AssertUnwindSafe(|| f(k))) {
+            let mut first = s.panic.lock().expect("not poisoned");
+            if first.is_none() {
+                *first = Some(p);
+            }
+        }
+        if s.remaining.fetch_sub(1, SeqCst) == 1 && s.caller_sleeps.load(SeqCst) {
+            let _g = s.done_lock.lock().expect("not poisoned");
+            s.done.notify_one();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_worker_runs_every_pass_once() {
+        let pool = Pool::new(3, |_| ()).unwrap();
+        let count: Vec<AtomicUsize> = (0..3).map(|_| AtomicUsize::new(0)).collect();
+        for pass in 0..2000 {
+            pool.run(&|k| {
+                count[k].fetch_add(1, SeqCst);
+            });
+            // Now and then a pause long enough for the workers to fall asleep.
+            if pass % 500 == 0 {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        }
+        assert!(count.iter().all(|c| c.load(SeqCst) == 2000));
+    }
+
+    #[test]
+    fn a_panicking_worker_reaches_the_caller_and_the_pool_goes_on() {
+        let pool = Pool::new(2, |_| ()).unwrap();
+        let r = catch_unwind(AssertUnwindSafe(|| {
+            pool.run(&|k| {
+                if k == 1 {
+                    panic!("worker one");
+                }
+            })
+        }));
+        assert!(r.is_err());
+        let ran = AtomicUsize::new(0);
+        pool.run(&|_| {
+            ran.fetch_add(1, SeqCst);
+        });
+        assert_eq!(ran.load(SeqCst), 2);
+    }
+
+    #[test]
+    fn workers_start_placed_and_stop_when_dropped() {
+        let started = Arc::new(AtomicUsize::new(0));
+        let s = started.clone();
+        let pool = Pool::new(4, move |_| {
+            s.fetch_add(1, SeqCst);
+        })
+        .unwrap();
+        pool.run(&|_| ());
+        assert_eq!(started.load(SeqCst), 4);
+        drop(pool);
+    }
+}
