@@ -6,9 +6,9 @@
 //! puts its idle workers to sleep and its caller too, so every pass paid two or three
 //! wake-ups of the operating system: on the README's default job (4,104 points, about a
 //! millisecond of work per step) that was 45 % of a one-thread run. Here the workers wait for
-//! the next pass spinning for a short while ([`SPIN`]) before they sleep, and so does the
+//! the next pass spinning for a short while (50 µs) before they sleep, and so does the
 //! caller for the end of the pass; between the passes of a step nobody sleeps, and a run that
-//! stops stepping (output, the end) leaves its workers asleep after [`SPIN`].
+//! stops stepping (output, the end) leaves its workers asleep after that.
 //!
 //! A pass is handed over as a borrowed closure: [`Pool::run`] does not return before every
 //! worker has finished with it (and has let go of it), which is what makes lending the
