@@ -1547,6 +1547,8 @@ impl<R: Real, E: Element> Engine<R, E> {
         if !self.partition.is_whole() {
             moved |= self.migrate();
         }
+        // `moved` even when the order holds: a point moving into the next element stays in
+        // order, but its element's point range must follow it (design.md §5.2).
         let permuted = self.layout.resort(
             &self.team,
             &mut self.particles,

@@ -113,11 +113,6 @@ impl Pool {
         Ok(pool)
     }
 
-    /// Number of workers.
-    pub fn threads(&self) -> usize {
-        self.handles.len()
-    }
-
     /// Runs `f(k)` on every worker k and returns when all have finished; a worker's panic is
     /// resumed here once the others are done.
     pub fn run(&self, f: &(dyn Fn(usize) + Sync)) {

@@ -131,22 +131,23 @@ pub fn resort<R: Real>(
     scratch.stage.resize(n, 0);
     scratch.order.resize(n, 0);
     scratch.next.resize(elements + 1, 0);
-    let destination = |e: u32| ranges.partition_point(|r| r.end <= e as usize);
+    // The thread whose elements hold element `e`, for a point of thread `t`'s share: most
+    // points stay in the thread's own elements, so those are looked at first.
+    let destination = |t: usize, e: u32| {
+        if ranges[t].contains(&(e as usize)) {
+            t
+        } else {
+            ranges.partition_point(|r| r.end <= e as usize)
+        }
+    };
     {
         let element = &p.element;
         let counts = Shared::new(&mut scratch.counts);
         team.run(|t| {
             // SAFETY: row t of the matrix is this thread's only.
             let row = unsafe { counts.range(t * threads..(t + 1) * threads) };
-            let own = ranges[t].clone();
             for &e in &element[share(t)] {
-                // Most points stay in the thread's own elements.
-                let d = if own.contains(&(e as usize)) {
-                    t
-                } else {
-                    destination(e)
-                };
-                row[d] += 1;
+                row[destination(t, e)] += 1;
             }
         });
     }
@@ -169,11 +170,7 @@ pub fn resort<R: Real>(
             let cursor = unsafe { counts.range(t * threads..(t + 1) * threads) };
             let r = share(t);
             for (i, &e) in r.clone().zip(&element[r]) {
-                let d = if ranges[t].contains(&(e as usize)) {
-                    t
-                } else {
-                    destination(e)
-                };
+                let d = destination(t, e);
                 // SAFETY: the prefix gave each (source, destination) pair its own places, and
                 // each source writes only its own pairs' places.
                 unsafe { stage.write(cursor[d] as usize, i as u32) };
