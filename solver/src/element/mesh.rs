@@ -218,6 +218,7 @@ impl<E: Element, R: Real> Mesh<E, R> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::tri3::Tri3;
     use mpm_shared::{generate, ElementType};
 
     #[test]
@@ -262,5 +263,53 @@ mod tests {
             .count();
         // 6 sides x 4 squares x 2 triangles.
         assert_eq!(boundary, 48);
+    }
+
+    /// Each lane of [`Element::shape_lanes`] is [`Element::shape`] at that point, to the bit,
+    /// in f64 and f32 and for batches of 1 and 4 (the stress loop's results must not depend on
+    /// its batch width).
+    fn shape_lanes_match<E: Element, R: Real, const W: usize>(mesh: &Mesh<E, R>) {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for e in 0..mesh.elements() {
+            let first = &mesh.x[mesh.corners[e].as_ref()[0] as usize];
+            let points: [V3<R>; W] = std::array::from_fn(|_| {
+                // Inside the element's box and a little beyond it.
+                let mut p = [R::ZERO; 3];
+                for a in 0..E::DIM {
+                    p[a] = R::of(first[a].f64() + 1.2 * next() - 0.6);
+                }
+                p
+            });
+            let x: [[R; W]; 3] = std::array::from_fn(|a| points.map(|p| p[a]));
+            let lanes = E::shape_lanes(&mesh.map[e], first, &x);
+            for (q, p) in points.iter().enumerate() {
+                let one = mesh.shape(e, p);
+                for k in 0..4 {
+                    let want = one.as_ref().get(k).map_or(0.0, |v| v.f64());
+                    assert_eq!(
+                        lanes[k][q].f64().to_bits(),
+                        want.to_bits(),
+                        "e{e} q{q} k{k}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn shape_lanes_are_shape_lane_by_lane() {
+        let tets = generate::box_mesh([2, 2, 2], [1.0, 2.0, 0.5], ElementType::Tet4);
+        shape_lanes_match::<Tet4, f64, 1>(&TetMesh::<f64>::new(&tets).unwrap());
+        shape_lanes_match::<Tet4, f64, 4>(&TetMesh::<f64>::new(&tets).unwrap());
+        shape_lanes_match::<Tet4, f32, 4>(&TetMesh::<f32>::new(&tets).unwrap());
+        let tris = generate::rect_mesh([3, 2], [1.5, 1.0]);
+        shape_lanes_match::<Tri3, f64, 1>(&Mesh::<Tri3, f64>::new(&tris).unwrap());
+        shape_lanes_match::<Tri3, f32, 4>(&Mesh::<Tri3, f32>::new(&tris).unwrap());
     }
 }

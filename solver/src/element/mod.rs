@@ -77,6 +77,16 @@ pub trait Element: Copy + Debug + Default + Send + Sync + 'static {
     fn geometry<R: Real>(x: &Self::Nodes<[f64; 3]>) -> Result<Geometry<Self, R>, f64>;
     /// Shape-function values at `p` of the element with map `map` and first node at `first`.
     fn shape<R: Real>(map: &Self::Map<R>, first: &V3<R>, p: &V3<R>) -> Self::Nodes<R>;
+    /// Shape values at `W` points at once, `x[a][q]` being coordinate a of point q: `[k][q]` is
+    /// node k's value at point q, nodes past [`Element::NODES`] zero. Each lane's arithmetic is
+    /// [`Element::shape`]'s, in the same order, so the values are the same bits; written value by
+    /// value across the points, so that the compiler turns each operation into vector
+    /// instructions.
+    fn shape_lanes<R: Real, const W: usize>(
+        map: &Self::Map<R>,
+        first: &V3<R>,
+        x: &[[R; W]; 3],
+    ) -> [[R; W]; 4];
     /// The face a point with shape values `n` lies beyond (the most negative one), or `None`
     /// when it is inside, within `tol` (a small negative number).
     fn exit_face<R: Real>(n: &Self::Nodes<R>, tol: R) -> Option<usize>;

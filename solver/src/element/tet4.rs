@@ -103,6 +103,21 @@ impl Element for Tet4 {
         [R::ONE - l2 - l3 - l4, l2, l3, l4]
     }
 
+    #[inline(always)]
+    fn shape_lanes<R: Real, const W: usize>(
+        m: &[V3<R>; 3],
+        x1: &V3<R>,
+        x: &[[R; W]; 3],
+    ) -> [[R; W]; 4] {
+        let d: [[R; W]; 3] = std::array::from_fn(|a| x[a].map(|v| v - x1[a]));
+        let row = |r: &V3<R>| -> [R; W] {
+            std::array::from_fn(|q| r[0] * d[0][q] + r[1] * d[1][q] + r[2] * d[2][q])
+        };
+        let (l2, l3, l4) = (row(&m[0]), row(&m[1]), row(&m[2]));
+        let l1 = std::array::from_fn(|q| R::ONE - l2[q] - l3[q] - l4[q]);
+        [l1, l2, l3, l4]
+    }
+
     #[inline]
     fn exit_face<R: Real>(l: &[R; 4], tol: R) -> Option<usize> {
         let (mut k, mut lo) = (0, l[0]);

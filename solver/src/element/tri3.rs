@@ -118,6 +118,19 @@ impl<const AXI: bool> Element for Triangle<AXI> {
         [R::ONE - xi - eta, xi, eta]
     }
 
+    #[inline(always)]
+    fn shape_lanes<R: Real, const W: usize>(
+        m: &[[R; 2]; 2],
+        x1: &V3<R>,
+        x: &[[R; W]; 3],
+    ) -> [[R; W]; 4] {
+        let d: [[R; W]; 2] = std::array::from_fn(|a| x[a].map(|v| v - x1[a]));
+        let xi = std::array::from_fn(|q| m[0][0] * d[0][q] + m[0][1] * d[1][q]);
+        let eta = std::array::from_fn(|q| m[1][0] * d[0][q] + m[1][1] * d[1][q]);
+        let n1 = std::array::from_fn(|q| R::ONE - xi[q] - eta[q]);
+        [n1, xi, eta, [R::ZERO; W]]
+    }
+
     #[inline]
     fn exit_face<R: Real>(l: &[R; 3], tol: R) -> Option<usize> {
         let (mut k, mut lo) = (0, l[0]);

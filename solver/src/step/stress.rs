@@ -14,10 +14,12 @@ use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
 
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
-/// the rotation Δω σ - σ Δω with Δω = skew(L) Δt and -tr(Δε) σ); V *= 1 + tr Δε; x += Δt Σ N_n v_n. With `smoothing`, the
+/// the rotation Δω σ - σ Δω with Δω = skew(L) Δt and -tr(Δε) σ); V *= 1 + tr Δε;
+/// x += Δt Σ N_n v_n. With `smoothing`, the
 /// normal increments (the two in-plane ones in plane strain) are shifted equally so that
-/// tr Δε is the smoothed volumetric increment ([`crate::step::smoothing`]). In an axisymmetric section (x the radius) Δε_zz is
-/// the hoop increment Δt Σ N_n v_n,x / x, and `hoop_in_volume` says whether it changes V. Each thread updates the particles of its elements.
+/// tr Δε is the smoothed volumetric increment ([`crate::step::smoothing`]). In an axisymmetric
+/// section (x the radius) Δε_zz is the hoop increment Δt Σ N_n v_n,x / x, and `hoop_in_volume`
+/// says whether it changes V. Each thread updates the particles of its elements.
 ///
 /// With `guard`, the [`GuardSums`] of the active points of each block of
 /// [`ELEMENT_BLOCK`] elements are completed in its slot, point by point in order (strain-energy
@@ -128,8 +130,9 @@ pub fn update_stress_and_move<E: Element, R: Real>(
             let corners = mesh.corners[e].as_ref();
             let vel = E::nodes(|k| g.vel[corners[k] as usize]);
             let vel = vel.as_ref();
-            let mut l = [[R::ZERO; 3]; 3]; // velocity gradient L[a][b] = ∂v_a/∂x_b
-                                           // A 2D element's velocities and gradients have no z-part: the in-plane block only.
+            // The velocity gradient L[a][b] = ∂v_a/∂x_b; a 2D element's velocities and gradients
+            // have no z-part: the in-plane block only.
+            let mut l = [[R::ZERO; 3]; 3];
             for k in 0..E::NODES {
                 for a in 0..E::DIM {
                     for b in 0..E::DIM {
@@ -137,131 +140,230 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     }
                 }
             }
-            for j in points.start - r.start..points.end - r.start {
-                if !active[j] || !maps(body, material[j]) {
-                    continue;
-                }
-                debug_assert_eq!(element[j] as usize, e, "points not sorted by element");
-                let n = mesh.shape(e, &x[j]);
-                let n = n.as_ref();
-                // The pore pressure's smoothed rate, from the nodes at the start-of-step
-                // position (the points move below).
-                if let (Some(rate), Some(pore)) = (&pore_rate, pore.as_mut()) {
-                    if rate.fluids[material[j] as usize].is_some() {
-                        let mut change = R::ZERO;
-                        for k in 0..E::NODES {
-                            change += n[k] * rate.nodal[corners[k] as usize];
+            // The element's points in batches of up to `W` ([`batch_width`]), each value held
+            // across the batch's points (`[c][q]`: value c of point q) so that each operation
+            // is one over the points, which the compiler turns into vector instructions. Each
+            // point's arithmetic is the one a point-by-point loop does, in the same order, so
+            // the results are the same bits whatever the width; lanes past the batch's points
+            // or of points that do not move repeat a moving point's values and are never
+            // stored.
+            let first = &mesh.x[corners[0] as usize];
+            let map = &mesh.map[e];
+            let (end, mut j) = (points.end - r.start, points.start - r.start);
+            // The batch loop, expanded once per batch width (one is used per element type
+            // and precision, [`batch_width`]).
+            macro_rules! batches {
+                ($w:literal) => {{
+                    const W: usize = $w;
+                    while j < end {
+                        let m = (end - j).min(W);
+                        let on: [bool; W] =
+                            std::array::from_fn(|q| {
+                                q < m && active[j + q] && maps(body, material[j + q])
+                            });
+                        let Some(lead) = on.iter().position(|&o| o) else {
+                            j += m;
+                            continue;
+                        };
+                        debug_assert!(
+                            (j..j + m).all(|i| element[i] as usize == e),
+                            "points not sorted by element"
+                        );
+                        // The point of lane q (a moving one for the lanes that are not stored).
+                        let at: [usize; W] =
+                            std::array::from_fn(|q| j + if on[q] { q } else { lead });
+                        let xl: [[R; W]; 3] = std::array::from_fn(|a| at.map(|i| x[i][a]));
+                        let n = E::shape_lanes(map, first, &xl);
+                        // The pore pressure's smoothed rate, from the nodes at the start-of-step
+                        // position (the points move below).
+                        if let (Some(rate), Some(pore)) = (&pore_rate, pore.as_mut()) {
+                            for q in (0..m).filter(|&q| on[q]) {
+                                if rate.fluids[material[j + q] as usize].is_some() {
+                                    let mut change = R::ZERO;
+                                    for k in 0..E::NODES {
+                                        change += n[k][q] * rate.nodal[corners[k] as usize];
+                                    }
+                                    pore[j + q] += change * dt;
+                                }
+                            }
                         }
-                        pore[j] += change * dt;
+                        let mut dx: [[R; W]; 3] = [[R::ZERO; W]; 3];
+                        for k in 0..E::NODES {
+                            for a in 0..E::DIM {
+                                for q in 0..W {
+                                    dx[a][q] += n[k][q] * vel[k][a];
+                                }
+                            }
+                        }
+                        // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the
+                        // radius).
+                        let hoop: [R; W] = if E::AXISYMMETRIC {
+                            std::array::from_fn(|q| dx[0][q] / xl[0][q])
+                        } else {
+                            [l[2][2]; W]
+                        };
+                        let mut de: [[R; W]; 6] = [
+                            [l[0][0] * dt; W],
+                            [l[1][1] * dt; W],
+                            hoop.map(|h| h * dt),
+                            [half * (l[0][1] + l[1][0]) * dt; W],
+                            [half * (l[1][2] + l[2][1]) * dt; W],
+                            [half * (l[2][0] + l[0][2]) * dt; W],
+                        ];
+                        if let Some(sm) = smoothing {
+                            // The normal increments in the section's plane take the correction: all
+                            // three in 3D, the two in-plane ones in plane strain (Anura3D's rule;
+                            // its ε_zz stays zero). Axisymmetric sections do not smooth.
+                            for q in 0..W {
+                                let [es, _] = sm.element_mean(mesh, e, material[at[q]]);
+                                let c = if E::DIM == 2 {
+                                    (de[0][q] + de[1][q] - es) * half
+                                } else {
+                                    (de[0][q] + de[1][q] + de[2][q] - es) * third
+                                };
+                                for d in de.iter_mut().take(E::DIM) {
+                                    d[q] -= c;
+                                }
+                            }
+                        }
+                        let s0: [[R; W]; 6] = std::array::from_fn(|c| at.map(|i| stress[i][c]));
+                        let mut s1 = s0;
+                        // A batch of one linear-elastic material takes the update across its
+                        // points; any other law goes point by point.
+                        let law = &laws[material[j + lead] as usize];
+                        match law {
+                            Law::LinearElastic(le)
+                                if (0..m).all(|q| {
+                                    !on[q] || material[j + q] == material[j + lead]
+                                }) =>
+                            {
+                                let g2 = le.shear + le.shear;
+                                for q in 0..W {
+                                    let tr = le.lambda * (de[0][q] + de[1][q] + de[2][q]);
+                                    s1[0][q] += tr + g2 * de[0][q];
+                                    s1[1][q] += tr + g2 * de[1][q];
+                                    s1[2][q] += tr + g2 * de[2][q];
+                                    s1[3][q] += g2 * de[3][q];
+                                    s1[4][q] += g2 * de[4][q];
+                                    s1[5][q] += g2 * de[5][q];
+                                }
+                            }
+                            _ => {
+                                for q in (0..m).filter(|&q| on[q]) {
+                                    let i = j + q;
+                                    let mut s: [R; 6] = std::array::from_fn(|c| s1[c][q]);
+                                    let d: [R; 6] = std::array::from_fn(|c| de[c][q]);
+                                    laws[material[i] as usize].update(
+                                        &mut s,
+                                        &d,
+                                        &mut state[k * i..k * i + k],
+                                    );
+                                    for c in 0..6 {
+                                        s1[c][q] = s[c];
+                                    }
+                                }
+                            }
+                        }
+                        // Anura3D's objective update (its "Hill" rate): the co-rotation and the
+                        // change of volume, -tr(Δε) σ, of the start-of-step stress, added after the
+                        // law's update as Anura3D adds them (for a plastic law the order matters:
+                        // the return sees the unrotated trial).
+                        if objective {
+                            let w = [
+                                half * (l[0][1] - l[1][0]) * dt, // ω_xy
+                                half * (l[1][2] - l[2][1]) * dt, // ω_yz
+                                half * (l[2][0] - l[0][2]) * dt, // ω_zx
+                            ];
+                            let mut h = rotation_lanes(&s0, &w);
+                            for q in 0..W {
+                                let ev = de[0][q] + de[1][q] + de[2][q];
+                                for c in 0..6 {
+                                    h[c][q] -= ev * s0[c][q];
+                                    s1[c][q] += h[c][q];
+                                }
+                            }
+                        }
+                        let v0: [R; W] = at.map(|i| volume[i]);
+                        // The hoop strain changes an axisymmetric point's volume unless the case
+                        // follows Anura3D, which leaves it out
+                        // ([`crate::input::case::Case::hoop_in_volume`]).
+                        let de_zz = if E::AXISYMMETRIC && !hoop_in_volume {
+                            [R::ZERO; W]
+                        } else {
+                            de[2]
+                        };
+                        let v1: [R; W] =
+                            std::array::from_fn(|q| {
+                                v0[q] * (R::ONE + de[0][q] + de[1][q] + de_zz[q])
+                            });
+                        let mut x1 = xl;
+                        for a in 0..E::DIM {
+                            for q in 0..W {
+                                x1[a][q] += dt * dx[a][q];
+                            }
+                        }
+                        for q in (0..m).filter(|&q| on[q]) {
+                            let i = j + q;
+                            x[i] = std::array::from_fn(|a| x1[a][q]);
+                            for a in 0..E::DIM {
+                                u[i][a] += dt * dx[a][q];
+                            }
+                            stress[i] = std::array::from_fn(|c| s1[c][q]);
+                            volume[i] = v1[q];
+                        }
+                        if sums.is_some() {
+                            // Work of the mean stress over the step (exact for a linear law) on the
+                            // start volume; shear components count twice (tensor shear strains).
+                            let mut w = [R::ZERO; W];
+                            for c in 0..6 {
+                                let twice = if c < 3 { R::ONE } else { R::of(2.0) };
+                                for q in 0..W {
+                                    w[q] += twice * (s0[c][q] + s1[c][q]) * de[c][q];
+                                }
+                            }
+                            // 0, or NaN for a non-finite position or new volume: added to the
+                            // strain sum, which a non-finite stress makes non-finite too, so one
+                            // test of the sums catches them all.
+                            let finite: [R; W] = std::array::from_fn(|q| {
+                                R::ZERO * (x1[0][q] + x1[1][q] + x1[2][q] + v1[q])
+                            });
+                            let strain: [R; W] = std::array::from_fn(|q| w[q] * v0[q] + finite[q]);
+                            // Point by point in order: the block's sums are those of adding in
+                            // place.
+                            for q in (0..m).filter(|&q| on[q]) {
+                                let i = j + q;
+                                // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no
+                                // division per point.
+                                let rho0 = initial_density[material[i] as usize];
+                                let margin = v1[q] * rho0 - min_ratio * mass[i];
+                                // Twice the energies: the engine halves the sums (exactly, a power
+                                // of two).
+                                open.strain += strain[q].f64();
+                                if let Some(pore) = pore.as_deref() {
+                                    // A saturated point's liquid holds n V p² / 2 K_w: the pore
+                                    // pressure's work on Δp = (K_w/n) Δε_mix. A non-finite pore
+                                    // pressure makes the sum NaN.
+                                    let p = pore[i];
+                                    let c = fluids[material[i] as usize]
+                                        .as_ref()
+                                        .map_or(R::ZERO, |f| f.n_over_kw);
+                                    open.liquid += (v1[q] * p * p * c + R::ZERO * p).f64();
+                                }
+                                // A plain comparison (one instruction): NaN is caught by the strain
+                                // sum.
+                                let m = margin.f64();
+                                if m < open.volume_margin {
+                                    open.volume_margin = m;
+                                }
+                            }
+                        }
+                        j += m;
                     }
-                }
-                let mut dx = [R::ZERO; 3];
-                for k in 0..E::NODES {
-                    for a in 0..E::DIM {
-                        dx[a] += n[k] * vel[k][a];
-                    }
-                }
-                // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the radius).
-                let hoop = if E::AXISYMMETRIC {
-                    dx[0] / x[j][0]
-                } else {
-                    l[2][2]
-                };
-                let mut de = [
-                    l[0][0] * dt,
-                    l[1][1] * dt,
-                    hoop * dt,
-                    half * (l[0][1] + l[1][0]) * dt,
-                    half * (l[1][2] + l[2][1]) * dt,
-                    half * (l[2][0] + l[0][2]) * dt,
-                ];
-                if let Some(sm) = smoothing {
-                    // The normal increments in the section's plane take the correction: all
-                    // three in 3D, the two in-plane ones in plane strain (Anura3D's rule; its
-                    // ε_zz stays zero). Axisymmetric sections do not smooth.
-                    let [es, _] = sm.element_mean(mesh, e, material[j]);
-                    let c = if E::DIM == 2 {
-                        (de[0] + de[1] - es) * half
-                    } else {
-                        (de[0] + de[1] + de[2] - es) * third
-                    };
-                    for d in de.iter_mut().take(E::DIM) {
-                        *d -= c;
-                    }
-                }
-                let s0 = stress[j];
-                laws[material[j] as usize].update(
-                    &mut stress[j],
-                    &de,
-                    &mut state[k * j..k * j + k],
-                );
-                // Anura3D's objective update (its "Hill" rate): the co-rotation and the change of
-                // volume, -tr(Δε) σ, of the start-of-step stress, added after the law's update as
-                // Anura3D adds them (for a plastic law the order matters: the return sees the
-                // unrotated trial). Formed after the update, from the start-of-step stress the
-                // guard sums keep anyway, so that fewer values live across the law's call.
-                if objective {
-                    let w = [
-                        half * (l[0][1] - l[1][0]) * dt, // ω_xy
-                        half * (l[1][2] - l[2][1]) * dt, // ω_yz
-                        half * (l[2][0] - l[0][2]) * dt, // ω_zx
-                    ];
-                    let ev = de[0] + de[1] + de[2];
-                    let mut h = rotation(&s0, &w);
-                    for (h, v) in h.iter_mut().zip(s0) {
-                        *h -= ev * v;
-                    }
-                    for (s, h) in stress[j].iter_mut().zip(h) {
-                        *s += h;
-                    }
-                }
-                let v0 = volume[j];
-                // The hoop strain changes an axisymmetric point's volume unless the case follows
-                // Anura3D, which leaves it out ([`crate::input::case::Case::hoop_in_volume`]).
-                let de_zz = if E::AXISYMMETRIC && !hoop_in_volume {
-                    R::ZERO
-                } else {
-                    de[2]
-                };
-                volume[j] *= R::ONE + de[0] + de[1] + de_zz;
-                for a in 0..E::DIM {
-                    x[j][a] += dt * dx[a];
-                    u[j][a] += dt * dx[a];
-                }
-                if sums.is_some() {
-                    // Work of the mean stress over the step (exact for a linear law) on the start
-                    // volume; shear components count twice (tensor shear strains).
-                    let s1 = stress[j];
-                    let mut w = R::ZERO;
-                    for c in 0..6 {
-                        let twice = if c < 3 { R::ONE } else { R::of(2.0) };
-                        w += twice * (s0[c] + s1[c]) * de[c];
-                    }
-                    // 0, or NaN for a non-finite position or new volume: added to the strain sum,
-                    // which a non-finite stress makes non-finite too, so one test of the sums
-                    // catches them all.
-                    let finite = R::ZERO * (x[j][0] + x[j][1] + x[j][2] + volume[j]);
-                    // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no division
-                    // per point.
-                    let margin =
-                        volume[j] * initial_density[material[j] as usize] - min_ratio * mass[j];
-                    // Twice the energies: the engine halves the sums (exactly, a power of two).
-                    open.strain += (w * v0 + finite).f64();
-                    if let Some(pore) = pore.as_deref() {
-                        // A saturated point's liquid holds n V p² / 2 K_w: the pore pressure's work
-                        // on Δp = (K_w/n) Δε_mix. A non-finite pore pressure makes the sum NaN.
-                        let p = pore[j];
-                        let c = fluids[material[j] as usize]
-                            .as_ref()
-                            .map_or(R::ZERO, |f| f.n_over_kw);
-                        open.liquid += (volume[j] * p * p * c + R::ZERO * p).f64();
-                    }
-                    // A plain comparison (one instruction): NaN is caught by the strain sum.
-                    let m = margin.f64();
-                    if m < open.volume_margin {
-                        open.volume_margin = m;
-                    }
-                }
+                }};
+            }
+            match batch_width::<E, R>() {
+                1 => batches!(1),
+                _ => batches!(4),
             }
         }
         if let Some(sums) = sums.as_mut() {
@@ -270,6 +372,35 @@ pub fn update_stress_and_move<E: Element, R: Real>(
             }
         }
     });
+}
+
+/// Points per batch of the stress loop, chosen per element type and precision by measurement
+/// (one thread, batches of 1, 2 and 4 on each case, docs/performance-precision.md): four f32
+/// values fill one 16-byte vector register of the baseline x86-64 instruction set, and a
+/// tetrahedron's four points fill the batch; everywhere else (f64, whose four values take two
+/// registers and spill; the triangle's three points) point by point was the fastest.
+const fn batch_width<E: Element, R: Real>() -> usize {
+    if R::BYTES == 4 && E::DIM == 3 {
+        4
+    } else {
+        1
+    }
+}
+
+/// [`rotation`] of each point's stress in a batch of `W`, the same arithmetic point by point.
+#[inline(always)]
+fn rotation_lanes<R: Real, const W: usize>(s: &[[R; W]; 6], w: &[R; 3]) -> [[R; W]; 6] {
+    let [xx, yy, zz, xy, yz, zx] = s;
+    let (wxy, wyz, wzx) = (w[0], w[1], w[2]);
+    let two = R::of(2.0);
+    [
+        std::array::from_fn(|q| two * (wxy * xy[q] - wzx * zx[q])),
+        std::array::from_fn(|q| two * (wyz * yz[q] - wxy * xy[q])),
+        std::array::from_fn(|q| two * (wzx * zx[q] - wyz * yz[q])),
+        std::array::from_fn(|q| wxy * (yy[q] - xx[q]) + wyz * zx[q] - wzx * yz[q]),
+        std::array::from_fn(|q| wyz * (zz[q] - yy[q]) + wzx * xy[q] - wxy * zx[q]),
+        std::array::from_fn(|q| wzx * (xx[q] - zz[q]) + wxy * yz[q] - wyz * xy[q]),
+    ]
 }
 
 /// The guard sums of the block the stress loop is in.
