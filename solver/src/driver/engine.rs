@@ -3,7 +3,7 @@
 use std::ops::Range;
 use std::time::Instant;
 
-use crate::element::locate::{walk, Found};
+use crate::element::locate::{locate_width, run_inside, walk, Found};
 use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::Element;
@@ -1468,7 +1468,29 @@ impl<R: Real, E: Element> Engine<R, E> {
             // SAFETY: the particle ranges of the chunks are disjoint, and each chunk runs once.
             let (el, active) = unsafe { (elements.range(r.clone()), actives.range(r.clone())) };
             let (mut first, mut count, mut moved) = ((usize::MAX, 0u32), 0u64, false);
-            for (j, i) in r.enumerate() {
+            let w = locate_width::<E, R>();
+            let mut skip = 0;
+            for (j, i) in r.clone().enumerate() {
+                if skip > 0 {
+                    skip -= 1;
+                    continue;
+                }
+                // A batch of `w` active points of one element that are all still inside it
+                // (most points, most steps) is checked at once; the rest walk one by one.
+                if w > 1 && j + w <= el.len() {
+                    let e = el[j];
+                    if (0..w).all(|q| active[j + q] && el[j + q] == e) {
+                        let inside = match w {
+                            4 => run_inside::<E, R, 4>(mesh, e as usize, &x[i..i + 4]),
+                            3 => run_inside::<E, R, 3>(mesh, e as usize, &x[i..i + 3]),
+                            _ => run_inside::<E, R, 2>(mesh, e as usize, &x[i..i + 2]),
+                        };
+                        if inside {
+                            skip = w - 1;
+                            continue;
+                        }
+                    }
+                }
                 if !active[j] {
                     continue;
                 }

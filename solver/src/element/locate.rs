@@ -48,10 +48,47 @@ pub fn walk<E: Element, R: Real>(mesh: &Mesh<E, R>, start: u32, p: &V3<R>) -> Fo
     Found::In(start)
 }
 
+/// Points per batch of the locate check ([`run_inside`]), by element type and precision: a
+/// triangle's three points, two f64 or four f32 of a tetrahedron's four (one 16-byte vector
+/// register of the baseline x86-64 instruction set). Measured on one thread against the other
+/// widths (docs/performance-precision.md); the outcome does not depend on it.
+pub const fn locate_width<E: Element, R: Real>() -> usize {
+    match (E::DIM, R::BYTES) {
+        (2, _) => 3,
+        (_, 4) => 4,
+        _ => 2,
+    }
+}
+
+/// Whether each of the `W` points `x` lies inside element `e` within the locate tolerance:
+/// where this says so, [`walk`] from `e` ends at once with [`Found::In`] for each of them (the
+/// same shape values, [`Element::shape_lanes`], and the same test); where it does not, walk the
+/// points one by one.
+#[inline(always)]
+pub fn run_inside<E: Element, R: Real, const W: usize>(
+    mesh: &Mesh<E, R>,
+    e: usize,
+    x: &[V3<R>],
+) -> bool {
+    let xl: [[R; W]; 3] = std::array::from_fn(|a| std::array::from_fn(|q| x[q][a]));
+    let tol = R::of(-tolerance::<R>());
+    let first = &mesh.x[mesh.corners[e].as_ref()[0] as usize];
+    let n = E::shape_lanes(&mesh.map[e], first, &xl);
+    // Not `n >= tol`: a NaN shape value is inside for the walk too (no face is more negative).
+    let mut out = false;
+    for nk in n.iter().take(E::NODES) {
+        for &v in nk {
+            out |= v < tol;
+        }
+    }
+    !out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::element::mesh::TetMesh;
+    use crate::element::tet4::Tet4;
     use mpm_shared::{generate, ElementType};
 
     #[test]
@@ -116,5 +153,59 @@ mod tests {
             }
         }
         assert!(checked > 1000);
+    }
+
+    /// [`run_inside`] says "inside" exactly when the walk from the element ends there at once
+    /// for every point of the batch: points near and across the element's faces, in both
+    /// precisions, for each batch width the engine uses.
+    fn run_inside_agrees_with_walk<R: Real, const W: usize>() {
+        let model = generate::box_mesh([3, 3, 3], [1.0, 0.7, 1.3], ElementType::Tet4);
+        let mesh = TetMesh::<R>::new(&model).unwrap();
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut inside, mut not) = (0, 0);
+        for e in 0..mesh.elements() {
+            let c: Vec<[f64; 3]> = mesh.corners[e]
+                .iter()
+                .map(|&n| mesh.x[n as usize].map(|v| v.f64()))
+                .collect();
+            for _ in 0..20 {
+                // Barycentric weights mostly inside, some a little outside.
+                let x: Vec<V3<R>> = (0..W)
+                    .map(|_| {
+                        let mut l: [f64; 4] = std::array::from_fn(|_| next() + 0.02);
+                        let total: f64 = l.iter().sum();
+                        l.iter_mut().for_each(|v| *v /= total);
+                        if next() < 0.05 {
+                            l[0] -= 0.05;
+                            l[1] += 0.05;
+                        }
+                        std::array::from_fn(|a| R::of((0..4).map(|k| l[k] * c[k][a]).sum()))
+                    })
+                    .collect();
+                let walked = x
+                    .iter()
+                    .all(|p| walk(&mesh, e as u32, p) == Found::In(e as u32));
+                let batched = run_inside::<Tet4, R, W>(&mesh, e, &x);
+                assert_eq!(batched, walked, "element {e}");
+                if batched {
+                    inside += 1;
+                } else {
+                    not += 1;
+                }
+            }
+        }
+        assert!(inside > 100 && not > 10, "{inside} inside, {not} not");
+    }
+
+    #[test]
+    fn batched_inside_check_is_the_walks_first_step() {
+        run_inside_agrees_with_walk::<f64, 2>();
+        run_inside_agrees_with_walk::<f32, 4>();
     }
 }

@@ -2,7 +2,7 @@
 //! update of every particle.
 
 use crate::element::mesh::Mesh;
-use crate::element::Element;
+use crate::element::{batch_width, Element};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::gather::{node_slots, Layout, Slots, ELEMENT_BLOCK};
@@ -372,19 +372,6 @@ pub fn update_stress_and_move<E: Element, R: Real>(
             }
         }
     });
-}
-
-/// Points per batch of the stress loop, chosen per element type and precision by measurement
-/// (one thread, batches of 1, 2 and 4 on each case, docs/performance-precision.md): four f32
-/// values fill one 16-byte vector register of the baseline x86-64 instruction set, and a
-/// tetrahedron's four points fill the batch; everywhere else (f64, whose four values take two
-/// registers and spill; the triangle's three points) point by point was the fastest.
-const fn batch_width<E: Element, R: Real>() -> usize {
-    if R::BYTES == 4 && E::DIM == 3 {
-        4
-    } else {
-        1
-    }
 }
 
 /// [`rotation`] of each point's stress in a batch of `W`, the same arithmetic point by point.
