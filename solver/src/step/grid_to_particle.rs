@@ -83,8 +83,9 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // into its scatter (one closure for four variants was left a call, its re-map width a
     // value at run time).
     macro_rules! element_pass {
-        ($want:expr, $with_liquid:expr) => {
+        ($want:expr, $with_liquid:expr, $w:expr) => {
             |e: usize, four: &mut [R]| {
+                const W: usize = $w;
                 let (want, with_liquid): (bool, bool) = ($want, $with_liquid);
                 let (mut kinetic, mut kinetic_w) = (0.0, 0.0);
                 // The element's points, each array sliced to them once (one length): the loop then
@@ -104,71 +105,113 @@ pub fn grid_to_particle<E: Element, R: Real>(
                     .as_ref()
                     .filter(|_| with_liquid)
                     .map(|w| unsafe { &mut w.range(range.clone())[..count] });
-                for i in 0..count {
-                    if !active[i] || !maps(body, material[i]) {
+                // The element's points in batches of `W`, each value held across the batch's
+                // points (`[c][q]`: value c of point q), so that shape values, interpolation and
+                // the velocity update are operations over the points; each point's arithmetic
+                // is a point-by-point loop's, in the same order (the same bits whatever the
+                // width), and each point's sums follow in point order.
+                let corners = mesh.corners[e].as_ref();
+                let first = &mesh.x[corners[0] as usize];
+                let map = &mesh.map[e];
+                let acc_e = E::nodes(|k| acc[corners[k] as usize]);
+                let acc_e = acc_e.as_ref();
+                let mut j = 0;
+                while j < count {
+                    let m = (count - j).min(W);
+                    let on: [bool; W] = std::array::from_fn(|q| {
+                        q < m && active[j + q] && maps(body, material[j + q])
+                    });
+                    let Some(lead) = on.iter().position(|&o| o) else {
+                        j += m;
                         continue;
-                    }
-                    let n = mesh.shape(e, &x[i]);
-                    let n = n.as_ref();
-                    let dv = interpolate(mesh, e, n, acc);
-                    let v = &mut vel[i];
-                    for c in 0..E::DIM {
-                        v[c] += dt * dv[c];
-                    }
-                    if pic > R::ZERO {
-                        // The nodes' velocities after the step, v + a Δt (zero where fixed or empty).
-                        let mut grid_v = [R::ZERO; 3];
-                        for (k, &nk) in n.iter().enumerate().take(E::NODES) {
-                            let node = mesh.corners[e].as_ref()[k] as usize;
-                            let m = node_mass[node];
-                            if m <= empty {
-                                continue;
+                    };
+                    let at: [usize; W] = std::array::from_fn(|q| j + if on[q] { q } else { lead });
+                    let xl: [[R; W]; 3] = std::array::from_fn(|a| at.map(|i| x[i][a]));
+                    let nl = E::shape_lanes(map, first, &xl);
+                    // Σ N_k a_k, node by node.
+                    let mut dv = [[R::ZERO; W]; 3];
+                    for k in 0..E::NODES {
+                        for c in 0..E::DIM {
+                            for q in 0..W {
+                                dv[c][q] += nl[k][q] * acc_e[k][c];
                             }
-                            for c in 0..E::DIM {
-                                if !fixed[node][c] {
-                                    grid_v[c] += nk * (momentum[node][c] / m + dt * acc[node][c]);
+                        }
+                    }
+                    let mut vl: [[R; W]; 3] = std::array::from_fn(|c| at.map(|i| vel[i][c]));
+                    for c in 0..E::DIM {
+                        for q in 0..W {
+                            vl[c][q] += dt * dv[c][q];
+                        }
+                    }
+                    for i in (j..j + m).filter(|&i| on[i - j]) {
+                        let q = i - j;
+                        let nq: [R; 4] = std::array::from_fn(|k| nl[k][q]);
+                        let n = &nq[..E::NODES];
+                        let v = &mut vel[i];
+                        for c in 0..E::DIM {
+                            v[c] = vl[c][q];
+                        }
+                        if pic > R::ZERO {
+                            // The nodes' velocities after the step, v + a Δt (zero where fixed or
+                            // empty).
+                            let mut grid_v = [R::ZERO; 3];
+                            for (k, &nk) in n.iter().enumerate().take(E::NODES) {
+                                let node = corners[k] as usize;
+                                let mass_n = node_mass[node];
+                                if mass_n <= empty {
+                                    continue;
+                                }
+                                for c in 0..E::DIM {
+                                    if !fixed[node][c] {
+                                        let v_n = momentum[node][c] / mass_n + dt * acc[node][c];
+                                        grid_v[c] += nk * v_n;
+                                    }
                                 }
                             }
+                            for c in 0..E::DIM {
+                                v[c] = flip * v[c] + pic * grid_v[c];
+                            }
                         }
+                        for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
+                            let w = mass[i] * n[k];
+                            for c in 0..E::DIM {
+                                slot[c] += w * v[c];
+                            }
+                        }
+                        if want {
+                            kinetic += (mass[i] * dot::<E, R>(v, v)).f64();
+                        }
+                        // The liquid of the point, if its material has one.
+                        if !with_liquid {
+                            continue;
+                        }
+                        let (Some(l), Some(w_pts), Some(acc_w)) =
+                            (liquid, w_pts.as_mut(), liquid_acc)
+                        else {
+                            continue;
+                        };
+                        let Some(f) = l.fluids[material[i] as usize] else {
+                            continue;
+                        };
+                        let dw = interpolate(mesh, e, n, acc_w);
+                        let w = &mut w_pts[i];
                         for c in 0..E::DIM {
-                            v[c] = flip * v[c] + pic * grid_v[c];
+                            w[c] += dt * dw[c];
+                        }
+                        // The same liquid mass as particle to grid mapped (see
+                        // `LiquidPoints::volume0`).
+                        let g = range.start + i;
+                        let mw = f.rho_w * volume0.map_or(volume[g], |v0| v0[g]);
+                        for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
+                            for c in 0..E::DIM {
+                                slot[E::DIM + c] += mw * n[k] * w[c];
+                            }
+                        }
+                        if want {
+                            kinetic_w += (f.n * mw * dot::<E, R>(w, w)).f64();
                         }
                     }
-                    for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
-                        let w = mass[i] * n[k];
-                        for c in 0..E::DIM {
-                            slot[c] += w * v[c];
-                        }
-                    }
-                    if want {
-                        kinetic += (mass[i] * dot::<E, R>(v, v)).f64();
-                    }
-                    // The liquid of the point, if its material has one.
-                    if !with_liquid {
-                        continue;
-                    }
-                    let (Some(l), Some(w_pts), Some(acc_w)) = (liquid, w_pts.as_mut(), liquid_acc) else {
-                        continue;
-                    };
-                    let Some(f) = l.fluids[material[i] as usize] else {
-                        continue;
-                    };
-                    let dw = interpolate(mesh, e, n, acc_w);
-                    let w = &mut w_pts[i];
-                    for c in 0..E::DIM {
-                        w[c] += dt * dw[c];
-                    }
-                    // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
-                    let j = range.start + i;
-                    let mw = f.rho_w * volume0.map_or(volume[j], |v0| v0[j]);
-                    for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
-                        for c in 0..E::DIM {
-                            slot[E::DIM + c] += mw * n[k] * w[c];
-                        }
-                    }
-                    if want {
-                        kinetic_w += (f.n * mw * dot::<E, R>(w, w)).f64();
-                    }
+                    j += m;
                 }
                 (kinetic, kinetic_w)
             }
@@ -180,9 +223,9 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // The guarded variants: each element's kinetic sums into its block's slot, the liquid's
     // after the block's last element.
     macro_rules! guarded_pass {
-        ($guard:expr, $with_liquid:expr) => {
+        ($guard:expr, $with_liquid:expr, $w:expr) => {
             |e: usize, four: &mut [R], pending: &mut [f64; ELEMENT_BLOCK]| {
-                let element = element_pass!(true, $with_liquid);
+                let element = element_pass!(true, $with_liquid, $w);
                 let (kinetic, kinetic_w) = element(e, four);
                 let b = e / ELEMENT_BLOCK;
                 // SAFETY: the scatter hands element e to one thread only, once, in element
@@ -208,35 +251,35 @@ pub fn grid_to_particle<E: Element, R: Real>(
             }
         };
     }
-    match (&guard, liquid.is_some()) {
-        (None, false) => {
-            let element = element_pass!(false, false);
-            scatter::<E, R, _>(layout, team, slots, width(false), init, |e, f, _| {
+    // Each variant with the batch width of the element type ([`BATCH_TETRAHEDRA`]).
+    macro_rules! run {
+        (None, $with_liquid:expr, $w:expr) => {{
+            let element = element_pass!(false, $with_liquid, $w);
+            scatter::<E, R, _>(layout, team, slots, width($with_liquid), init, |e, f, _| {
                 element(e, f);
             })
-        }
-        (None, true) => {
-            let element = element_pass!(false, true);
-            scatter::<E, R, _>(layout, team, slots, width(true), init, |e, f, _| {
-                element(e, f);
-            })
-        }
-        (Some(g), false) => scatter::<E, R, _>(
-            layout,
-            team,
-            slots,
-            width(false),
-            init,
-            guarded_pass!(g, false),
-        ),
-        (Some(g), true) => scatter::<E, R, _>(
-            layout,
-            team,
-            slots,
-            width(true),
-            init,
-            guarded_pass!(g, true),
-        ),
+        }};
+        ($g:expr, $with_liquid:expr, $w:expr) => {
+            scatter::<E, R, _>(
+                layout,
+                team,
+                slots,
+                width($with_liquid),
+                init,
+                guarded_pass!($g, $with_liquid, $w),
+            )
+        };
+    }
+    let tetrahedra = E::DIM == 3;
+    match (&guard, liquid.is_some(), tetrahedra) {
+        (None, false, true) => run!(None, false, BATCH_TETRAHEDRA),
+        (None, false, false) => run!(None, false, 1),
+        (None, true, true) => run!(None, true, BATCH_TETRAHEDRA),
+        (None, true, false) => run!(None, true, 1),
+        (Some(g), false, true) => run!(g, false, BATCH_TETRAHEDRA),
+        (Some(g), false, false) => run!(g, false, 1),
+        (Some(g), true, true) => run!(g, true, BATCH_TETRAHEDRA),
+        (Some(g), true, false) => run!(g, true, 1),
     }
     nodal_velocity(
         team,
@@ -253,6 +296,11 @@ pub fn grid_to_particle<E: Element, R: Real>(
             .map(|(gl, l)| (&gl.mass[..], l.fixed, &mut gl.vel[..])),
     );
 }
+
+/// Points per batch of grid to particle in tetrahedra, in both precisions (triangles go point
+/// by point): measured on one thread against batches of 1 to 3 (ns per point-step, 4 against
+/// point by point: f64 15.4 against 18.3, f32 14.3 against 19.1; docs/performance-precision.md).
+const BATCH_TETRAHEDRA: usize = 4;
 
 /// Σ N_k a_k over the nodes of element `e` (the in-plane components of a 2D element, z 0).
 #[inline]
