@@ -115,6 +115,10 @@ pub fn grid_to_particle<E: Element, R: Real>(
                 let map = &mesh.map[e];
                 let acc_e = E::nodes(|k| acc[corners[k] as usize]);
                 let acc_e = acc_e.as_ref();
+                // The liquid's, likewise.
+                let acc_w_e = liquid_acc
+                    .filter(|_| with_liquid)
+                    .map(|a| E::nodes(|k| a[corners[k] as usize]));
                 let mut j = 0;
                 while j < count {
                     let m = (count - j).min(W);
@@ -141,6 +145,18 @@ pub fn grid_to_particle<E: Element, R: Real>(
                     for c in 0..E::DIM {
                         for q in 0..W {
                             vl[c][q] += dt * dv[c][q];
+                        }
+                    }
+                    // The liquid's Σ N_k a_w,k (used by the points with a fluid).
+                    let mut dwl = [[R::ZERO; W]; 3];
+                    if let Some(aw) = &acc_w_e {
+                        let aw = aw.as_ref();
+                        for k in 0..E::NODES {
+                            for c in 0..E::DIM {
+                                for q in 0..W {
+                                    dwl[c][q] += nl[k][q] * aw[k][c];
+                                }
+                            }
                         }
                     }
                     for i in (j..j + m).filter(|&i| on[i - j]) {
@@ -185,15 +201,15 @@ pub fn grid_to_particle<E: Element, R: Real>(
                         if !with_liquid {
                             continue;
                         }
-                        let (Some(l), Some(w_pts), Some(acc_w)) =
-                            (liquid, w_pts.as_mut(), liquid_acc)
+                        let (Some(l), Some(w_pts), Some(_)) =
+                            (liquid, w_pts.as_mut(), acc_w_e.as_ref())
                         else {
                             continue;
                         };
                         let Some(f) = l.fluids[material[i] as usize] else {
                             continue;
                         };
-                        let dw = interpolate(mesh, e, n, acc_w);
+                        let dw: [R; 3] = std::array::from_fn(|c| dwl[c][q]);
                         let w = &mut w_pts[i];
                         for c in 0..E::DIM {
                             w[c] += dt * dw[c];
@@ -301,24 +317,6 @@ pub fn grid_to_particle<E: Element, R: Real>(
 /// by point): measured on one thread against batches of 1 to 3 (ns per point-step, 4 against
 /// point by point: f64 15.4 against 18.3, f32 14.3 against 19.1; docs/performance-precision.md).
 const BATCH_TETRAHEDRA: usize = 4;
-
-/// Σ N_k a_k over the nodes of element `e` (the in-plane components of a 2D element, z 0).
-#[inline]
-fn interpolate<E: Element, R: Real>(
-    mesh: &Mesh<E, R>,
-    e: usize,
-    n: &[R],
-    nodal: &[V3<R>],
-) -> V3<R> {
-    let mut out = [R::ZERO; 3];
-    for k in 0..E::NODES {
-        let a = nodal[mesh.corners[e].as_ref()[k] as usize];
-        for c in 0..E::DIM {
-            out[c] += n[k] * a[c];
-        }
-    }
-    out
-}
 
 /// v · w over the element's dimensions.
 #[inline(always)]
