@@ -51,7 +51,7 @@ pub fn walk<E: Element, R: Real>(mesh: &Mesh<E, R>, start: u32, p: &V3<R>) -> Fo
 /// Points per batch of the locate check ([`run_inside`]), by element type and precision: a
 /// triangle's three points, two f64 or four f32 of a tetrahedron's four (one 16-byte vector
 /// register of the baseline x86-64 instruction set). Measured on one thread against the other
-/// widths (docs/performance-precision.md); the outcome does not depend on it.
+/// widths (docs/design.md §5.3); the outcome does not depend on it.
 pub const fn locate_width<E: Element, R: Real>() -> usize {
     match (E::DIM, R::BYTES) {
         (2, _) => 3,

@@ -100,13 +100,14 @@ pub trait Element: Copy + Debug + Default + Send + Sync + 'static {
     fn supported_point_counts() -> &'static str;
 }
 
-/// Points per batch of the kernels that take an element's points in batches (the stress
-/// update, the locate check), chosen per element type and precision by measurement (one thread,
-/// batches of 1, 2 and 4 on each case, docs/performance-precision.md): four f32 values fill one
-/// 16-byte vector register of the baseline x86-64 instruction set, and a tetrahedron's four
-/// points fill the batch; everywhere else (f64, whose four values take two registers and
-/// spill; the triangle's three points) point by point was the fastest. The results do not
-/// depend on it: a batch does each point's arithmetic as a point-by-point loop does.
+/// Points per batch of the stress update (`step::stress`), chosen per element type and
+/// precision by measurement (one thread, batches of 1, 2 and 4 on each case, docs/design.md
+/// §5.3): four f32 values fill one 16-byte vector register of the baseline x86-64 instruction
+/// set, and a tetrahedron's four points fill the batch; everywhere else (f64, whose four values
+/// take two registers and spill; the triangle's three points) point by point was the fastest.
+/// The results do not depend on it: a batch does each point's arithmetic as a point-by-point
+/// loop does. (Grid to particle and the locate check have widths of their own, measured the
+/// same way.)
 pub const fn batch_width<E: Element, R: Real>() -> usize {
     if R::BYTES == 4 && E::DIM == 3 {
         4

@@ -315,7 +315,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
 
 /// Points per batch of grid to particle in tetrahedra, in both precisions (triangles go point
 /// by point): measured on one thread against batches of 1 to 3 (ns per point-step, 4 against
-/// point by point: f64 15.4 against 18.3, f32 14.3 against 19.1; docs/performance-precision.md).
+/// point by point: f64 15.4 against 18.3, f32 14.3 against 19.1; docs/design.md §5.3).
 const BATCH_TETRAHEDRA: usize = 4;
 
 /// v · w over the element's dimensions.
