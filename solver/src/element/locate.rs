@@ -161,13 +161,7 @@ mod tests {
     fn run_inside_agrees_with_walk<R: Real, const W: usize>() {
         let model = generate::box_mesh([3, 3, 3], [1.0, 0.7, 1.3], ElementType::Tet4);
         let mesh = TetMesh::<R>::new(&model).unwrap();
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::element::samples(0x9e37_79b9_7f4a_7c15);
         let (mut inside, mut not) = (0, 0);
         for e in 0..mesh.elements() {
             let c: Vec<[f64; 3]> = mesh.corners[e]

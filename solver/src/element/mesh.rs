@@ -269,13 +269,7 @@ mod tests {
     /// in f64 and f32 and for batches of 1 and 4 (the stress loop's results must not depend on
     /// its batch width).
     fn shape_lanes_match<E: Element, R: Real, const W: usize>(mesh: &Mesh<E, R>) {
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::element::samples(0x9e37_79b9_7f4a_7c15);
         for e in 0..mesh.elements() {
             let first = &mesh.x[mesh.corners[e].as_ref()[0] as usize];
             let points: [V3<R>; W] = std::array::from_fn(|_| {

@@ -153,3 +153,15 @@ impl ElementKind {
         }
     }
 }
+
+/// Uniform samples in [0, 1) from a xorshift sequence: reproducible points for the element
+/// tests.
+#[cfg(test)]
+pub(crate) fn samples(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
