@@ -34,6 +34,11 @@ fn vector<E: Element, R: Real>(s: &[R], at: usize) -> V3<R> {
     v
 }
 
+/// Points per batch of the shape values in tetrahedra (triangles go point by point): measured
+/// on one thread (docs/design.md §5.3), particle to grid took 27.1–27.8 ns per point-step in f64
+/// and 19.4–19.7 in f32 with batches of four, against 28.3–31.8 and 21.4–22.8 point by point.
+const BATCH_TETRAHEDRA: usize = 4;
+
 /// Lanes of a per-element sum: one per element node, padded to four (a triangle's fourth lane
 /// carries zeros and is never stored).
 const LANES: usize = 4;
@@ -156,7 +161,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
     // with one caller, which the compiler inlines into its scatter (one closure called from
     // two variants was left a call, at 6 % more instructions per point-step).
     macro_rules! element_pass {
-        ($with_liquid:expr) => {
+        ($with_liquid:expr, $w:expr) => {
             |e: usize, four: &mut [R]| {
                 let with_liquid: bool = $with_liquid;
                 let grad = mesh.grad[e].as_ref();
@@ -257,93 +262,112 @@ pub fn particle_to_grid<E: Element, R: Real>(
                         lp.volume0.as_ref().map(|v0| &v0[range.clone()][..count]),
                     )
                 });
-                for i in 0..count {
-                    if !active[i] || !maps(body, material[i]) {
-                        continue;
-                    }
-                    let n = mesh.shape(e, &x[i]);
-                    let n = n.as_ref();
-                    let (m, v) = (mass[i], vel[i]);
-                    let gravity = &gravity[material[i] as usize];
-                    let vol = if full { R::ZERO } else { volume[i] };
-                    let mut s = stress[i].map(|c| vol * c);
-                    if let Some(pore) = pore {
-                        let vp = vol * pore[i];
-                        s[0] += vp;
-                        s[1] += vp;
-                        s[2] += vp;
-                    }
-                    // An axisymmetric section's hoop stress pulls each node towards the axis:
-                    // f_r -= V σ_θθ N / r (x the radius; V per radian).
-                    let hoop = if E::AXISYMMETRIC {
-                        s[2] / x[i][0]
-                    } else {
-                        R::ZERO
-                    };
-                    // Node by node the same operations as σ ∇N_k and m N_k (v, g) node after node.
-                    let w = lanes::<E, R>(|k| m * n[k]);
-                    for k in 0..LANES {
-                        sums[0][k] += w[k];
-                    }
-                    for a in 0..E::DIM {
-                        let f = tractions::<E, R>(&s, &by_component, a);
-                        for k in 0..LANES {
-                            sums[1 + a][k] += w[k] * v[a];
-                            sums[1 + E::DIM + a][k] -= f[k];
-                            sums[1 + 2 * E::DIM + a][k] += w[k] * gravity[a];
+                // The element's shape values in batches of `W` points, each held across the
+                // batch (the same bits as point by point); each point's sums then follow in
+                // point order.
+                const W: usize = $w;
+                let corners = mesh.corners[e].as_ref();
+                let (first, map) = (&mesh.x[corners[0] as usize], &mesh.map[e]);
+                let mut j = 0;
+                while j < count {
+                    let batch = (count - j).min(W);
+                    // Lanes past the element's last point repeat it (computed, never used).
+                    let xl: [[R; W]; 3] = std::array::from_fn(|a| {
+                        std::array::from_fn(|q| x[j + q.min(batch - 1)][a])
+                    });
+                    let nl = E::shape_lanes(map, first, &xl);
+                    for i in j..j + batch {
+                        if !active[i] || !maps(body, material[i]) {
+                            continue;
                         }
-                    }
-                    if E::AXISYMMETRIC {
+                        let nq: [R; 4] = std::array::from_fn(|k| nl[k][i - j]);
+                        let n = &nq[..E::NODES];
+                        let (m, v) = (mass[i], vel[i]);
+                        let gravity = &gravity[material[i] as usize];
+                        let vol = if full { R::ZERO } else { volume[i] };
+                        let mut s = stress[i].map(|c| vol * c);
+                        if let Some(pore) = pore {
+                            let vp = vol * pore[i];
+                            s[0] += vp;
+                            s[1] += vp;
+                            s[2] += vp;
+                        }
+                        // An axisymmetric section's hoop stress pulls each node towards the axis:
+                        // f_r -= V σ_θθ N / r (x the radius; V per radian).
+                        let hoop = if E::AXISYMMETRIC {
+                            s[2] / x[i][0]
+                        } else {
+                            R::ZERO
+                        };
+                        // Node by node the same operations as σ ∇N_k and m N_k (v, g) node after
+                        // node.
+                        let w = lanes::<E, R>(|k| m * n[k]);
+                        for k in 0..LANES {
+                            sums[0][k] += w[k];
+                        }
+                        for a in 0..E::DIM {
+                            let f = tractions::<E, R>(&s, &by_component, a);
+                            for k in 0..LANES {
+                                sums[1 + a][k] += w[k] * v[a];
+                                sums[1 + E::DIM + a][k] -= f[k];
+                                sums[1 + 2 * E::DIM + a][k] += w[k] * gravity[a];
+                            }
+                        }
+                        if E::AXISYMMETRIC {
+                            let nk = lanes::<E, R>(|k| n[k]);
+                            for k in 0..LANES {
+                                sums[1 + E::DIM][k] -= hoop * nk[k];
+                            }
+                        }
+                        if !with_liquid {
+                            continue;
+                        }
+                        let Some((loads, w_all, volume0)) = liquid_points else {
+                            continue;
+                        };
+                        let (Some(f), Some(pore)) = (loads.fluids[material[i] as usize], pore)
+                        else {
+                            continue;
+                        };
+                        let vol = volume[i];
+                        // The liquid's mass, weight and drag are taken on the initial volume where
+                        // the case holds the liquid mass fixed.
+                        let vw = volume0.map_or(vol, |v0| v0[i]);
+                        let mw = f.rho_w * vw;
+                        let pw = if full { R::ZERO } else { pore[i] * vol };
+                        let w = w_all[i];
+                        // The pore pressure's hoop force, as the solid's (axisymmetric sections).
+                        let hoop = if E::AXISYMMETRIC {
+                            pw / x[i][0]
+                        } else {
+                            R::ZERO
+                        };
+                        // Node by node the same operations as a loop over the nodes.
                         let nk = lanes::<E, R>(|k| n[k]);
+                        let (mn, nmw) = (
+                            lanes::<E, R>(|k| mw * n[k]),
+                            lanes::<E, R>(|k| f.n * mw * n[k]),
+                        );
                         for k in 0..LANES {
-                            sums[1 + E::DIM][k] -= hoop * nk[k];
+                            wet[0][k] += mn[k];
+                            wet[1][k] += nmw[k];
+                            wet[2][k] += f.drag * vw * nk[k];
+                        }
+                        for a in 0..E::DIM {
+                            for k in 0..LANES {
+                                wet[3 + a][k] += mn[k] * w[a];
+                                let force = mn[k] * loads.gravity[a] - pw * by_component[a][k];
+                                wet[3 + E::DIM + a][k] += force;
+                                wet[3 + 2 * E::DIM + a][k] += nmw[k] * loads.gravity[a];
+                            }
+                        }
+                        if E::AXISYMMETRIC {
+                            for k in 0..LANES {
+                                wet[3 + E::DIM][k] -= hoop * nk[k];
+                            }
                         }
                     }
-                    if !with_liquid {
-                        continue;
-                    }
-                    let Some((loads, w_all, volume0)) = liquid_points else {
-                        continue;
-                    };
-                    let (Some(f), Some(pore)) = (loads.fluids[material[i] as usize], pore) else {
-                        continue;
-                    };
-                    let vol = volume[i];
-                    // The liquid's mass, weight and drag are taken on the initial volume where the
-                    // case holds the liquid mass fixed.
-                    let vw = volume0.map_or(vol, |v0| v0[i]);
-                    let mw = f.rho_w * vw;
-                    let pw = if full { R::ZERO } else { pore[i] * vol };
-                    let w = w_all[i];
-                    // The pore pressure's hoop force, as the solid's (axisymmetric sections).
-                    let hoop = if E::AXISYMMETRIC {
-                        pw / x[i][0]
-                    } else {
-                        R::ZERO
-                    };
-                    // Node by node the same operations as a loop over the nodes.
-                    let nk = lanes::<E, R>(|k| n[k]);
-                    let (mn, nmw) = (
-                        lanes::<E, R>(|k| mw * n[k]),
-                        lanes::<E, R>(|k| f.n * mw * n[k]),
-                    );
-                    for k in 0..LANES {
-                        wet[0][k] += mn[k];
-                        wet[1][k] += nmw[k];
-                        wet[2][k] += f.drag * vw * nk[k];
-                    }
-                    for a in 0..E::DIM {
-                        for k in 0..LANES {
-                            wet[3 + a][k] += mn[k] * w[a];
-                            wet[3 + E::DIM + a][k] += mn[k] * loads.gravity[a] - pw * by_component[a][k];
-                            wet[3 + 2 * E::DIM + a][k] += nmw[k] * loads.gravity[a];
-                        }
-                    }
-                    if E::AXISYMMETRIC {
-                        for k in 0..LANES {
-                            wet[3 + E::DIM][k] -= hoop * nk[k];
-                        }
-                    }
+                    j += batch;
                 }
                 store::<E, R, 10>(&sums, four, stride(with_liquid), 0, sw);
                 if with_liquid {
@@ -393,12 +417,22 @@ pub fn particle_to_grid<E: Element, R: Real>(
         assert!(solid_width::<Tri3>() == 7 && solid_width::<Tet4>() == 10);
         assert!(liquid_width::<Tri3>() == 9 && liquid_width::<Tet4>() == 12);
     };
-    let (dry, wet) = (element_pass!(false), element_pass!(true));
+    // Triangles (7 and 16 values) take their points one by one, tetrahedra in batches.
     match (stride(liquid.is_some()), liquid.is_some()) {
-        (7, false) => layout.sum_to_nodes::<7, _, _>(team, slots, dry, node),
-        (10, false) => layout.sum_to_nodes::<10, _, _>(team, slots, dry, node),
-        (16, true) => layout.sum_to_nodes::<16, _, _>(team, slots, wet, node),
-        (22, true) => layout.sum_to_nodes::<22, _, _>(team, slots, wet, node),
+        (7, false) => layout.sum_to_nodes::<7, _, _>(team, slots, element_pass!(false, 1), node),
+        (10, false) => layout.sum_to_nodes::<10, _, _>(
+            team,
+            slots,
+            element_pass!(false, BATCH_TETRAHEDRA),
+            node,
+        ),
+        (16, true) => layout.sum_to_nodes::<16, _, _>(team, slots, element_pass!(true, 1), node),
+        (22, true) => layout.sum_to_nodes::<22, _, _>(
+            team,
+            slots,
+            element_pass!(true, BATCH_TETRAHEDRA),
+            node,
+        ),
         (w, _) => unreachable!("a pass {w} values wide"),
     }
 }
