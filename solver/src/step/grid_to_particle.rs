@@ -9,6 +9,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::step::batch::{interpolate, Batch, TETRAHEDRA};
 use crate::step::contact::{maps, OneBody};
 use crate::step::stress::GuardSums;
 
@@ -121,45 +122,28 @@ pub fn grid_to_particle<E: Element, R: Real>(
                     .map(|a| E::nodes(|k| a[corners[k] as usize]));
                 let mut j = 0;
                 while j < count {
-                    let m = (count - j).min(W);
-                    let on: [bool; W] = std::array::from_fn(|q| {
-                        q < m && active[j + q] && maps(body, material[j + q])
-                    });
-                    let Some(lead) = on.iter().position(|&o| o) else {
-                        j += m;
-                        continue;
-                    };
-                    let at: [usize; W] = std::array::from_fn(|q| j + if on[q] { q } else { lead });
-                    let xl: [[R; W]; 3] = std::array::from_fn(|a| at.map(|i| x[i][a]));
-                    let nl = E::shape_lanes(map, first, &xl);
-                    // Σ N_k a_k, node by node.
-                    let mut dv = [[R::ZERO; W]; 3];
-                    for k in 0..E::NODES {
-                        for c in 0..E::DIM {
-                            for q in 0..W {
-                                dv[c][q] += nl[k][q] * acc_e[k][c];
+                    let b =
+                        match Batch::<W>::new(j, count, |i| active[i] && maps(body, material[i])) {
+                            Ok(b) => b,
+                            Err(skip) => {
+                                j += skip;
+                                continue;
                             }
-                        }
-                    }
-                    let mut vl: [[R; W]; 3] = std::array::from_fn(|c| at.map(|i| vel[i][c]));
+                        };
+                    let nl = E::shape_lanes(map, first, &b.gather(x));
+                    // Σ N_k a_k, node by node.
+                    let dv = interpolate::<E, R, W>(&nl, acc_e);
+                    let mut vl = b.gather(vel);
                     for c in 0..E::DIM {
                         for q in 0..W {
                             vl[c][q] += dt * dv[c][q];
                         }
                     }
                     // The liquid's Σ N_k a_w,k (used by the points with a fluid).
-                    let mut dwl = [[R::ZERO; W]; 3];
-                    if let Some(aw) = &acc_w_e {
-                        let aw = aw.as_ref();
-                        for k in 0..E::NODES {
-                            for c in 0..E::DIM {
-                                for q in 0..W {
-                                    dwl[c][q] += nl[k][q] * aw[k][c];
-                                }
-                            }
-                        }
-                    }
-                    for i in (j..j + m).filter(|&i| on[i - j]) {
+                    let dwl = acc_w_e.as_ref().map_or([[R::ZERO; W]; 3], |aw| {
+                        interpolate::<E, R, W>(&nl, aw.as_ref())
+                    });
+                    for i in b.points() {
                         let q = i - j;
                         let nq: [R; 4] = std::array::from_fn(|k| nl[k][q]);
                         let n = &nq[..E::NODES];
@@ -227,7 +211,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
                             kinetic_w += (f.n * mw * dot::<E, R>(w, w)).f64();
                         }
                     }
-                    j += m;
+                    j += b.len;
                 }
                 (kinetic, kinetic_w)
             }
@@ -267,7 +251,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
             }
         };
     }
-    // Each variant with the batch width of the element type ([`BATCH_TETRAHEDRA`]).
+    // Each variant with the batch width of the element type ([`TETRAHEDRA`]).
     macro_rules! run {
         (None, $with_liquid:expr, $w:expr) => {{
             let element = element_pass!(false, $with_liquid, $w);
@@ -288,13 +272,13 @@ pub fn grid_to_particle<E: Element, R: Real>(
     }
     let tetrahedra = E::DIM == 3;
     match (&guard, liquid.is_some(), tetrahedra) {
-        (None, false, true) => run!(None, false, BATCH_TETRAHEDRA),
+        (None, false, true) => run!(None, false, TETRAHEDRA),
         (None, false, false) => run!(None, false, 1),
-        (None, true, true) => run!(None, true, BATCH_TETRAHEDRA),
+        (None, true, true) => run!(None, true, TETRAHEDRA),
         (None, true, false) => run!(None, true, 1),
-        (Some(g), false, true) => run!(g, false, BATCH_TETRAHEDRA),
+        (Some(g), false, true) => run!(g, false, TETRAHEDRA),
         (Some(g), false, false) => run!(g, false, 1),
-        (Some(g), true, true) => run!(g, true, BATCH_TETRAHEDRA),
+        (Some(g), true, true) => run!(g, true, TETRAHEDRA),
         (Some(g), true, false) => run!(g, true, 1),
     }
     nodal_velocity(
@@ -312,11 +296,6 @@ pub fn grid_to_particle<E: Element, R: Real>(
             .map(|(gl, l)| (&gl.mass[..], l.fixed, &mut gl.vel[..])),
     );
 }
-
-/// Points per batch of grid to particle in tetrahedra, in both precisions (triangles go point
-/// by point): measured on one thread against batches of 1 to 3 (ns per point-step, 4 against
-/// point by point: f64 15.4 against 18.3, f32 14.3 against 19.1; docs/design.md §5.3).
-const BATCH_TETRAHEDRA: usize = 4;
 
 /// v · w over the element's dimensions.
 #[inline(always)]

@@ -1,5 +1,6 @@
 //! The phases of one explicit MUSL step, in the order they run, and what they read from the configuration (load curves, damping rule, drag, prescribed velocities).
 
+pub mod batch;
 pub mod contact;
 pub mod grid_to_particle;
 pub mod grid_update;

@@ -11,6 +11,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::step::batch::TETRAHEDRA;
 use crate::step::contact::{maps, OneBody};
 use crate::step::mixed::Mixed;
 
@@ -33,11 +34,6 @@ fn vector<E: Element, R: Real>(s: &[R], at: usize) -> V3<R> {
     v[..E::DIM].copy_from_slice(&s[at..at + E::DIM]);
     v
 }
-
-/// Points per batch of the shape values in tetrahedra (triangles go point by point): measured
-/// on one thread (docs/design.md §5.3), particle to grid took 27.1–27.8 ns per point-step in f64
-/// and 19.4–19.7 in f32 with batches of four, against 28.3–31.8 and 21.4–22.8 point by point.
-const BATCH_TETRAHEDRA: usize = 4;
 
 /// Lanes of a per-element sum: one per element node, padded to four (a triangle's fourth lane
 /// carries zeros and is never stored).
@@ -420,19 +416,13 @@ pub fn particle_to_grid<E: Element, R: Real>(
     // Triangles (7 and 16 values) take their points one by one, tetrahedra in batches.
     match (stride(liquid.is_some()), liquid.is_some()) {
         (7, false) => layout.sum_to_nodes::<7, _, _>(team, slots, element_pass!(false, 1), node),
-        (10, false) => layout.sum_to_nodes::<10, _, _>(
-            team,
-            slots,
-            element_pass!(false, BATCH_TETRAHEDRA),
-            node,
-        ),
+        (10, false) => {
+            layout.sum_to_nodes::<10, _, _>(team, slots, element_pass!(false, TETRAHEDRA), node)
+        }
         (16, true) => layout.sum_to_nodes::<16, _, _>(team, slots, element_pass!(true, 1), node),
-        (22, true) => layout.sum_to_nodes::<22, _, _>(
-            team,
-            slots,
-            element_pass!(true, BATCH_TETRAHEDRA),
-            node,
-        ),
+        (22, true) => {
+            layout.sum_to_nodes::<22, _, _>(team, slots, element_pass!(true, TETRAHEDRA), node)
+        }
         (w, _) => unreachable!("a pass {w} values wide"),
     }
 }

@@ -10,6 +10,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::step::batch::{interpolate, Batch};
 use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
 
@@ -156,45 +157,35 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 ($w:literal) => {{
                     const W: usize = $w;
                     while j < end {
-                        let m = (end - j).min(W);
-                        let on: [bool; W] =
-                            std::array::from_fn(|q| {
-                                q < m && active[j + q] && maps(body, material[j + q])
-                            });
-                        let Some(lead) = on.iter().position(|&o| o) else {
-                            j += m;
-                            continue;
+                        let b = match Batch::<W>::new(j, end, |i| {
+                            active[i] && maps(body, material[i])
+                        }) {
+                            Ok(b) => b,
+                            Err(skip) => {
+                                j += skip;
+                                continue;
+                            }
                         };
                         debug_assert!(
-                            (j..j + m).all(|i| element[i] as usize == e),
+                            (j..j + b.len).all(|i| element[i] as usize == e),
                             "points not sorted by element"
                         );
-                        // The point of lane q (a moving one for the lanes that are not stored).
-                        let at: [usize; W] =
-                            std::array::from_fn(|q| j + if on[q] { q } else { lead });
-                        let xl: [[R; W]; 3] = std::array::from_fn(|a| at.map(|i| x[i][a]));
+                        let xl = b.gather(x);
                         let n = E::shape_lanes(map, first, &xl);
                         // The pore pressure's smoothed rate, from the nodes at the start-of-step
                         // position (the points move below).
                         if let (Some(rate), Some(pore)) = (&pore_rate, pore.as_mut()) {
-                            for q in (0..m).filter(|&q| on[q]) {
-                                if rate.fluids[material[j + q] as usize].is_some() {
+                            for i in b.points() {
+                                if rate.fluids[material[i] as usize].is_some() {
                                     let mut change = R::ZERO;
                                     for k in 0..E::NODES {
-                                        change += n[k][q] * rate.nodal[corners[k] as usize];
+                                        change += n[k][i - j] * rate.nodal[corners[k] as usize];
                                     }
-                                    pore[j + q] += change * dt;
+                                    pore[i] += change * dt;
                                 }
                             }
                         }
-                        let mut dx: [[R; W]; 3] = [[R::ZERO; W]; 3];
-                        for k in 0..E::NODES {
-                            for a in 0..E::DIM {
-                                for q in 0..W {
-                                    dx[a][q] += n[k][q] * vel[k][a];
-                                }
-                            }
-                        }
+                        let dx = interpolate::<E, R, W>(&n, vel);
                         // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the
                         // radius).
                         let hoop: [R; W] = if E::AXISYMMETRIC {
@@ -215,7 +206,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                             // three in 3D, the two in-plane ones in plane strain (Anura3D's rule;
                             // its ε_zz stays zero). Axisymmetric sections do not smooth.
                             for q in 0..W {
-                                let [es, _] = sm.element_mean(mesh, e, material[at[q]]);
+                                let [es, _] = sm.element_mean(mesh, e, material[b.at[q]]);
                                 let c = if E::DIM == 2 {
                                     (de[0][q] + de[1][q] - es) * half
                                 } else {
@@ -226,16 +217,13 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                                 }
                             }
                         }
-                        let s0: [[R; W]; 6] = std::array::from_fn(|c| at.map(|i| stress[i][c]));
+                        let s0 = b.gather(stress);
                         let mut s1 = s0;
                         // A batch of one linear-elastic material takes the update across its
                         // points; any other law goes point by point.
-                        let law = &laws[material[j + lead] as usize];
-                        match law {
-                            Law::LinearElastic(le)
-                                if (0..m).all(|q| {
-                                    !on[q] || material[j + q] == material[j + lead]
-                                }) =>
+                        let lead = material[b.at[0]];
+                        match &laws[lead as usize] {
+                            Law::LinearElastic(le) if b.points().all(|i| material[i] == lead) =>
                             {
                                 let g2 = le.shear + le.shear;
                                 for q in 0..W {
@@ -249,8 +237,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                                 }
                             }
                             _ => {
-                                for q in (0..m).filter(|&q| on[q]) {
-                                    let i = j + q;
+                                for i in b.points() {
+                                    let q = i - j;
                                     let mut s: [R; 6] = std::array::from_fn(|c| s1[c][q]);
                                     let d: [R; 6] = std::array::from_fn(|c| de[c][q]);
                                     laws[material[i] as usize].update(
@@ -283,7 +271,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                                 }
                             }
                         }
-                        let v0: [R; W] = at.map(|i| volume[i]);
+                        let v0: [R; W] = b.at.map(|i| volume[i]);
                         // The hoop strain changes an axisymmetric point's volume unless the case
                         // follows Anura3D, which leaves it out
                         // ([`crate::input::case::Case::hoop_in_volume`]).
@@ -302,8 +290,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                                 x1[a][q] += dt * dx[a][q];
                             }
                         }
-                        for q in (0..m).filter(|&q| on[q]) {
-                            let i = j + q;
+                        for i in b.points() {
+                            let q = i - j;
                             x[i] = std::array::from_fn(|a| x1[a][q]);
                             for a in 0..E::DIM {
                                 u[i][a] += dt * dx[a][q];
@@ -330,8 +318,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                             let strain: [R; W] = std::array::from_fn(|q| w[q] * v0[q] + finite[q]);
                             // Point by point in order: the block's sums are those of adding in
                             // place.
-                            for q in (0..m).filter(|&q| on[q]) {
-                                let i = j + q;
+                            for i in b.points() {
+                                let q = i - j;
                                 // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no
                                 // division per point.
                                 let rho0 = initial_density[material[i] as usize];
@@ -357,7 +345,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                                 }
                             }
                         }
-                        j += m;
+                        j += b.len;
                     }
                 }};
             }
@@ -374,7 +362,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     });
 }
 
-/// [`rotation`] of each point's stress in a batch of `W`, the same arithmetic point by point.
+/// [`rotation`] of each point's stress in a batch of `W`: (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj,
+/// written out for the symmetric result, point by point.
 #[inline(always)]
 fn rotation_lanes<R: Real, const W: usize>(s: &[[R; W]; 6], w: &[R; 3]) -> [[R; W]; 6] {
     let [xx, yy, zz, xy, yz, zx] = s;
@@ -600,18 +589,7 @@ pub fn rotate<R: Real>(s: &mut [R; 6], w: &[R; 3]) {
 /// The co-rotation Ω σ - σ Ω of `s` (xx yy zz xy yz zx) for the spin increment `w`
 /// (ω_xy, ω_yz, ω_zx).
 pub fn rotation<R: Real>(s: &[R; 6], w: &[R; 3]) -> [R; 6] {
-    let [xx, yy, zz, xy, yz, zx] = *s;
-    let (wxy, wyz, wzx) = (w[0], w[1], w[2]);
-    let two = R::of(2.0);
-    // (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj, written out for the symmetric result.
-    [
-        two * (wxy * xy - wzx * zx),
-        two * (wyz * yz - wxy * xy),
-        two * (wzx * zx - wyz * yz),
-        wxy * (yy - xx) + wyz * zx - wzx * yz,
-        wyz * (zz - yy) + wzx * xy - wxy * zx,
-        wzx * (xx - zz) + wxy * yz - wyz * xy,
-    ]
+    rotation_lanes(&s.map(|v| [v]), w).map(|[v]| v)
 }
 
 #[cfg(test)]

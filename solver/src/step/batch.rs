@@ -1,0 +1,80 @@
+//! Batches of an element's points for the passes that hold each value across several points
+//! (`[c][q]`: value c of point q), so that each operation is one over the batch, which the
+//! compiler emits as vector instructions (docs/design.md §5.3). Each point's arithmetic stays
+//! the one a point-by-point loop does, in the same order, so the bits do not depend on the
+//! width.
+
+use crate::element::Element;
+use crate::real::{Real, V3};
+
+/// Points per batch of particle to grid's shape values and of grid to particle in tetrahedra
+/// (triangles go point by point), measured on one thread against batches of 1 to 3
+/// (docs/design.md §5.3). A literal, not a function of the element type: the passes expand
+/// their element closure once per width.
+pub const TETRAHEDRA: usize = 4;
+
+/// Up to `W` consecutive points of one element, from index `start`: which lanes hold a point
+/// that takes part (`on`), and the point each lane reads (`at`: its own, or the first taking
+/// part for a lane past the batch's points or of a point that does not take part, whose values
+/// are computed and never stored).
+#[derive(Debug, Clone, Copy)]
+pub struct Batch<const W: usize> {
+    /// Index of the batch's first point.
+    pub start: usize,
+    /// Points in the batch (the lanes past them are padding).
+    pub len: usize,
+    /// Whether lane q's point takes part.
+    pub on: [bool; W],
+    /// The point lane q reads.
+    pub at: [usize; W],
+}
+
+impl<const W: usize> Batch<W> {
+    /// The batch of the points from `start` up to `end` (at most `W`), those with `takes_part`
+    /// on; `Err(len)` (the points to skip) when none of them takes part.
+    #[inline(always)]
+    pub fn new(
+        start: usize,
+        end: usize,
+        takes_part: impl Fn(usize) -> bool,
+    ) -> Result<Self, usize> {
+        let len = (end - start).min(W);
+        let on: [bool; W] = std::array::from_fn(|q| q < len && takes_part(start + q));
+        let Some(lead) = on.iter().position(|&o| o) else {
+            return Err(len);
+        };
+        let at = std::array::from_fn(|q| start + if on[q] { q } else { lead });
+        Ok(Batch { start, len, on, at })
+    }
+
+    /// The indices of the points that take part, in order.
+    #[inline(always)]
+    pub fn points(&self) -> impl Iterator<Item = usize> + '_ {
+        (self.start..self.start + self.len).filter(|&i| self.on[i - self.start])
+    }
+
+    /// Each lane's point's `C` values of `v`, value by value.
+    #[inline(always)]
+    pub fn gather<T: Copy, const C: usize>(&self, v: &[[T; C]]) -> [[T; W]; C] {
+        std::array::from_fn(|c| self.at.map(|i| v[i][c]))
+    }
+}
+
+/// Σ_k N_k a_k at each point of a batch, from the shape values by node (`n[k][q]`) and the
+/// element's nodal values `nodal[k]`: node by node, as a point-by-point loop sums it (the
+/// in-plane components of a 2D element, z 0).
+#[inline(always)]
+pub fn interpolate<E: Element, R: Real, const W: usize>(
+    n: &[[R; W]; 4],
+    nodal: &[V3<R>],
+) -> [[R; W]; 3] {
+    let mut out = [[R::ZERO; W]; 3];
+    for k in 0..E::NODES {
+        for c in 0..E::DIM {
+            for q in 0..W {
+                out[c][q] += n[k][q] * nodal[k][c];
+            }
+        }
+    }
+    out
+}
