@@ -31,14 +31,25 @@ impl<R: Real> LinearElastic<R> {
     /// components) to `s`.
     #[inline]
     pub fn update(&self, s: &mut [R; 6], de: &[R; 6]) {
-        let tr = self.lambda * (de[0] + de[1] + de[2]);
+        let mut lanes = s.map(|x| [x]);
+        self.update_lanes::<1>(&mut lanes, &de.map(|x| [x]));
+        *s = lanes.map(|[x]| x);
+    }
+
+    /// [`LinearElastic::update`] of `W` points at once (`s[c][q]`, `de[c][q]`: component c of
+    /// point q), each point's arithmetic the one-point update's.
+    #[inline(always)]
+    pub fn update_lanes<const W: usize>(&self, s: &mut [[R; W]; 6], de: &[[R; W]; 6]) {
         let g2 = self.shear + self.shear;
-        s[0] += tr + g2 * de[0];
-        s[1] += tr + g2 * de[1];
-        s[2] += tr + g2 * de[2];
-        s[3] += g2 * de[3];
-        s[4] += g2 * de[4];
-        s[5] += g2 * de[5];
+        for q in 0..W {
+            let tr = self.lambda * (de[0][q] + de[1][q] + de[2][q]);
+            s[0][q] += tr + g2 * de[0][q];
+            s[1][q] += tr + g2 * de[1][q];
+            s[2][q] += tr + g2 * de[2][q];
+            s[3][q] += g2 * de[3][q];
+            s[4][q] += g2 * de[4][q];
+            s[5][q] += g2 * de[5][q];
+        }
     }
 }
 

@@ -51,6 +51,25 @@ fn cross<R: Real>(a: &[R; 3], b: &[R; 3]) -> [R; 3] {
     ]
 }
 
+/// [`cross`] lane by lane (`a[k][q]`: component k of lane q), each lane's arithmetic the
+/// one-lane product's.
+#[inline(always)]
+fn cross_lanes<R: Real, const W: usize>(a: &[&[R; W]; 3], b: &[&[R; W]; 3]) -> [[R; W]; 3] {
+    let mut out = [[R::ZERO; W]; 3];
+    for q in 0..W {
+        out[0][q] = a[1][q] * b[2][q] - a[2][q] * b[1][q];
+        out[1][q] = a[2][q] * b[0][q] - a[0][q] * b[2][q];
+        out[2][q] = a[0][q] * b[1][q] - a[1][q] * b[0][q];
+    }
+    out
+}
+
+/// [`dot3`] lane by lane.
+#[inline(always)]
+fn dot_lanes<R: Real, const W: usize>(a: &[[R; W]; 3], b: &[[R; W]; 3]) -> [R; W] {
+    std::array::from_fn(|q| a[0][q] * b[0][q] + a[1][q] * b[1][q] + a[2][q] * b[2][q])
+}
+
 /// Sorts three (value, vector) pairs by value.
 fn sorted<R: Real>(values: [R; 3], vectors: [[R; 3]; 3]) -> Principal<R> {
     let mut order = [0usize, 1, 2];
@@ -72,54 +91,101 @@ fn sorted<R: Real>(values: [R; 3], vectors: [[R; 3]; 3]) -> Principal<R> {
 /// to round-off, or a non-finite one.
 #[inline]
 fn far_root<R: Real>(s: &[R; 6]) -> Option<(R, [R; 3], R, R)> {
-    let p = (s[0] + s[1] + s[2]) * R::of(1.0 / 3.0);
-    let d = [s[0] - p, s[1] - p, s[2] - p];
-    let (xy, yz, zx) = (s[3], s[4], s[5]);
-    let j2 = R::of(0.5) * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + xy * xy + yz * yz + zx * zx;
-    let mut largest = R::ZERO;
-    for x in s {
-        largest = largest.max(x.abs());
+    let f = far_root_lanes::<R, 1>(&s.map(|x| [x]));
+    f.ok[0].then(|| (f.far[0], f.n.map(|c| c[0]), f.size[0], f.p[0]))
+}
+
+/// [`far_root`] of `W` tensors at once (`s[c][q]`: component c of tensor q), each lane's
+/// arithmetic the one-tensor loop's in the same order (the same bits whatever `W`).
+struct FarLanes<R: Real, const W: usize> {
+    /// The far eigenvalue less the mean.
+    far: [R; W],
+    /// Its eigenvector, not normalised (`n[c][q]`).
+    n: [[R; W]; 3],
+    /// The vector's squared length.
+    size: [R; W],
+    /// The mean.
+    p: [R; W],
+    /// False where [`far_root`] gives `None` (the other values are then meaningless).
+    ok: [bool; W],
+}
+
+/// The lanes of [`far_root`]: the long chain of dependent square roots, divisions and products
+/// is latency, so several tensors side by side keep the core busy (and go to vector
+/// instructions where the compiler can).
+#[inline(always)]
+fn far_root_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> FarLanes<R, W> {
+    let third = R::of(1.0 / 3.0);
+    let (xy, yz, zx) = (&s[3], &s[4], &s[5]);
+    let mut p = [R::ZERO; W];
+    let mut d = [[R::ZERO; W]; 3];
+    let mut j2 = [R::ZERO; W];
+    let mut j3 = [R::ZERO; W];
+    let mut far = [R::ZERO; W];
+    let mut ok = [true; W];
+    for q in 0..W {
+        p[q] = (s[0][q] + s[1][q] + s[2][q]) * third;
+        for c in 0..3 {
+            d[c][q] = s[c][q] - p[q];
+        }
+        let (d0, d1, d2) = (d[0][q], d[1][q], d[2][q]);
+        let (xy, yz, zx) = (xy[q], yz[q], zx[q]);
+        j2[q] = R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + xy * xy + yz * yz + zx * zx;
+        let mut largest = R::ZERO;
+        for x in s {
+            largest = largest.max(x[q].abs());
+        }
+        let small = R::of(1e3 * R::EPSILON) * largest;
+        ok[q] = j2[q] > small * small;
+        j3[q] = d0 * (d1 * d2 - yz * yz) - xy * (xy * d2 - yz * zx) + zx * (xy * yz - d1 * zx);
     }
-    let small = R::of(1e3 * R::EPSILON) * largest;
-    if !(j2 > small * small) {
-        return None;
-    }
-    let j3 =
-        d[0] * (d[1] * d[2] - yz * yz) - xy * (xy * d[2] - yz * zx) + zx * (xy * yz - d[1] * zx);
     // Deviatoric eigenvalues 2 r cos(θ - 2πk/3), r = sqrt(J2/3), cos 3θ = J3 / (2 r³). The
     // square root and the reciprocal of J2 are independent (1/r = 3r/J2), which shortens the
     // chain of dependent operations: cos 3θ = 4.5 J3 r / J2².
-    let (j2f, j3f) = (j2.f64(), j3.f64());
-    let r = (j2f * (1.0 / 3.0)).sqrt();
-    let inv = 1.0 / j2f;
-    let c3 = (4.5 * j3f * r * (inv * inv)).clamp(-1.0, 1.0);
-    // The largest root is the far one for cos 3θ ≥ 0, the smallest (the largest of -s,
-    // negated) otherwise: either way ± 2r · t(|cos 3θ|).
-    let t = 2.0 * r * largest_cubic_root(c3.abs());
-    let far = R::of(if c3 >= 0.0 { t } else { -t });
-    let rows = [
-        [d[0] - far, xy, zx],
-        [xy, d[1] - far, yz],
-        [zx, yz, d[2] - far],
-    ];
+    for q in 0..W {
+        let (j2f, j3f) = (j2[q].f64(), j3[q].f64());
+        let r = (j2f * (1.0 / 3.0)).sqrt();
+        let inv = 1.0 / j2f;
+        let c3 = (4.5 * j3f * r * (inv * inv)).clamp(-1.0, 1.0);
+        // The largest root is the far one for cos 3θ ≥ 0, the smallest (the largest of -s,
+        // negated) otherwise: either way ± 2r · t(|cos 3θ|).
+        let t = 2.0 * r * largest_cubic_root(c3.abs());
+        far[q] = R::of(if c3 >= 0.0 { t } else { -t });
+    }
+    // The rows of s - λI, each value held across the lanes, so that the cross products below
+    // are operations over the lanes.
+    let diag: [[R; W]; 3] = std::array::from_fn(|c| std::array::from_fn(|q| d[c][q] - far[q]));
+    let rows = [[&diag[0], xy, zx], [xy, &diag[1], yz], [zx, yz, &diag[2]]];
     // The longest of the three cross products, chosen without branches (which one wins
     // depends on the tensor's orientation, which branch prediction cannot learn).
-    let mut n = cross(&rows[0], &rows[1]);
-    let mut size = dot3(&n, &n);
-    for c in [cross(&rows[0], &rows[2]), cross(&rows[1], &rows[2])] {
-        let cc = dot3(&c, &c);
-        let longer = cc > size;
-        for k in 0..3 {
-            n[k] = if longer { c[k] } else { n[k] };
+    let mut n = cross_lanes(&rows[0], &rows[1]);
+    let mut size = dot_lanes(&n, &n);
+    for c in [
+        cross_lanes(&rows[0], &rows[2]),
+        cross_lanes(&rows[1], &rows[2]),
+    ] {
+        let cc = dot_lanes(&c, &c);
+        for q in 0..W {
+            let longer = cc[q] > size[q];
+            for k in 0..3 {
+                n[k][q] = if longer { c[k][q] } else { n[k][q] };
+            }
+            size[q] = if longer { cc[q] } else { size[q] };
         }
-        size = if longer { cc } else { size };
     }
-    // The rows span a plane (rank 2) when the eigenvalue is simple: their cross product is of
-    // the order of J2.
-    if !(size > (R::of(1e-6) * j2) * (R::of(1e-6) * j2)) {
-        return None;
+    // The rows span a plane (rank 2) when the eigenvalue is simple: their cross product is
+    // of the order of J2.
+    for q in 0..W {
+        let tiny = R::of(1e-6) * j2[q];
+        ok[q] = ok[q] && size[q] > tiny * tiny;
     }
-    Some((far, n, size, p))
+    FarLanes {
+        far,
+        n,
+        size,
+        p,
+        ok,
+    }
 }
 
 /// [`far_root`] with the vector normalised and the eigenvalue refined as its Rayleigh
@@ -313,10 +379,51 @@ fn outer<R: Real>(n: &[R; 3], w: R) -> [R; 6] {
 /// tensor.
 #[inline]
 pub fn split<R: Real>(s: &[R; 6]) -> Split<R> {
-    let (lambda, outer) = match far_root(s) {
-        Some((l, n, size, p)) => (l + p, outer(&n, R::ONE / size)),
-        None => {
-            let p = jacobi(s);
+    let [one] = split_lanes::<R, 1>(&s.map(|x| [x]));
+    one
+}
+
+/// [`split`] of `W` tensors at once (`s[c][q]`: component c of tensor q), each the bits of
+/// [`split`] of that tensor alone: the decomposition is a chain of dependent square roots and
+/// divisions, so tensors side by side overlap their latencies.
+#[inline(always)]
+pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> [Split<R>; W] {
+    // A tensor whose largest entry lies outside [2^-16, 2^16] is decomposed scaled by a power
+    // of two that brings it to about 1: the eigenvector's squared length below is a fourth
+    // power of the entries, which f32 underflows for stresses of order 1e-10 (a load ramped up
+    // from zero) and overflows above 1e9. Scaling by a power of two is exact, and the factor
+    // is 1 in range, so the bits are those of the unscaled arithmetic wherever it was finite.
+    let mut t = *s;
+    let mut up = [R::ONE; W];
+    for q in 0..W {
+        let mut largest = R::ZERO;
+        for c in s {
+            largest = largest.max(c[q].abs());
+        }
+        let l = largest.f64();
+        const LOW: f64 = 1.0 / 65536.0;
+        const HIGH: f64 = 65536.0;
+        if !(LOW..=HIGH).contains(&l) && l > 0.0 && l.is_finite() {
+            let e = (l.log2().round() as i32).clamp(-120, 120);
+            let down = R::of(2f64.powi(-e));
+            up[q] = R::of(2f64.powi(e));
+            for c in 0..6 {
+                t[c][q] = s[c][q] * down;
+            }
+        }
+    }
+    let s = &t;
+    let f = far_root_lanes(s);
+    let mut lambda = [R::ZERO; W];
+    let mut o = [[R::ZERO; W]; 6];
+    for q in 0..W {
+        let (l, oq) = if f.ok[q] {
+            (
+                f.far[q] + f.p[q],
+                outer(&f.n.map(|c| c[q]), R::ONE / f.size[q]),
+            )
+        } else {
+            let p = jacobi(&s.map(|c| c[q]));
             // The extreme eigenvalue farther from the middle one.
             let k = if p.values[2] - p.values[1] >= p.values[1] - p.values[0] {
                 2
@@ -324,48 +431,75 @@ pub fn split<R: Real>(s: &[R; 6]) -> Split<R> {
                 0
             };
             (p.values[k], outer(&p.vectors[k], R::ONE))
+        };
+        lambda[q] = l;
+        for c in 0..6 {
+            o[c][q] = oq[c];
         }
-    };
-    let half = R::of(0.5);
-    let m = half * (s[0] + s[1] + s[2] - lambda);
-    // s - λ n ⊗ n - m (I - n ⊗ n): exact to the round-off of s itself, whatever the gap.
-    let c = m - lambda;
-    let plane = [
-        s[0] - m + c * outer[0],
-        s[1] - m + c * outer[1],
-        s[2] - m + c * outer[2],
-        s[3] + c * outer[3],
-        s[4] + c * outer[4],
-        s[5] + c * outer[5],
-    ];
-    let norm2 = plane[0] * plane[0]
-        + plane[1] * plane[1]
-        + plane[2] * plane[2]
-        + R::of(2.0) * (plane[3] * plane[3] + plane[4] * plane[4] + plane[5] * plane[5]);
-    // |plane| = sqrt(2) g for the half gap g.
-    let g = (half * norm2).sqrt();
-    let (lo, hi) = (m - g, m + g);
-    let (values, far) = if lambda >= hi {
-        ([lo, hi, lambda], 2)
-    } else if lambda <= lo {
-        ([lambda, lo, hi], 0)
-    } else {
-        // Only round-off puts the far value between the others (a tensor isotropic to it).
-        let v = [lambda, lo, hi];
-        let (a, b) = (v[0].min(v[1]), v[0].max(v[1]));
-        (
-            [a, b.min(v[2]), b.max(v[2])],
-            if lambda <= m { 0 } else { 2 },
-        )
-    };
-    Split {
-        values,
-        far,
-        outer,
-        plane,
-        // Off the critical path: the return runs beside it.
-        inv_gap: if g > R::ZERO { R::ONE / g } else { R::ZERO },
     }
+    let half = R::of(0.5);
+    let mut m = [R::ZERO; W];
+    let mut plane = [[R::ZERO; W]; 6];
+    let mut g = [R::ZERO; W];
+    for q in 0..W {
+        m[q] = half * (s[0][q] + s[1][q] + s[2][q] - lambda[q]);
+        // s - λ n ⊗ n - m (I - n ⊗ n): exact to the round-off of s itself, whatever the gap.
+        let k = m[q] - lambda[q];
+        for c in 0..3 {
+            plane[c][q] = s[c][q] - m[q] + k * o[c][q];
+        }
+        for c in 3..6 {
+            plane[c][q] = s[c][q] + k * o[c][q];
+        }
+        let norm2 = plane[0][q] * plane[0][q]
+            + plane[1][q] * plane[1][q]
+            + plane[2][q] * plane[2][q]
+            + R::of(2.0)
+                * (plane[3][q] * plane[3][q]
+                    + plane[4][q] * plane[4][q]
+                    + plane[5][q] * plane[5][q]);
+        // |plane| = sqrt(2) g for the half gap g.
+        g[q] = (half * norm2).sqrt();
+    }
+    let mut out = [Split {
+        values: [R::ZERO; 3],
+        far: 0,
+        outer: [R::ZERO; 6],
+        plane: [R::ZERO; 6],
+        inv_gap: R::ZERO,
+    }; W];
+    for (q, out) in out.iter_mut().enumerate() {
+        let (lambda, m, g) = (lambda[q], m[q], g[q]);
+        let (lo, hi) = (m - g, m + g);
+        let (values, far) = if lambda >= hi {
+            ([lo, hi, lambda], 2)
+        } else if lambda <= lo {
+            ([lambda, lo, hi], 0)
+        } else {
+            // Only round-off puts the far value between the others (a tensor isotropic to it).
+            let v = [lambda, lo, hi];
+            let (a, b) = (v[0].min(v[1]), v[0].max(v[1]));
+            (
+                [a, b.min(v[2]), b.max(v[2])],
+                if lambda <= m { 0 } else { 2 },
+            )
+        };
+        // Back to the tensor's scale (exact: a power of two).
+        let up = up[q];
+        out.values = values.map(|v| v * up);
+        out.far = far;
+        for c in 0..6 {
+            out.outer[c] = o[c][q];
+            out.plane[c] = plane[c][q] * up;
+        }
+        // Off the critical path: the return runs beside it.
+        out.inv_gap = if g > R::ZERO {
+            R::ONE / (g * up)
+        } else {
+            R::ZERO
+        };
+    }
+    out
 }
 
 impl<R: Real> Split<R> {
@@ -542,6 +676,123 @@ mod tests {
         let p = principal(&[f64::NAN, 1.0, 2.0, 0.5, 0.0, 0.0]);
         assert!(p.values.iter().any(|v| v.is_nan()));
         let _ = principal(&[f64::INFINITY, 1.0, 2.0, 1e300, 0.0, 0.0]);
+    }
+
+    /// Tensors of every kind the returns meet, of magnitude `scale`: random ones, pairs
+    /// repeated exactly and to round-off, isotropic ones, zero.
+    fn tensors<R: Real>(scale: f64, seed: u64) -> Vec<[R; 6]> {
+        let mut rand = crate::test_rng::uniform(seed);
+        let mut out = vec![[R::ZERO; 6], [R::of(-scale); 3].repeat_six()];
+        for k in 0..64 {
+            let mut t: [f64; 6] = std::array::from_fn(|_| scale * rand());
+            match k % 4 {
+                // diag(a, a, b) rotated about z, to round-off.
+                1 => {
+                    let (a, b, c) = (t[0], t[1], 0.6);
+                    let sn = 0.8;
+                    t = [
+                        a * c * c + a * sn * sn,
+                        a * sn * sn + a * c * c,
+                        b,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ];
+                }
+                // Exactly repeated.
+                2 => t = [t[0], t[0], t[1], 0.0, 0.0, 0.0],
+                // Nearly isotropic.
+                3 => {
+                    let m = t[0];
+                    t = [m, m * (1.0 + 1e-14), m, m * 1e-15, 0.0, 0.0];
+                }
+                _ => {}
+            }
+            out.push(t.map(R::of));
+        }
+        out
+    }
+
+    trait RepeatSix<R> {
+        fn repeat_six(self) -> [R; 6];
+    }
+    impl<R: Real> RepeatSix<R> for [R; 3] {
+        fn repeat_six(self) -> [R; 6] {
+            [self[0], self[1], self[2], R::ZERO, R::ZERO, R::ZERO]
+        }
+    }
+
+    fn same_bits<R: Real>(a: &Split<R>, b: &Split<R>) -> bool {
+        let bits = |v: &[R]| v.iter().map(|x| x.f64().to_bits()).collect::<Vec<_>>();
+        bits(&a.values) == bits(&b.values)
+            && a.far == b.far
+            && bits(&a.outer) == bits(&b.outer)
+            && bits(&a.plane) == bits(&b.plane)
+            && a.inv_gap.f64().to_bits() == b.inv_gap.f64().to_bits()
+    }
+
+    /// Four tensors side by side give each tensor's own split, to the bit, in both precisions
+    /// and at magnitudes inside and outside the range that needs no scaling.
+    fn lanes_are_split_lane_by_lane<R: Real>() {
+        for scale in [1e-12, 1e-3, 1.0, 300.0, 1e7, 1e12] {
+            let t = tensors::<R>(scale, 7);
+            for group in t.chunks_exact(4) {
+                let lanes: [[R; 4]; 6] =
+                    std::array::from_fn(|c| std::array::from_fn(|q| group[q][c]));
+                let got = split_lanes(&lanes);
+                for q in 0..4 {
+                    let want = split(&group[q]);
+                    assert!(
+                        same_bits(&got[q], &want),
+                        "{:?}: {:?} against {:?}",
+                        group[q],
+                        got[q],
+                        want
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn split_lanes_are_split_lane_by_lane() {
+        lanes_are_split_lane_by_lane::<f64>();
+        lanes_are_split_lane_by_lane::<f32>();
+    }
+
+    /// The split of a tensor scaled by a power of two is the tensor's split scaled, bit for
+    /// bit, at stresses f32 cannot square twice (1e-10 kPa: a load ramped up from zero) and
+    /// far beyond any soil's, so no magnitude ends in infinities or NaN.
+    fn scales_exactly<R: Real>() {
+        for t in tensors::<R>(1.0, 11) {
+            let base = split(&t);
+            // (f32 keeps the round-off of a nearly repeated pair, 1e-8 of the stress, normal
+            // down to stresses of 1e-30: below it the result itself is subnormal.)
+            let far = if R::BYTES == 4 { 60 } else { 200 };
+            for e in [-far, -33, -17, 17, 40, far] {
+                let k = R::of(2f64.powi(e));
+                let scaled = t.map(|x| x * k);
+                if scaled.iter().zip(&t).any(|(&y, &x)| y / k != x) {
+                    // An entry under- or overflowed: not the same tensor scaled.
+                    continue;
+                }
+                let sp = split(&scaled);
+                let up = Split {
+                    values: base.values.map(|v| v * k),
+                    far: base.far,
+                    outer: base.outer,
+                    plane: base.plane.map(|v| v * k),
+                    inv_gap: base.inv_gap / k,
+                };
+                assert!(same_bits(&sp, &up), "{t:?} x 2^{e}: {sp:?} against {up:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn split_is_exact_under_scaling_by_powers_of_two() {
+        scales_exactly::<f64>();
+        scales_exactly::<f32>();
     }
 
     proptest! {

@@ -11,6 +11,10 @@ use crate::real::Real;
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 use crate::step::batch::{interpolate, Batch};
+
+/// Points per batch of the elements of a Mohr-Coulomb material, whatever the element type and
+/// precision (docs/design.md §5.3).
+pub const PLASTIC_WIDTH: usize = 4;
 use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
 
@@ -219,23 +223,13 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                         }
                         let s0 = b.gather(stress);
                         let mut s1 = s0;
-                        // A batch of one linear-elastic material takes the update across its
-                        // points; any other law goes point by point.
+                        // A batch of one linear-elastic or Mohr-Coulomb material takes the
+                        // update across its points; any other law goes point by point.
                         let lead = material[b.at[0]];
+                        let one = b.points().all(|i| material[i] == lead);
                         match &laws[lead as usize] {
-                            Law::LinearElastic(le) if b.points().all(|i| material[i] == lead) =>
-                            {
-                                let g2 = le.shear + le.shear;
-                                for q in 0..W {
-                                    let tr = le.lambda * (de[0][q] + de[1][q] + de[2][q]);
-                                    s1[0][q] += tr + g2 * de[0][q];
-                                    s1[1][q] += tr + g2 * de[1][q];
-                                    s1[2][q] += tr + g2 * de[2][q];
-                                    s1[3][q] += g2 * de[3][q];
-                                    s1[4][q] += g2 * de[4][q];
-                                    s1[5][q] += g2 * de[5][q];
-                                }
-                            }
+                            Law::LinearElastic(le) if one => le.update_lanes(&mut s1, &de),
+                            Law::MohrCoulomb(mc) if one => mc.update_lanes(&mut s1, &de, &b.on),
                             _ => {
                                 for i in b.points() {
                                     let q = i - j;
@@ -349,8 +343,20 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                     }
                 }};
             }
-            match batch_width::<E, R>() {
+            // Mohr-Coulomb points go in batches of [`PLASTIC_WIDTH`] whatever the element
+            // and precision: their return's decompositions side by side (a long chain of
+            // dependent square roots and divisions each) outweigh the spills of the rest.
+            let plastic = matches!(
+                laws[material[points.start - r.start] as usize],
+                Law::MohrCoulomb(_)
+            );
+            match if plastic {
+                PLASTIC_WIDTH
+            } else {
+                batch_width::<E, R>()
+            } {
                 1 => batches!(1),
+                2 => batches!(2),
                 _ => batches!(4),
             }
         }
