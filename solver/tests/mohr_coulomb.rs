@@ -33,14 +33,23 @@ fn scene(dir: &Path, stem: &str, edit: &dyn Fn(String) -> String) -> PathBuf {
 
 /// Runs `case` to its end: the final stresses, and the particles' state values per point.
 fn run(case: &Case, out: &Path) -> (Vec<[f64; 6]>, usize) {
-    let engine = mpm_solve::driver::run::run_observed::<f64, Tet4>(
+    run_in::<f64>(case, out)
+}
+
+/// [`run`] at precision `R`, the stresses widened to f64.
+fn run_in<R: mpm_solve::real::Real>(case: &Case, out: &Path) -> (Vec<[f64; 6]>, usize) {
+    let engine = mpm_solve::driver::run::run_observed::<R, Tet4>(
         case,
         out,
         &Default::default(),
         &mut |_| {},
     )
     .unwrap();
-    (engine.particles.stress.clone(), engine.particles.state_len)
+    let stress = engine.particles.stress.iter();
+    (
+        stress.map(|s| s.map(|x| x.f64())).collect(),
+        engine.particles.state_len,
+    )
 }
 
 /// The column of `testdata/mc_column.toml` at precision `R`: it settles in the active state
@@ -52,20 +61,8 @@ fn settles_in_the_active_state<R: mpm_solve::real::Real>(tol: f64) {
         case.materials[1].as_ref().unwrap().law.name(),
         "mohr_coulomb"
     );
-    let engine = mpm_solve::driver::run::run_observed::<R, Tet4>(
-        &case,
-        &dir.path().join("out"),
-        &Default::default(),
-        &mut |_| {},
-    )
-    .unwrap();
-    assert_eq!(engine.particles.state_len, 0);
-    let stress: Vec<[f64; 6]> = engine
-        .particles
-        .stress
-        .iter()
-        .map(|s| s.map(|x| x.f64()))
-        .collect();
+    let (stress, state_len) = run_in::<R>(&case, &dir.path().join("out"));
+    assert_eq!(state_len, 0);
     let surface = Surface::<f64>::new(30.0, 0.0, 0.0, 0.0);
     let (mut deep, mut active) = (0, 0);
     for s in &stress {
