@@ -261,7 +261,7 @@ impl<R: Real> Surface<R> {
 
     /// [`Surface::return_map_with`] of the `W` trial stresses `s` (`s[c][q]`: component c of
     /// lane q) whose lane is `on`, each the bits of a return of that stress alone: those the
-    /// bounds of [`Surface::surely_inside`] cannot settle are decomposed side by side
+    /// invariant bounds (no decomposition) cannot settle are decomposed side by side
     /// ([`split_lanes`]), which overlaps the decomposition's long latency chains.
     #[inline(always)]
     pub fn return_lanes<const W: usize>(
