@@ -11,12 +11,12 @@ use crate::real::Real;
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 use crate::step::batch::{interpolate, Batch};
-
-/// Points per batch of the elements of a Mohr-Coulomb material, whatever the element type and
-/// precision (docs/design.md §5.3).
-pub const PLASTIC_WIDTH: usize = 4;
 use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
+
+/// Points per batch of the elements of a Mohr-Coulomb material, whatever the element type and
+/// precision (docs/design.md §5.3); [`update_stress_and_move`] expands widths 1 and 4 only.
+pub const PLASTIC_WIDTH: usize = 4;
 
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
 /// the rotation Δω σ - σ Δω with Δω = skew(L) Δt and -tr(Δε) σ); V *= 1 + tr Δε;
@@ -356,7 +356,6 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 batch_width::<E, R>()
             } {
                 1 => batches!(1),
-                2 => batches!(2),
                 _ => batches!(4),
             }
         }
