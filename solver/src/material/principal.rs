@@ -51,18 +51,6 @@ fn cross<R: Real>(a: &[R; 3], b: &[R; 3]) -> [R; 3] {
     ]
 }
 
-/// The largest |entry| of each lane's tensor.
-#[inline(always)]
-fn largest_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> [R; W] {
-    let mut largest = [R::ZERO; W];
-    for c in s {
-        for q in 0..W {
-            largest[q] = largest[q].max(c[q].abs());
-        }
-    }
-    largest
-}
-
 /// [`cross`] lane by lane (`a[k][q]`: component k of lane q), each lane's arithmetic the
 /// one-lane product's.
 #[inline(always)]
@@ -103,8 +91,7 @@ fn sorted<R: Real>(values: [R; 3], vectors: [[R; 3]; 3]) -> Principal<R> {
 /// to round-off, or a non-finite one.
 #[inline]
 fn far_root<R: Real>(s: &[R; 6]) -> Option<(R, [R; 3], R, R)> {
-    let lanes = s.map(|x| [x]);
-    let f = far_root_lanes::<R, 1>(&lanes, &largest_lanes(&lanes));
+    let f = far_root_lanes::<R, 1>(&s.map(|x| [x]));
     f.ok[0].then(|| (f.far[0], f.n.map(|c| c[0]), f.size[0], f.p[0]))
 }
 
@@ -127,7 +114,7 @@ struct FarLanes<R: Real, const W: usize> {
 /// is latency, so several tensors side by side keep the core busy (and go to vector
 /// instructions where the compiler can).
 #[inline(always)]
-fn far_root_lanes<R: Real, const W: usize>(s: &[[R; W]; 6], largest: &[R; W]) -> FarLanes<R, W> {
+fn far_root_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> FarLanes<R, W> {
     let third = R::of(1.0 / 3.0);
     let (xy, yz, zx) = (&s[3], &s[4], &s[5]);
     let mut p = [R::ZERO; W];
@@ -144,7 +131,11 @@ fn far_root_lanes<R: Real, const W: usize>(s: &[[R; W]; 6], largest: &[R; W]) ->
         let (d0, d1, d2) = (d[0][q], d[1][q], d[2][q]);
         let (xy, yz, zx) = (xy[q], yz[q], zx[q]);
         j2[q] = R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + xy * xy + yz * yz + zx * zx;
-        let small = R::of(1e3 * R::EPSILON) * largest[q];
+        let mut largest = R::ZERO;
+        for x in s {
+            largest = largest.max(x[q].abs());
+        }
+        let small = R::of(1e3 * R::EPSILON) * largest;
         ok[q] = j2[q] > small * small;
         j3[q] = d0 * (d1 * d2 - yz * yz) - xy * (xy * d2 - yz * zx) + zx * (xy * yz - d1 * zx);
     }
@@ -404,9 +395,12 @@ pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> [Split<R>; W] {
     // is 1 in range, so the bits are those of the unscaled arithmetic wherever it was finite.
     let mut t = *s;
     let mut up = [R::ONE; W];
-    let mut largest = largest_lanes(s);
     for q in 0..W {
-        let l = largest[q].f64();
+        let mut largest = R::ZERO;
+        for c in s {
+            largest = largest.max(c[q].abs());
+        }
+        let l = largest.f64();
         const LOW: f64 = 1.0 / 65536.0;
         const HIGH: f64 = 65536.0;
         if !(LOW..=HIGH).contains(&l) && l > 0.0 && l.is_finite() {
@@ -416,12 +410,10 @@ pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> [Split<R>; W] {
             for c in 0..6 {
                 t[c][q] = s[c][q] * down;
             }
-            // (Exact: a power of two.)
-            largest[q] *= down;
         }
     }
     let s = &t;
-    let f = far_root_lanes(s, &largest);
+    let f = far_root_lanes(s);
     let mut lambda = [R::ZERO; W];
     let mut o = [[R::ZERO; W]; 6];
     for q in 0..W {
