@@ -265,6 +265,9 @@ pub fn particle_to_grid<E: Element, R: Real>(
                 let corners = mesh.corners[e].as_ref();
                 let (first, map) = (&mesh.x[corners[0] as usize], &mesh.map[e]);
                 let mut j = 0;
+                // (Not `Batch`, which the stress and grid-to-particle passes share: the batch
+                // here takes every point and skips inside, measured 15 % faster on the
+                // saturated f64 column's particle to grid.)
                 while j < count {
                     let batch = (count - j).min(W);
                     // Lanes past the element's last point repeat it (computed, never used).
