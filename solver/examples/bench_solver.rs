@@ -26,12 +26,20 @@
 //! phase re-sorts them each step, as in a run-out or a collapse (the quasi-static columns
 //! never do).
 //!
+//! `--huge-pages on` asks for 2 MiB pages for the large arrays (`mpm_solve::parallel::huge_pages`,
+//! off by default as in `mpm-solve`), to measure what they are worth.
+//!
 //! `--guards off` skips the per-step guard rails (docs/design.md §4.14), to measure their cost.
 //!
 //! `--order random` renumbers elements and nodes by a fixed pseudo-random permutation (the
 //! locality a mesh generator's worst case gives); `morton` applies the solver's curve ordering.
 
 use std::time::Instant;
+
+/// Large arrays on huge pages with `--huge-pages on`, as `mpm-solve`.
+#[global_allocator]
+static ALLOC: mpm_solve::parallel::huge_pages::HugePageAlloc =
+    mpm_solve::parallel::huge_pages::HugePageAlloc;
 
 use mpm_shared::{generate, ElementType, Model};
 use mpm_solve::driver::dispatch::{dispatch, Generic};
@@ -103,6 +111,8 @@ fn main() {
         _ => Pin::Cores,
     };
     let first_touch = arg(&a, "--first-touch") != Some("off");
+    let huge_pages = arg(&a, "--huge-pages") == Some("on");
+    mpm_solve::parallel::huge_pages::set_enabled(huge_pages);
     let order = arg(&a, "--order").unwrap_or("morton").to_string();
     let plane = arg(&a, "--dim") == Some("2");
 
@@ -245,6 +255,7 @@ fn main() {
         thread_busy,
         info,
         bytes_per_point,
+        huge_page_bytes,
         modelled,
         ..
     } = result;
@@ -283,7 +294,7 @@ fn main() {
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
     println!(
-        "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"modelled_bytes_per_particle_step\": {{{}}}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}, \"phase_team_per_step\": {{{}}}, \"thread_busy_per_step\": {:?}{}}}",
+        "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"huge_pages\": {}, \"huge_page_bytes\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"modelled_bytes_per_particle_step\": {{{}}}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}, \"phase_team_per_step\": {{{}}}, \"thread_busy_per_step\": {:?}{}}}",
         if saturated { "saturated" } else { "dry" },
         if plane { 2 } else { 3 },
         arg(&a, "--law").unwrap_or("linear"),
@@ -294,6 +305,8 @@ fn main() {
         pinned.join(", "),
         if pin == Pin::Cores { "cores" } else { "none" },
         first_touch,
+        mpm_solve::parallel::huge_pages::enabled(),
+        huge_page_bytes.map_or("null".to_string(), |b| b.to_string()),
         order,
         steps,
         if f32 { "f32" } else { "f64" },
@@ -319,6 +332,8 @@ struct Measured {
     thread_busy: Vec<Vec<f64>>,
     info: (usize, usize, Vec<Option<usize>>),
     bytes_per_point: usize,
+    /// Bytes on huge pages while the last repetition's engine was alive (Linux).
+    huge_page_bytes: Option<u64>,
     /// Modelled bytes per particle-step of each phase.
     modelled: [f64; 5],
     /// Over MPI ranks: each rank's report of the last repetition (on rank 0).
@@ -374,6 +389,7 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
         thread_busy: Vec::new(),
         info: (0, 0, Vec::new()),
         bytes_per_point: 0,
+        huge_page_bytes: None,
         modelled: [0.0; 5],
         reports: None,
         traffic: Vec::new(),
@@ -426,12 +442,8 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
         );
         m.info = (np, engine.team.threads, engine.team.pinned.clone());
         m.bytes_per_point = engine.particles.bytes_per_point();
-        m.modelled = mpm_solve::driver::traffic::modelled_bytes::<R, E>(
-            &engine.particles,
-            engine.mesh.elements(),
-            engine.mesh.nodes(),
-            engine.layout.slot_share(),
-        );
+        m.huge_page_bytes = mpm_solve::parallel::huge_pages::resident_huge_bytes();
+        m.modelled = engine.modelled_bytes();
     }
     m
 }

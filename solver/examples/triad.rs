@@ -3,10 +3,17 @@
 //! counting 24 bytes per element as STREAM does.
 //!
 //! `cargo run --release -p mpm-solve --example triad -- [THREADS] [MIB_PER_ARRAY] [REPS]`
+//! (`TRIAD_HUGE_PAGES=on` in the environment: its arrays on huge pages)
 
 use std::time::Instant;
 
 use mpm_solve::parallel::team::{balanced_ranges, Pin, Shared, Team};
+
+/// The solver's allocator (`mpm_solve::parallel::huge_pages`; `TRIAD_HUGE_PAGES=on` turns
+/// its advice on), so that the roofline compares like with like.
+#[global_allocator]
+static ALLOC: mpm_solve::parallel::huge_pages::HugePageAlloc =
+    mpm_solve::parallel::huge_pages::HugePageAlloc;
 
 fn main() {
     let a: Vec<usize> = std::env::args()
@@ -17,6 +24,9 @@ fn main() {
     let mib = *a.get(1).unwrap_or(&256);
     let reps = *a.get(2).unwrap_or(&10);
     let n = mib * 1024 * 1024 / 8;
+    mpm_solve::parallel::huge_pages::set_enabled(
+        std::env::var("TRIAD_HUGE_PAGES").is_ok_and(|v| v == "on"),
+    );
     let team = Team::new(threads, Pin::Cores).expect("team");
     let ranges = balanced_ranges(std::iter::repeat(1u64).take(n), team.threads);
     // Zeroed allocations: each thread first touches its own range below.

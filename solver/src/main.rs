@@ -83,6 +83,11 @@ struct Args {
     /// everything on the main thread (for measurement).
     #[arg(long, value_enum, default_value = "on")]
     first_touch: OnOff,
+    /// Ask Linux to back the large arrays with 2 MiB pages (transparent huge pages, where the
+    /// kernel leaves them to programs that ask; for measurement: on the machines measured so
+    /// far they did not pay, docs/design.md §5.4). Results do not depend on it.
+    #[arg(long, value_enum, default_value = "off")]
+    huge_pages: OnOff,
     /// Order the mesh along a space-filling curve before computing (skip with `none` for a
     /// mesh sfcb already ordered); material-point ids stay those of the input.
     #[arg(long, value_enum, default_value = "morton")]
@@ -285,6 +290,11 @@ impl log::Log for Messages {
 
 static MESSAGES: Messages = Messages;
 
+/// Large arrays on huge pages (`--huge-pages`).
+#[global_allocator]
+static ALLOC: mpm_solve::parallel::huge_pages::HugePageAlloc =
+    mpm_solve::parallel::huge_pages::HugePageAlloc;
+
 fn main() -> ExitCode {
     // The team's look at which cores are free overlaps reading the input.
     mpm_solve::parallel::machine::begin_early();
@@ -423,6 +433,8 @@ fn run(args: Args) -> anyhow::Result<()> {
     if args.threads == Some(0) {
         bail!("--threads must be at least 1");
     }
+    // Before the input is read: the large arrays are allocated from here on.
+    mpm_solve::parallel::huge_pages::set_enabled(matches!(args.huge_pages, OnOff::On));
     // Reading, ordering and set-up run on rayon's pool: size it as the run's team.
     if let Some(n) = args.threads {
         rayon::ThreadPoolBuilder::new()

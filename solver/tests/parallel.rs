@@ -261,3 +261,47 @@ fn element_point_ranges_follow_every_point_at_every_step() {
         check.crossings
     );
 }
+
+/// The points are located in the stress pass as they move (every run without moving mesh,
+/// contact or dropped points) or in a pass of their own (the others, here through
+/// `drop_lost`, with no point lost): the same elements, positions and stresses at every step,
+/// on a block whose points cross elements both ways.
+#[test]
+fn locating_in_the_stress_pass_finds_what_the_locate_pass_finds() {
+    use mpm_solve::driver::engine::Engine;
+    let case = mpm_solve::input::scene::load(&testdata("oracle_mc_block.toml")).unwrap();
+    for threads in [1, 3] {
+        let mut case = case.clone();
+        case.engine.threads = threads;
+        let mut fused = Engine::<f64, Tet4>::new(&case, false).unwrap();
+        let mut apart = Engine::<f64, Tet4>::new(&case, true).unwrap();
+        let by_id = |p: &mpm_solve::state::particles::Particles<f64>| {
+            let ids = p.id.iter().max().map_or(0, |&m| m as usize + 1);
+            let mut e = vec![u32::MAX; ids];
+            for (&id, &el) in p.id.iter().zip(&p.element) {
+                e[id as usize] = el;
+            }
+            e
+        };
+        let mut crossings = 0;
+        for step in 0..1500 {
+            let before = by_id(&fused.particles);
+            fused.step(fused.dt, None).unwrap();
+            apart.step(apart.dt, None).unwrap();
+            let (a, b) = (&fused.particles, &apart.particles);
+            assert_eq!(a.id, b.id, "step {step}: the points' order");
+            assert_eq!(a.element, b.element, "step {step}: the elements");
+            let bits = |p: &mpm_solve::state::particles::Particles<f64>| {
+                p.x.iter()
+                    .chain(&p.u)
+                    .flatten()
+                    .chain(p.stress.iter().flatten())
+                    .map(|v| v.to_bits())
+                    .collect::<Vec<_>>()
+            };
+            assert!(bits(a) == bits(b), "step {step}: positions or stresses");
+            crossings += by_id(a).iter().zip(&before).filter(|(x, y)| x != y).count();
+        }
+        assert!(crossings > 100, "{threads} threads: {crossings} crossings");
+    }
+}

@@ -3,7 +3,9 @@
 use std::ops::Range;
 use std::time::Instant;
 
-use crate::element::locate::{locate_width, run_inside, walk, Found};
+use crate::element::locate::{
+    locate_width, merge, record, run_inside, walk, Found, Outcome, NOTHING_FOUND,
+};
 use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::Element;
@@ -232,7 +234,7 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     sort_scratch: SortScratch,
     /// Per thread, from the last locate: first point found outside (index, element), count,
     /// and whether any of its points changed element.
-    locate_outcome: Vec<((usize, u32), u64, bool)>,
+    locate_outcome: Vec<Outcome>,
     /// Liquid constants per material index (`None` for dry materials; all `None` in a dry case).
     pub fluids: Vec<Option<Fluid<R>>>,
     /// Fixed liquid components per computational node.
@@ -641,7 +643,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                 == crate::input::case::CriticalStepRule::OccupiedEachStep)
                 .then(|| crate::step::time_step::CriticalStep::new(case, team.threads)),
             reactions,
-            locate_outcome: vec![((usize::MAX, 0), 0, false); team.threads],
+            locate_outcome: vec![NOTHING_FOUND; team.threads],
             team,
             layout,
             slots,
@@ -869,7 +871,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             .layout
             .for_threads(&self.mesh, &self.particles, team.threads);
         self.slots = self.layout.new_slots();
-        self.locate_outcome = vec![((usize::MAX, 0), 0, false); team.threads];
+        self.locate_outcome = vec![NOTHING_FOUND; team.threads];
         self.team = team;
     }
 
@@ -1178,6 +1180,10 @@ impl<R: Real, E: Element> Engine<R, E> {
             self.smoothing.as_ref(),
             R::of(dt),
         );
+        let fused_locate = self.locates_in_stress_pass();
+        if fused_locate {
+            self.locate_outcome.fill(NOTHING_FOUND);
+        }
         // Each body's points strain and move with its own nodes' velocities.
         let soil = self.contact.as_ref().map(|c| c.soil());
         let structure = self.contact.as_ref().map(|c| (&c.grid, Some(c.structure)));
@@ -1214,6 +1220,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                 }),
                 body,
                 pore_rate.filter(|_| k == 0),
+                (fused_locate && k == 0).then_some(&mut self.locate_outcome[..]),
             );
         }
         if let Some(m) = &self.mixed {
@@ -1292,7 +1299,11 @@ impl<R: Real, E: Element> Engine<R, E> {
                 .into());
             }
         }
-        self.locate()?;
+        if fused_locate {
+            self.settle_located()?;
+        } else {
+            self.locate()?;
+        }
         if let Some(m) = &self.mixed {
             m.after_locate(&self.team, &self.layout, &mut self.particles);
         }
@@ -1446,7 +1457,38 @@ impl<R: Real, E: Element> Engine<R, E> {
     /// Finds every point's element (each thread walks its own points), stops at the first
     /// point (by index) that left the mesh unless such points are dropped, and keeps the points
     /// sorted by element.
+    /// Whether the points are located in the stress pass as they move (docs/design.md §4.10):
+    /// unless something between the two passes bears on their elements, the mesh moving, a
+    /// second body, or lost points dropped (deactivated before the mixed rule's averages and
+    /// the guards read them).
+    pub fn locates_in_stress_pass(&self) -> bool {
+        self.moving_mesh.is_none() && self.contact.is_none() && !self.drop_lost
+    }
+
+    /// The modelled bytes per particle-step of each step phase (`driver::traffic`), for the
+    /// way this run locates its points.
+    pub fn modelled_bytes(&self) -> [f64; 5] {
+        let bytes = crate::driver::traffic::modelled_bytes::<R, E>(
+            &self.particles,
+            self.mesh.elements(),
+            self.mesh.nodes(),
+            self.layout.slot_share(),
+        );
+        if self.locates_in_stress_pass() {
+            crate::driver::traffic::locating_in_stress(bytes)
+        } else {
+            bytes
+        }
+    }
+
     fn locate(&mut self) -> Result<(), Lost> {
+        self.walk_points();
+        self.settle_located()
+    }
+
+    /// Walks every active point from its element to the one holding it now, in chunks,
+    /// recording per thread what [`locate`](Self::locate) needs ([`Outcome`]).
+    fn walk_points(&mut self) {
         let mesh = &self.mesh;
         let layout = &self.layout;
         let p = &mut self.particles;
@@ -1456,7 +1498,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         // Per thread: the first point it found outside (index, element), how many, and whether
         // a point changed element, over the chunks it walked.
         for o in &mut self.locate_outcome {
-            *o = ((usize::MAX, 0), 0, false);
+            *o = NOTHING_FOUND;
         }
         let outcomes = Shared::new(&mut self.locate_outcome);
         let drop_lost = self.drop_lost;
@@ -1467,7 +1509,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             let r = layout.chunk_particles(c);
             // SAFETY: the particle ranges of the chunks are disjoint, and each chunk runs once.
             let (el, active) = unsafe { (elements.range(r.clone()), actives.range(r.clone())) };
-            let (mut first, mut count, mut moved) = ((usize::MAX, 0u32), 0u64, false);
+            let mut o = NOTHING_FOUND;
             let w = locate_width::<E, R>();
             let mut skip = 0;
             for (j, i) in r.clone().enumerate() {
@@ -1495,43 +1537,34 @@ impl<R: Real, E: Element> Engine<R, E> {
                     continue;
                 }
                 let found = walk(mesh, el[j], &x[i]);
-                let (Found::In(e) | Found::Outside(e) | Found::Beyond(e)) = found;
-                moved |= e != el[j];
-                match found {
-                    Found::In(e) => el[j] = e,
-                    Found::Beyond(e) => {
-                        // Beyond the halo: moved more than an element in one step, which the
-                        // rank cannot follow; stops the run as a point leaving the mesh does.
-                        log::error!(
-                            "a material point moved beyond this rank's halo in one step (from local element {})",
-                            el[j]
-                        );
-                        el[j] = e;
-                        if count == 0 {
-                            first = (i, e);
-                        }
-                        count += 1;
+                if let Found::Beyond(_) = found {
+                    // Beyond the halo: moved more than an element in one step, which the rank
+                    // cannot follow; stops the run as a point leaving the mesh does.
+                    log::error!(
+                        "a material point moved beyond this rank's halo in one step (from local element {})",
+                        el[j]
+                    );
+                }
+                if record(&mut o, i, &mut el[j], found) {
+                    if matches!(found, Found::Beyond(_)) || !drop_lost {
                         break;
                     }
-                    Found::Outside(e) => {
-                        el[j] = e;
-                        if count == 0 {
-                            first = (i, e);
-                        }
-                        count += 1;
-                        if !drop_lost {
-                            break;
-                        }
-                        active[j] = false;
-                    }
+                    active[j] = false;
                 }
             }
             // SAFETY: slot t is this thread's only (a thread runs its chunks one after another).
             let mine = unsafe { &mut outcomes.range(t..t + 1)[0] };
-            mine.0 = mine.0.min(first);
-            mine.1 += count;
-            mine.2 |= moved;
+            merge(mine, o);
         });
+    }
+
+    /// After the walk (its own pass, or fused into the stress pass): stops the run on a point
+    /// that left the mesh (unless lost points are dropped), exchanges the points that crossed
+    /// to other ranks, and re-sorts the points by element where any moved.
+    fn settle_located(&mut self) -> Result<(), Lost> {
+        let mesh = &self.mesh;
+        let p = &mut self.particles;
+        let drop_lost = self.drop_lost;
         let outside = self.locate_outcome.iter().map(|o| o.1).sum::<u64>();
         let outside_anywhere = self.comm.sum_count(outside);
         if !drop_lost && outside_anywhere > 0 {

@@ -317,12 +317,7 @@ pub fn write_summary<R: Real, E: Element>(
             )
         })
         .collect();
-    let modelled = crate::driver::traffic::modelled_bytes::<R, E>(
-        &engine.particles,
-        engine.mesh.elements(),
-        engine.mesh.nodes(),
-        engine.layout.slot_share(),
-    );
+    let modelled = engine.modelled_bytes();
     let bytes: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
         .iter()
         .zip(modelled)
@@ -342,6 +337,8 @@ pub fn write_summary<R: Real, E: Element>(
         "pinned_cores": engine.team.pinned,
         "busy_cores": engine.team.busy,
         "first_touch": case.engine.first_touch,
+        "huge_pages": crate::parallel::huge_pages::enabled(),
+        "huge_page_bytes": crate::parallel::huge_pages::resident_huge_bytes(),
         "precision": R::NAME,
         "particles": n,
         "elements": engine.mesh.elements(),

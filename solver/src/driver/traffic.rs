@@ -145,6 +145,15 @@ pub fn modelled_bytes<R: Real, E: Element>(
     ]
 }
 
+/// [`modelled_bytes`] of a run that locates its points in the stress pass (docs/design.md
+/// §4.10): the stress pass also rewrites the element numbers it reads, and the locate phase
+/// moves no point data of its own (its re-sort is left out, as above).
+pub fn locating_in_stress(mut bytes: [f64; 5]) -> [f64; 5] {
+    bytes[3] += std::mem::size_of::<u32>() as f64;
+    bytes[4] = 0.0;
+    bytes
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -203,5 +212,11 @@ mod tests {
             dry[0] - direct[0],
             (2.0 * 80.0 * 10.0 * 8.0 - 2.0 * 4.0 * 10.0 * 8.0) / 80.0
         );
+        // Located in the stress pass: the stress pass writes the element numbers back (4
+        // bytes more), the locate phase moves nothing, the other phases are unchanged.
+        let fused = locating_in_stress(dry);
+        assert_eq!(fused[3], dry[3] + 4.0);
+        assert_eq!(fused[4], 0.0);
+        assert_eq!(fused[..3], dry[..3]);
     }
 }

@@ -17,6 +17,41 @@ pub enum Found {
     Beyond(u32),
 }
 
+/// What walking a range of points found: the first point found outside the mesh or beyond
+/// the rank's halo (its index and the element it left by; `(usize::MAX, 0)` for none), how many
+/// such points, and whether any point changed element.
+pub type Outcome = ((usize, u32), u64, bool);
+
+/// An outcome of no point lost and none moved.
+pub const NOTHING_FOUND: Outcome = ((usize::MAX, 0), 0, false);
+
+/// Takes the outcome of point `index` (at `el`, its element until now) ending its walk with
+/// `found` into `o`; returns whether the point left the mesh (or the halo). `el` takes the
+/// element the walk ended in.
+#[inline]
+pub fn record(o: &mut Outcome, index: usize, el: &mut u32, found: Found) -> bool {
+    let (Found::In(e) | Found::Outside(e) | Found::Beyond(e)) = found;
+    o.2 |= e != *el;
+    *el = e;
+    if matches!(found, Found::In(_)) {
+        return false;
+    }
+    if o.1 == 0 {
+        o.0 = (index, e);
+    }
+    o.1 += 1;
+    true
+}
+
+/// Adds the outcome of more points, `more`, to `o` (the lowest first point, the counts
+/// summed): the same whichever thread walked which points.
+#[inline]
+pub fn merge(o: &mut Outcome, more: Outcome) {
+    o.0 = o.0.min(more.0);
+    o.1 += more.1;
+    o.2 |= more.2;
+}
+
 /// How far outside an element (in local coordinates) a point may lie and still count as in
 /// it: 1e-10, or a hundred rounding errors of the precision where that is coarser (f32: 1.2e-5),
 /// so that a point on a face is not sent back and forth between its two elements.

@@ -4,6 +4,7 @@ pub mod comm;
 pub mod exact;
 pub mod gather;
 pub mod halo;
+pub mod huge_pages;
 pub mod machine;
 #[cfg(feature = "mpi")]
 pub mod mpi_comm;

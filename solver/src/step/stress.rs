@@ -1,6 +1,9 @@
 //! Strain increments from nodal velocities, the constitutive update, and the volume and position
 //! update of every particle.
 
+use crate::element::locate::{
+    locate_width, merge, record, run_inside, walk, Found, Outcome, NOTHING_FOUND,
+};
 use crate::element::mesh::Mesh;
 use crate::element::{batch_width, Element};
 use crate::material::law::Law;
@@ -32,6 +35,14 @@ pub const PLASTIC_WIDTH: usize = 4;
 /// the kinetic energy): the guard rails' sums, formed in passes that read the points anyway so
 /// that they cost no pass of their own. Only the points of `body` move, with `g`'s velocities
 /// (all of them for `None`; one body of a contact pair, [`crate::step::contact`]).
+///
+/// With `located` (one [`Outcome`] per thread, each added to), each moved point is also
+/// located: tested against its element with the position it was just given, and walked from
+/// there where it left it, as the locate pass would (the same test and walk, so the same
+/// elements), which then needs no pass of its own over the points. For runs in which nothing
+/// happens between the two passes that a point's element depends on: no mesh motion, one
+/// body, and lost points stopping the run (a point that leaves is recorded, and the rest of
+/// its chunk still walked).
 #[allow(clippy::too_many_arguments)]
 pub fn update_stress_and_move<E: Element, R: Real>(
     team: &Team,
@@ -47,6 +58,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     guard: Option<Guard<'_, R>>,
     body: Option<OneBody>,
     pore_rate: Option<PoreRate<'_, R>>,
+    located: Option<&mut [Outcome]>,
 ) {
     debug_assert!(
         pore_rate.is_none() || body.is_none(),
@@ -71,21 +83,26 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     let volumes = Shared::new(&mut p.volume);
     let k = p.state_len;
     let states = Shared::new(&mut p.state);
-    let (active, element, material) = (&p.active, &p.element, &p.material);
+    let (active, material) = (&p.active, &p.material);
+    let elements = Shared::new(&mut p.element);
+    let located = located.map(Shared::new);
     // In chunks handed out while the pass runs: a thread slowed by its core leaves the rest of
     // its chunks to the others (each point's update and each block's sums are the same
     // whichever thread computes them).
-    team.run_chunks(layout.thread_chunks(), |_, c| {
+    team.run_chunks(layout.thread_chunks(), |t, c| {
         let r = layout.chunk_particles(c);
         // SAFETY: the particle ranges of the chunks are disjoint, and each chunk runs once.
-        let (x, u, stress, volume) = unsafe {
+        let (x, u, stress, volume, element) = unsafe {
             (
                 xs.range(r.clone()),
                 us.range(r.clone()),
                 stresses.range(r.clone()),
                 volumes.range(r.clone()),
+                elements.range(r.clone()),
             )
         };
+        // What this chunk's walks found, added to the thread's outcome at the end.
+        let mut found = NOTHING_FOUND;
         // SAFETY: as above; each point's state is its own `k` values.
         let state = unsafe { states.range(k * r.start..k * r.end) };
         let blocks = layout.chunk_blocks(c);
@@ -104,12 +121,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         // the position in it: the compiler then drops the bounds checks in the loop.
         let n = x.len();
         let (u, stress, volume) = (&mut u[..n], &mut stress[..n], &mut volume[..n]);
-        let (active, element, material) = (
-            &active[r.clone()],
-            &element[r.clone()],
-            &material[r.clone()],
-        );
-        let (active, element, material) = (&active[..n], &element[..n], &material[..n]);
+        let (active, material) = (&active[r.clone()], &material[r.clone()]);
+        let (active, element, material) = (&active[..n], &mut element[..n], &material[..n]);
         let mass = &mass[r.clone()][..n];
         // SAFETY: as above.
         let mut pore = pores
@@ -358,13 +371,63 @@ pub fn update_stress_and_move<E: Element, R: Real>(
                 1 => batches!(1),
                 _ => batches!(4),
             }
+            if located.is_some() {
+                // The element's points at their new positions, still in the nearest cache:
+                // runs of `w` of them tested at once (most points stay in their element), the
+                // others walked, as the locate pass does.
+                let (end, w) = (points.end - r.start, locate_width::<E, R>());
+                let mut i = points.start - r.start;
+                while i < end {
+                    if w > 1 && i + w <= end && active[i..i + w].iter().all(|&a| a) {
+                        let inside = match w {
+                            4 => run_inside::<E, R, 4>(mesh, e, &x[i..i + 4]),
+                            3 => run_inside::<E, R, 3>(mesh, e, &x[i..i + 3]),
+                            _ => run_inside::<E, R, 2>(mesh, e, &x[i..i + 2]),
+                        };
+                        if inside {
+                            i += w;
+                            continue;
+                        }
+                    }
+                    if active[i] {
+                        relocate(mesh, &mut found, r.start + i, &mut element[i], &x[i]);
+                    }
+                    i += 1;
+                }
+            }
         }
         if let Some(sums) = sums.as_mut() {
             if open.block < blocks.end {
                 open.close(&mut sums[open.block - blocks.start..]);
             }
         }
+        if let Some(outcomes) = &located {
+            // SAFETY: slot t is this thread's only (a thread runs its chunks one after another).
+            merge(unsafe { &mut outcomes.range(t..t + 1)[0] }, found);
+        }
     });
+}
+
+/// Walks point `index` (at `x`, in element `*el` until now) to the element holding it and
+/// records the outcome: the rare case of the stress pass's locate (most points stay in their
+/// element), kept out of its loop.
+#[cold]
+#[inline(never)]
+fn relocate<E: Element, R: Real>(
+    mesh: &Mesh<E, R>,
+    found: &mut Outcome,
+    index: usize,
+    el: &mut u32,
+    x: &crate::real::V3<R>,
+) {
+    let f = walk(mesh, *el, x);
+    if let Found::Beyond(_) = f {
+        log::error!(
+            "a material point moved beyond this rank's halo in one step (from local element {})",
+            *el
+        );
+    }
+    record(found, index, el, f);
 }
 
 /// [`rotation`] of each point's stress in a batch of `W`: (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj,
