@@ -9,8 +9,9 @@
 //! how the memory is mapped, so outputs are the same bits either way.
 //!
 //! Off by default: on the 2-core development machine (AMD EPYC, KVM) huge pages gained 2-3 % on
-//! one thread but cost 10-15 % on two, all of it in the two scatters (particle to grid 14.3-14.9
-//! against 16.7-19.1 ns per particle-step, dry 1M-point column; docs/design.md §5.4). The
+//! one thread but cost 3-8 % on two (docs/performance-pages.md), all of it in the two scatters
+//! (particle to grid 15.2 against 16.8 ns per particle-step, dry 1M-point column; docs/design.md
+//! §5.4). The
 //! binaries install the allocator (`#[global_allocator] static A: HugePageAlloc =
 //! HugePageAlloc;`), and `--huge-pages on` ([`set_enabled`]`(true)` before the buffers are
 //! allocated) turns the advice on, to measure it on other machines. Elsewhere than Linux the
