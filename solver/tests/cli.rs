@@ -83,13 +83,16 @@ fn writes_every_output_and_repeats_byte_for_byte() {
         assert!(run.get(key).is_some(), "run.json lacks {key}");
     }
     // Every step phase has a positive modelled traffic but the grid update, which may be
-    // small; all are finite.
-    for phase in ["particle_to_grid", "grid_to_particle", "stress", "locate"] {
+    // small, and locate: this scene's points are located in the stress pass (no moving mesh,
+    // one body, lost points stop the run), which leaves the locate phase no point data of its
+    // own to move. All are finite.
+    for phase in ["particle_to_grid", "grid_to_particle", "stress"] {
         let b = run["modelled_bytes_per_particle_step"][phase]
             .as_f64()
             .unwrap();
         assert!(b > 0.0 && b.is_finite(), "{phase}: {b}");
     }
+    assert_eq!(run["modelled_bytes_per_particle_step"]["locate"], 0.0);
     // Where the threads' time went: the mean thread's work is positive in every step phase,
     // and no part is negative beyond the clocks' resolution.
     for phase in [
@@ -101,7 +104,13 @@ fn writes_every_output_and_repeats_byte_for_byte() {
     ] {
         let t = &run["phase_threads_ns_per_particle_step"][phase];
         let work = t["work"].as_f64().unwrap();
-        assert!(work > 0.0 && work.is_finite(), "{phase}: {t}");
+        // The locate phase's team passes are the re-sort's, when points changed element.
+        let least = if phase == "locate" {
+            0.0
+        } else {
+            f64::MIN_POSITIVE
+        };
+        assert!(work >= least && work.is_finite(), "{phase}: {t}");
         for part in ["imbalance", "pool"] {
             let v = t[part].as_f64().unwrap();
             assert!(v >= 0.0 && v.is_finite(), "{phase} {part}: {t}");
