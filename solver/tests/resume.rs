@@ -16,8 +16,9 @@ const BIN: &str = env!("CARGO_BIN_EXE_mpm-solve");
 
 /// Keys of run.json that describe this process rather than the results: wall times, rates,
 /// memory, and the threads (outputs do not depend on them), with the traffic model, whose
-/// slots are those of the threads' borders.
-const RUN_SPECIFIC: [&str; 11] = [
+/// slots are those of the threads' borders, and the memory on huge pages (which a kernel that
+/// gives them to every process changes from run to run).
+const RUN_SPECIFIC: [&str; 12] = [
     "wall_seconds",
     "particle_steps_per_second",
     "phase_seconds",
@@ -29,6 +30,7 @@ const RUN_SPECIFIC: [&str; 11] = [
     "pinned_cores",
     "busy_cores",
     "modelled_bytes_per_particle_step",
+    "huge_page_bytes",
 ];
 
 /// A longer dry column: 0.2 s in 40 outputs (about 2,100 steps), for signals from outside.

@@ -241,6 +241,27 @@ impl FieldReader for Collect<'_> {
     }
 }
 
+/// The instruction set this binary was compiled for: `x86-64` (the portable default),
+/// `x86-64-v3` (AVX2, FMA and BMI2, e.g. `RUSTFLAGS="-C target-cpu=x86-64-v3"`), `x86-64-v4`
+/// (AVX-512 as well), or the architecture's name elsewhere. Outputs do not depend on it
+/// (docs/design.md §9); speed does, so benchmarks record it.
+pub fn instruction_set() -> &'static str {
+    if cfg!(target_arch = "x86_64") {
+        let v3 = cfg!(all(
+            target_feature = "avx2",
+            target_feature = "fma",
+            target_feature = "bmi2"
+        ));
+        match (v3, cfg!(target_feature = "avx512f")) {
+            (true, true) => "x86-64-v4",
+            (true, false) => "x86-64-v3",
+            _ => "x86-64",
+        }
+    } else {
+        std::env::consts::ARCH
+    }
+}
+
 /// Peak resident memory of this process in bytes (Linux), 0 where unknown.
 pub fn peak_rss_bytes() -> u64 {
     std::fs::read_to_string("/proc/self/status")
@@ -340,6 +361,7 @@ pub fn write_summary<R: Real, E: Element>(
         "huge_pages": crate::parallel::huge_pages::enabled(),
         "huge_page_bytes": crate::parallel::huge_pages::resident_huge_bytes(),
         "precision": R::NAME,
+        "instruction_set": instruction_set(),
         "particles": n,
         "elements": engine.mesh.elements(),
         "nodes": engine.mesh.nodes(),
