@@ -4,7 +4,7 @@ use std::ops::Range;
 use std::time::Instant;
 
 use crate::element::locate::{
-    locate_width, merge, record, run_inside, walk, Found, Outcome, NOTHING_FOUND,
+    locate_width, merge, relocate, run_inside, Found, Outcome, NOTHING_FOUND,
 };
 use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
@@ -1536,20 +1536,10 @@ impl<R: Real, E: Element> Engine<R, E> {
                 if !active[j] {
                     continue;
                 }
-                let found = walk(mesh, el[j], &x[i]);
-                if let Found::Beyond(_) = found {
-                    // Beyond the halo: moved more than an element in one step, which the rank
-                    // cannot follow; stops the run as a point leaving the mesh does.
-                    log::error!(
-                        "a material point moved beyond this rank's halo in one step (from local element {})",
-                        el[j]
-                    );
-                }
-                if record(&mut o, i, &mut el[j], found) {
-                    if matches!(found, Found::Beyond(_)) || !drop_lost {
-                        break;
-                    }
-                    active[j] = false;
+                match relocate(mesh, &mut o, i, &mut el[j], &x[i]) {
+                    Found::In(_) => {}
+                    Found::Outside(_) if drop_lost => active[j] = false,
+                    Found::Outside(_) | Found::Beyond(_) => break,
                 }
             }
             // SAFETY: slot t is this thread's only (a thread runs its chunks one after another).

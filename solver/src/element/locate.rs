@@ -25,22 +25,45 @@ pub type Outcome = ((usize, u32), u64, bool);
 /// An outcome of no point lost and none moved.
 pub const NOTHING_FOUND: Outcome = ((usize::MAX, 0), 0, false);
 
+/// Walks point `index` (at `x`, in element `*el` until now) to the element holding it, which
+/// `el` takes, and adds the outcome to `o`: the locate pass's and the stress pass's walk alike
+/// (the rare case of both: most points stay in their element, which the batched test of
+/// [`run_inside`] settles first).
+#[cold]
+#[inline(never)]
+pub fn relocate<E: Element, R: Real>(
+    mesh: &Mesh<E, R>,
+    o: &mut Outcome,
+    index: usize,
+    el: &mut u32,
+    x: &V3<R>,
+) -> Found {
+    let found = walk(mesh, *el, x);
+    if let Found::Beyond(_) = found {
+        // Beyond the halo: moved more than an element in one step, which the rank cannot
+        // follow; stops the run as a point leaving the mesh does.
+        log::error!(
+            "a material point moved beyond this rank's halo in one step (from local element {})",
+            *el
+        );
+    }
+    record(o, index, el, found);
+    found
+}
+
 /// Takes the outcome of point `index` (at `el`, its element until now) ending its walk with
-/// `found` into `o`; returns whether the point left the mesh (or the halo). `el` takes the
-/// element the walk ended in.
-#[inline]
-pub fn record(o: &mut Outcome, index: usize, el: &mut u32, found: Found) -> bool {
+/// `found` into `o`. `el` takes the element the walk ended in.
+fn record(o: &mut Outcome, index: usize, el: &mut u32, found: Found) {
     let (Found::In(e) | Found::Outside(e) | Found::Beyond(e)) = found;
     o.2 |= e != *el;
     *el = e;
     if matches!(found, Found::In(_)) {
-        return false;
+        return;
     }
     if o.1 == 0 {
         o.0 = (index, e);
     }
     o.1 += 1;
-    true
 }
 
 /// Adds the outcome of more points, `more`, to `o` (the lowest first point, the counts

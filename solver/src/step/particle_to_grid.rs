@@ -131,38 +131,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
     body: Option<OneBody>,
     liquid: Option<LiquidLoads<'_, R>>,
 ) {
-    particle_to_grid_in(
-        avx2(),
-        team,
-        layout,
-        slots,
-        mesh,
-        p,
-        gravity,
-        mixed,
-        g,
-        body,
-        liquid,
-    );
-}
-
-/// [`particle_to_grid`], its elements through [`element_sums_avx2`] when `wide` (which the
-/// processor must then allow, [`avx2`]) and through [`element_sums`] otherwise.
-#[allow(clippy::too_many_arguments)]
-fn particle_to_grid_in<E: Element, R: Real>(
-    wide: bool,
-    team: &Team,
-    layout: &Layout<R, E>,
-    slots: &mut Slots<R>,
-    mesh: &Mesh<E, R>,
-    p: &Particles<R>,
-    gravity: &[V3<R>],
-    mixed: Option<&mut Mixed<R>>,
-    g: &mut Grid<R>,
-    body: Option<OneBody>,
-    liquid: Option<LiquidLoads<'_, R>>,
-) {
-    debug_assert!(!wide || avx2(), "the AVX2 pass on a processor without AVX2");
+    let wide = use_avx2();
     let liquid = match (liquid, &p.liquid) {
         (Some(l), Some(lp)) if g.liquid.is_some() => Some((l, lp)),
         _ => None,
@@ -248,8 +217,7 @@ fn particle_to_grid_in<E: Element, R: Real>(
                 layout.sum_to_nodes::<$width, _, _>(
                     team,
                     slots,
-                    // SAFETY: `wide` only where the processor has AVX2 (`particle_to_grid` passes
-                    // `avx2()`; checked above in debug builds).
+                    // SAFETY: `wide` only where the processor has AVX2 (`use_avx2`).
                     |e, four| unsafe {
                         element_sums_avx2::<E, R, $liquid, { $points }>(&pass, e, four)
                     },
@@ -286,6 +254,22 @@ fn avx2() -> bool {
     {
         false
     }
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Tests: `true` keeps this thread's particle to grid on the portable element pass.
+    static PORTABLE_ONLY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether [`particle_to_grid`] takes the AVX2 element pass: where [`avx2`] allows it (and,
+/// in tests, this thread has not asked for the portable one).
+fn use_avx2() -> bool {
+    #[cfg(test)]
+    if PORTABLE_ONLY.with(|p| p.get()) {
+        return false;
+    }
+    avx2()
 }
 
 /// The mixed rule's per-element outputs and inputs: mean stresses, full flags, the filling
@@ -625,8 +609,8 @@ mod tests {
                     fluids: &engine.fluids,
                     gravity: [0.0, -9.81, 0.0],
                 });
-                particle_to_grid_in(
-                    wide,
+                PORTABLE_ONLY.with(|p| p.set(!wide));
+                particle_to_grid(
                     &engine.team,
                     &engine.layout,
                     &mut slots,

@@ -1,9 +1,7 @@
 //! Strain increments from nodal velocities, the constitutive update, and the volume and position
 //! update of every particle.
 
-use crate::element::locate::{
-    locate_width, merge, record, run_inside, walk, Found, Outcome, NOTHING_FOUND,
-};
+use crate::element::locate::{locate_width, merge, relocate, run_inside, Outcome, NOTHING_FOUND};
 use crate::element::mesh::Mesh;
 use crate::element::{batch_width, Element};
 use crate::material::law::Law;
@@ -406,28 +404,6 @@ pub fn update_stress_and_move<E: Element, R: Real>(
             merge(unsafe { &mut outcomes.range(t..t + 1)[0] }, found);
         }
     });
-}
-
-/// Walks point `index` (at `x`, in element `*el` until now) to the element holding it and
-/// records the outcome: the rare case of the stress pass's locate (most points stay in their
-/// element), kept out of its loop.
-#[cold]
-#[inline(never)]
-fn relocate<E: Element, R: Real>(
-    mesh: &Mesh<E, R>,
-    found: &mut Outcome,
-    index: usize,
-    el: &mut u32,
-    x: &crate::real::V3<R>,
-) {
-    let f = walk(mesh, *el, x);
-    if let Found::Beyond(_) = f {
-        log::error!(
-            "a material point moved beyond this rank's halo in one step (from local element {})",
-            *el
-        );
-    }
-    record(found, index, el, f);
 }
 
 /// [`rotation`] of each point's stress in a batch of `W`: (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj,
