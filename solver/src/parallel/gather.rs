@@ -22,6 +22,7 @@ use std::ops::Range;
 use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::Element;
+use crate::parallel::avx2;
 use crate::parallel::comm::Communicator;
 use crate::parallel::exact::{self, ExactSum};
 use crate::parallel::halo::Halo;
@@ -363,13 +364,17 @@ impl<R: Real, E: Element> Layout<R, E> {
     where
         F: Fn(usize, &mut [R]) + Sync,
     {
-        self.scatter_with::<W, (), _>(team, slots, |_| (), |e, own, _| element(e, own));
+        self.scatter_with::<W, false, (), _>(team, slots, |_| (), |e, own, _| element(e, own));
     }
 
     /// [`Layout::scatter`] with a state of each thread's own, made by `init(thread)` before
     /// its first element and handed to every `element(e, buffer, state)` call of the thread, in
     /// element order (for sums a pass keeps beside its slots).
-    pub fn scatter_with<const W: usize, S, F>(
+    ///
+    /// With `WIDE`, each thread's elements run compiled with AVX2 ([`avx2::call`]: `element`
+    /// is inlined there, so pass a closure of its own to each instantiation); it panics where
+    /// the processor lacks AVX2 (choose `WIDE` by [`avx2::use_avx2`]).
+    pub fn scatter_with<const W: usize, const WIDE: bool, S, F>(
         &self,
         team: &Team,
         slots: &mut Slots<R>,
@@ -386,6 +391,7 @@ impl<R: Real, E: Element> Layout<R, E> {
         let shared = Shared::new(slots);
         let ranges = &self.element_ranges;
         let direct = &self.direct;
+        assert!(!WIDE || avx2::present(), "an AVX2 scatter without AVX2");
         team.run(|k| {
             let r = ranges[k].clone();
             // SAFETY: the element ranges are disjoint, so are their slots.
@@ -393,35 +399,43 @@ impl<R: Real, E: Element> Layout<R, E> {
             let mut buffer = [R::ZERO; WIDTH * MAX_NODES];
             let own = &mut buffer[..per_element];
             let mut state = init(k);
-            for (slot, e) in mine.chunks_exact_mut(per_element).zip(r) {
-                own.fill(R::ZERO);
-                element(e, own, &mut state);
-                let targets = &direct[E::NODES * e..E::NODES * e + E::NODES];
-                for ((values, to), &target) in own
-                    .chunks_exact(W)
-                    .zip(slot.chunks_exact_mut(W))
-                    .zip(targets)
-                {
-                    if target == TO_SLOT {
-                        to.copy_from_slice(values);
-                        continue;
-                    }
-                    let n = (target & !DIRECT_FIRST) as usize;
-                    // SAFETY: a node with a `direct` entry has every element in this thread's
-                    // range (`direct_slots`), so no other thread touches its accumulator, and
-                    // the accumulators lie past every slot.
-                    let acc = unsafe { shared.range(acc_at + W * n..acc_at + W * n + W) };
-                    if target & DIRECT_FIRST != 0 {
-                        // 0 + v, not v: the slot pass's sum starts from 0 (and 0 + -0 is +0).
-                        for (a, &v) in acc.iter_mut().zip(values) {
-                            *a = R::ZERO + v;
+            let elements = || {
+                for (slot, e) in mine.chunks_exact_mut(per_element).zip(r) {
+                    own.fill(R::ZERO);
+                    element(e, own, &mut state);
+                    let targets = &direct[E::NODES * e..E::NODES * e + E::NODES];
+                    for ((values, to), &target) in own
+                        .chunks_exact(W)
+                        .zip(slot.chunks_exact_mut(W))
+                        .zip(targets)
+                    {
+                        if target == TO_SLOT {
+                            to.copy_from_slice(values);
+                            continue;
                         }
-                    } else {
-                        for (a, &v) in acc.iter_mut().zip(values) {
-                            *a += v;
+                        let n = (target & !DIRECT_FIRST) as usize;
+                        // SAFETY: a node with a `direct` entry has every element in this thread's
+                        // range (`direct_slots`), so no other thread touches its accumulator, and
+                        // the accumulators lie past every slot.
+                        let acc = unsafe { shared.range(acc_at + W * n..acc_at + W * n + W) };
+                        if target & DIRECT_FIRST != 0 {
+                            // 0 + v, not v: the slot pass's sum starts from 0 (and 0 + -0 is +0).
+                            for (a, &v) in acc.iter_mut().zip(values) {
+                                *a = R::ZERO + v;
+                            }
+                        } else {
+                            for (a, &v) in acc.iter_mut().zip(values) {
+                                *a += v;
+                            }
                         }
                     }
                 }
+            };
+            if WIDE {
+                // SAFETY: the processor has AVX2 (asserted above).
+                unsafe { avx2::call(elements) }
+            } else {
+                elements()
             }
         });
         if let Some(h) = &self.halo {
@@ -475,7 +489,7 @@ impl<R: Real, E: Element> Layout<R, E> {
 
     /// Both passes: [`Layout::scatter`] with `element`, then [`Layout::gather`] handing each
     /// node's `W` sums to `node` as a slice (so that one `node` serves passes of any width).
-    pub fn sum_to_nodes<const W: usize, F, G>(
+    pub fn sum_to_nodes<const W: usize, const WIDE: bool, F, G>(
         &self,
         team: &Team,
         slots: &mut Slots<R>,
@@ -485,7 +499,7 @@ impl<R: Real, E: Element> Layout<R, E> {
         F: Fn(usize, &mut [R]) + Sync,
         G: Fn(usize, &[R]) + Sync,
     {
-        self.scatter::<W, _>(team, slots, element);
+        self.scatter_with::<W, WIDE, (), _>(team, slots, |_| (), |e, own, _| element(e, own));
         self.gather::<W, _>(team, slots, |n, s| node(n, &s));
     }
 

@@ -1,5 +1,6 @@
 //! The thread team and the deterministic parallel sums: who computes what.
 
+pub mod avx2;
 pub mod comm;
 pub mod exact;
 pub mod gather;

@@ -2,8 +2,11 @@
 //! velocities that drive strain, stress, volume and position (docs/design.md §4, step 3), on the team.
 
 use crate::element::mesh::Mesh;
+use crate::element::tet4::Tet4;
+use crate::element::tri3::Tri3;
 use crate::element::Element;
 use crate::material::liquid::Fluid;
+use crate::parallel::avx2::use_avx2;
 use crate::parallel::gather::{node_slots, Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
@@ -75,6 +78,10 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // Values per node of the re-map: the solid's momentum, then the liquid's.
     let width = |with_liquid: bool| if with_liquid { 2 * E::DIM } else { E::DIM };
     let elements = mesh.elements();
+    // Each thread's elements in the baseline instruction set or, where the processor has it and
+    // the build does not assume it, with AVX2 (the same bits): each variant's closure written
+    // twice, one for each scatter, so that each is inlined into its own.
+    let wide = use_avx2();
     // One element's points; with `want`, their kinetic energy (solid, liquid). Two scatters
     // below, each with `want` fixed, so that the run without guards keeps the loop it had
     // without them.
@@ -252,34 +259,44 @@ pub fn grid_to_particle<E: Element, R: Real>(
         };
     }
     // Each variant with the batch width of the element type ([`TETRAHEDRA`]).
+    // Each variant at its re-map width (a literal, so that each closure has one caller: the
+    // solid's 3 or 2 values per node, then as many for the liquid), once for each instruction
+    // set.
     macro_rules! run {
-        (None, $with_liquid:expr, $w:expr) => {{
-            let element = element_pass!(false, $with_liquid, $w);
-            scatter::<E, R, _>(layout, team, slots, width($with_liquid), init, |e, f, _| {
-                element(e, f);
-            })
+        (None, $with_liquid:expr, $w:expr, $width:literal) => {{
+            if wide {
+                let element = element_pass!(false, $with_liquid, $w);
+                layout.scatter_with::<$width, true, _, _>(team, slots, init, |e, f, _| {
+                    element(e, f);
+                })
+            } else {
+                let element = element_pass!(false, $with_liquid, $w);
+                layout.scatter_with::<$width, false, _, _>(team, slots, init, |e, f, _| {
+                    element(e, f);
+                })
+            }
         }};
-        ($g:expr, $with_liquid:expr, $w:expr) => {
-            scatter::<E, R, _>(
-                layout,
-                team,
-                slots,
-                width($with_liquid),
-                init,
-                guarded_pass!($g, $with_liquid, $w),
-            )
+        ($g:expr, $with_liquid:expr, $w:expr, $width:literal) => {
+            if wide {
+                let element = guarded_pass!($g, $with_liquid, $w);
+                layout.scatter_with::<$width, true, _, _>(team, slots, init, element)
+            } else {
+                let element = guarded_pass!($g, $with_liquid, $w);
+                layout.scatter_with::<$width, false, _, _>(team, slots, init, element)
+            }
         };
     }
+    const { assert!(Tet4::DIM == 3 && Tri3::DIM == 2) };
     let tetrahedra = E::DIM == 3;
     match (&guard, liquid.is_some(), tetrahedra) {
-        (None, false, true) => run!(None, false, TETRAHEDRA),
-        (None, false, false) => run!(None, false, 1),
-        (None, true, true) => run!(None, true, TETRAHEDRA),
-        (None, true, false) => run!(None, true, 1),
-        (Some(g), false, true) => run!(g, false, TETRAHEDRA),
-        (Some(g), false, false) => run!(g, false, 1),
-        (Some(g), true, true) => run!(g, true, TETRAHEDRA),
-        (Some(g), true, false) => run!(g, true, 1),
+        (None, false, true) => run!(None, false, TETRAHEDRA, 3),
+        (None, false, false) => run!(None, false, 1, 2),
+        (None, true, true) => run!(None, true, TETRAHEDRA, 6),
+        (None, true, false) => run!(None, true, 1, 4),
+        (Some(g), false, true) => run!(g, false, TETRAHEDRA, 3),
+        (Some(g), false, false) => run!(g, false, 1, 2),
+        (Some(g), true, true) => run!(g, true, TETRAHEDRA, 6),
+        (Some(g), true, false) => run!(g, true, 1, 4),
     }
     nodal_velocity(
         team,
@@ -305,25 +322,6 @@ fn dot<E: Element, R: Real>(v: &V3<R>, w: &V3<R>) -> R {
         s += v[c] * w[c];
     }
     s
-}
-
-/// A scatter of the re-mapped momenta, `width` values per node: the solid's, as wide as the
-/// element's dimension, then the liquid's when there is one.
-fn scatter<E: Element, R: Real, S>(
-    layout: &Layout<R, E>,
-    team: &Team,
-    slots: &mut Slots<R>,
-    width: usize,
-    init: impl Fn(usize) -> S + Sync,
-    element: impl Fn(usize, &mut [R], &mut S) + Sync,
-) {
-    match width {
-        2 => layout.scatter_with::<2, _, _>(team, slots, init, element),
-        3 => layout.scatter_with::<3, _, _>(team, slots, init, element),
-        4 => layout.scatter_with::<4, _, _>(team, slots, init, element),
-        6 => layout.scatter_with::<6, _, _>(team, slots, init, element),
-        _ => unreachable!("a re-map {width} values wide"),
-    }
 }
 
 /// The velocity of a node of `mass` from its re-mapped `momentum`: zero at an empty node and in

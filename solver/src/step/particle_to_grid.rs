@@ -6,6 +6,7 @@ use crate::element::tet4::Tet4;
 use crate::element::tri3::Tri3;
 use crate::element::Element;
 use crate::material::liquid::Fluid;
+use crate::parallel::avx2::use_avx2;
 use crate::parallel::gather::{node_slots, Layout, Slots};
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
@@ -214,17 +215,14 @@ pub fn particle_to_grid<E: Element, R: Real>(
     macro_rules! pass {
         ($width:literal, $liquid:literal, $points:expr) => {
             if wide {
-                layout.sum_to_nodes::<$width, _, _>(
+                layout.sum_to_nodes::<$width, true, _, _>(
                     team,
                     slots,
-                    // SAFETY: `wide` only where the processor has AVX2 (`use_avx2`).
-                    |e, four| unsafe {
-                        element_sums_avx2::<E, R, $liquid, { $points }>(&pass, e, four)
-                    },
+                    |e, four| element_sums::<E, R, $liquid, { $points }>(&pass, e, four),
                     node,
                 )
             } else {
-                layout.sum_to_nodes::<$width, _, _>(
+                layout.sum_to_nodes::<$width, false, _, _>(
                     team,
                     slots,
                     |e, four| element_sums::<E, R, $liquid, { $points }>(&pass, e, four),
@@ -240,36 +238,6 @@ pub fn particle_to_grid<E: Element, R: Real>(
         (22, true) => pass!(22, true, TETRAHEDRA),
         (w, _) => unreachable!("a pass {w} values wide"),
     }
-}
-
-/// Whether this processor runs AVX2 and this build does not already assume it (then every
-/// pass is compiled with it): [`particle_to_grid`] then takes its elements through
-/// [`element_sums_avx2`].
-fn avx2() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        !cfg!(target_feature = "avx2") && std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-#[cfg(test)]
-thread_local! {
-    /// Tests: `true` keeps this thread's particle to grid on the portable element pass.
-    static PORTABLE_ONLY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-}
-
-/// Whether [`particle_to_grid`] takes the AVX2 element pass: where [`avx2`] allows it (and,
-/// in tests, this thread has not asked for the portable one).
-fn use_avx2() -> bool {
-    #[cfg(test)]
-    if PORTABLE_ONLY.with(|p| p.get()) {
-        return false;
-    }
-    avx2()
 }
 
 /// The mixed rule's per-element outputs and inputs: mean stresses, full flags, the filling
@@ -524,37 +492,6 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
     }
 }
 
-/// [`element_sums`] compiled with AVX2: an element's four nodes of f64 sums in one register
-/// instead of two. The scatter calls it for each element (a function of other target features
-/// is not inlined into it), which costs some of the gain: on the 2-core EPYC particle to grid
-/// took 24.1 ns per particle-step dry this way, against 27.8 without and 21.7 for a whole build
-/// for x86-64-v3 (docs/performance-avx2.md).
-///
-/// # Safety
-/// The processor must have AVX2 ([`avx2`]).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn element_sums_avx2<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
-    cx: &Pass<'_, E, R>,
-    e: usize,
-    four: &mut [R],
-) {
-    element_sums::<E, R, WITH_LIQUID, W>(cx, e, four)
-}
-
-/// Elsewhere: [`element_sums`] ([`avx2`] is false there).
-///
-/// # Safety
-/// None beyond [`element_sums`]'s; unsafe only to match the x86-64 version.
-#[cfg(not(target_arch = "x86_64"))]
-unsafe fn element_sums_avx2<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
-    cx: &Pass<'_, E, R>,
-    e: usize,
-    four: &mut [R],
-) {
-    element_sums::<E, R, WITH_LIQUID, W>(cx, e, four)
-}
-
 /// Adds the face loads carried by points, `scale` times their force, at the points' positions
 /// (a short list, in its fixed order).
 pub fn add_point_loads<E: Element, R: Real>(
@@ -577,68 +514,6 @@ pub fn add_point_loads<E: Element, R: Real>(
             for a in 0..3 {
                 g.f_ext[node][a] += n[k] * scale * f[a];
             }
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::driver::engine::Engine;
-
-    /// The AVX2 copy of the element pass sums every node's values to the same bits as the
-    /// portable one, dry and two-phase, on columns stepped until their stresses and velocities
-    /// are nonzero.
-    #[test]
-    fn the_avx2_pass_gives_the_portable_bits() {
-        if !avx2() {
-            eprintln!("skipped: this processor has no AVX2, or the build assumes it");
-            return;
-        }
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../testdata/golden");
-        for scene in ["column_dry.toml", "column_saturated.toml"] {
-            let case = crate::input::scene::load(&dir.join(scene)).unwrap();
-            let mut engine = Engine::<f64, Tet4>::new(&case, false).unwrap();
-            for _ in 0..30 {
-                engine.step(engine.dt, None).unwrap();
-            }
-            let gravity = vec![[0.3, -9.81, 0.1]; 4];
-            let sums = |wide: bool| {
-                let (mut g, mut slots) = (engine.grid.clone(), engine.slots.clone());
-                let liquid = Some(LiquidLoads {
-                    fluids: &engine.fluids,
-                    gravity: [0.0, -9.81, 0.0],
-                });
-                PORTABLE_ONLY.with(|p| p.set(!wide));
-                particle_to_grid(
-                    &engine.team,
-                    &engine.layout,
-                    &mut slots,
-                    &engine.mesh,
-                    &engine.particles,
-                    &gravity,
-                    None,
-                    &mut g,
-                    None,
-                    liquid,
-                );
-                let mut bits: Vec<u64> = g.mass.iter().map(|v| v.to_bits()).collect();
-                for a in [&g.momentum, &g.f_int, &g.f_ext] {
-                    bits.extend(a.iter().flatten().map(|v| v.to_bits()));
-                }
-                if let Some(l) = &g.liquid {
-                    for a in [&l.mass, &l.mass_n, &l.drag] {
-                        bits.extend(a.iter().map(|v| v.to_bits()));
-                    }
-                    for a in [&l.momentum, &l.force] {
-                        bits.extend(a.iter().flatten().map(|v| v.to_bits()));
-                    }
-                }
-                bits
-            };
-            let (portable, wide) = (sums(false), sums(true));
-            assert!(portable.iter().any(|&b| b != 0), "{scene}: nothing summed");
-            assert!(portable == wide, "{scene}: the AVX2 pass changed a sum");
         }
     }
 }

@@ -6,6 +6,7 @@ use crate::element::mesh::Mesh;
 use crate::element::{batch_width, Element};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
+use crate::parallel::avx2::{self, use_avx2};
 use crate::parallel::gather::{node_slots, Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
@@ -62,8 +63,6 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         pore_rate.is_none() || body.is_none(),
         "pore pressures moved with one body of a contact pair"
     );
-    let half = R::of(0.5);
-    let third = R::ONE / R::of(3.0);
     let (guard_slots, initial_density, fluids, min_ratio) = match guard {
         Some(g) => (
             Some(Shared::new(g.slots)),
@@ -73,337 +72,432 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         ),
         None => (None, &[][..], &[][..], R::ZERO),
     };
-    let mass = &p.mass;
-    let pores = p.liquid.as_mut().map(|l| Shared::new(&mut l.p));
-    let xs = Shared::new(&mut p.x);
-    let us = Shared::new(&mut p.u);
-    let stresses = Shared::new(&mut p.stress);
-    let volumes = Shared::new(&mut p.volume);
-    let k = p.state_len;
-    let states = Shared::new(&mut p.state);
-    let (active, material) = (&p.active, &p.material);
-    let elements = Shared::new(&mut p.element);
-    let located = located.map(Shared::new);
+    let cx = Pass {
+        layout,
+        mesh,
+        g,
+        laws,
+        objective,
+        hoop_in_volume,
+        smoothing,
+        dt,
+        guard_slots,
+        initial_density,
+        fluids,
+        min_ratio,
+        body,
+        pore_rate,
+        mass: &p.mass,
+        pores: p.liquid.as_mut().map(|l| Shared::new(&mut l.p)),
+        xs: Shared::new(&mut p.x),
+        us: Shared::new(&mut p.u),
+        stresses: Shared::new(&mut p.stress),
+        volumes: Shared::new(&mut p.volume),
+        k: p.state_len,
+        states: Shared::new(&mut p.state),
+        active: &p.active,
+        material: &p.material,
+        elements: Shared::new(&mut p.element),
+        located: located.map(Shared::new),
+    };
     // In chunks handed out while the pass runs: a thread slowed by its core leaves the rest of
     // its chunks to the others (each point's update and each block's sums are the same
-    // whichever thread computes them).
+    // whichever thread computes them). Each chunk in the baseline instruction set or, where the
+    // processor has it and the build does not assume it, with AVX2 (the same bits).
+    let wide = use_avx2();
     team.run_chunks(layout.thread_chunks(), |t, c| {
-        let r = layout.chunk_particles(c);
-        // SAFETY: the particle ranges of the chunks are disjoint, and each chunk runs once.
-        let (x, u, stress, volume, element) = unsafe {
-            (
-                xs.range(r.clone()),
-                us.range(r.clone()),
-                stresses.range(r.clone()),
-                volumes.range(r.clone()),
-                elements.range(r.clone()),
-            )
-        };
-        // What this chunk's walks found, added to the thread's outcome at the end.
-        let mut found = NOTHING_FOUND;
-        // SAFETY: as above; each point's state is its own `k` values.
-        let state = unsafe { states.range(k * r.start..k * r.end) };
-        let blocks = layout.chunk_blocks(c);
-        // SAFETY: the chunks' element ranges are disjoint and hold whole blocks; this chunk's
-        // points lie in its own elements.
-        let mut sums = guard_slots
-            .as_ref()
-            .map(|g| unsafe { g.range(blocks.clone()) });
-        // The current block's sums, kept in registers and written to its slot when the points
-        // pass to the next block (adding to the slot point by point would chain every point's
-        // sum through memory). Points come sorted by element, so blocks come in order; the
-        // slot's own strain and liquid terms start at 0 (grid to particle began it), so the
-        // sums are those of adding in place, point by point.
-        let mut open = Open::new(blocks.start);
-        // The point arrays sliced to this thread's range, all of one length, and indexed by
-        // the position in it: the compiler then drops the bounds checks in the loop.
-        let n = x.len();
-        let (u, stress, volume) = (&mut u[..n], &mut stress[..n], &mut volume[..n]);
-        let (active, material) = (&active[r.clone()], &material[r.clone()]);
-        let (active, element, material) = (&active[..n], &mut element[..n], &material[..n]);
-        let mass = &mass[r.clone()][..n];
-        // SAFETY: as above.
-        let mut pore = pores
-            .as_ref()
-            .map(|p| unsafe { &mut p.range(r.clone())[..n] });
-        // Element by element (the points are sorted by element): a linear element's velocity
-        // gradient is the same at all its points, so it is formed once per element, from its
-        // nodes' velocities gathered once.
-        for e in layout.chunk_elements(c) {
-            let points = layout.particles_of(e);
-            if points.is_empty() {
-                continue;
-            }
-            if let Some(sums) = sums.as_mut() {
-                // A new block of elements: the last one's sums go to its slot.
-                let b = e / ELEMENT_BLOCK;
-                if b != open.block {
-                    open.close(&mut sums[open.block - blocks.start..]);
-                    open = Open::new(b);
-                }
-            }
-            let grad = mesh.grad[e].as_ref();
-            let corners = mesh.corners[e].as_ref();
-            let vel = E::nodes(|k| g.vel[corners[k] as usize]);
-            let vel = vel.as_ref();
-            // The velocity gradient L[a][b] = ∂v_a/∂x_b; a 2D element's velocities and gradients
-            // have no z-part: the in-plane block only.
-            let mut l = [[R::ZERO; 3]; 3];
-            for k in 0..E::NODES {
-                for a in 0..E::DIM {
-                    for b in 0..E::DIM {
-                        l[a][b] += vel[k][a] * grad[k][b];
-                    }
-                }
-            }
-            // The element's points in batches of up to `W` ([`batch_width`]), each value held
-            // across the batch's points (`[c][q]`: value c of point q) so that each operation
-            // is one over the points, which the compiler turns into vector instructions. Each
-            // point's arithmetic is the one a point-by-point loop does, in the same order, so
-            // the results are the same bits whatever the width; lanes past the batch's points
-            // or of points that do not move repeat a moving point's values and are never
-            // stored.
-            let first = &mesh.x[corners[0] as usize];
-            let map = &mesh.map[e];
-            let (end, mut j) = (points.end - r.start, points.start - r.start);
-            // The batch loop, expanded once per batch width (one is used per element type
-            // and precision, [`batch_width`]).
-            macro_rules! batches {
-                ($w:literal) => {{
-                    const W: usize = $w;
-                    while j < end {
-                        let b = match Batch::<W>::new(j, end, |i| {
-                            active[i] && maps(body, material[i])
-                        }) {
-                            Ok(b) => b,
-                            Err(skip) => {
-                                j += skip;
-                                continue;
-                            }
-                        };
-                        debug_assert!(
-                            (j..j + b.len).all(|i| element[i] as usize == e),
-                            "points not sorted by element"
-                        );
-                        let xl = b.gather(x);
-                        let n = E::shape_lanes(map, first, &xl);
-                        // The pore pressure's smoothed rate, from the nodes at the start-of-step
-                        // position (the points move below).
-                        if let (Some(rate), Some(pore)) = (&pore_rate, pore.as_mut()) {
-                            for i in b.points() {
-                                if rate.fluids[material[i] as usize].is_some() {
-                                    let mut change = R::ZERO;
-                                    for k in 0..E::NODES {
-                                        change += n[k][i - j] * rate.nodal[corners[k] as usize];
-                                    }
-                                    pore[i] += change * dt;
-                                }
-                            }
-                        }
-                        let dx = interpolate::<E, R, W>(&n, vel);
-                        // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the
-                        // radius).
-                        let hoop: [R; W] = if E::AXISYMMETRIC {
-                            std::array::from_fn(|q| dx[0][q] / xl[0][q])
-                        } else {
-                            [l[2][2]; W]
-                        };
-                        let mut de: [[R; W]; 6] = [
-                            [l[0][0] * dt; W],
-                            [l[1][1] * dt; W],
-                            hoop.map(|h| h * dt),
-                            [half * (l[0][1] + l[1][0]) * dt; W],
-                            [half * (l[1][2] + l[2][1]) * dt; W],
-                            [half * (l[2][0] + l[0][2]) * dt; W],
-                        ];
-                        if let Some(sm) = smoothing {
-                            // The normal increments in the section's plane take the correction: all
-                            // three in 3D, the two in-plane ones in plane strain (Anura3D's rule;
-                            // its ε_zz stays zero). Axisymmetric sections do not smooth.
-                            for q in 0..W {
-                                let [es, _] = sm.element_mean(mesh, e, material[b.at[q]]);
-                                let c = if E::DIM == 2 {
-                                    (de[0][q] + de[1][q] - es) * half
-                                } else {
-                                    (de[0][q] + de[1][q] + de[2][q] - es) * third
-                                };
-                                for d in de.iter_mut().take(E::DIM) {
-                                    d[q] -= c;
-                                }
-                            }
-                        }
-                        let s0 = b.gather(stress);
-                        let mut s1 = s0;
-                        // A batch of one linear-elastic or Mohr-Coulomb material takes the
-                        // update across its points; any other law goes point by point.
-                        let lead = material[b.at[0]];
-                        let one = b.points().all(|i| material[i] == lead);
-                        match &laws[lead as usize] {
-                            Law::LinearElastic(le) if one => le.update_lanes(&mut s1, &de),
-                            Law::MohrCoulomb(mc) if one => mc.update_lanes(&mut s1, &de, &b.on),
-                            _ => {
-                                for i in b.points() {
-                                    let q = i - j;
-                                    let mut s: [R; 6] = std::array::from_fn(|c| s1[c][q]);
-                                    let d: [R; 6] = std::array::from_fn(|c| de[c][q]);
-                                    laws[material[i] as usize].update(
-                                        &mut s,
-                                        &d,
-                                        &mut state[k * i..k * i + k],
-                                    );
-                                    for c in 0..6 {
-                                        s1[c][q] = s[c];
-                                    }
-                                }
-                            }
-                        }
-                        // Anura3D's objective update (its "Hill" rate): the co-rotation and the
-                        // change of volume, -tr(Δε) σ, of the start-of-step stress, added after the
-                        // law's update as Anura3D adds them (for a plastic law the order matters:
-                        // the return sees the unrotated trial).
-                        if objective {
-                            let w = [
-                                half * (l[0][1] - l[1][0]) * dt, // ω_xy
-                                half * (l[1][2] - l[2][1]) * dt, // ω_yz
-                                half * (l[2][0] - l[0][2]) * dt, // ω_zx
-                            ];
-                            let mut h = rotation_lanes(&s0, &w);
-                            for q in 0..W {
-                                let ev = de[0][q] + de[1][q] + de[2][q];
-                                for c in 0..6 {
-                                    h[c][q] -= ev * s0[c][q];
-                                    s1[c][q] += h[c][q];
-                                }
-                            }
-                        }
-                        let v0: [R; W] = b.at.map(|i| volume[i]);
-                        // The hoop strain changes an axisymmetric point's volume unless the case
-                        // follows Anura3D, which leaves it out
-                        // ([`crate::input::case::Case::hoop_in_volume`]).
-                        let de_zz = if E::AXISYMMETRIC && !hoop_in_volume {
-                            [R::ZERO; W]
-                        } else {
-                            de[2]
-                        };
-                        let v1: [R; W] =
-                            std::array::from_fn(|q| {
-                                v0[q] * (R::ONE + de[0][q] + de[1][q] + de_zz[q])
-                            });
-                        let mut x1 = xl;
-                        for a in 0..E::DIM {
-                            for q in 0..W {
-                                x1[a][q] += dt * dx[a][q];
-                            }
-                        }
-                        for i in b.points() {
-                            let q = i - j;
-                            x[i] = std::array::from_fn(|a| x1[a][q]);
-                            for a in 0..E::DIM {
-                                u[i][a] += dt * dx[a][q];
-                            }
-                            stress[i] = std::array::from_fn(|c| s1[c][q]);
-                            volume[i] = v1[q];
-                        }
-                        if sums.is_some() {
-                            // Work of the mean stress over the step (exact for a linear law) on the
-                            // start volume; shear components count twice (tensor shear strains).
-                            let mut w = [R::ZERO; W];
-                            for c in 0..6 {
-                                let twice = if c < 3 { R::ONE } else { R::of(2.0) };
-                                for q in 0..W {
-                                    w[q] += twice * (s0[c][q] + s1[c][q]) * de[c][q];
-                                }
-                            }
-                            // 0, or NaN for a non-finite position or new volume: added to the
-                            // strain sum, which a non-finite stress makes non-finite too, so one
-                            // test of the sums catches them all.
-                            let finite: [R; W] = std::array::from_fn(|q| {
-                                R::ZERO * (x1[0][q] + x1[1][q] + x1[2][q] + v1[q])
-                            });
-                            let strain: [R; W] = std::array::from_fn(|q| w[q] * v0[q] + finite[q]);
-                            // Point by point in order: the block's sums are those of adding in
-                            // place.
-                            for i in b.points() {
-                                let q = i - j;
-                                // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no
-                                // division per point.
-                                let rho0 = initial_density[material[i] as usize];
-                                let margin = v1[q] * rho0 - min_ratio * mass[i];
-                                // Twice the energies: the engine halves the sums (exactly, a power
-                                // of two).
-                                open.strain += strain[q].f64();
-                                if let Some(pore) = pore.as_deref() {
-                                    // A saturated point's liquid holds n V p² / 2 K_w: the pore
-                                    // pressure's work on Δp = (K_w/n) Δε_mix. A non-finite pore
-                                    // pressure makes the sum NaN.
-                                    let p = pore[i];
-                                    let c = fluids[material[i] as usize]
-                                        .as_ref()
-                                        .map_or(R::ZERO, |f| f.n_over_kw);
-                                    open.liquid += (v1[q] * p * p * c + R::ZERO * p).f64();
-                                }
-                                // A plain comparison (one instruction): NaN is caught by the strain
-                                // sum.
-                                let m = margin.f64();
-                                if m < open.volume_margin {
-                                    open.volume_margin = m;
-                                }
-                            }
-                        }
-                        j += b.len;
-                    }
-                }};
-            }
-            // Mohr-Coulomb points go in batches of [`PLASTIC_WIDTH`] whatever the element
-            // and precision: their return's decompositions side by side (a long chain of
-            // dependent square roots and divisions each) outweigh the spills of the rest.
-            let plastic = matches!(
-                laws[material[points.start - r.start] as usize],
-                Law::MohrCoulomb(_)
-            );
-            match if plastic {
-                PLASTIC_WIDTH
-            } else {
-                batch_width::<E, R>()
-            } {
-                1 => batches!(1),
-                _ => batches!(4),
-            }
-            if located.is_some() {
-                // The element's points at their new positions, still in the nearest cache:
-                // runs of `w` of them tested at once (most points stay in their element), the
-                // others walked, as the locate pass does.
-                let (end, w) = (points.end - r.start, locate_width::<E, R>());
-                let mut i = points.start - r.start;
-                while i < end {
-                    if w > 1 && i + w <= end && active[i..i + w].iter().all(|&a| a) {
-                        let inside = match w {
-                            4 => run_inside::<E, R, 4>(mesh, e, &x[i..i + 4]),
-                            3 => run_inside::<E, R, 3>(mesh, e, &x[i..i + 3]),
-                            _ => run_inside::<E, R, 2>(mesh, e, &x[i..i + 2]),
-                        };
-                        if inside {
-                            i += w;
-                            continue;
-                        }
-                    }
-                    if active[i] {
-                        relocate(mesh, &mut found, r.start + i, &mut element[i], &x[i]);
-                    }
-                    i += 1;
-                }
-            }
-        }
-        if let Some(sums) = sums.as_mut() {
-            if open.block < blocks.end {
-                open.close(&mut sums[open.block - blocks.start..]);
-            }
-        }
-        if let Some(outcomes) = &located {
-            // SAFETY: slot t is this thread's only (a thread runs its chunks one after another).
-            merge(unsafe { &mut outcomes.range(t..t + 1)[0] }, found);
+        if wide {
+            // SAFETY: `wide` only where the processor has AVX2 (`use_avx2`).
+            unsafe { avx2::call(|| chunk(&cx, t, c)) }
+        } else {
+            chunk(&cx, t, c)
         }
     });
+}
+
+/// What [`update_stress_and_move`]'s chunks read and write: its arguments, and the particle
+/// arrays each chunk takes its own range of.
+struct Pass<'a, E: Element, R: Real> {
+    layout: &'a Layout<R, E>,
+    mesh: &'a Mesh<E, R>,
+    g: &'a Grid<R>,
+    laws: &'a [Law<R>],
+    objective: bool,
+    hoop_in_volume: bool,
+    smoothing: Option<&'a StrainSmoothing<R>>,
+    dt: R,
+    /// The guard's slots (one per block), or `None` without guards.
+    guard_slots: Option<Shared<'a, GuardSums>>,
+    initial_density: &'a [R],
+    fluids: &'a [Option<Fluid<R>>],
+    min_ratio: R,
+    body: Option<OneBody>,
+    pore_rate: Option<PoreRate<'a, R>>,
+    mass: &'a [R],
+    pores: Option<Shared<'a, R>>,
+    xs: Shared<'a, [R; 3]>,
+    us: Shared<'a, [R; 3]>,
+    stresses: Shared<'a, [R; 6]>,
+    volumes: Shared<'a, R>,
+    /// State values per point.
+    k: usize,
+    states: Shared<'a, R>,
+    active: &'a [bool],
+    material: &'a [u32],
+    elements: Shared<'a, u32>,
+    /// One outcome per thread.
+    located: Option<Shared<'a, Outcome>>,
+}
+
+/// Chunk `c`'s points, on thread `t` ([`update_stress_and_move`]).
+#[inline(always)]
+fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
+    let Pass {
+        layout,
+        mesh,
+        g,
+        laws,
+        objective,
+        hoop_in_volume,
+        smoothing,
+        dt,
+        initial_density,
+        fluids,
+        min_ratio,
+        body,
+        pore_rate,
+        mass,
+        k,
+        active,
+        material,
+        ..
+    } = *cx;
+    let (guard_slots, pores, located) = (&cx.guard_slots, &cx.pores, &cx.located);
+    let (xs, us, stresses, volumes, states, elements) = (
+        &cx.xs,
+        &cx.us,
+        &cx.stresses,
+        &cx.volumes,
+        &cx.states,
+        &cx.elements,
+    );
+    let half = R::of(0.5);
+    let third = R::ONE / R::of(3.0);
+    let r = layout.chunk_particles(c);
+    // SAFETY: the particle ranges of the chunks are disjoint, and each chunk runs once.
+    let (x, u, stress, volume, element) = unsafe {
+        (
+            xs.range(r.clone()),
+            us.range(r.clone()),
+            stresses.range(r.clone()),
+            volumes.range(r.clone()),
+            elements.range(r.clone()),
+        )
+    };
+    // What this chunk's walks found, added to the thread's outcome at the end.
+    let mut found = NOTHING_FOUND;
+    // SAFETY: as above; each point's state is its own `k` values.
+    let state = unsafe { states.range(k * r.start..k * r.end) };
+    let blocks = layout.chunk_blocks(c);
+    // SAFETY: the chunks' element ranges are disjoint and hold whole blocks; this chunk's
+    // points lie in its own elements.
+    let mut sums = guard_slots
+        .as_ref()
+        .map(|g| unsafe { g.range(blocks.clone()) });
+    // The current block's sums, kept in registers and written to its slot when the points
+    // pass to the next block (adding to the slot point by point would chain every point's
+    // sum through memory). Points come sorted by element, so blocks come in order; the
+    // slot's own strain and liquid terms start at 0 (grid to particle began it), so the
+    // sums are those of adding in place, point by point.
+    let mut open = Open::new(blocks.start);
+    // The point arrays sliced to this thread's range, all of one length, and indexed by
+    // the position in it: the compiler then drops the bounds checks in the loop.
+    let n = x.len();
+    let (u, stress, volume) = (&mut u[..n], &mut stress[..n], &mut volume[..n]);
+    let (active, material) = (&active[r.clone()], &material[r.clone()]);
+    let (active, element, material) = (&active[..n], &mut element[..n], &material[..n]);
+    let mass = &mass[r.clone()][..n];
+    // SAFETY: as above.
+    let mut pore = pores
+        .as_ref()
+        .map(|p| unsafe { &mut p.range(r.clone())[..n] });
+    // Element by element (the points are sorted by element): a linear element's velocity
+    // gradient is the same at all its points, so it is formed once per element, from its
+    // nodes' velocities gathered once.
+    for e in layout.chunk_elements(c) {
+        let points = layout.particles_of(e);
+        if points.is_empty() {
+            continue;
+        }
+        if let Some(sums) = sums.as_mut() {
+            // A new block of elements: the last one's sums go to its slot.
+            let b = e / ELEMENT_BLOCK;
+            if b != open.block {
+                open.close(&mut sums[open.block - blocks.start..]);
+                open = Open::new(b);
+            }
+        }
+        let grad = mesh.grad[e].as_ref();
+        let corners = mesh.corners[e].as_ref();
+        let vel = E::nodes(|k| g.vel[corners[k] as usize]);
+        let vel = vel.as_ref();
+        // The velocity gradient L[a][b] = ∂v_a/∂x_b; a 2D element's velocities and gradients
+        // have no z-part: the in-plane block only.
+        let mut l = [[R::ZERO; 3]; 3];
+        for k in 0..E::NODES {
+            for a in 0..E::DIM {
+                for b in 0..E::DIM {
+                    l[a][b] += vel[k][a] * grad[k][b];
+                }
+            }
+        }
+        // The element's points in batches of up to `W` ([`batch_width`]), each value held
+        // across the batch's points (`[c][q]`: value c of point q) so that each operation
+        // is one over the points, which the compiler turns into vector instructions. Each
+        // point's arithmetic is the one a point-by-point loop does, in the same order, so
+        // the results are the same bits whatever the width; lanes past the batch's points
+        // or of points that do not move repeat a moving point's values and are never
+        // stored.
+        let first = &mesh.x[corners[0] as usize];
+        let map = &mesh.map[e];
+        let (end, mut j) = (points.end - r.start, points.start - r.start);
+        // The batch loop, expanded once per batch width (one is used per element type
+        // and precision, [`batch_width`]).
+        macro_rules! batches {
+            ($w:literal) => {{
+                const W: usize = $w;
+                while j < end {
+                    let b = match Batch::<W>::new(j, end, |i| {
+                        active[i] && maps(body, material[i])
+                    }) {
+                        Ok(b) => b,
+                        Err(skip) => {
+                            j += skip;
+                            continue;
+                        }
+                    };
+                    debug_assert!(
+                        (j..j + b.len).all(|i| element[i] as usize == e),
+                        "points not sorted by element"
+                    );
+                    let xl = b.gather(x);
+                    let n = E::shape_lanes(map, first, &xl);
+                    // The pore pressure's smoothed rate, from the nodes at the start-of-step
+                    // position (the points move below).
+                    if let (Some(rate), Some(pore)) = (&pore_rate, pore.as_mut()) {
+                        for i in b.points() {
+                            if rate.fluids[material[i] as usize].is_some() {
+                                let mut change = R::ZERO;
+                                for k in 0..E::NODES {
+                                    change += n[k][i - j] * rate.nodal[corners[k] as usize];
+                                }
+                                pore[i] += change * dt;
+                            }
+                        }
+                    }
+                    let dx = interpolate::<E, R, W>(&n, vel);
+                    // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the
+                    // radius).
+                    let hoop: [R; W] = if E::AXISYMMETRIC {
+                        std::array::from_fn(|q| dx[0][q] / xl[0][q])
+                    } else {
+                        [l[2][2]; W]
+                    };
+                    let mut de: [[R; W]; 6] = [
+                        [l[0][0] * dt; W],
+                        [l[1][1] * dt; W],
+                        hoop.map(|h| h * dt),
+                        [half * (l[0][1] + l[1][0]) * dt; W],
+                        [half * (l[1][2] + l[2][1]) * dt; W],
+                        [half * (l[2][0] + l[0][2]) * dt; W],
+                    ];
+                    if let Some(sm) = smoothing {
+                        // The normal increments in the section's plane take the correction: all
+                        // three in 3D, the two in-plane ones in plane strain (Anura3D's rule;
+                        // its ε_zz stays zero). Axisymmetric sections do not smooth.
+                        for q in 0..W {
+                            let [es, _] = sm.element_mean(mesh, e, material[b.at[q]]);
+                            let c = if E::DIM == 2 {
+                                (de[0][q] + de[1][q] - es) * half
+                            } else {
+                                (de[0][q] + de[1][q] + de[2][q] - es) * third
+                            };
+                            for d in de.iter_mut().take(E::DIM) {
+                                d[q] -= c;
+                            }
+                        }
+                    }
+                    let s0 = b.gather(stress);
+                    let mut s1 = s0;
+                    // A batch of one linear-elastic or Mohr-Coulomb material takes the
+                    // update across its points; any other law goes point by point.
+                    let lead = material[b.at[0]];
+                    let one = b.points().all(|i| material[i] == lead);
+                    match &laws[lead as usize] {
+                        Law::LinearElastic(le) if one => le.update_lanes(&mut s1, &de),
+                        Law::MohrCoulomb(mc) if one => mc.update_lanes(&mut s1, &de, &b.on),
+                        _ => {
+                            for i in b.points() {
+                                let q = i - j;
+                                let mut s: [R; 6] = std::array::from_fn(|c| s1[c][q]);
+                                let d: [R; 6] = std::array::from_fn(|c| de[c][q]);
+                                laws[material[i] as usize].update(
+                                    &mut s,
+                                    &d,
+                                    &mut state[k * i..k * i + k],
+                                );
+                                for c in 0..6 {
+                                    s1[c][q] = s[c];
+                                }
+                            }
+                        }
+                    }
+                    // Anura3D's objective update (its "Hill" rate): the co-rotation and the
+                    // change of volume, -tr(Δε) σ, of the start-of-step stress, added after the
+                    // law's update as Anura3D adds them (for a plastic law the order matters:
+                    // the return sees the unrotated trial).
+                    if objective {
+                        let w = [
+                            half * (l[0][1] - l[1][0]) * dt, // ω_xy
+                            half * (l[1][2] - l[2][1]) * dt, // ω_yz
+                            half * (l[2][0] - l[0][2]) * dt, // ω_zx
+                        ];
+                        let mut h = rotation_lanes(&s0, &w);
+                        for q in 0..W {
+                            let ev = de[0][q] + de[1][q] + de[2][q];
+                            for c in 0..6 {
+                                h[c][q] -= ev * s0[c][q];
+                                s1[c][q] += h[c][q];
+                            }
+                        }
+                    }
+                    let v0: [R; W] = b.at.map(|i| volume[i]);
+                    // The hoop strain changes an axisymmetric point's volume unless the case
+                    // follows Anura3D, which leaves it out
+                    // ([`crate::input::case::Case::hoop_in_volume`]).
+                    let de_zz = if E::AXISYMMETRIC && !hoop_in_volume {
+                        [R::ZERO; W]
+                    } else {
+                        de[2]
+                    };
+                    let v1: [R; W] =
+                        std::array::from_fn(|q| {
+                            v0[q] * (R::ONE + de[0][q] + de[1][q] + de_zz[q])
+                        });
+                    let mut x1 = xl;
+                    for a in 0..E::DIM {
+                        for q in 0..W {
+                            x1[a][q] += dt * dx[a][q];
+                        }
+                    }
+                    for i in b.points() {
+                        let q = i - j;
+                        x[i] = std::array::from_fn(|a| x1[a][q]);
+                        for a in 0..E::DIM {
+                            u[i][a] += dt * dx[a][q];
+                        }
+                        stress[i] = std::array::from_fn(|c| s1[c][q]);
+                        volume[i] = v1[q];
+                    }
+                    if sums.is_some() {
+                        // Work of the mean stress over the step (exact for a linear law) on the
+                        // start volume; shear components count twice (tensor shear strains).
+                        let mut w = [R::ZERO; W];
+                        for c in 0..6 {
+                            let twice = if c < 3 { R::ONE } else { R::of(2.0) };
+                            for q in 0..W {
+                                w[q] += twice * (s0[c][q] + s1[c][q]) * de[c][q];
+                            }
+                        }
+                        // 0, or NaN for a non-finite position or new volume: added to the
+                        // strain sum, which a non-finite stress makes non-finite too, so one
+                        // test of the sums catches them all.
+                        let finite: [R; W] = std::array::from_fn(|q| {
+                            R::ZERO * (x1[0][q] + x1[1][q] + x1[2][q] + v1[q])
+                        });
+                        let strain: [R; W] = std::array::from_fn(|q| w[q] * v0[q] + finite[q]);
+                        // Point by point in order: the block's sums are those of adding in
+                        // place.
+                        for i in b.points() {
+                            let q = i - j;
+                            // V/V0 ≤ r is V ρ0 - r m ≤ 0 (the mass is constant, m = ρ0 V0): no
+                            // division per point.
+                            let rho0 = initial_density[material[i] as usize];
+                            let margin = v1[q] * rho0 - min_ratio * mass[i];
+                            // Twice the energies: the engine halves the sums (exactly, a power
+                            // of two).
+                            open.strain += strain[q].f64();
+                            if let Some(pore) = pore.as_deref() {
+                                // A saturated point's liquid holds n V p² / 2 K_w: the pore
+                                // pressure's work on Δp = (K_w/n) Δε_mix. A non-finite pore
+                                // pressure makes the sum NaN.
+                                let p = pore[i];
+                                let c = fluids[material[i] as usize]
+                                    .as_ref()
+                                    .map_or(R::ZERO, |f| f.n_over_kw);
+                                open.liquid += (v1[q] * p * p * c + R::ZERO * p).f64();
+                            }
+                            // A plain comparison (one instruction): NaN is caught by the strain
+                            // sum.
+                            let m = margin.f64();
+                            if m < open.volume_margin {
+                                open.volume_margin = m;
+                            }
+                        }
+                    }
+                    j += b.len;
+                }
+            }};
+        }
+        // Mohr-Coulomb points go in batches of [`PLASTIC_WIDTH`] whatever the element
+        // and precision: their return's decompositions side by side (a long chain of
+        // dependent square roots and divisions each) outweigh the spills of the rest.
+        let plastic = matches!(
+            laws[material[points.start - r.start] as usize],
+            Law::MohrCoulomb(_)
+        );
+        match if plastic {
+            PLASTIC_WIDTH
+        } else {
+            batch_width::<E, R>()
+        } {
+            1 => batches!(1),
+            _ => batches!(4),
+        }
+        if located.is_some() {
+            // The element's points at their new positions, still in the nearest cache:
+            // runs of `w` of them tested at once (most points stay in their element), the
+            // others walked, as the locate pass does.
+            let (end, w) = (points.end - r.start, locate_width::<E, R>());
+            let mut i = points.start - r.start;
+            while i < end {
+                if w > 1 && i + w <= end && active[i..i + w].iter().all(|&a| a) {
+                    let inside = match w {
+                        4 => run_inside::<E, R, 4>(mesh, e, &x[i..i + 4]),
+                        3 => run_inside::<E, R, 3>(mesh, e, &x[i..i + 3]),
+                        _ => run_inside::<E, R, 2>(mesh, e, &x[i..i + 2]),
+                    };
+                    if inside {
+                        i += w;
+                        continue;
+                    }
+                }
+                if active[i] {
+                    relocate(mesh, &mut found, r.start + i, &mut element[i], &x[i]);
+                }
+                i += 1;
+            }
+        }
+    }
+    if let Some(sums) = sums.as_mut() {
+        if open.block < blocks.end {
+            open.close(&mut sums[open.block - blocks.start..]);
+        }
+    }
+    if let Some(outcomes) = &located {
+        // SAFETY: slot t is this thread's only (a thread runs its chunks one after another).
+        merge(unsafe { &mut outcomes.range(t..t + 1)[0] }, found);
+    }
 }
 
 /// [`rotation`] of each point's stress in a batch of `W`: (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj,
