@@ -6,7 +6,7 @@ use crate::element::mesh::Mesh;
 use crate::element::{batch_width, Element};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
-use crate::parallel::avx2::{self, use_avx2};
+use crate::parallel::avx2::use_avx2;
 use crate::parallel::gather::{node_slots, Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
@@ -108,7 +108,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     team.run_chunks(layout.thread_chunks(), |t, c| {
         if wide {
             // SAFETY: `wide` only where the processor has AVX2 (`use_avx2`).
-            unsafe { avx2::call(|| chunk(&cx, t, c)) }
+            unsafe { chunk_avx2(&cx, t, c) }
         } else {
             chunk(&cx, t, c)
         }
@@ -498,6 +498,27 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
         // SAFETY: slot t is this thread's only (a thread runs its chunks one after another).
         merge(unsafe { &mut outcomes.range(t..t + 1)[0] }, found);
     }
+}
+
+/// [`chunk`] compiled with AVX2. A function of its own with `chunk` inlined (always): a
+/// closure around `chunk` handed to [`crate::parallel::avx2::call`] is too large for the compiler to inline
+/// there, and would be compiled for the baseline.
+///
+/// # Safety
+/// The processor must have AVX2 ([`crate::parallel::avx2::present`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn chunk_avx2<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
+    chunk(cx, t, c)
+}
+
+/// Elsewhere: [`chunk`] (AVX2 is never chosen there).
+///
+/// # Safety
+/// None beyond [`chunk`]'s; unsafe only to match the x86-64 version.
+#[cfg(not(target_arch = "x86_64"))]
+unsafe fn chunk_avx2<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
+    chunk(cx, t, c)
 }
 
 /// [`rotation`] of each point's stress in a batch of `W`: (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj,
