@@ -1,9 +1,12 @@
-//! Whether the point passes take their AVX2 copies: particle to grid's element pass, grid to
-//! particle's and the stress pass's chunks are each compiled twice, once for the baseline
-//! x86-64 and once with `#[target_feature(enable = "avx2")]`, and the pass picks one at run
-//! time. AVX2 holds four f64 lanes of a batch in one register instead of two; without FMA
-//! (not enabled, and Rust never contracts a product and a sum) each operation rounds as in the
-//! baseline, so both copies give the same bits (docs/performance-avx2.md).
+//! Whether the point passes take their AVX2 copies. Particle to grid, grid to particle and the
+//! stress pass are each compiled twice, once for the baseline x86-64 and once with
+//! `#[target_feature(enable = "avx2")]`, and each pass picks one at run time for every
+//! thread's whole range (the scatters through [`call`], the stress pass through its own
+//! target-feature function). AVX2 holds four f64 lanes in one register instead of two; without
+//! FMA (not enabled, and Rust never contracts a product and a sum) each operation rounds as in
+//! the baseline, so both copies give the same bits (docs/design.md §9,
+//! docs/performance-avx2.md). `scripts/check-avx2-copies` checks in the release binary that
+//! the copies are AVX2 code.
 
 /// Whether this processor runs AVX2.
 pub fn present() -> bool {
