@@ -294,7 +294,7 @@ fn main() {
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
     println!(
-        "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"huge_pages\": {}, \"huge_page_bytes\": {}, \"instruction_set\": \"{}\", \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"modelled_bytes_per_particle_step\": {{{}}}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}, \"phase_team_per_step\": {{{}}}, \"thread_busy_per_step\": {:?}{}}}",
+        "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"huge_pages\": {}, \"huge_page_bytes\": {}, \"instruction_set\": \"{}\", \"avx2_copies\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"modelled_bytes_per_particle_step\": {{{}}}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}, \"phase_team_per_step\": {{{}}}, \"thread_busy_per_step\": {:?}{}}}",
         if saturated { "saturated" } else { "dry" },
         if plane { 2 } else { 3 },
         arg(&a, "--law").unwrap_or("linear"),
@@ -308,6 +308,7 @@ fn main() {
         mpm_solve::parallel::huge_pages::enabled(),
         huge_page_bytes.map_or("null".to_string(), |b| b.to_string()),
         mpm_solve::driver::output::instruction_set(),
+        mpm_solve::parallel::avx2::detected(),
         order,
         steps,
         if f32 { "f32" } else { "f64" },

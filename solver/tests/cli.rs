@@ -117,6 +117,9 @@ fn writes_every_output_and_repeats_byte_for_byte() {
         }
     }
     assert_eq!(run["precision"], "f64");
+    // Whether the point passes took their AVX2 copies: never in a build that assumes AVX2.
+    let copies = run["avx2_copies"].as_bool().unwrap();
+    assert!(!(copies && run["instruction_set"] != "x86-64"), "{run}");
 }
 
 #[test]

@@ -409,6 +409,9 @@ pub fn write_summary<R: Real, E: Element>(
         })),
     });
     let mut json = json;
+    // Whether the point passes ran their AVX2 copies (docs/design.md §9); outside the literal
+    // above, which is at the macro's recursion limit (the keys are written sorted either way).
+    json["avx2_copies"] = serde_json::json!(crate::parallel::avx2::detected());
     if let Some(ranks) = ranks {
         // A run over MPI ranks: the mesh is the whole one, and each rank reports its share.
         let elements: u64 = ranks.iter().filter_map(|r| r["elements"].as_u64()).sum();
