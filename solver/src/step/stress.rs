@@ -105,6 +105,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     // whichever thread computes them). Each chunk in the baseline instruction set or, where the
     // processor has it and the build does not assume it, with AVX2 (the same bits).
     let wide = use_avx2();
+    debug_assert!(!wide || crate::parallel::avx2::present());
     team.run_chunks(layout.thread_chunks(), |t, c| {
         if wide {
             // SAFETY: `wide` only where the processor has AVX2 (`use_avx2`).
