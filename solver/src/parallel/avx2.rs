@@ -23,14 +23,7 @@ pub fn present() -> bool {
 /// Whether this processor runs AVX2 and this build does not already assume it (a build for
 /// x86-64-v3 compiles every pass with it, and needs no second copy).
 pub fn detected() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        !cfg!(target_feature = "avx2") && present()
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    !cfg!(target_feature = "avx2") && present()
 }
 
 #[cfg(test)]

@@ -258,12 +258,12 @@ pub fn grid_to_particle<E: Element, R: Real>(
             }
         };
     }
-    // Each variant with the batch width of the element type ([`TETRAHEDRA`]).
-    // Each variant at its re-map width (a literal, so that each closure has one caller: the
-    // solid's 3 or 2 values per node, then as many for the liquid), once for each instruction
-    // set.
+    // Each variant with the batch width of the element type ([`TETRAHEDRA`]) and at its re-map
+    // width (a literal, so that each closure has one caller: the solid's 3 or 2 values per
+    // node, then as many for the liquid), once for each instruction set.
     macro_rules! run {
         (None, $with_liquid:expr, $w:expr, $width:literal) => {{
+            debug_assert_eq!(width($with_liquid), $width);
             if wide {
                 let element = element_pass!(false, $with_liquid, $w);
                 layout.scatter_with::<$width, true, _, _>(team, slots, init, |e, f, _| {
@@ -276,7 +276,8 @@ pub fn grid_to_particle<E: Element, R: Real>(
                 })
             }
         }};
-        ($g:expr, $with_liquid:expr, $w:expr, $width:literal) => {
+        ($g:expr, $with_liquid:expr, $w:expr, $width:literal) => {{
+            debug_assert_eq!(width($with_liquid), $width);
             if wide {
                 let element = guarded_pass!($g, $with_liquid, $w);
                 layout.scatter_with::<$width, true, _, _>(team, slots, init, element)
@@ -284,7 +285,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
                 let element = guarded_pass!($g, $with_liquid, $w);
                 layout.scatter_with::<$width, false, _, _>(team, slots, init, element)
             }
-        };
+        }};
     }
     const { assert!(Tet4::DIM == 3 && Tri3::DIM == 2) };
     let tetrahedra = E::DIM == 3;

@@ -153,14 +153,9 @@ struct Pass<'a, E: Element, R: Real> {
 /// Chunk `c`'s points, on thread `t` ([`update_stress_and_move`]).
 #[inline(always)]
 fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
+    // The values the loop uses most, by name; the others as `cx.` fields.
     let Pass {
-        layout,
         mesh,
-        g,
-        laws,
-        objective,
-        hoop_in_volume,
-        smoothing,
         dt,
         initial_density,
         fluids,
@@ -184,7 +179,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
     );
     let half = R::of(0.5);
     let third = R::ONE / R::of(3.0);
-    let r = layout.chunk_particles(c);
+    let r = cx.layout.chunk_particles(c);
     // SAFETY: the particle ranges of the chunks are disjoint, and each chunk runs once.
     let (x, u, stress, volume, element) = unsafe {
         (
@@ -199,7 +194,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
     let mut found = NOTHING_FOUND;
     // SAFETY: as above; each point's state is its own `k` values.
     let state = unsafe { states.range(k * r.start..k * r.end) };
-    let blocks = layout.chunk_blocks(c);
+    let blocks = cx.layout.chunk_blocks(c);
     // SAFETY: the chunks' element ranges are disjoint and hold whole blocks; this chunk's
     // points lie in its own elements.
     let mut sums = guard_slots
@@ -225,8 +220,8 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
     // Element by element (the points are sorted by element): a linear element's velocity
     // gradient is the same at all its points, so it is formed once per element, from its
     // nodes' velocities gathered once.
-    for e in layout.chunk_elements(c) {
-        let points = layout.particles_of(e);
+    for e in cx.layout.chunk_elements(c) {
+        let points = cx.layout.particles_of(e);
         if points.is_empty() {
             continue;
         }
@@ -240,7 +235,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
         }
         let grad = mesh.grad[e].as_ref();
         let corners = mesh.corners[e].as_ref();
-        let vel = E::nodes(|k| g.vel[corners[k] as usize]);
+        let vel = E::nodes(|k| cx.g.vel[corners[k] as usize]);
         let vel = vel.as_ref();
         // The velocity gradient L[a][b] = ∂v_a/∂x_b; a 2D element's velocities and gradients
         // have no z-part: the in-plane block only.
@@ -312,7 +307,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
                         [half * (l[1][2] + l[2][1]) * dt; W],
                         [half * (l[2][0] + l[0][2]) * dt; W],
                     ];
-                    if let Some(sm) = smoothing {
+                    if let Some(sm) = cx.smoothing {
                         // The normal increments in the section's plane take the correction: all
                         // three in 3D, the two in-plane ones in plane strain (Anura3D's rule;
                         // its ε_zz stays zero). Axisymmetric sections do not smooth.
@@ -334,7 +329,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
                     // update across its points; any other law goes point by point.
                     let lead = material[b.at[0]];
                     let one = b.points().all(|i| material[i] == lead);
-                    match &laws[lead as usize] {
+                    match &cx.laws[lead as usize] {
                         Law::LinearElastic(le) if one => le.update_lanes(&mut s1, &de),
                         Law::MohrCoulomb(mc) if one => mc.update_lanes(&mut s1, &de, &b.on),
                         _ => {
@@ -342,7 +337,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
                                 let q = i - j;
                                 let mut s: [R; 6] = std::array::from_fn(|c| s1[c][q]);
                                 let d: [R; 6] = std::array::from_fn(|c| de[c][q]);
-                                laws[material[i] as usize].update(
+                                cx.laws[material[i] as usize].update(
                                     &mut s,
                                     &d,
                                     &mut state[k * i..k * i + k],
@@ -357,7 +352,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
                     // change of volume, -tr(Δε) σ, of the start-of-step stress, added after the
                     // law's update as Anura3D adds them (for a plastic law the order matters:
                     // the return sees the unrotated trial).
-                    if objective {
+                    if cx.objective {
                         let w = [
                             half * (l[0][1] - l[1][0]) * dt, // ω_xy
                             half * (l[1][2] - l[2][1]) * dt, // ω_yz
@@ -376,7 +371,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
                     // The hoop strain changes an axisymmetric point's volume unless the case
                     // follows Anura3D, which leaves it out
                     // ([`crate::input::case::Case::hoop_in_volume`]).
-                    let de_zz = if E::AXISYMMETRIC && !hoop_in_volume {
+                    let de_zz = if E::AXISYMMETRIC && !cx.hoop_in_volume {
                         [R::ZERO; W]
                     } else {
                         de[2]
@@ -454,7 +449,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
         // and precision: their return's decompositions side by side (a long chain of
         // dependent square roots and divisions each) outweigh the spills of the rest.
         let plastic = matches!(
-            laws[material[points.start - r.start] as usize],
+            cx.laws[material[points.start - r.start] as usize],
             Law::MohrCoulomb(_)
         );
         match if plastic {
