@@ -291,6 +291,36 @@ impl<R: Real> Surface<R> {
             }
         }
         let splits = split_lanes(&packed);
+        if !self.cut_off && planes.inverted {
+            // The pyramid's returns side by side too ([`Surface::pyramid_return_lanes`]).
+            let sig: [[R; W]; 3] = std::array::from_fn(|i| splits.map(|sp| sp.values[i]));
+            // [`Surface::return_split`]'s scale and test, lane by lane.
+            let scale: [R; W] =
+                std::array::from_fn(|k| sig[0][k].abs().max(sig[2][k].abs()).max(self.cohesion));
+            let outside: [bool; W] = std::array::from_fn(|k| {
+                let tol = R::of(16.0 * R::EPSILON) * scale[k];
+                !(self.yield_value(sig[0][k], sig[2][k]) <= tol)
+            });
+            if !outside[..count].contains(&true) {
+                return;
+            }
+            let (back, settled) = self.pyramid_return_lanes(el, planes, &sig, &scale);
+            for k in 0..count {
+                if !outside[k] {
+                    continue;
+                }
+                let values = if settled[k] {
+                    [back[0][k], back[1][k], back[2][k]]
+                } else {
+                    self.principal_return(el, planes, &splits[k].values, scale[k])
+                };
+                let out = splits[k].rebuild(&values);
+                for (c, v) in out.into_iter().enumerate() {
+                    s[c][need[k]] = v;
+                }
+            }
+            return;
+        }
         for (k, sp) in splits.iter().enumerate().take(count) {
             let q = need[k];
             let mut sq = s.map(|c| c[q]);
@@ -550,22 +580,129 @@ impl<R: Real> Surface<R> {
             let (k, det) = Surface::system(planes, set, el.shear)?;
             dl = solve(&k, det, set.len(), &r);
         }
+        let (back, violation) =
+            self.settle::<1>(el, planes, set, &sig.map(|x| [x]), &dl.map(|x| [x]));
+        Some((back.map(|[x]| x), violation[0]))
+    }
+
+    /// The stresses `sig` less the flow of the planes `set` with multipliers `dl` (`dl[j][q]`:
+    /// plane j's, as a stress, of lane q), and how far each is from consistent
+    /// ([`Surface::candidate`]); each lane's arithmetic the one-lane candidate's.
+    #[inline(always)]
+    fn settle<const W: usize>(
+        &self,
+        el: &LinearElastic<R>,
+        planes: &Planes<R>,
+        set: &[usize],
+        sig: &[[R; W]; 3],
+        dl: &[[R; W]; 3],
+    ) -> ([[R; W]; 3], [R; W]) {
         let mut back = *sig;
-        let mut violation = R::ZERO;
+        let mut violation = [R::ZERO; W];
         let g2 = el.shear + el.shear;
         for (j, &p) in set.iter().enumerate() {
-            for i in 0..3 {
-                back[i] -= dl[j] * planes.db[p][i];
+            for q in 0..W {
+                for i in 0..3 {
+                    back[i][q] -= dl[j][q] * planes.db[p][i];
+                }
+                violation[q] = violation[q].max(-dl[j][q] * g2);
             }
-            violation = violation.max(-dl[j] * g2);
         }
-        let lo = back[0].min(back[1]).min(back[2]);
-        let hi = back[0].max(back[1]).max(back[2]);
-        violation = violation.max(self.yield_value(lo, hi));
-        if self.cut_off {
-            violation = violation.max(hi - self.tension);
+        for q in 0..W {
+            let lo = back[0][q].min(back[1][q]).min(back[2][q]);
+            let hi = back[0][q].max(back[1][q]).max(back[2][q]);
+            violation[q] = violation[q].max(self.yield_value(lo, hi));
+            if self.cut_off {
+                violation[q] = violation[q].max(hi - self.tension);
+            }
         }
-        Some((back, violation))
+        (back, violation)
+    }
+
+    /// [`Surface::candidate`] of `W` sorted trials side by side (`sig[i][q]`: principal stress
+    /// i of lane q, `f[j][q]` its yield value on plane j), for the pyramid without the
+    /// cut-off and planes with their inverses formed; each lane the bits of its own candidate.
+    #[inline(always)]
+    fn candidate_lanes<const W: usize>(
+        &self,
+        el: &LinearElastic<R>,
+        planes: &Planes<R>,
+        f: &[[R; W]; 3],
+        sig: &[[R; W]; 3],
+        which: usize,
+    ) -> Option<([[R; W]; 3], [R; W])> {
+        debug_assert!(planes.inverted && !self.cut_off);
+        if planes.singular[which] {
+            return None;
+        }
+        let set = WITH_CUT_OFF[which];
+        let n = set.len();
+        let inv = &planes.inverse[which];
+        let mut dl = [[R::ZERO; W]; 3];
+        for q in 0..W {
+            let r = [
+                f[set[0]][q],
+                if n > 1 { f[set[1]][q] } else { R::ZERO },
+                if n > 2 { f[set[2]][q] } else { R::ZERO },
+            ];
+            for (x, row) in dl.iter_mut().zip(inv) {
+                x[q] = row[0] * r[0] + row[1] * r[1] + row[2] * r[2];
+            }
+        }
+        Some(self.settle(el, planes, set, sig, &dl))
+    }
+
+    /// [`Surface::principal_return`] of `W` sorted trials side by side for the pyramid without
+    /// the cut-off (planes with their inverses formed): every candidate of every lane formed
+    /// (a few dozen operations each, over the lanes at once), then each lane takes the first
+    /// consistent one in the scalar search's order. A lane none of them settles (the apex, or
+    /// round-off at a region boundary) is marked unsettled for the scalar search; the others
+    /// are the bits of that search.
+    #[inline(always)]
+    fn pyramid_return_lanes<const W: usize>(
+        &self,
+        el: &LinearElastic<R>,
+        planes: &Planes<R>,
+        sig: &[[R; W]; 3],
+        scale: &[R; W],
+    ) -> ([[R; W]; 3], [bool; W]) {
+        let mut f = [[R::ZERO; W]; 3];
+        for (j, f) in f.iter_mut().enumerate() {
+            for q in 0..W {
+                let s = [sig[0][q], sig[1][q], sig[2][q]];
+                f[q] = dot(&planes.a[j], &s) - planes.k[j];
+            }
+        }
+        let mut back = *sig;
+        let mut settled = [false; W];
+        // Without the face the scalar search orders the edges differently: leave it to that.
+        let Some((face, face_violation)) = self.candidate_lanes(el, planes, &f, sig, 0) else {
+            return (back, settled);
+        };
+        let extension = self.candidate_lanes(el, planes, &f, sig, PYRAMID_SETS[1]);
+        let compression = self.candidate_lanes(el, planes, &f, sig, PYRAMID_SETS[2]);
+        for q in 0..W {
+            let tol = R::of(64.0 * R::EPSILON) * scale[q];
+            // The scalar search's order: the compression edge first where the face return
+            // leaves σ2 above σ3.
+            let (second, third) = if face[1][q] > face[2][q] {
+                (&compression, &extension)
+            } else {
+                (&extension, &compression)
+            };
+            let first = Some((face, face_violation));
+            let chosen = [&first, second, third]
+                .into_iter()
+                .flatten()
+                .find(|(_, v)| v[q] <= tol);
+            if let Some((b, _)) = chosen {
+                for i in 0..3 {
+                    back[i][q] = b[i][q];
+                }
+                settled[q] = true;
+            }
+        }
+        (back, settled)
     }
 }
 
@@ -636,12 +773,17 @@ mod tests {
     /// bit, whichever lanes are on, yield or stay inside (lanes off are left as they are).
     fn lanes_are_updates_one_by_one<R: Real>() {
         let mut rand = crate::test_rng::uniform(99);
+        // The first three with the cut-off, the last two without (σt at or above the apex):
+        // the pyramid's returns side by side ([`Surface::pyramid_return_lanes`]).
         for (phi, c, psi, t) in [
             (30.0, 5.0, 0.0, 0.0),
             (25.0, 2.0, 10.0, 1.0),
             (0.0, 10.0, 0.0, 0.0),
+            (30.0, 0.0, 0.0, 0.0),
+            (20.0, 5.0, 5.0, 1e6),
         ] {
             let l = MohrCoulomb::<R>::new(E, 0.3, phi, c, psi, t);
+            assert_eq!(l.surface.cut_off, phi != 20.0 && c > 0.0, "{phi} {c} {t}");
             let (mut returned, mut elastic) = (0, 0);
             for round in 0..200 {
                 // Geostatic states with some shear, strained in random directions: some stay
