@@ -6,7 +6,7 @@
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
 //!  --order morton|random|none --precision f64|f32 --guards on|off
-//!  --law linear|mc-elastic|mc-plastic|mc-flowing --dim 3|2 --shear RATE`
+//!  --law linear|mc-elastic|mc-plastic|mc-flowing --surface on|off --dim 3|2 --shear RATE`
 //!
 //! `--dim 2` runs the plane-strain twin: a rectangle of `--cells NX NY` square cells of 1 cm
 //! (the 3D column's cell size at NY = 100, so the time step and the motion per step compare),
@@ -15,7 +15,8 @@
 //!
 //! The Mohr-Coulomb laws print, beside the timing, the share of point-steps that end on the
 //! yield surface and the share that end there with a stress that moved (returned points), from
-//! one more run of the same steps.
+//! one more run of the same steps (`--surface off` leaves that run out, so that an instruction
+//! count sees the timed run alone).
 //!
 //! `--mpi` (built with the cargo feature `mpi`, launched by `mpirun -np N`): the same case
 //! over N ranks, each with `--threads` threads; rank 0 prints the line, with the total points
@@ -237,7 +238,7 @@ fn main() {
             serde_json::json!(result.traffic),
             serde_json::Value::from(result.reports.clone().unwrap_or_default())
         )
-    } else if law.starts_with("mc-") {
+    } else if law.starts_with("mc-") && arg(&a, "--surface") != Some("off") {
         let friction = if law == "mc-elastic" { 30.0 } else { 10.0 };
         let (on, moved) = if plane {
             on_surface::<Tri3>(&case, steps, flow, friction)

@@ -6,6 +6,7 @@ use crate::element::mesh::Mesh;
 use crate::element::{batch_width, Element};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
+use crate::material::mohr_coulomb::MohrCoulomb;
 use crate::parallel::avx2::use_avx2;
 use crate::parallel::gather::{node_slots, Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
@@ -111,7 +112,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
             // SAFETY: `wide` only where the processor has AVX2 (`use_avx2`).
             unsafe { chunk_avx2(&cx, t, c) }
         } else {
-            chunk(&cx, t, c)
+            chunk::<E, R, false>(&cx, t, c)
         }
     });
 }
@@ -152,7 +153,7 @@ struct Pass<'a, E: Element, R: Real> {
 
 /// Chunk `c`'s points, on thread `t` ([`update_stress_and_move`]).
 #[inline(always)]
-fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
+fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
     // The values the loop uses most, by name; the others as `cx.` fields.
     let Pass {
         mesh,
@@ -331,7 +332,10 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
                     let one = b.points().all(|i| material[i] == lead);
                     match &cx.laws[lead as usize] {
                         Law::LinearElastic(le) if one => le.update_lanes(&mut s1, &de),
-                        Law::MohrCoulomb(mc) if one => mc.update_lanes(&mut s1, &de, &b.on),
+                        // (A lone point goes by the scalar update: the same bits.)
+                        Law::MohrCoulomb(mc) if one && W > 1 => {
+                            plastic_lanes::<R, W, WIDE>(mc, &mut s1, &de, &b.on)
+                        }
                         _ => {
                             for i in b.points() {
                                 let q = i - j;
@@ -505,7 +509,7 @@ fn chunk<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn chunk_avx2<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
-    chunk(cx, t, c)
+    chunk::<E, R, true>(cx, t, c)
 }
 
 /// Elsewhere: [`chunk`] (AVX2 is never chosen there).
@@ -514,7 +518,56 @@ unsafe fn chunk_avx2<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usiz
 /// None beyond [`chunk`]'s; unsafe only to match the x86-64 version.
 #[cfg(not(target_arch = "x86_64"))]
 unsafe fn chunk_avx2<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
-    chunk(cx, t, c)
+    chunk::<E, R, false>(cx, t, c)
+}
+
+/// [`MohrCoulomb::update_lanes`] in a function of its own, so that the long return does not
+/// crowd the registers of the chunk's loop that every other law runs through; with `WIDE`
+/// ([`chunk_avx2`]'s) compiled with AVX2.
+#[inline(never)]
+fn plastic_lanes<R: Real, const W: usize, const WIDE: bool>(
+    mc: &MohrCoulomb<R>,
+    s: &mut [[R; W]; 6],
+    de: &[[R; W]; 6],
+    on: &[bool; W],
+) {
+    if WIDE {
+        debug_assert!(crate::parallel::avx2::present());
+        // SAFETY: `WIDE` only in [`chunk_avx2`]'s expansion, which runs where the processor
+        // has AVX2.
+        unsafe { plastic_lanes_avx2(mc, s, de, on) }
+    } else {
+        mc.update_lanes(s, de, on)
+    }
+}
+
+/// [`MohrCoulomb::update_lanes`] compiled with AVX2.
+///
+/// # Safety
+/// The processor must have AVX2 ([`crate::parallel::avx2::present`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn plastic_lanes_avx2<R: Real, const W: usize>(
+    mc: &MohrCoulomb<R>,
+    s: &mut [[R; W]; 6],
+    de: &[[R; W]; 6],
+    on: &[bool; W],
+) {
+    mc.update_lanes(s, de, on)
+}
+
+/// Elsewhere: [`MohrCoulomb::update_lanes`] (AVX2 is never chosen there).
+///
+/// # Safety
+/// None; unsafe only to match the x86-64 version.
+#[cfg(not(target_arch = "x86_64"))]
+unsafe fn plastic_lanes_avx2<R: Real, const W: usize>(
+    mc: &MohrCoulomb<R>,
+    s: &mut [[R; W]; 6],
+    de: &[[R; W]; 6],
+    on: &[bool; W],
+) {
+    mc.update_lanes(s, de, on)
 }
 
 /// [`rotation`] of each point's stress in a batch of `W`: (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj,
