@@ -500,25 +500,16 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
     }
 }
 
-/// [`chunk`] compiled with AVX2. A function of its own with `chunk` inlined (always): a
-/// closure around `chunk` handed to [`crate::parallel::avx2::call`] is too large for the compiler to inline
-/// there, and would be compiled for the baseline.
+/// [`chunk`] compiled with AVX2 (on x86-64; elsewhere AVX2 is never chosen, and this is
+/// [`chunk`]). A function of its own with `chunk` inlined (always): a closure around `chunk`
+/// handed to [`crate::parallel::avx2::call`] is too large for the compiler to inline there, and
+/// would be compiled for the baseline.
 ///
 /// # Safety
-/// The processor must have AVX2 ([`crate::parallel::avx2::present`]).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+/// On x86-64 the processor must have AVX2 ([`crate::parallel::avx2::present`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
 unsafe fn chunk_avx2<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
-    chunk::<E, R, true>(cx, t, c)
-}
-
-/// Elsewhere: [`chunk`] (AVX2 is never chosen there).
-///
-/// # Safety
-/// None beyond [`chunk`]'s; unsafe only to match the x86-64 version.
-#[cfg(not(target_arch = "x86_64"))]
-unsafe fn chunk_avx2<E: Element, R: Real>(cx: &Pass<'_, E, R>, t: usize, c: usize) {
-    chunk::<E, R, false>(cx, t, c)
+    chunk::<E, R, { cfg!(target_arch = "x86_64") }>(cx, t, c)
 }
 
 /// [`MohrCoulomb::update_lanes`] in a function of its own, so that the long return does not
@@ -541,26 +532,12 @@ fn plastic_lanes<R: Real, const W: usize, const WIDE: bool>(
     }
 }
 
-/// [`MohrCoulomb::update_lanes`] compiled with AVX2.
+/// [`MohrCoulomb::update_lanes`] compiled with AVX2 (on x86-64; elsewhere AVX2 is never
+/// chosen, and this is the plain update).
 ///
 /// # Safety
-/// The processor must have AVX2 ([`crate::parallel::avx2::present`]).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn plastic_lanes_avx2<R: Real, const W: usize>(
-    mc: &MohrCoulomb<R>,
-    s: &mut [[R; W]; 6],
-    de: &[[R; W]; 6],
-    on: &[bool; W],
-) {
-    mc.update_lanes(s, de, on)
-}
-
-/// Elsewhere: [`MohrCoulomb::update_lanes`] (AVX2 is never chosen there).
-///
-/// # Safety
-/// None; unsafe only to match the x86-64 version.
-#[cfg(not(target_arch = "x86_64"))]
+/// On x86-64 the processor must have AVX2 ([`crate::parallel::avx2::present`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
 unsafe fn plastic_lanes_avx2<R: Real, const W: usize>(
     mc: &MohrCoulomb<R>,
     s: &mut [[R; W]; 6],
