@@ -294,13 +294,8 @@ impl<R: Real> Surface<R> {
         if !self.cut_off && planes.inverted {
             // The pyramid's returns side by side too ([`Surface::pyramid_return_lanes`]).
             let sig: [[R; W]; 3] = std::array::from_fn(|i| splits.map(|sp| sp.values[i]));
-            // [`Surface::return_split`]'s scale and test, lane by lane.
-            let scale: [R; W] =
-                std::array::from_fn(|k| sig[0][k].abs().max(sig[2][k].abs()).max(self.cohesion));
-            let outside: [bool; W] = std::array::from_fn(|k| {
-                let tol = R::of(16.0 * R::EPSILON) * scale[k];
-                !(self.yield_value(sig[0][k], sig[2][k]) <= tol)
-            });
+            let tested = splits.map(|sp| self.outside(&sp.values));
+            let (scale, outside) = (tested.map(|t| t.0), tested.map(|t| t.1));
             if !outside[..count].contains(&true) {
                 return;
             }
@@ -332,6 +327,21 @@ impl<R: Real> Surface<R> {
         }
     }
 
+    /// The stress scale of the sorted principal stresses `sig`, and whether they lie outside
+    /// the surface beyond round-off (a returned stress, decomposed again, lies inside and
+    /// stays as it is).
+    #[inline(always)]
+    fn outside(&self, sig: &[R; 3]) -> (R, bool) {
+        let mut scale = sig[0].abs().max(sig[2].abs()).max(self.cohesion);
+        if self.cut_off {
+            scale = scale.max(self.tension.abs());
+        }
+        let tol = R::of(16.0 * R::EPSILON) * scale;
+        let inside_tension = !self.cut_off || sig[2] - self.tension <= tol;
+        let inside = self.yield_value(sig[0], sig[2]) <= tol && inside_tension;
+        (scale, !inside)
+    }
+
     /// The return of `s`, given its [`split`] `p`.
     #[inline(always)]
     fn return_split(
@@ -342,14 +352,8 @@ impl<R: Real> Surface<R> {
         s: &mut [R; 6],
     ) -> Option<[R; 3]> {
         let sig = p.values;
-        let mut scale = sig[0].abs().max(sig[2].abs()).max(self.cohesion);
-        if self.cut_off {
-            scale = scale.max(self.tension.abs());
-        }
-        // Inside to round-off: a returned stress, decomposed again, stays as it is.
-        let tol = R::of(16.0 * R::EPSILON) * scale;
-        let inside_tension = !self.cut_off || sig[2] - self.tension <= tol;
-        if self.yield_value(sig[0], sig[2]) <= tol && inside_tension {
+        let (scale, outside) = self.outside(&sig);
+        if !outside {
             return None;
         }
         let back = self.principal_return(el, planes, &sig, scale);
