@@ -145,6 +145,7 @@ impl Fingerprint {
             input_node,
             fixed,
             liquid_fixed,
+            walls,
             traction,
             point_loads,
             traction_curve,
@@ -186,7 +187,7 @@ impl Fingerprint {
             precision,
         } = case;
         let version = env!("CARGO_PKG_VERSION");
-        let items: [(&str, &dyn std::fmt::Debug); 49] = [
+        let items: [(&str, &dyn std::fmt::Debug); 50] = [
             ("solver version", &version),
             ("case name", name),
             ("input files", inputs),
@@ -198,6 +199,7 @@ impl Fingerprint {
             ("node numbers", input_node),
             ("fixities", fixed),
             ("liquid fixities", liquid_fixed),
+            ("walls", walls),
             ("tractions", traction),
             ("loads on material points", point_loads),
             ("traction curve", traction_curve),

@@ -190,6 +190,8 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub fixed: Vec<[bool; 3]>,
     /// Face-load forces per computational node at multiplier 1.
     pub traction: Vec<V3<R>>,
+    /// The nodes on rigid walls (empty without them).
+    pub walls: Vec<crate::step::wall_friction::WallNode<R>>,
     /// Liquid face-load forces per computational node at multiplier 1.
     pub liquid_traction: Vec<V3<R>>,
     /// Constitutive law per material index.
@@ -495,6 +497,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         let NodeInputs {
             mut fixed,
             liquid_fixed,
+            walls,
             traction,
             liquid_traction,
             input_element,
@@ -635,6 +638,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             nodal_kinetic: 0.0,
             fluids,
             liquid_fixed,
+            walls,
             prescribed,
             nodal_velocity,
             moving_mesh,
@@ -776,6 +780,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             locate_outcome: _,
             fluids: _,
             liquid_fixed: _,
+            walls: _,
             smoothing: _,
             weight_ratio: _,
             gravity_by_material: _,
@@ -1047,6 +1052,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                     case.damping_rule,
                     &*self.comm,
                 );
+                crate::step::wall_friction::apply_walls(&self.walls, grid, &self.fixed, R::of(dt));
             }
             if let Some(c) = &mut self.contact {
                 c.force_sums(
@@ -1144,6 +1150,11 @@ impl<R: Real, E: Element> Engine<R, E> {
                     fixed: &self.liquid_fixed,
                 }),
             );
+        }
+        // Walls: no re-mapped velocity into a wall (each body's).
+        crate::step::wall_friction::hold_remapped(&self.walls, &mut self.grid.vel);
+        if let Some(c) = &mut self.contact {
+            crate::step::wall_friction::hold_remapped(&self.walls, &mut c.grid.vel);
         }
         if let Some(pr) = &mut self.prescribed {
             let g = self
@@ -1762,6 +1773,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         let inputs = NodeInputs::of(case, mesh, &self.partition);
         self.fixed = inputs.fixed;
         self.liquid_fixed = inputs.liquid_fixed;
+        self.walls = inputs.walls;
         self.traction = inputs.traction;
         self.liquid_traction = inputs.liquid_traction;
         self.input_element = inputs.input_element;
@@ -1994,6 +2006,7 @@ fn exchange_points<R: Real>(
 struct NodeInputs<R: Real> {
     fixed: Vec<[bool; 3]>,
     liquid_fixed: Vec<[bool; 3]>,
+    walls: Vec<crate::step::wall_friction::WallNode<R>>,
     traction: Vec<V3<R>>,
     liquid_traction: Vec<V3<R>>,
     input_element: Vec<u32>,
@@ -2014,6 +2027,7 @@ impl<R: Real> NodeInputs<R> {
         NodeInputs {
             fixed: by_node(&|m| case.fixed[m]),
             liquid_fixed: by_node(&|m| case.liquid_fixed[m]),
+            walls: crate::step::wall_friction::wall_nodes(&case.walls, &mesh.model_node),
             traction: loads(&case.traction),
             liquid_traction: loads(&case.liquid_traction),
             input_element: (0..mesh.elements())

@@ -478,6 +478,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         input_node: (0..n as u32).collect(),
         fixed,
         liquid_fixed,
+        walls: Vec::new(),
         traction,
         point_loads,
         traction_curve,

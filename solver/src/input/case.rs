@@ -238,6 +238,9 @@ pub struct Case {
     /// Fixed liquid velocity components per model node (impermeable faces); used only where a
     /// saturated material is.
     pub liquid_fixed: Vec<[bool; 3]>,
+    /// Per model node and axis, the rigid wall normal to that axis the node lies on, if any
+    /// ([`crate::step::wall_friction`]); empty when the case has no wall.
+    pub walls: Vec<[crate::step::wall_friction::WallAxis; 3]>,
     /// Nodal face-load forces per model node (kN) at multiplier 1.
     pub traction: Vec<[f64; 3]>,
     /// Loads carried by material points.
@@ -526,6 +529,9 @@ impl Case {
         self.input_node = by_node(&self.input_node, &o.node_new);
         self.fixed = by_node(&self.fixed, &o.node_new);
         self.liquid_fixed = by_node(&self.liquid_fixed, &o.node_new);
+        if !self.walls.is_empty() {
+            self.walls = by_node(&self.walls, &o.node_new);
+        }
         self.traction = by_node(&self.traction, &o.node_new);
         self.liquid_traction = by_node(&self.liquid_traction, &o.node_new);
         for load in &mut self.point_loads {
@@ -625,6 +631,7 @@ impl Case {
             input_node: (0..n as u32).collect(),
             liquid_fixed: fixed.clone(),
             fixed,
+            walls: Vec::new(),
             traction: vec![[0.0; 3]; n],
             point_loads: Vec::new(),
             traction_curve: LoadCurve::Step,

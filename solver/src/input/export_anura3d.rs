@@ -206,6 +206,14 @@ pub fn build(r: &Resolved, file: &str) -> Result<Anura3dCase, ExportError> {
             ),
         ));
     }
+    if !case.walls.is_empty() {
+        return Err(refuse(
+            "fixity.friction",
+            "Anura3D has no frictional fixity (its friction acts between bodies in contact); \
+             remove friction from the fixities to export"
+                .into(),
+        ));
+    }
     // Anura3D has one multiplier for every prescribed velocity.
     let prescribed_velocity = match r.velocities.first() {
         None => "off  0.0  1.0",

@@ -35,6 +35,10 @@
 //! [[fixity]]
 //! plane = "x = 0"
 //! fixed = [true, false, false]
+//! [[fixity]]                      # a rigid wall normal to the one "fixed" axis: the body
+//! plane = "x = 2.0"               # presses on it, slides along it against Coulomb friction
+//! fixed = [true, false, false]    # (0: smooth) or leaves it (dry scenes; the mesh must lie
+//! friction = 0.5                  # on one side of it)
 //! [[traction]]
 //! physical = "top"
 //! traction = [0.0, -10.0, 0.0]    # kPa; or pressure = 10.0 (kPa, normal to each face,
@@ -75,6 +79,7 @@ use crate::material::law::LawSpec;
 use crate::material::liquid::LiquidSpec;
 use crate::step::nodal_velocity::{NodalVelocitySet, PrescribedNode};
 use crate::step::prescribed::{PrescribedElement, PrescribedVelocity};
+use crate::step::wall_friction::WallAxis;
 
 /// The scene file's content.
 #[derive(Debug, Deserialize)]
@@ -320,6 +325,11 @@ struct Fixity {
     /// Liquid fixities (impermeable directions); default: those of the solid.
     #[serde(default)]
     liquid: Option<[bool; 3]>,
+    /// Coulomb friction coefficient μ of a rigid wall: the one "fixed" component is the wall's
+    /// normal, which the body may press on or leave, the others slide against friction
+    /// ([`crate::step::wall_friction`]).
+    #[serde(default)]
+    friction: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -473,6 +483,43 @@ fn physical_faces(
 }
 
 /// All nodes (model numbering, corner and mid-edge) of the boundary group `name`.
+/// For each of the wall's `nodes`, the side of the mesh along `axis`: +1 where the elements
+/// around the node lie on its + side, -1 on its - side; `Err(node)` for a node with elements on
+/// both sides (or none), which no wall can bound.
+fn wall_sides(model: &Model, nodes: &[u32], axis: usize) -> Result<Vec<f64>, u32> {
+    // Per node, the lowest and highest element centroid along the axis, relative to the node.
+    let mut range = vec![(f64::INFINITY, f64::NEG_INFINITY); model.node_count()];
+    let mut on_wall = vec![false; model.node_count()];
+    for &n in nodes {
+        on_wall[n as usize] = true;
+    }
+    let corners = model.element_type.corners();
+    for e in 0..model.element_count() {
+        let el = &model.element(e)[..corners];
+        if !el.iter().any(|&n| on_wall[n as usize]) {
+            continue;
+        }
+        let centroid = el
+            .iter()
+            .map(|&n| model.node(n as usize)[axis])
+            .sum::<f64>()
+            / corners as f64;
+        for &n in el {
+            let r = &mut range[n as usize];
+            let d = centroid - model.node(n as usize)[axis];
+            *r = (r.0.min(d), r.1.max(d));
+        }
+    }
+    nodes
+        .iter()
+        .map(|&n| match range[n as usize] {
+            (lo, _) if lo > 0.0 => Ok(1.0),
+            (_, hi) if hi < 0.0 => Ok(-1.0),
+            _ => Err(n),
+        })
+        .collect()
+}
+
 fn physical_nodes(
     mesh: &MshMesh,
     node_map: &[u32],
@@ -737,6 +784,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         .collect();
     let mut fixed = vec![[false; 3]; model.node_count()];
     let mut liquid_fixed = vec![[false; 3]; model.node_count()];
+    let mut walls: Vec<[WallAxis; 3]> = Vec::new();
     let size = (0..3)
         .map(|a| {
             let (lo, hi) = model
@@ -784,6 +832,62 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
             }
         };
         let liquid = f.liquid.unwrap_or(f.fixed);
+        if let Some(mu) = f.friction {
+            let item = match (&f.physical, &f.plane) {
+                (Some(name), _) => format!("fixity \"{name}\".friction"),
+                (_, Some(plane)) => format!("fixity plane \"{plane}\".friction"),
+                _ => unreachable!("checked above"),
+            };
+            let axes: Vec<usize> = (0..3).filter(|&a| f.fixed[a]).collect();
+            let &[axis] = axes.as_slice() else {
+                return Err(invalid(
+                    item,
+                    format!(
+                        "a frictional wall fixes its normal component alone; fixed = {:?} has {} \
+                         fixed components",
+                        f.fixed,
+                        axes.len()
+                    ),
+                ));
+            };
+            if !(mu.is_finite() && mu >= 0.0) {
+                return Err(invalid(
+                    item,
+                    format!("must be a finite coefficient >= 0, got {mu}"),
+                ));
+            }
+            if materials.iter().flatten().any(|m| m.liquid.is_some()) {
+                return Err(invalid(
+                    item,
+                    "is modelled for dry scenes only (this one has a saturated material)".into(),
+                ));
+            }
+            if axis >= model.dimension.coords() {
+                return Err(invalid(
+                    item,
+                    format!("the wall's normal, axis {axis}, is not an axis of this 2D mesh"),
+                ));
+            }
+            let sides = wall_sides(&model, &nodes, axis).map_err(|n| {
+                invalid(
+                    item.clone(),
+                    format!(
+                        "the node at {:?} has elements on both sides along the wall's normal \
+                         ({}): a wall must bound the mesh",
+                        model.node(n as usize),
+                        ["x", "y", "z"][axis]
+                    ),
+                )
+            })?;
+            if walls.is_empty() {
+                walls = vec![[WallAxis::default(); 3]; model.node_count()];
+            }
+            for (&n, side) in nodes.iter().zip(sides) {
+                walls[n as usize][axis] = WallAxis { side, friction: mu };
+            }
+            // The wall holds the normal, not the fixity (the body may leave it).
+            continue;
+        }
         for n in nodes {
             for a in 0..3 {
                 fixed[n as usize][a] |= f.fixed[a];
@@ -1023,6 +1127,7 @@ pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
         input_node: (0..nodes as u32).collect(),
         fixed,
         liquid_fixed,
+        walls,
         traction,
         point_loads: Vec::new(),
         traction_curve: LoadCurve::ramp(traction_ramp),

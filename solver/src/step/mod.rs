@@ -15,3 +15,4 @@ pub mod reaction;
 pub mod smoothing;
 pub mod stress;
 pub mod time_step;
+pub mod wall_friction;
