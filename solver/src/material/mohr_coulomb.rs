@@ -1180,6 +1180,26 @@ mod tests {
         }
     }
 
+    /// A lone point in free flight: its stress decays towards zero over thousands of steps
+    /// (1e-100 kPa and less, subnormal in the end) while strain increments keep arriving. The
+    /// return stays finite at every such size (it once turned 1e-115 kPa into NaN).
+    #[test]
+    fn vanishing_stresses_return_to_finite_values() {
+        let l = law(0.3, 30.0, 0.0, 0.0, 0.0);
+        let shape = [-1.21, 0.6, -0.084, -1.04, -0.21, 0.33];
+        for scale in [1e-100, 1e-115, 1e-200, 1e-300, 1e-310, 5e-324] {
+            for de_scale in [0.0, 1e-120, 1e-6] {
+                let mut s = shape.map(|x| x * scale);
+                let de = [1.0, -2.0, 0.5, 0.3, -0.7, 0.2].map(|x| x * de_scale);
+                l.update(&mut s, &de);
+                assert!(
+                    s.iter().all(|x| x.is_finite()),
+                    "stress {scale:e}, strain {de_scale:e}: {s:?}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn f32_returns_stay_on_the_surface() {
         let l = MohrCoulomb::<f32>::new(E, 0.3, 30.0, 10.0, 5.0, 2.0);

@@ -404,7 +404,11 @@ pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> [Split<R>; W] {
         const LOW: f64 = 1.0 / 65536.0;
         const HIGH: f64 = 65536.0;
         if !(LOW..=HIGH).contains(&l) && l > 0.0 && l.is_finite() {
-            let e = (l.log2().round() as i32).clamp(-120, 120);
+            // As far as the precision's exponent range allows (a lone point in free flight
+            // carries stresses of 1e-100 kPa and less, which an f64 clamp at f32's range left
+            // to underflow into 0/0).
+            let reach = if R::BYTES == 4 { 120 } else { 1000 };
+            let e = (l.log2().round() as i32).clamp(-reach, reach);
             let down = R::of(2f64.powi(-e));
             up[q] = R::of(2f64.powi(e));
             for c in 0..6 {
@@ -761,15 +765,16 @@ mod tests {
     }
 
     /// The split of a tensor scaled by a power of two is the tensor's split scaled, bit for
-    /// bit, at stresses f32 cannot square twice (1e-10 kPa: a load ramped up from zero) and
-    /// far beyond any soil's, so no magnitude ends in infinities or NaN.
+    /// bit, at stresses f32 cannot square twice (1e-10 kPa: a load ramped up from zero), at
+    /// those of a lone point in free flight (f64 down to 2^-900) and far beyond any soil's, so
+    /// no magnitude ends in infinities or NaN.
     fn scales_exactly<R: Real>() {
         for t in tensors::<R>(1.0, 11) {
             let base = split(&t);
             // (f32 keeps the round-off of a nearly repeated pair, 1e-8 of the stress, normal
             // down to stresses of 1e-30: below it the result itself is subnormal.)
-            let far = if R::BYTES == 4 { 60 } else { 200 };
-            for e in [-far, -33, -17, 17, 40, far] {
+            let (far, wide) = if R::BYTES == 4 { (60, 60) } else { (200, 900) };
+            for e in [-wide, -far, -33, -17, 17, 40, far, wide] {
                 let k = R::of(2f64.powi(e));
                 let scaled = t.map(|x| x * k);
                 if scaled.iter().zip(&t).any(|(&y, &x)| y / k != x) {
