@@ -482,7 +482,6 @@ fn physical_faces(
     )
 }
 
-/// All nodes (model numbering, corner and mid-edge) of the boundary group `name`.
 /// For each of the wall's `nodes`, the side of the mesh along `axis`: +1 where the elements
 /// around the node lie on its + side, -1 on its - side; `Err(node)` for a node with elements on
 /// both sides (or none), which no wall can bound.
@@ -520,6 +519,7 @@ fn wall_sides(model: &Model, nodes: &[u32], axis: usize) -> Result<Vec<f64>, u32
         .collect()
 }
 
+/// All nodes (model numbering, corner and mid-edge) of the boundary group `name`.
 fn physical_nodes(
     mesh: &MshMesh,
     node_map: &[u32],
