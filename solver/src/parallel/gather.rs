@@ -42,6 +42,15 @@ pub use crate::parallel::team::ELEMENT_BLOCK;
 /// that claiming it costs nothing next to its work).
 pub const CHUNK_BLOCKS: usize = 16;
 
+/// Where the scatter cuts each thread's elements into pieces, in thousandths of the thread's
+/// points: a first piece of three quarters, then two eighths. A thread takes its own pieces
+/// in order, then the pieces still left of the others ([`Team::run_chunks`]), so a thread that
+/// its core slows down hands its last quarter to the others instead of holding them at the
+/// barrier. The scatter's chunks are few and large, unlike the stress pass's
+/// ([`CHUNK_BLOCKS`]): a node whose elements lie in two pieces goes through the slots, so every
+/// cut adds slot traffic (docs/design.md §5).
+pub const SCATTER_CUTS: [u64; 2] = [750, 875];
+
 /// Layout and scratch of the parallel step.
 #[derive(Debug)]
 ///
@@ -83,6 +92,11 @@ pub struct Layout<R: Real, E: Element = Tet4> {
     chunks: Vec<Range<usize>>,
     /// The chunks of each thread.
     thread_chunks: Vec<Range<usize>>,
+    /// The elements of each piece of the scatter ([`SCATTER_CUTS`]): contiguous, in order,
+    /// whole blocks, covering the mesh.
+    pieces: Vec<Range<usize>>,
+    /// The pieces of each thread.
+    thread_pieces: Vec<Range<usize>>,
     _types: std::marker::PhantomData<(R, E)>,
 }
 
@@ -197,8 +211,9 @@ impl<R: Real, E: Element> Layout<R, E> {
             }
         }
         owned_start.push(owned_node.len() as u32);
+        let (pieces, thread_pieces) = pieces_of(&element_ranges, &elem_start);
         let (direct, direct_node) = if halo.is_none() {
-            direct_slots::<E>(&element_ranges, &node_start, &node_slot)
+            direct_slots::<E>(&pieces, &node_start, &node_slot)
         } else {
             (vec![TO_SLOT; E::NODES * ne], vec![false; nn])
         };
@@ -207,6 +222,8 @@ impl<R: Real, E: Element> Layout<R, E> {
             elem_start,
             chunks,
             thread_chunks,
+            pieces,
+            thread_pieces,
             element_ranges,
             node_ranges,
             node_start,
@@ -242,6 +259,23 @@ impl<R: Real, E: Element> Layout<R, E> {
                 next = r.end;
             }
             assert_eq!(next, ne, "element ranges do not cover the mesh");
+            let mut next = 0;
+            for (r, own) in self.element_ranges.iter().zip(&self.thread_pieces) {
+                let p = &self.pieces[own.clone()];
+                assert!(
+                    p.first().map_or(r.is_empty(), |f| f.start == r.start)
+                        && p.last().map_or(true, |l| l.end == r.end),
+                    "a thread's pieces are not its elements"
+                );
+                for q in p {
+                    assert!(
+                        q.start == next && q.end > q.start && q.start % ELEMENT_BLOCK == 0,
+                        "scatter pieces not contiguous, non-empty and on blocks"
+                    );
+                    next = q.end;
+                }
+            }
+            assert_eq!(next, ne, "scatter pieces do not cover the mesh");
             assert!(
                 self.elem_start.windows(2).all(|w| w[0] <= w[1]),
                 "particle starts decrease"
@@ -356,10 +390,13 @@ impl<R: Real, E: Element> Layout<R, E> {
         self.elem_start[e] as usize..self.elem_start[e + 1] as usize
     }
 
-    /// Pass 1: on every thread, for each of its elements, zeroes a buffer for the values of the
-    /// element's nodes ([`Element::NODES`] slots of `W` values, one after the other), calls
+    /// Pass 1: for each element, on some thread, zeroes a buffer for the values of the element's
+    /// nodes ([`Element::NODES`] slots of `W` values, one after the other), calls
     /// `element(e, buffer)` ([`node_slots`] splits it by node), and hands each node's values on:
-    /// into the node's accumulator when the node is this thread's alone, else into its slot.
+    /// into the node's accumulator when all the node's elements lie in this piece
+    /// ([`SCATTER_CUTS`]), else into its slot. The pieces are handed out while the pass runs
+    /// ([`Team::run_chunks`]), each to one thread, which takes its elements in order: `element`
+    /// must write only what belongs to its element.
     pub fn scatter<const W: usize, F>(&self, team: &Team, slots: &mut Slots<R>, element: F)
     where
         F: Fn(usize, &mut [R]) + Sync,
@@ -367,9 +404,10 @@ impl<R: Real, E: Element> Layout<R, E> {
         self.scatter_with::<W, false, (), _>(team, slots, |_| (), |e, own, _| element(e, own));
     }
 
-    /// [`Layout::scatter`] with a state of each thread's own, made by `init(thread)` before
-    /// its first element and handed to every `element(e, buffer, state)` call of the thread, in
-    /// element order (for sums a pass keeps beside its slots).
+    /// [`Layout::scatter`] with a state of each piece's own, made by `init(thread)` before the
+    /// piece's first element and handed to every `element(e, buffer, state)` call of the piece,
+    /// in element order (for sums a pass keeps beside its slots; a piece holds whole
+    /// [`ELEMENT_BLOCK`]s).
     ///
     /// With `WIDE`, each thread's elements run compiled with AVX2 ([`avx2::call`]: `element`
     /// is inlined there, so pass a closure of its own to each instantiation); it panics where
@@ -389,12 +427,12 @@ impl<R: Real, E: Element> Layout<R, E> {
         let acc_at = self.accumulators();
         debug_assert_eq!(slots.len(), acc_at + WIDTH * self.direct_node.len());
         let shared = Shared::new(slots);
-        let ranges = &self.element_ranges;
+        let pieces = &self.pieces;
         let direct = &self.direct;
         assert!(!WIDE || avx2::present(), "an AVX2 scatter without AVX2");
-        team.run(|k| {
-            let r = ranges[k].clone();
-            // SAFETY: the element ranges are disjoint, so are their slots.
+        team.run_chunks(&self.thread_pieces, |k, c| {
+            let r = pieces[c].clone();
+            // SAFETY: the pieces are disjoint and each is handed out once, so are their slots.
             let mine = unsafe { shared.range(per_element * r.start..per_element * r.end) };
             let mut buffer = [R::ZERO; WIDTH * MAX_NODES];
             let own = &mut buffer[..per_element];
@@ -414,9 +452,10 @@ impl<R: Real, E: Element> Layout<R, E> {
                             continue;
                         }
                         let n = (target & !DIRECT_FIRST) as usize;
-                        // SAFETY: a node with a `direct` entry has every element in this thread's
-                        // range (`direct_slots`), so no other thread touches its accumulator, and
-                        // the accumulators lie past every slot.
+                        // SAFETY: a node with a `direct` entry has every element in this piece
+                        // (`direct_slots`), which one thread takes in element order, so no other
+                        // thread touches its accumulator, and the accumulators lie past every
+                        // slot.
                         let acc = unsafe { shared.range(acc_at + W * n..acc_at + W * n + W) };
                         if target & DIRECT_FIRST != 0 {
                             // 0 + v, not v: the slot pass's sum starts from 0 (and 0 + -0 is +0).
@@ -553,8 +592,8 @@ pub fn exact_total<const K: usize>(comm: &dyn Communicator, partials: &[[f64; K]
 
 /// The `direct` entries of [`Layout`] (and which nodes they cover) for one process: a node all
 /// of whose slots (`node_slot[node_start[n]..node_start[n + 1]]`, in element order) belong to
-/// elements of one thread's range adds straight into its accumulator, its first element
-/// marked.
+/// elements of one range of `element_ranges` (the scatter's pieces) adds straight into its
+/// accumulator, its first element marked.
 fn direct_slots<E: Element>(
     element_ranges: &[Range<usize>],
     node_start: &[u32],
@@ -613,6 +652,41 @@ fn chunks_of(ranges: &[Range<usize>]) -> (Vec<Range<usize>>, Vec<Range<usize>>) 
     (chunks, own)
 }
 
+/// Each thread's elements cut into the scatter's pieces at [`SCATTER_CUTS`] of its points, the
+/// cuts on block boundaries and empty pieces left out (a team of one keeps one piece): the
+/// pieces, and each thread's.
+fn pieces_of(
+    ranges: &[Range<usize>],
+    elem_start: &[u32],
+) -> (Vec<Range<usize>>, Vec<Range<usize>>) {
+    let mut pieces = Vec::new();
+    let mut own = Vec::with_capacity(ranges.len());
+    let cuts: &[u64] = if ranges.len() > 1 { &SCATTER_CUTS } else { &[] };
+    for r in ranges {
+        let first = pieces.len();
+        let points = |e: usize| u64::from(elem_start[e] - elem_start[r.start]);
+        let total = points(r.end);
+        let mut start = r.start;
+        for &cut in cuts {
+            // The first block boundary past the cut's share of the points.
+            let want = total * cut / 1000;
+            let mut end = start;
+            while end < r.end && points(end) < want {
+                end = (end + ELEMENT_BLOCK).min(r.end);
+            }
+            if end > start && end < r.end {
+                pieces.push(start..end);
+                start = end;
+            }
+        }
+        if start < r.end {
+            pieces.push(start..r.end);
+        }
+        own.push(first..pieces.len());
+    }
+    (pieces, own)
+}
+
 /// First particle of each element for particles sorted by `element`.
 pub fn element_starts(element: &[u32], elements: usize) -> Vec<u32> {
     let mut start = vec![0u32; elements + 1];
@@ -649,6 +723,46 @@ mod tests {
             ]
         );
         assert_eq!(own, [0..2, 2..2, 2..5]);
+    }
+
+    #[test]
+    fn pieces_cut_each_thread_at_its_shares_of_points_on_blocks() {
+        // Two threads of 64 blocks each, one point per element but for a crowded block 60
+        // (ten per element), and a third thread with nothing.
+        let elements = 128 * ELEMENT_BLOCK;
+        let mut elem_start = vec![0u32; elements + 1];
+        for e in 0..elements {
+            let here = if e / ELEMENT_BLOCK == 60 { 10 } else { 1 };
+            elem_start[e + 1] = elem_start[e] + here;
+        }
+        let ranges = [
+            0..64 * ELEMENT_BLOCK,
+            64 * ELEMENT_BLOCK..elements,
+            elements..elements,
+        ];
+        let (pieces, own) = pieces_of(&ranges, &elem_start);
+        assert_eq!(own, [0..3, 3..6, 6..6]);
+        let b = |k: usize| k * ELEMENT_BLOCK;
+        // Thread 0 holds 63 * 64 + 640 = 4,672 points: 3/4 of them (3,504) are reached at the
+        // end of block 54 (3,520), 7/8 (4,088) only past the crowded block 60 (4,480).
+        assert_eq!(pieces[0..3], [0..b(55), b(55)..b(61), b(61)..b(64)]);
+        // Thread 1, one point per element: 48 blocks, then 8 and 8.
+        assert_eq!(
+            pieces[3..6],
+            [b(64)..b(112), b(112)..b(120), b(120)..b(128)]
+        );
+        for w in pieces.windows(2) {
+            assert_eq!(w[0].end, w[1].start);
+            assert_eq!(w[0].end % ELEMENT_BLOCK, 0);
+        }
+        // A team of one: one piece.
+        let one_thread: [Range<usize>; 1] = [Range {
+            start: 0,
+            end: elements,
+        }];
+        let (pieces, own) = pieces_of(&one_thread, &elem_start);
+        assert_eq!(pieces.len(), 1);
+        assert_eq!((pieces[0].clone(), own[0].clone()), (0..elements, 0..1));
     }
 
     #[test]

@@ -236,8 +236,8 @@ pub fn grid_to_particle<E: Element, R: Real>(
                 let (kinetic, kinetic_w) = element(e, four);
                 let b = e / ELEMENT_BLOCK;
                 // SAFETY: the scatter hands element e to one thread only, once, in element
-                // order, and the thread's elements hold whole blocks (aligned ranges): no other
-                // thread touches block b, and its first element comes first.
+                // order, and its pieces hold whole blocks: no other thread touches block b,
+                // and its first element comes first.
                 let slot = unsafe { &mut $guard.range(b..b + 1)[0] };
                 if begin && e % ELEMENT_BLOCK == 0 {
                     *slot = GuardSums {
