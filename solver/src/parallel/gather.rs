@@ -397,6 +397,13 @@ impl<R: Real, E: Element> Layout<R, E> {
     /// ([`SCATTER_CUTS`]), else into its slot. The pieces are handed out while the pass runs
     /// ([`Team::run_chunks`]), each to one thread, which takes its elements in order: `element`
     /// must write only what belongs to its element.
+    ///
+    /// An element without points must add nothing to its buffer (checked in debug builds):
+    /// `element` is still called for it (for what else it records of the element), but its
+    /// buffer is not read: its slots take zeros and its nodes' accumulators nothing, which
+    /// are the same bits (an accumulator starts at `0 + v` and so is never −0, and `x + 0` is
+    /// `x` for every other `x`). A mesh mostly void, as around a collapsing column or a
+    /// run-out, then costs little per empty element.
     pub fn scatter<const W: usize, F>(&self, team: &Team, slots: &mut Slots<R>, element: F)
     where
         F: Fn(usize, &mut [R]) + Sync,
@@ -429,6 +436,7 @@ impl<R: Real, E: Element> Layout<R, E> {
         let shared = Shared::new(slots);
         let pieces = &self.pieces;
         let direct = &self.direct;
+        let start = &self.elem_start;
         assert!(!WIDE || avx2::present(), "an AVX2 scatter without AVX2");
         team.run_chunks(&self.thread_pieces, |k, c| {
             let r = pieces[c].clone();
@@ -442,6 +450,15 @@ impl<R: Real, E: Element> Layout<R, E> {
                     own.fill(R::ZERO);
                     element(e, own, &mut state);
                     let targets = &direct[E::NODES * e..E::NODES * e + E::NODES];
+                    if start[e] == start[e + 1] {
+                        debug_assert!(
+                            own.iter().all(|v| v.f64().to_bits() == 0),
+                            "element {e} has no points but added to its buffer"
+                        );
+                        // SAFETY: as for the nodes' accumulators below.
+                        unsafe { empty_element::<R, W>(slot, targets, &shared, acc_at) };
+                        continue;
+                    }
                     for ((values, to), &target) in own
                         .chunks_exact(W)
                         .zip(slot.chunks_exact_mut(W))
@@ -631,6 +648,32 @@ fn direct_slots<E: Element>(
         }
     }
     (direct, direct_node)
+}
+
+/// The scatter's hand-on for an element without points (its buffer all zeros): its slots
+/// take zeros, a node's accumulator that starts at it zero, and the other accumulators
+/// nothing (`x + 0` is `x` for every `x` an accumulator holds: it starts at `0 + v`, never
+/// −0). Kept out of the element loop, which inlines each pass's element there.
+///
+/// # Safety
+/// `acc_at` and `targets` as in [`Layout::scatter_with`]: no other thread touches the
+/// accumulators of `targets`' direct nodes while this runs.
+#[inline(never)]
+unsafe fn empty_element<R: Real, const W: usize>(
+    slot: &mut [R],
+    targets: &[u32],
+    shared: &Shared<'_, R>,
+    acc_at: usize,
+) {
+    for (to, &target) in slot.chunks_exact_mut(W).zip(targets) {
+        if target == TO_SLOT {
+            to.fill(R::ZERO);
+        } else if target & DIRECT_FIRST != 0 {
+            let n = (target & !DIRECT_FIRST) as usize;
+            // SAFETY: the caller's.
+            unsafe { shared.range(acc_at + W * n..acc_at + W * n + W) }.fill(R::ZERO);
+        }
+    }
 }
 
 /// The threads' element ranges cut into chunks of [`CHUNK_BLOCKS`] blocks (the ranges start

@@ -100,6 +100,10 @@ pub fn grid_to_particle<E: Element, R: Real>(
                 // indexes without bounds checks.
                 let range = layout.particles_of(e);
                 let count = range.len();
+                // An element without points adds nothing (the scatter's contract).
+                if count == 0 {
+                    return (kinetic, kinetic_w);
+                }
                 let (x, mass, active, material) = (
                     &x[range.clone()][..count],
                     &mass[range.clone()][..count],
