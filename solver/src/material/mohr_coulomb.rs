@@ -153,24 +153,54 @@ impl<R: Real> Surface<R> {
         half * (hi - lo) + half * (hi + lo) * self.sin_phi - self.cohesion
     }
 
+    /// The first test of [`Surface::surely_inside`], for `W` stresses at once (`s[c][q]`:
+    /// component c of lane q), each lane the bits of one stress's: the mean stress p, J2,
+    /// r = c - p sin φ, and whether the stress is surely outside the pyramid (F above its
+    /// smallest value over the Lode angle, reached on the compression meridian where soil
+    /// under gravity sits, and where soil flowing plastically stays).
+    #[inline(always)]
+    fn pyramid_bound_lanes<const W: usize>(
+        &self,
+        s: &[[R; W]; 6],
+    ) -> ([R; W], [R; W], [R; W], [bool; W]) {
+        // Each step a loop over the lanes alone (vector instructions).
+        let p: [R; W] = std::array::from_fn(|q| (s[0][q] + s[1][q] + s[2][q]) * R::of(1.0 / 3.0));
+        let mut d = [[R::ZERO; W]; 3];
+        for c in 0..3 {
+            for q in 0..W {
+                d[c][q] = s[c][q] - p[q];
+            }
+        }
+        let mut j2 = [R::ZERO; W];
+        for q in 0..W {
+            let (d0, d1, d2) = (d[0][q], d[1][q], d[2][q]);
+            let (xy, yz, zx) = (s[3][q], s[4][q], s[5][q]);
+            j2[q] = R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + xy * xy + yz * yz + zx * zx;
+        }
+        // Largest (σ3 - σ1)/2 - σ2' sin φ / 2 over the Lode angle: sqrt(J2 (1 + sin²φ/3)).
+        let r: [R; W] = std::array::from_fn(|q| self.cohesion - p[q] * self.sin_phi);
+        let beyond = std::array::from_fn(|q| (r[q] < R::ZERO) | (j2[q] * self.inner > r[q] * r[q]));
+        (p, j2, r, beyond)
+    }
+
     /// Whether `s` is inside both surfaces, from bounds on its principal stresses that need no
     /// eigen decomposition (false means "look closer", not "outside"): first a bound from the
     /// mean stress and J2 alone, then bounds on the largest and smallest principal stress by
     /// Newton's method on the characteristic polynomial from outside the spectrum.
     #[inline(always)]
     fn surely_inside(&self, s: &[R; 6]) -> bool {
-        let p = (s[0] + s[1] + s[2]) * R::of(1.0 / 3.0);
+        let ([p], [j2], [r], [beyond]) = self.pyramid_bound_lanes(&s.map(|x| [x]));
+        // Surely outside the pyramid: the Newton bounds below could not help, so go straight
+        // to the decomposition.
+        !beyond && self.surely_inside_within(s, p, j2, r)
+    }
+
+    /// The rest of [`Surface::surely_inside`] for a stress `s` within the first bound, given
+    /// that bound's p, J2 and r.
+    #[inline(always)]
+    fn surely_inside_within(&self, s: &[R; 6], p: R, j2: R, r: R) -> bool {
         let (d0, d1, d2) = (s[0] - p, s[1] - p, s[2] - p);
         let (xy, yz, zx) = (s[3], s[4], s[5]);
-        let j2 = R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + xy * xy + yz * yz + zx * zx;
-        // Largest (σ3 - σ1)/2 - σ2' sin φ / 2 over the Lode angle: sqrt(J2 (1 + sin²φ/3)).
-        let r = self.cohesion - p * self.sin_phi;
-        // Surely outside the pyramid (F above its smallest value over the Lode angle, reached
-        // on the compression meridian where soil under gravity sits): the Newton bounds below
-        // could not help, so go straight to the decomposition.
-        if r < R::ZERO || j2 * self.inner > r * r {
-            return false;
-        }
         // Nor can they when that smallest value is within their margin (below) of 0, as on the
         // compression meridian after a return there: the state is on the surface to round-off
         // and the decomposition decides. (Either way the stress is left as it is when the
@@ -271,10 +301,15 @@ impl<R: Real> Surface<R> {
         s: &mut [[R; W]; 6],
         on: &[bool; W],
     ) {
+        // The first of the bounds over the lanes at once: plastic flow fails it, and then
+        // the others need not be formed.
+        let (p, j2, r, beyond) = self.pyramid_bound_lanes(s);
         let mut need = [0usize; W];
         let mut count = 0;
         for q in 0..W {
-            if on[q] && !self.surely_inside(&s.map(|c| c[q])) {
+            if on[q]
+                && (beyond[q] || !self.surely_inside_within(&s.map(|c| c[q]), p[q], j2[q], r[q]))
+            {
                 need[count] = q;
                 count += 1;
             }
@@ -292,34 +327,49 @@ impl<R: Real> Surface<R> {
         }
         let splits = split_lanes(&packed);
         if !self.cut_off && planes.inverted {
-            // The pyramid's returns side by side too ([`Surface::pyramid_return_lanes`]).
-            let sig: [[R; W]; 3] = std::array::from_fn(|i| splits.map(|sp| sp.values[i]));
-            let tested = splits.map(|sp| self.outside(&sp.values));
-            let (scale, outside) = (tested.map(|t| t.0), tested.map(|t| t.1));
+            // The pyramid's returns side by side too ([`Surface::pyramid_return_lanes`]), and
+            // their rebuilds.
+            let sig = &splits.values;
+            let mut scale = [R::ZERO; W];
+            let mut outside = [false; W];
+            for q in 0..W {
+                (scale[q], outside[q]) = self.outside(&[sig[0][q], sig[1][q], sig[2][q]]);
+            }
             if !outside[..count].contains(&true) {
                 return;
             }
-            let (back, settled) = self.pyramid_return_lanes(el, planes, &sig, &scale);
-            for k in 0..count {
-                if !outside[k] {
-                    continue;
+            let (mut back, settled) = self.pyramid_return_lanes(el, planes, sig, &scale);
+            for k in (0..count).filter(|&k| outside[k] && !settled[k]) {
+                let values =
+                    self.principal_return(el, planes, &[sig[0][k], sig[1][k], sig[2][k]], scale[k]);
+                for i in 0..3 {
+                    back[i][k] = values[i];
                 }
-                let values = if settled[k] {
-                    [back[0][k], back[1][k], back[2][k]]
-                } else {
-                    self.principal_return(el, planes, &splits[k].values, scale[k])
-                };
-                let out = splits[k].rebuild(&values);
-                for (c, v) in out.into_iter().enumerate() {
-                    s[c][need[k]] = v;
+            }
+            let out = splits.rebuild(&back);
+            if count == W {
+                // Every lane decomposed in place (as in plastic flow): chosen lane by lane.
+                for c in 0..6 {
+                    for q in 0..W {
+                        s[c][q] = if outside[q] { out[c][q] } else { s[c][q] };
+                    }
+                }
+            } else {
+                for k in (0..count).filter(|&k| outside[k]) {
+                    for c in 0..6 {
+                        s[c][need[k]] = out[c][k];
+                    }
                 }
             }
             return;
         }
-        for (k, sp) in splits.iter().enumerate().take(count) {
+        for k in 0..count {
             let q = need[k];
             let mut sq = s.map(|c| c[q]);
-            if self.return_split(el, planes, sp, &mut sq).is_some() {
+            if self
+                .return_split(el, planes, &splits.lane(k), &mut sq)
+                .is_some()
+            {
                 for c in 0..6 {
                     s[c][q] = sq[c];
                 }

@@ -91,7 +91,8 @@ fn sorted<R: Real>(values: [R; 3], vectors: [[R; 3]; 3]) -> Principal<R> {
 /// to round-off, or a non-finite one.
 #[inline]
 fn far_root<R: Real>(s: &[R; 6]) -> Option<(R, [R; 3], R, R)> {
-    let f = far_root_lanes::<R, 1>(&s.map(|x| [x]));
+    let largest = s.iter().fold(R::ZERO, |m, x| m.max(x.abs()));
+    let f = far_root_lanes::<R, 1>(&s.map(|x| [x]), &[largest]);
     f.ok[0].then(|| (f.far[0], f.n.map(|c| c[0]), f.size[0], f.p[0]))
 }
 
@@ -112,9 +113,9 @@ struct FarLanes<R: Real, const W: usize> {
 
 /// The lanes of [`far_root`]: the long chain of dependent square roots, divisions and products
 /// is latency, so several tensors side by side keep the core busy (and go to vector
-/// instructions where the compiler can).
+/// instructions where the compiler can). `largest`: each tensor's largest entry in magnitude.
 #[inline(always)]
-fn far_root_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> FarLanes<R, W> {
+fn far_root_lanes<R: Real, const W: usize>(s: &[[R; W]; 6], largest: &[R; W]) -> FarLanes<R, W> {
     let third = R::of(1.0 / 3.0);
     let (xy, yz, zx) = (&s[3], &s[4], &s[5]);
     let mut p = [R::ZERO; W];
@@ -131,11 +132,7 @@ fn far_root_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> FarLanes<R, W> {
         let (d0, d1, d2) = (d[0][q], d[1][q], d[2][q]);
         let (xy, yz, zx) = (xy[q], yz[q], zx[q]);
         j2[q] = R::of(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + xy * xy + yz * yz + zx * zx;
-        let mut largest = R::ZERO;
-        for x in s {
-            largest = largest.max(x[q].abs());
-        }
-        let small = R::of(1e3 * R::EPSILON) * largest;
+        let small = R::of(1e3 * R::EPSILON) * largest[q];
         ok[q] = j2[q] > small * small;
         j3[q] = d0 * (d1 * d2 - yz * yz) - xy * (xy * d2 - yz * zx) + zx * (xy * yz - d1 * zx);
     }
@@ -379,54 +376,80 @@ fn outer<R: Real>(n: &[R; 3], w: R) -> [R; 6] {
 /// tensor.
 #[inline]
 pub fn split<R: Real>(s: &[R; 6]) -> Split<R> {
-    let [one] = split_lanes::<R, 1>(&s.map(|x| [x]));
-    one
+    split_lanes::<R, 1>(&s.map(|x| [x])).lane(0)
 }
 
-/// [`split`] of `W` tensors at once (`s[c][q]`: component c of tensor q), each the bits of
-/// [`split`] of that tensor alone: the decomposition is a chain of dependent square roots and
-/// divisions, so tensors side by side overlap their latencies.
+/// [`split`] of `W` tensors at once (`s[c][q]`: component c of tensor q), each lane the bits
+/// of [`split`] of that tensor alone: the decomposition is a chain of dependent square roots
+/// and divisions, so tensors side by side overlap their latencies, and each step is one
+/// operation over the lanes (vector instructions) rather than one per tensor. The rare cases
+/// (a tensor to scale, one nearly isotropic) are fixed up lane by lane afterwards.
 #[inline(always)]
-pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> [Split<R>; W] {
+pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> SplitLanes<R, W> {
     // A tensor whose largest entry lies outside [2^-16, 2^16] is decomposed scaled by a power
     // of two that brings it to about 1: the eigenvector's squared length below is a fourth
     // power of the entries, which f32 underflows for stresses of order 1e-10 (a load ramped up
     // from zero) and overflows above 1e9. Scaling by a power of two is exact, and the factor
     // is 1 in range, so the bits are those of the unscaled arithmetic wherever it was finite.
+    let mut largest = [R::ZERO; W];
+    for c in s {
+        for q in 0..W {
+            largest[q] = largest[q].max(c[q].abs());
+        }
+    }
+    const LOW: f64 = 1.0 / 65536.0;
+    const HIGH: f64 = 65536.0;
+    // Outside the range, above 0 and finite (false for NaN), as a test without branches.
+    let scaled = |l: R| {
+        let l = l.f64();
+        ((l < LOW) | (l > HIGH)) & (l > 0.0) & (l < f64::INFINITY)
+    };
     let mut t = *s;
     let mut up = [R::ONE; W];
-    for q in 0..W {
-        let mut largest = R::ZERO;
-        for c in s {
-            largest = largest.max(c[q].abs());
-        }
-        let l = largest.f64();
-        const LOW: f64 = 1.0 / 65536.0;
-        const HIGH: f64 = 65536.0;
-        if !(LOW..=HIGH).contains(&l) && l > 0.0 && l.is_finite() {
+    if largest.iter().fold(false, |any, &l| any | scaled(l)) {
+        for q in 0..W {
+            if !scaled(largest[q]) {
+                continue;
+            }
             // As far as the precision's exponent range allows (a lone point in free flight
             // carries stresses of 1e-100 kPa and less, which an f64 clamp at f32's range left
             // to underflow into 0/0).
             let reach = if R::BYTES == 4 { 120 } else { 1000 };
-            let e = (l.log2().round() as i32).clamp(-reach, reach);
+            let e = (largest[q].f64().log2().round() as i32).clamp(-reach, reach);
             let down = R::of(2f64.powi(-e));
             up[q] = R::of(2f64.powi(e));
+            largest[q] = R::ZERO;
             for c in 0..6 {
                 t[c][q] = s[c][q] * down;
+                largest[q] = largest[q].max(t[c][q].abs());
             }
         }
     }
     let s = &t;
-    let f = far_root_lanes(s);
+    let f = far_root_lanes(s, &largest);
+    // The far eigenvalue and its projector n ⊗ n / |n|² ([`outer`]) for every lane, then the
+    // Jacobi decomposition's extreme pair where the closed form failed (a tensor isotropic to
+    // round-off: what the lanes hold there is discarded).
     let mut lambda = [R::ZERO; W];
     let mut o = [[R::ZERO; W]; 6];
+    let mut nw = [[R::ZERO; W]; 3];
     for q in 0..W {
-        let (l, oq) = if f.ok[q] {
-            (
-                f.far[q] + f.p[q],
-                outer(&f.n.map(|c| c[q]), R::ONE / f.size[q]),
-            )
-        } else {
+        lambda[q] = f.far[q] + f.p[q];
+        let w = R::ONE / f.size[q];
+        for i in 0..3 {
+            nw[i][q] = f.n[i][q] * w;
+        }
+    }
+    for (c, (i, j)) in [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)]
+        .into_iter()
+        .enumerate()
+    {
+        for q in 0..W {
+            o[c][q] = nw[i][q] * f.n[j][q];
+        }
+    }
+    if f.ok.contains(&false) {
+        for q in (0..W).filter(|&q| !f.ok[q]) {
             let p = jacobi(&s.map(|c| c[q]));
             // The extreme eigenvalue farther from the middle one.
             let k = if p.values[2] - p.values[1] >= p.values[1] - p.values[0] {
@@ -434,76 +457,144 @@ pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> [Split<R>; W] {
             } else {
                 0
             };
-            (p.values[k], outer(&p.vectors[k], R::ONE))
-        };
-        lambda[q] = l;
-        for c in 0..6 {
-            o[c][q] = oq[c];
+            lambda[q] = p.values[k];
+            for (c, v) in outer(&p.vectors[k], R::ONE).into_iter().enumerate() {
+                o[c][q] = v;
+            }
         }
     }
+    // From here each step is a loop over the lanes alone, which the compiler turns into
+    // vector instructions (choices included, as blends).
     let half = R::of(0.5);
+    let two = R::of(2.0);
     let mut m = [R::ZERO; W];
-    let mut plane = [[R::ZERO; W]; 6];
-    let mut g = [R::ZERO; W];
     for q in 0..W {
         m[q] = half * (s[0][q] + s[1][q] + s[2][q] - lambda[q]);
-        // s - λ n ⊗ n - m (I - n ⊗ n): exact to the round-off of s itself, whatever the gap.
-        let k = m[q] - lambda[q];
-        for c in 0..3 {
-            plane[c][q] = s[c][q] - m[q] + k * o[c][q];
+    }
+    let k: [R; W] = std::array::from_fn(|q| m[q] - lambda[q]);
+    // s - λ n ⊗ n - m (I - n ⊗ n): exact to the round-off of s itself, whatever the gap.
+    let mut plane = [[R::ZERO; W]; 6];
+    for c in 0..3 {
+        for q in 0..W {
+            plane[c][q] = s[c][q] - m[q] + k[q] * o[c][q];
         }
-        for c in 3..6 {
-            plane[c][q] = s[c][q] + k * o[c][q];
+    }
+    for c in 3..6 {
+        for q in 0..W {
+            plane[c][q] = s[c][q] + k[q] * o[c][q];
         }
-        let norm2 = plane[0][q] * plane[0][q]
-            + plane[1][q] * plane[1][q]
-            + plane[2][q] * plane[2][q]
-            + R::of(2.0)
-                * (plane[3][q] * plane[3][q]
-                    + plane[4][q] * plane[4][q]
-                    + plane[5][q] * plane[5][q]);
-        // |plane| = sqrt(2) g for the half gap g.
+    }
+    // |plane| = sqrt(2) g for the half gap g.
+    let mut g = [R::ZERO; W];
+    for q in 0..W {
+        let p = &plane;
+        let norm2 = p[0][q] * p[0][q]
+            + p[1][q] * p[1][q]
+            + p[2][q] * p[2][q]
+            + two * (p[3][q] * p[3][q] + p[4][q] * p[4][q] + p[5][q] * p[5][q]);
         g[q] = (half * norm2).sqrt();
     }
-    let mut out = [Split {
-        values: [R::ZERO; 3],
-        far: 0,
-        outer: [R::ZERO; 6],
-        plane: [R::ZERO; 6],
-        inv_gap: R::ZERO,
-    }; W];
-    for (q, out) in out.iter_mut().enumerate() {
+    // The far value above the pair, or below it; only round-off puts it between them (a
+    // tensor isotropic to it), where the three are sorted and it counts as the top one when
+    // above the pair's mean.
+    let mut out = SplitLanes {
+        values: [[R::ZERO; W]; 3],
+        far_top: [false; W],
+        outer: o,
+        plane,
+        inv_gap: [R::ZERO; W],
+    };
+    for q in 0..W {
         let (lambda, m, g) = (lambda[q], m[q], g[q]);
         let (lo, hi) = (m - g, m + g);
-        let (values, far) = if lambda >= hi {
-            ([lo, hi, lambda], 2)
-        } else if lambda <= lo {
-            ([lambda, lo, hi], 0)
-        } else {
-            // Only round-off puts the far value between the others (a tensor isotropic to it).
-            let v = [lambda, lo, hi];
-            let (a, b) = (v[0].min(v[1]), v[0].max(v[1]));
-            (
-                [a, b.min(v[2]), b.max(v[2])],
-                if lambda <= m { 0 } else { 2 },
-            )
-        };
-        // Back to the tensor's scale (exact: a power of two).
-        let up = up[q];
-        out.values = values.map(|v| v * up);
-        out.far = far;
-        for c in 0..6 {
-            out.outer[c] = o[c][q];
-            out.plane[c] = plane[c][q] * up;
-        }
+        let top = lambda >= hi;
+        let bottom = lambda <= lo;
+        let (a, b) = (lambda.min(lo), lambda.max(lo));
+        let (mid_lo, mid_mid, mid_hi) = (a, b.min(hi), b.max(hi));
+        let v0 = if bottom { lambda } else { mid_lo };
+        let v1 = if bottom { lo } else { mid_mid };
+        let v2 = if bottom { hi } else { mid_hi };
+        out.values[0][q] = if top { lo } else { v0 };
+        out.values[1][q] = if top { hi } else { v1 };
+        out.values[2][q] = if top { lambda } else { v2 };
+        out.far_top[q] = top || (!bottom && !(lambda <= m));
         // Off the critical path: the return runs beside it.
-        out.inv_gap = if g > R::ZERO {
-            R::ONE / (g * up)
-        } else {
-            R::ZERO
-        };
+        let inv = R::ONE / (g * up[q]);
+        out.inv_gap[q] = if g > R::ZERO { inv } else { R::ZERO };
+    }
+    // Back to the tensor's scale (exact: a power of two).
+    if up.iter().any(|&u| u != R::ONE) {
+        for q in 0..W {
+            for i in 0..3 {
+                out.values[i][q] = out.values[i][q] * up[q];
+            }
+            for c in 0..6 {
+                out.plane[c][q] = out.plane[c][q] * up[q];
+            }
+        }
     }
     out
+}
+
+/// The [`Split`]s of `W` tensors lane by lane (`values[i][q]`: value i of lane q), as
+/// [`split_lanes`] forms them, so that a return and its rebuild run over the lanes too.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SplitLanes<R: Real, const W: usize> {
+    /// Each lane's [`Split::values`].
+    pub values: [[R; W]; 3],
+    /// Whether each lane's far value is its largest ([`Split::far`] 2) rather than its
+    /// smallest (0).
+    pub far_top: [bool; W],
+    /// Each lane's [`Split::outer`].
+    pub outer: [[R; W]; 6],
+    /// Each lane's [`Split::plane`].
+    pub plane: [[R; W]; 6],
+    /// Each lane's 1 / (half the pair's gap).
+    inv_gap: [R; W],
+}
+
+impl<R: Real, const W: usize> SplitLanes<R, W> {
+    /// Lane `q`'s [`Split`].
+    #[inline(always)]
+    pub fn lane(&self, q: usize) -> Split<R> {
+        Split {
+            values: self.values.map(|v| v[q]),
+            far: if self.far_top[q] { 2 } else { 0 },
+            outer: self.outer.map(|v| v[q]),
+            plane: self.plane.map(|v| v[q]),
+            inv_gap: self.inv_gap[q],
+        }
+    }
+
+    /// [`Split::rebuild`] of every lane with its eigenvalues `values` (`values[i][q]`), each
+    /// lane the bits of its own rebuild.
+    #[inline(always)]
+    pub fn rebuild(&self, values: &[[R; W]; 3]) -> [[R; W]; 6] {
+        let half = R::of(0.5);
+        let (mut m, mut r, mut c) = ([R::ZERO; W], [R::ZERO; W], [R::ZERO; W]);
+        for q in 0..W {
+            let top = self.far_top[q];
+            let (v0, v1, v2) = (values[0][q], values[1][q], values[2][q]);
+            let lambda = if top { v2 } else { v0 };
+            let lo = if top { v0 } else { v1 };
+            let hi = if top { v1 } else { v2 };
+            m[q] = half * (lo + hi);
+            r[q] = half * (hi - lo) * self.inv_gap[q];
+            c[q] = lambda - m[q];
+        }
+        let mut out = [[R::ZERO; W]; 6];
+        for k in 0..3 {
+            for q in 0..W {
+                out[k][q] = m[q] + c[q] * self.outer[k][q] + r[q] * self.plane[k][q];
+            }
+        }
+        for k in 3..6 {
+            for q in 0..W {
+                out[k][q] = c[q] * self.outer[k][q] + r[q] * self.plane[k][q];
+            }
+        }
+        out
+    }
 }
 
 impl<R: Real> Split<R> {
@@ -747,10 +838,10 @@ mod tests {
                 for q in 0..4 {
                     let want = split(&group[q]);
                     assert!(
-                        same_bits(&got[q], &want),
+                        same_bits(&got.lane(q), &want),
                         "{:?}: {:?} against {:?}",
                         group[q],
-                        got[q],
+                        got.lane(q),
                         want
                     );
                 }
