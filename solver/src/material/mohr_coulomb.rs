@@ -349,9 +349,12 @@ impl<R: Real> Surface<R> {
             let out = splits.rebuild(&back);
             if count == W {
                 // Every lane decomposed in place (as in plastic flow): chosen lane by lane.
+                // (Chosen against the packed copy, which then holds each lane's trial: whole
+                // rows stored, where a choice against `s` itself becomes masked stores that
+                // the caller's loads of `s` wait for.)
                 for c in 0..6 {
                     for q in 0..W {
-                        s[c][q] = if outside[q] { out[c][q] } else { s[c][q] };
+                        s[c][q] = if outside[q] { out[c][q] } else { packed[c][q] };
                     }
                 }
             } else {
