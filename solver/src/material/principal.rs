@@ -399,7 +399,9 @@ pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> SplitLanes<R, W>
     }
     const LOW: f64 = 1.0 / 65536.0;
     const HIGH: f64 = 65536.0;
-    // Outside the range, above 0 and finite (false for NaN), as a test without branches.
+    // Outside the range, above 0 and finite (false for NaN), as a test without branches
+    // (`contains` would branch).
+    #[allow(clippy::manual_range_contains)]
     let scaled = |l: R| {
         let l = l.f64();
         ((l < LOW) | (l > HIGH)) & (l > 0.0) & (l < f64::INFINITY)
@@ -526,10 +528,10 @@ pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> SplitLanes<R, W>
     if up.iter().any(|&u| u != R::ONE) {
         for q in 0..W {
             for i in 0..3 {
-                out.values[i][q] = out.values[i][q] * up[q];
+                out.values[i][q] *= up[q];
             }
             for c in 0..6 {
-                out.plane[c][q] = out.plane[c][q] * up[q];
+                out.plane[c][q] *= up[q];
             }
         }
     }
