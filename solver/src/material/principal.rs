@@ -366,8 +366,24 @@ pub struct Split<R: Real> {
 /// w n ⊗ n (xx yy zz xy yz zx).
 #[inline]
 fn outer<R: Real>(n: &[R; 3], w: R) -> [R; 6] {
-    let (a, b, c) = (n[0] * w, n[1] * w, n[2] * w);
-    [a * n[0], b * n[1], c * n[2], a * n[1], b * n[2], c * n[0]]
+    outer_lanes(&n.map(|x| [x]), &[w]).map(|[x]| x)
+}
+
+/// [`outer`] of `W` vectors at once (`n[i][q]`: component i of lane q), as loops over the
+/// lanes.
+#[inline(always)]
+fn outer_lanes<R: Real, const W: usize>(n: &[[R; W]; 3], w: &[R; W]) -> [[R; W]; 6] {
+    let nw: [[R; W]; 3] = std::array::from_fn(|i| std::array::from_fn(|q| n[i][q] * w[q]));
+    let mut o = [[R::ZERO; W]; 6];
+    for (c, (i, j)) in [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)]
+        .into_iter()
+        .enumerate()
+    {
+        for q in 0..W {
+            o[c][q] = nw[i][q] * n[j][q];
+        }
+    }
+    o
 }
 
 /// The [`Split`] of the symmetric tensor `s` (xx yy zz xy yz zx): the closed form's best
@@ -432,24 +448,8 @@ pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> SplitLanes<R, W>
     // The far eigenvalue and its projector n ⊗ n / |n|² ([`outer`]) for every lane, then the
     // Jacobi decomposition's extreme pair where the closed form failed (a tensor isotropic to
     // round-off: what the lanes hold there is discarded).
-    let mut lambda = [R::ZERO; W];
-    let mut o = [[R::ZERO; W]; 6];
-    let mut nw = [[R::ZERO; W]; 3];
-    for q in 0..W {
-        lambda[q] = f.far[q] + f.p[q];
-        let w = R::ONE / f.size[q];
-        for i in 0..3 {
-            nw[i][q] = f.n[i][q] * w;
-        }
-    }
-    for (c, (i, j)) in [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)]
-        .into_iter()
-        .enumerate()
-    {
-        for q in 0..W {
-            o[c][q] = nw[i][q] * f.n[j][q];
-        }
-    }
+    let mut lambda: [R; W] = std::array::from_fn(|q| f.far[q] + f.p[q]);
+    let mut o = outer_lanes(&f.n, &f.size.map(|size| R::ONE / size));
     if f.ok.contains(&false) {
         for q in (0..W).filter(|&q| !f.ok[q]) {
             let p = jacobi(&s.map(|c| c[q]));
