@@ -402,8 +402,9 @@ impl<R: Real, E: Element> Layout<R, E> {
     /// `element` is still called for it (for what else it records of the element), but its
     /// buffer is not read: its slots take zeros and its nodes' accumulators nothing, which
     /// are the same bits (an accumulator starts at `0 + v` and so is never −0, and `x + 0` is
-    /// `x` for every other `x`). A mesh mostly void, as around a collapsing column or a
-    /// run-out, then costs little per empty element.
+    /// `x` for every other `x`), and the next element starts from that buffer, still zero. A
+    /// mesh mostly void, as around a collapsing column or a run-out, then costs little per
+    /// empty element.
     pub fn scatter<const W: usize, F>(&self, team: &Team, slots: &mut Slots<R>, element: F)
     where
         F: Fn(usize, &mut [R]) + Sync,
@@ -446,8 +447,10 @@ impl<R: Real, E: Element> Layout<R, E> {
             let own = &mut buffer[..per_element];
             let mut state = init(k);
             let elements = || {
+                // The buffer is zero at the top of the loop: it starts so, an element without
+                // points leaves it so, and the others' values are cleared once handed on (runs
+                // of empty elements, as in a void mesh, zero nothing).
                 for (slot, e) in mine.chunks_exact_mut(per_element).zip(r) {
-                    own.fill(R::ZERO);
                     element(e, own, &mut state);
                     let targets = &direct[E::NODES * e..E::NODES * e + E::NODES];
                     if start[e] == start[e + 1] {
@@ -485,6 +488,7 @@ impl<R: Real, E: Element> Layout<R, E> {
                             }
                         }
                     }
+                    own.fill(R::ZERO);
                 }
             };
             if WIDE {
