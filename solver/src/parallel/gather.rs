@@ -458,8 +458,14 @@ impl<R: Real, E: Element> Layout<R, E> {
                             own.iter().all(|v| v.f64().to_bits() == 0),
                             "element {e} has no points but added to its buffer"
                         );
-                        // SAFETY: as for the nodes' accumulators below.
-                        unsafe { empty_element::<R, W>(slot, targets, &shared, acc_at) };
+                        // Only a slot or a node's first element takes zeros: most empty
+                        // elements have neither (the test of one bit, which `TO_SLOT` has too,
+                        // unrolled over the element's nodes).
+                        const { assert!(TO_SLOT & DIRECT_FIRST != 0) };
+                        if targets.iter().any(|&t| t & DIRECT_FIRST != 0) {
+                            // SAFETY: as for the nodes' accumulators below.
+                            unsafe { empty_element::<R, W>(slot, targets, &shared, acc_at) };
+                        }
                         continue;
                     }
                     for ((values, to), &target) in own
