@@ -275,6 +275,26 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
     e: usize,
     four: &mut [R],
 ) {
+    let range = cx.layout.particles_of(e);
+    let count = range.len();
+    // An element without points: its buffer holds zeros already, which the sums would store
+    // ([`Layout::scatter`]), and under mixed integration its outputs are those of no points
+    // (not full, zero means), so it returns before reading the element (most of a void mesh's
+    // elements take this path at every step). (The test is of an opaque copy of the count:
+    // the loops below, compiled knowing the count is not zero, took more instructions per
+    // point.)
+    if std::hint::black_box(count) == 0 {
+        debug_assert!(four.iter().all(|v| v.f64().to_bits() == 0));
+        if let Some((stress, flags, _, pressure, _)) = &cx.mixed {
+            // SAFETY: element e is this thread's only.
+            unsafe {
+                stress.write(e, [R::ZERO; 6]);
+                flags.write(e, false);
+                pressure.write(e, R::ZERO);
+            }
+        }
+        return;
+    }
     let grad = cx.mesh.grad[e].as_ref();
     let by_component = gradients_by_component::<E, R>(grad);
     // The element's sums, value by value across its nodes (stored into `four` at the end).
@@ -283,7 +303,6 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
     // The liquid's, likewise.
     let mut wet: Lanes<R, 12> = [[R::ZERO; LANES]; 12];
     const { assert!(liquid_width::<Tet4>() <= 12) };
-    let range = cx.layout.particles_of(e);
     // Mixed integration: is the element full, and its mean stress.
     let mut full = false;
     if let Some((stress, flags, filling, pressure, (rule, boundary))) = &cx.mixed {
@@ -353,14 +372,6 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
     }
     // The element's points, every array sliced to them once (one length), so that the loop
     // indexes without bounds checks.
-    let count = range.len();
-    // An element without points: its buffer holds zeros already, which the sums would store
-    // ([`Layout::scatter`]). (The test is of an opaque copy of the count: the loops below,
-    // compiled knowing the count is not zero, took more instructions per point.)
-    if std::hint::black_box(count) == 0 {
-        debug_assert!(four.iter().all(|v| v.f64().to_bits() == 0));
-        return;
-    }
     let active = &cx.p.active[range.clone()][..count];
     let (x, mass, vel) = (
         &cx.p.x[range.clone()][..count],
