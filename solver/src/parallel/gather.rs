@@ -392,7 +392,9 @@ impl<R: Real, E: Element> Layout<R, E> {
 
     /// Pass 1: for each element, on some thread, zeroes a buffer for the values of the element's
     /// nodes ([`Element::NODES`] slots of `W` values, one after the other), calls
-    /// `element(e, buffer)` ([`node_slots`] splits it by node), and hands each node's values on:
+    /// `element(e, points, buffer)` with the element's points (the range of
+    /// [`Layout::particles_of`], read once by the scatter beside its own test of it;
+    /// [`node_slots`] splits the buffer by node), and hands each node's values on:
     /// into the node's accumulator when all the node's elements lie in this piece
     /// ([`SCATTER_CUTS`]), else into its slot. The pieces are handed out while the pass runs
     /// ([`Team::run_chunks`]), each to one thread, which takes its elements in order: `element`
@@ -407,13 +409,19 @@ impl<R: Real, E: Element> Layout<R, E> {
     /// empty element.
     pub fn scatter<const W: usize, F>(&self, team: &Team, slots: &mut Slots<R>, element: F)
     where
-        F: Fn(usize, &mut [R]) + Sync,
+        F: Fn(usize, Range<usize>, &mut [R]) + Sync,
     {
-        self.scatter_with::<W, false, (), _>(team, slots, |_| (), |e, own, _| element(e, own));
+        self.scatter_with::<W, false, (), _>(
+            team,
+            slots,
+            |_| (),
+            |e, points, own, _| element(e, points, own),
+        );
     }
 
     /// [`Layout::scatter`] with a state of each piece's own, made by `init(thread)` before the
-    /// piece's first element and handed to every `element(e, buffer, state)` call of the piece,
+    /// piece's first element and handed to every `element(e, points, buffer, state)` call of the
+    /// piece,
     /// in element order (for sums a pass keeps beside its slots; a piece holds whole
     /// [`ELEMENT_BLOCK`]s).
     ///
@@ -427,7 +435,7 @@ impl<R: Real, E: Element> Layout<R, E> {
         init: impl Fn(usize) -> S + Sync,
         element: F,
     ) where
-        F: Fn(usize, &mut [R], &mut S) + Sync,
+        F: Fn(usize, Range<usize>, &mut [R], &mut S) + Sync,
     {
         const { assert!(W <= WIDTH) };
         const { assert!(E::NODES <= MAX_NODES) };
@@ -450,10 +458,21 @@ impl<R: Real, E: Element> Layout<R, E> {
                 // The buffer is zero at the top of the loop: it starts so, an element without
                 // points leaves it so, and the others' values are cleared once handed on (runs
                 // of empty elements, as in a void mesh, zero nothing).
-                for (slot, e) in mine.chunks_exact_mut(per_element).zip(r) {
-                    element(e, own, &mut state);
-                    let targets = &direct[E::NODES * e..E::NODES * e + E::NODES];
-                    if start[e] == start[e + 1] {
+                // The piece's `direct` entries and point starts sliced once and walked beside
+                // its slots, so that the loop indexes nothing (a void mesh's empty elements
+                // paid a bounds check per access).
+                let targets_of =
+                    direct[E::NODES * r.start..E::NODES * r.end].chunks_exact(E::NODES);
+                let starts = &start[r.start..=r.end];
+                let bounds = starts.iter().zip(&starts[1..]);
+                for (((slot, e), targets), (first, end)) in mine
+                    .chunks_exact_mut(per_element)
+                    .zip(r)
+                    .zip(targets_of)
+                    .zip(bounds)
+                {
+                    element(e, *first as usize..*end as usize, own, &mut state);
+                    if first == end {
                         debug_assert!(
                             own.iter().all(|v| v.f64().to_bits() == 0),
                             "element {e} has no points but added to its buffer"
@@ -562,10 +581,15 @@ impl<R: Real, E: Element> Layout<R, E> {
         element: F,
         node: G,
     ) where
-        F: Fn(usize, &mut [R]) + Sync,
+        F: Fn(usize, Range<usize>, &mut [R]) + Sync,
         G: Fn(usize, &[R]) + Sync,
     {
-        self.scatter_with::<W, WIDE, (), _>(team, slots, |_| (), |e, own, _| element(e, own));
+        self.scatter_with::<W, WIDE, (), _>(
+            team,
+            slots,
+            |_| (),
+            |e, points, own, _| element(e, points, own),
+        );
         self.gather::<W, _>(team, slots, |n, s| node(n, &s));
     }
 
@@ -579,8 +603,9 @@ impl<R: Real, E: Element> Layout<R, E> {
         team.run(|k| {
             for n in self.node_ranges[k].clone() {
                 if self.direct_node[n] {
-                    let at = acc_at + W * n;
-                    node(n, std::array::from_fn(|c| slots[at + c]));
+                    // Sliced once: one bounds check per node, not one per value.
+                    let sum = &slots[acc_at + W * n..acc_at + W * n + W];
+                    node(n, std::array::from_fn(|c| sum[c]));
                     continue;
                 }
                 let mut sum = [R::ZERO; W];

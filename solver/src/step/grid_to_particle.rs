@@ -92,13 +92,12 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // value at run time).
     macro_rules! element_pass {
         ($want:expr, $with_liquid:expr, $w:expr) => {
-            |e: usize, four: &mut [R]| {
+            |e: usize, range: std::ops::Range<usize>, four: &mut [R]| {
                 const W: usize = $w;
                 let (want, with_liquid): (bool, bool) = ($want, $with_liquid);
                 let (mut kinetic, mut kinetic_w) = (0.0, 0.0);
                 // The element's points, each array sliced to them once (one length): the loop then
                 // indexes without bounds checks.
-                let range = layout.particles_of(e);
                 let count = range.len();
                 // An element without points adds nothing (the scatter's contract).
                 if count == 0 {
@@ -235,9 +234,12 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // after the block's last element.
     macro_rules! guarded_pass {
         ($guard:expr, $with_liquid:expr, $w:expr) => {
-            |e: usize, four: &mut [R], pending: &mut [f64; ELEMENT_BLOCK]| {
+            |e: usize,
+             range: std::ops::Range<usize>,
+             four: &mut [R],
+             pending: &mut [f64; ELEMENT_BLOCK]| {
                 let element = element_pass!(true, $with_liquid, $w);
-                let (kinetic, kinetic_w) = element(e, four);
+                let (kinetic, kinetic_w) = element(e, range, four);
                 let b = e / ELEMENT_BLOCK;
                 // SAFETY: the scatter hands element e to one thread only, once, in element
                 // order, and its pieces hold whole blocks: no other thread touches block b,
@@ -270,13 +272,13 @@ pub fn grid_to_particle<E: Element, R: Real>(
             debug_assert_eq!(width($with_liquid), $width);
             if wide {
                 let element = element_pass!(false, $with_liquid, $w);
-                layout.scatter_with::<$width, true, _, _>(team, slots, init, |e, f, _| {
-                    element(e, f);
+                layout.scatter_with::<$width, true, _, _>(team, slots, init, |e, r, f, _| {
+                    element(e, r, f);
                 })
             } else {
                 let element = element_pass!(false, $with_liquid, $w);
-                layout.scatter_with::<$width, false, _, _>(team, slots, init, |e, f, _| {
-                    element(e, f);
+                layout.scatter_with::<$width, false, _, _>(team, slots, init, |e, r, f, _| {
+                    element(e, r, f);
                 })
             }
         }};

@@ -160,7 +160,6 @@ pub fn particle_to_grid<E: Element, R: Real>(
     // at 6 % more instructions per point-step).
     let pass = Pass {
         mesh,
-        layout,
         p,
         gravity,
         mixed: mixed_sums,
@@ -218,14 +217,18 @@ pub fn particle_to_grid<E: Element, R: Real>(
                 layout.sum_to_nodes::<$width, true, _, _>(
                     team,
                     slots,
-                    |e, four| element_sums::<E, R, $liquid, { $points }>(&pass, e, four),
+                    |e, points, four| {
+                        element_sums::<E, R, $liquid, { $points }>(&pass, e, points, four)
+                    },
                     node,
                 )
             } else {
                 layout.sum_to_nodes::<$width, false, _, _>(
                     team,
                     slots,
-                    |e, four| element_sums::<E, R, $liquid, { $points }>(&pass, e, four),
+                    |e, points, four| {
+                        element_sums::<E, R, $liquid, { $points }>(&pass, e, points, four)
+                    },
                     node,
                 )
             }
@@ -253,7 +256,6 @@ type MixedSums<'a, R> = (
 /// What one element's pass reads (and, through the mixed rule's slices, writes).
 struct Pass<'a, E: Element, R: Real> {
     mesh: &'a Mesh<E, R>,
-    layout: &'a Layout<R, E>,
     p: &'a Particles<R>,
     gravity: &'a [V3<R>],
     mixed: Option<MixedSums<'a, R>>,
@@ -273,9 +275,9 @@ struct Pass<'a, E: Element, R: Real> {
 fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
     cx: &Pass<'_, E, R>,
     e: usize,
+    range: std::ops::Range<usize>,
     four: &mut [R],
 ) {
-    let range = cx.layout.particles_of(e);
     let count = range.len();
     // An element without points: its buffer holds zeros already, which the sums would store
     // ([`Layout::scatter`]), and under mixed integration its outputs are those of no points

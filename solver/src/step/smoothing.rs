@@ -77,9 +77,9 @@ impl<R: Real> StrainSmoothing<R> {
         let wvel = g.liquid.as_ref().map(|l| &l.vel);
         for lo in (0..columns).step_by(PER_PASS) {
             let hi = (lo + PER_PASS).min(columns);
-            layout.scatter::<PASS_WIDTH, _>(team, slots, |e, four| {
+            layout.scatter::<PASS_WIDTH, _>(team, slots, |e, points, four| {
                 let mut present = [false; PER_PASS];
-                for i in layout.particles_of(e) {
+                for i in points {
                     let c = column[p.material[i] as usize];
                     if p.active[i] && (lo..hi).contains(&c) {
                         present[c - lo] = true;

@@ -732,8 +732,7 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         });
         return false;
     }
-    layout.scatter::<2, _>(team, slots, |e, four| {
-        let points = layout.particles_of(e);
+    layout.scatter::<2, _>(team, slots, |e, points, four| {
         if points.is_empty() {
             return;
         }
