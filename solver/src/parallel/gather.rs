@@ -421,8 +421,7 @@ impl<R: Real, E: Element> Layout<R, E> {
 
     /// [`Layout::scatter`] with a state of each piece's own, made by `init(thread)` before the
     /// piece's first element and handed to every `element(e, points, buffer, state)` call of the
-    /// piece,
-    /// in element order (for sums a pass keeps beside its slots; a piece holds whole
+    /// piece, in element order (for sums a pass keeps beside its slots; a piece holds whole
     /// [`ELEMENT_BLOCK`]s).
     ///
     /// With `WIDE`, each thread's elements run compiled with AVX2 ([`avx2::call`]: `element`
