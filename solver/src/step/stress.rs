@@ -1,6 +1,8 @@
 //! Strain increments from nodal velocities, the constitutive update, and the volume and position
 //! update of every particle.
 
+use std::ops::Range;
+
 use crate::element::locate::{locate_width, merge, relocate, run_inside, Outcome, NOTHING_FOUND};
 use crate::element::mesh::Mesh;
 use crate::element::{batch_width, Element};
@@ -10,7 +12,7 @@ use crate::material::mohr_coulomb::MohrCoulomb;
 use crate::parallel::avx2::use_avx2;
 use crate::parallel::gather::{node_slots, Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
-use crate::real::Real;
+use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 use crate::step::batch::{interpolate, Batch};
@@ -282,11 +284,16 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
                     // The pore pressure's smoothed rate, from the nodes at the start-of-step
                     // position (the points move below).
                     if let (Some(rate), Some(pore)) = (&pore_rate, pore.as_mut()) {
+                        // The element's nodal rates, read once per batch (once per element
+                        // in a tetrahedron's batch of four): held across the whole element
+                        // they cost the dry step registers.
+                        let nodal = E::nodes(|k| rate.nodal[corners[k] as usize]);
+                        let nodal = nodal.as_ref();
                         for i in b.points() {
                             if rate.fluids[material[i] as usize].is_some() {
                                 let mut change = R::ZERO;
                                 for k in 0..E::NODES {
-                                    change += n[k][i - j] * rate.nodal[corners[k] as usize];
+                                    change += n[k][i - j] * nodal[k];
                                 }
                                 pore[i] += change * dt;
                             }
@@ -689,42 +696,19 @@ pub fn update_pore_pressure<E: Element, R: Real>(
     }
     let (x, volume, active, material) = (&p.x, &p.volume, &p.active, &p.material);
     let (vel, wvel) = (&g.vel, &gl.vel);
-    // The divergence of both phases' velocities in element e: one per element for linear
-    // elements.
-    let divergence = |e: usize| {
-        let grad = mesh.grad[e].as_ref();
-        let (mut div_v, mut div_w) = (R::ZERO, R::ZERO);
-        for k in 0..E::NODES {
-            let node = mesh.corners[e].as_ref()[k] as usize;
-            let (v, w) = (vel[node], wvel[node]);
-            for a in 0..E::DIM {
-                div_v += v[a] * grad[k][a];
-                div_w += w[a] * grad[k][a];
-            }
-        }
-        (div_v, div_w)
-    };
-    // The rate of point i in element e from its element's divergences, plus, in an
-    // axisymmetric section, each phase's hoop rate u_r / r at the point.
-    let rate_at = |e: usize, i: usize, f: &Fluid<R>, (mut div_v, mut div_w): (R, R)| {
-        if E::AXISYMMETRIC {
-            let n = mesh.shape(e, &x[i]);
-            let r = x[i][0];
-            for (k, &nk) in n.as_ref().iter().enumerate() {
-                let node = mesh.corners[e].as_ref()[k] as usize;
-                div_v += nk * vel[node][0] / r;
-                div_w += nk * wvel[node][0] / r;
-            }
-        }
-        f.kw_over_n * (f.n * div_w + (R::ONE - f.n) * div_v)
-    };
     let pressure = Shared::new(&mut lp.p);
     if !smooth {
         team.run(|t| {
             for i in layout.particle_range(t) {
                 if let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) {
                     let e = p.element[i] as usize;
-                    let rate = rate_at(e, i, f, divergence(e));
+                    let nodal = NodalVelocities::of(mesh, vel, wvel, e);
+                    let rate = if E::AXISYMMETRIC {
+                        let n = mesh.shape(e, &x[i]);
+                        nodal.rate(f, |k| n.as_ref()[k], x[i][0])
+                    } else {
+                        nodal.rate(f, |_| R::ZERO, R::ONE)
+                    };
                     // SAFETY: particle i belongs to this thread only.
                     unsafe { pressure.range(i..i + 1)[0] += rate * dt };
                 }
@@ -732,24 +716,33 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         });
         return false;
     }
-    layout.scatter::<2, _>(team, slots, |e, points, four| {
-        if points.is_empty() {
-            return;
-        }
-        let div = divergence(e);
-        for i in points {
-            let (true, Some(f)) = (active[i], &fluids[material[i] as usize]) else {
-                continue;
-            };
-            let rate = rate_at(e, i, f, div);
-            let n = mesh.shape(e, &x[i]);
-            let n = n.as_ref();
-            for (k, slot) in node_slots::<E, R>(four, 2).enumerate() {
-                slot[0] += volume[i] * n[k] * rate;
-                slot[1] += volume[i] * n[k];
-            }
-        }
-    });
+    let pass = RatePass {
+        mesh,
+        x,
+        volume,
+        active,
+        material,
+        fluids,
+        vel,
+        wvel,
+    };
+    // Each copy ([`crate::parallel::avx2`]) with a closure of its own, so that `rate_sums` is
+    // inlined into it and compiled with its instruction set.
+    if use_avx2() {
+        layout.scatter_with::<2, true, (), _>(
+            team,
+            slots,
+            |_| (),
+            |e, points, two, _| rate_sums(&pass, e, points, two),
+        );
+    } else {
+        layout.scatter_with::<2, false, (), _>(
+            team,
+            slots,
+            |_| (),
+            |e, points, two, _| rate_sums(&pass, e, points, two),
+        );
+    }
     let nodal = Shared::new(&mut gl.rate);
     layout.gather::<2, _>(team, slots, |n, s| {
         let r = if s[1] > R::ZERO { s[0] / s[1] } else { R::ZERO };
@@ -758,6 +751,140 @@ pub fn update_pore_pressure<E: Element, R: Real>(
     });
     // The points take their rate in the stress pass ([`PoreRate`]).
     true
+}
+
+/// Both phases' velocities at an element's nodes and their divergences in it (one per
+/// element for linear elements): what a saturated point's pore-pressure rate needs.
+struct NodalVelocities<E: Element, R: Real> {
+    /// The solid's nodal velocities.
+    vel: E::Nodes<V3<R>>,
+    /// The liquid's nodal velocities.
+    wvel: E::Nodes<V3<R>>,
+    /// ∇·v of the solid and of the liquid.
+    div: (R, R),
+}
+
+impl<E: Element, R: Real> NodalVelocities<E, R> {
+    /// Element `e`'s, from the nodal velocities `vel` (solid) and `wvel` (liquid).
+    #[inline(always)]
+    fn of(mesh: &Mesh<E, R>, vel: &[V3<R>], wvel: &[V3<R>], e: usize) -> Self {
+        let (grad, corners) = (mesh.grad[e].as_ref(), mesh.corners[e].as_ref());
+        let vel = E::nodes(|k| vel[corners[k] as usize]);
+        let wvel = E::nodes(|k| wvel[corners[k] as usize]);
+        let (mut div_v, mut div_w) = (R::ZERO, R::ZERO);
+        for k in 0..E::NODES {
+            let (v, w) = (vel.as_ref()[k], wvel.as_ref()[k]);
+            for a in 0..E::DIM {
+                div_v += v[a] * grad[k][a];
+                div_w += w[a] * grad[k][a];
+            }
+        }
+        NodalVelocities {
+            vel,
+            wvel,
+            div: (div_v, div_w),
+        }
+    }
+
+    /// The pore-pressure rate (K_w / n)(n ∇·w + (1 - n) ∇·v) of a point of liquid `f`, plus, in
+    /// an axisymmetric section, each phase's hoop rate u_r / r at the point from its shape
+    /// values `n` and radius `r` (neither read otherwise).
+    #[inline(always)]
+    fn rate(&self, f: &Fluid<R>, n: impl Fn(usize) -> R, r: R) -> R {
+        let (mut div_v, mut div_w) = self.div;
+        if E::AXISYMMETRIC {
+            let (vel, wvel) = (self.vel.as_ref(), self.wvel.as_ref());
+            for k in 0..E::NODES {
+                div_v += n(k) * vel[k][0] / r;
+                div_w += n(k) * wvel[k][0] / r;
+            }
+        }
+        f.kw_over_n * (f.n * div_w + (R::ONE - f.n) * div_v)
+    }
+}
+
+/// What [`rate_sums`] reads: the points, the mesh and both phases' nodal velocities.
+struct RatePass<'a, E: Element, R: Real> {
+    mesh: &'a Mesh<E, R>,
+    x: &'a [V3<R>],
+    volume: &'a [R],
+    active: &'a [bool],
+    material: &'a [u32],
+    fluids: &'a [Option<Fluid<R>>],
+    vel: &'a [V3<R>],
+    wvel: &'a [V3<R>],
+}
+
+/// Element `e`'s two sums per node for the smoothed pore-pressure rate: Σ V N r and Σ V N over
+/// its saturated active points (r the point's rate), into `two` (zero on entry; 2 values per
+/// node). The shape values go in batches of the element's points ([`Batch`]: four in
+/// tetrahedra, one in triangles), each point's arithmetic as a point-by-point loop does it,
+/// and the sums are added point by point in order, in registers, from 0: the bits of adding
+/// into the slots in place.
+#[inline(always)]
+fn rate_sums<E: Element, R: Real>(
+    cx: &RatePass<'_, E, R>,
+    e: usize,
+    points: Range<usize>,
+    two: &mut [R],
+) {
+    if points.is_empty() {
+        return;
+    }
+    let mesh = cx.mesh;
+    let nodal = NodalVelocities::of(mesh, cx.vel, cx.wvel, e);
+    let corners = mesh.corners[e].as_ref();
+    let first = &mesh.x[corners[0] as usize];
+    let map = &mesh.map[e];
+    // The element's points, sliced once: the loop indexes them without bounds checks.
+    let (x, volume) = (&cx.x[points.clone()], &cx.volume[points.clone()]);
+    let end = x.len();
+    let (active, material) = (
+        &cx.active[points.clone()][..end],
+        &cx.material[points][..end],
+    );
+    let volume = &volume[..end];
+    let mut sums = [[R::ZERO; 2]; 4];
+    let mut j = 0;
+    macro_rules! batches {
+        ($w:literal) => {{
+            const W: usize = $w;
+            while j < end {
+                let b = match Batch::<W>::new(j, end, |i| {
+                    active[i] && cx.fluids[material[i] as usize].is_some()
+                }) {
+                    Ok(b) => b,
+                    Err(skip) => {
+                        j += skip;
+                        continue;
+                    }
+                };
+                let n = E::shape_lanes(map, first, &b.gather(x));
+                for i in b.points() {
+                    let q = i - j;
+                    let Some(f) = &cx.fluids[material[i] as usize] else {
+                        continue;
+                    };
+                    let rate = nodal.rate(f, |k| n[k][q], x[i][0]);
+                    for (k, s) in sums.iter_mut().enumerate().take(E::NODES) {
+                        s[0] += volume[i] * n[k][q] * rate;
+                        s[1] += volume[i] * n[k][q];
+                    }
+                }
+                j += b.len;
+            }
+        }};
+    }
+    // Tetrahedra take their four points side by side; a triangle's three go one by one (as
+    // in the other point passes, docs/design.md §5.3).
+    if E::DIM == 3 {
+        batches!(4)
+    } else {
+        batches!(1)
+    }
+    for (slot, s) in node_slots::<E, R>(two, 2).zip(sums) {
+        slot.copy_from_slice(&s);
+    }
 }
 
 /// Adds Ω σ - σ Ω to `s` for the skew increment Ω with Ω_xy = `w[0]`, Ω_yz = `w[1]`, Ω_zx = `w[2]`
