@@ -7,10 +7,10 @@
 use crate::element::Element;
 use crate::real::{Real, V3};
 
-/// Points per batch of particle to grid's shape values and of grid to particle in tetrahedra
-/// (triangles go point by point), measured on one thread against batches of 1 to 3
-/// (docs/design.md §5.3). A literal, not a function of the element type: the passes expand
-/// their element closure once per width.
+/// Points per batch of particle to grid's shape values, of grid to particle and of the
+/// pore-pressure rate's sums in tetrahedra (triangles go point by point), measured on one
+/// thread against batches of 1 to 3 (docs/design.md §5.3). A literal, not a function of the
+/// element type: the passes expand their element closure once per width.
 pub const TETRAHEDRA: usize = 4;
 
 /// Up to `W` consecutive points of one element, from index `start`: which lanes hold a point

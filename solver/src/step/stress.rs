@@ -15,7 +15,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::batch::{interpolate, Batch};
+use crate::step::batch::{interpolate, Batch, TETRAHEDRA};
 use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
 
@@ -847,7 +847,7 @@ fn rate_sums<E: Element, R: Real>(
     let mut sums = [[R::ZERO; 2]; 4];
     let mut j = 0;
     macro_rules! batches {
-        ($w:literal) => {{
+        ($w:expr) => {{
             const W: usize = $w;
             while j < end {
                 let b = match Batch::<W>::new(j, end, |i| {
@@ -875,10 +875,10 @@ fn rate_sums<E: Element, R: Real>(
             }
         }};
     }
-    // Tetrahedra take their four points side by side; a triangle's three go one by one (as
-    // in the other point passes, docs/design.md §5.3).
+    // Tetrahedra take their points side by side as particle to grid's shape values do; a
+    // triangle's three go one by one (as in the other point passes, docs/design.md §5.3).
     if E::DIM == 3 {
-        batches!(4)
+        batches!(TETRAHEDRA)
     } else {
         batches!(1)
     }
