@@ -1017,7 +1017,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         self.phase_load[0] += self.team.take_load();
         let liquid_scale = R::of(case.liquid_curve.at(self.time + dt));
         if self.grid.liquid.is_some() {
-            grid_update::grid_update_two_phase(
+            grid_update::grid_update_two_phase::<E, R>(
                 &self.team,
                 &mut self.grid_scratch,
                 &mut self.grid,
@@ -1041,7 +1041,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             let structure = self.contact.as_mut().map(|c| (&mut c.scratch, &mut c.grid));
             let bodies = std::iter::once((&mut self.grid_scratch, &mut self.grid)).chain(structure);
             for (scratch, grid) in bodies {
-                grid_update::grid_update(
+                grid_update::grid_update::<E, R>(
                     &self.team,
                     scratch,
                     grid,
@@ -1252,7 +1252,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         let mut energy = NodalEnergy::default();
         let grids = std::iter::once(&self.grid).chain(self.contact.as_ref().map(|c| &c.grid));
         for (k, grid) in grids.enumerate() {
-            nodal_energy::nodal_energy(
+            nodal_energy::nodal_energy::<E, R>(
                 &self.team,
                 &mut self.energy_values,
                 &mut self.energy_blocks,

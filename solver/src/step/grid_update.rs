@@ -1,5 +1,6 @@
 //! Grid update: nodal accelerations with local damping and fixities (docs/design.md §4, step 2).
 
+use crate::element::Element;
 use crate::parallel::comm::Communicator;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
@@ -130,7 +131,7 @@ pub const MASS_EPS: f64 = 1e-12;
 /// blocks of [`NODE_BLOCK`], and the sums formed per block (`scratch`): the same for any
 /// thread count.
 #[allow(clippy::too_many_arguments)]
-pub fn grid_update<R: Real>(
+pub fn grid_update<E: Element, R: Real>(
     team: &Team,
     scratch: &mut GridScratch<R>,
     g: &mut Grid<R>,
@@ -150,17 +151,30 @@ pub fn grid_update<R: Real>(
     team.for_blocks(nodes, NODE_BLOCK, &mut scratch.done, |r| {
         // SAFETY: the nodes of this block are this call's only.
         let (acc_out, sums) = unsafe { (acc_out.range(r.clone()), sums_out.range(r.clone())) };
-        for ((n, acc_n), sum) in r.zip(acc_out).zip(sums) {
+        // Every array sliced to the block once (one length): the loop indexes without bounds
+        // checks.
+        let len = acc_out.len();
+        let (mass, fixed, f_ext) = (
+            &mass[r.clone()][..len],
+            &fixed[r.clone()][..len],
+            &f_ext[r.clone()][..len],
+        );
+        let (f_int, momentum, traction) = (
+            &f_int[r.clone()][..len],
+            &momentum[r.clone()][..len],
+            &traction[r.clone()][..len],
+        );
+        for (n, (acc_n, sum)) in acc_out.iter_mut().zip(&mut sums[..len]).enumerate() {
             let m = mass[n];
+            // Components past the element's dimension stay 0 (a section's z: no force there).
+            *acc_n = [R::ZERO; 3];
             if m <= eps {
-                *acc_n = [R::ZERO; 3];
                 *sum = [0.0; 4];
                 continue;
             }
             let (mut out2, mut ext2) = (0.0, 0.0);
-            for a in 0..3 {
+            for a in 0..E::DIM {
                 if fixed[n][a] {
-                    acc_n[a] = R::ZERO;
                     continue;
                 }
                 let ext = f_ext[n][a] + scale * traction[n][a];
@@ -219,7 +233,7 @@ impl ForceSums {
 /// this step. The step's energy terms are taken after the remap
 /// ([`crate::step::nodal_energy`]).
 #[allow(clippy::too_many_arguments)]
-pub fn grid_update_two_phase<R: Real>(
+pub fn grid_update_two_phase<E: Element, R: Real>(
     team: &Team,
     scratch: &mut GridScratch<R>,
     g: &mut Grid<R>,
@@ -255,18 +269,42 @@ pub fn grid_update_two_phase<R: Real>(
                 sums_out.range(r.clone()),
             )
         };
-        for (((n, acc_s), acc_w), sum) in r.zip(acc_s).zip(acc_w).zip(sums) {
+        // Every array sliced to the block once (one length): the loop indexes without bounds
+        // checks.
+        let len = acc_s.len();
+        let (acc_w, sums) = (&mut acc_w[..len], &mut sums[..len]);
+        let (mass, f_ext, f_int, momentum) = (
+            &mass[r.clone()][..len],
+            &f_ext[r.clone()][..len],
+            &f_int[r.clone()][..len],
+            &momentum[r.clone()][..len],
+        );
+        let (l_mass, l_mass_n, l_drag, l_momentum, l_force) = (
+            &l_mass[r.clone()][..len],
+            &l_mass_n[r.clone()][..len],
+            &l_drag[r.clone()][..len],
+            &l_momentum[r.clone()][..len],
+            &l_force[r.clone()][..len],
+        );
+        let (traction, liquid_traction, fixed, liquid_fixed) = (
+            &traction[r.clone()][..len],
+            &liquid_traction[r.clone()][..len],
+            &fixed[r.clone()][..len],
+            &liquid_fixed[r.clone()][..len],
+        );
+        for (n, ((acc_s, acc_w), sum)) in acc_s.iter_mut().zip(acc_w).zip(sums).enumerate() {
             let ms = mass[n];
+            // Components past the element's dimension stay 0 (a section's z: no force there).
+            *acc_s = [R::ZERO; 3];
+            *acc_w = [R::ZERO; 3];
             if ms <= eps {
-                *acc_s = [R::ZERO; 3];
-                *acc_w = [R::ZERO; 3];
                 *sum = [0.0; 4];
                 continue;
             }
             let (mw, mwn, q) = (l_mass[n], l_mass_n[n], l_drag[n]);
             let wet = mw > eps;
             let (mut out2, mut ext2, mut out2_w, mut ext2_w) = (0.0, 0.0, 0.0, 0.0);
-            for a in 0..3 {
+            for a in 0..E::DIM {
                 let lt = liquid_scale * liquid_traction[n][a];
                 let ext = if liquid_load_on_mixture {
                     f_ext[n][a] + scale * traction[n][a] + lt
@@ -370,6 +408,7 @@ pub fn grid_update_two_phase<R: Real>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::tet4::Tet4;
     use crate::parallel::comm::SingleProcess;
     use crate::state::grid::LiquidNodes;
 
@@ -408,7 +447,7 @@ mod tests {
             let team = Team::new(threads, crate::parallel::team::Pin::None).unwrap();
             let mut scratch = GridScratch::new(n);
             let (mut g, fixed, traction) = random_grid(n);
-            grid_update_two_phase(
+            grid_update_two_phase::<Tet4, _>(
                 &team,
                 &mut scratch,
                 &mut g,
@@ -429,7 +468,7 @@ mod tests {
             let two = scratch.node_sums.clone();
             let (mut d, _, _) = random_grid(n);
             d.liquid = None;
-            grid_update(
+            grid_update::<Tet4, _>(
                 &team,
                 &mut scratch,
                 &mut d,
@@ -454,6 +493,140 @@ mod tests {
         assert!(one.0.iter().any(|s| s[0] > 0.0) && one.1.iter().any(|s| s[1] > 0.0));
         for threads in [2, 3] {
             assert_eq!(run(threads), one, "{threads} threads");
+        }
+    }
+
+    #[test]
+    fn a_section_updates_as_the_3d_grid_with_zero_z_data() {
+        // The 2D updates take the in-plane components only: on a grid whose z-data are zero
+        // (a section's), accelerations, force sums and nodal energy terms are the 3D update's,
+        // bit for bit, in both phases, under both damping rules and both drags.
+        use crate::element::tri3::Tri3;
+        use crate::step::nodal_energy::{nodal_energy, Loads};
+        let n = 2 * NODE_BLOCK + 5;
+        let team = Team::new(2, crate::parallel::team::Pin::None).unwrap();
+        let flat = || {
+            let (mut g, mut fixed, mut traction) = random_grid(n);
+            for i in 0..n {
+                g.momentum[i][2] = 0.0;
+                g.f_int[i][2] = 0.0;
+                g.f_ext[i][2] = 0.0;
+                let l = g.liquid.as_mut().unwrap();
+                l.momentum[i][2] = 0.0;
+                l.force[i][2] = 0.0;
+                traction[i][2] = 0.0;
+                // Some sections fix z, some leave it free.
+                fixed[i][2] = i % 2 == 0;
+            }
+            (g, fixed, traction)
+        };
+        fn energy(
+            team: &Team,
+            g: &mut Grid<f64>,
+            fixed: &[[bool; 3]],
+            traction: &[[f64; 3]],
+            plane: bool,
+        ) -> Vec<[f64; 4]> {
+            let n = g.mass.len();
+            // Remapped velocities as the nodal update gives them.
+            for i in 0..n {
+                for a in 0..3 {
+                    g.vel[i][a] = if g.mass[i] > 0.0 {
+                        g.momentum[i][a] / g.mass[i] + g.acc[i][a] * 1e-3
+                    } else {
+                        0.0
+                    };
+                    if let Some(l) = g.liquid.as_mut() {
+                        l.vel[i][a] = l.momentum[i][a] / l.mass[i] + l.acc[i][a] * 1e-3;
+                    }
+                }
+            }
+            let loads = Loads {
+                traction: (traction, 0.7),
+                liquid_traction: (traction, 0.3),
+                liquid_load_on_mixture: true,
+                fixed,
+                liquid_fixed: fixed,
+                gravity: [0.0, -9.81, 0.0],
+            };
+            let mut values = vec![[0.0; 4]; n];
+            let mut done = vec![(); n.div_ceil(NODE_BLOCK)];
+            if plane {
+                nodal_energy::<Tri3, _>(team, &mut values, &mut done, g, &loads);
+            } else {
+                nodal_energy::<Tet4, _>(team, &mut values, &mut done, g, &loads);
+            }
+            values
+        }
+        let bits = |g: &Grid<f64>, sums: &[[f64; 4]], energies: &[[f64; 4]]| {
+            let mut v: Vec<u64> = g.acc.iter().flatten().map(|x| x.to_bits()).collect();
+            if let Some(l) = &g.liquid {
+                v.extend(l.acc.iter().flatten().map(|x| x.to_bits()));
+            }
+            v.extend(sums.iter().flatten().map(|x| x.to_bits()));
+            v.extend(energies.iter().flatten().map(|x| x.to_bits()));
+            v
+        };
+        for (rule, drag) in [
+            (DampingRule::Phases, Drag::Implicit),
+            (DampingRule::Anura3d, Drag::Explicit),
+        ] {
+            let run = |plane: bool, wet: bool| {
+                let (mut g, fixed, traction) = flat();
+                if !wet {
+                    g.liquid = None;
+                }
+                let mut scratch = GridScratch::new(n);
+                macro_rules! update {
+                    ($e:ty) => {
+                        if wet {
+                            grid_update_two_phase::<$e, _>(
+                                &team,
+                                &mut scratch,
+                                &mut g,
+                                &traction,
+                                0.7,
+                                &traction,
+                                0.3,
+                                &fixed,
+                                &fixed,
+                                0.05,
+                                rule,
+                                drag,
+                                true,
+                                [0.0, -9.81, 0.0],
+                                1e-3,
+                                &SingleProcess,
+                            )
+                        } else {
+                            grid_update::<$e, _>(
+                                &team,
+                                &mut scratch,
+                                &mut g,
+                                &traction,
+                                0.7,
+                                &fixed,
+                                0.05,
+                                rule,
+                                &SingleProcess,
+                            )
+                        }
+                    };
+                }
+                if plane {
+                    update!(Tri3);
+                } else {
+                    update!(Tet4);
+                }
+                let energies = energy(&team, &mut g, &fixed, &traction, plane);
+                assert!(g.acc.iter().all(|a| a[2].to_bits() == 0));
+                bits(&g, &scratch.node_sums, &energies)
+            };
+            for wet in [false, true] {
+                let plane = run(true, wet);
+                assert!(plane.iter().any(|&b| b != 0));
+                assert_eq!(plane, run(false, wet), "{rule:?} {drag:?} wet {wet}");
+            }
         }
     }
 }

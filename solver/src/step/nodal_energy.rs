@@ -12,6 +12,7 @@
 //! moved to the far side of its element) is accelerated a hundred thousand times harder than
 //! the point, and a load on it would seem to do that much more work, which no point receives.
 
+use crate::element::Element;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
@@ -65,12 +66,24 @@ pub struct Loads<'a, R: Real> {
     pub gravity: V3<R>,
 }
 
+/// A block's liquid arrays, each sliced to the block's nodes (one length).
+struct Liquid<'a, R: Real> {
+    mass: &'a [R],
+    mass_n: &'a [R],
+    momentum: &'a [V3<R>],
+    force: &'a [V3<R>],
+    acc: &'a [V3<R>],
+    vel: &'a [V3<R>],
+    traction: &'a [V3<R>],
+    fixed: &'a [[bool; 3]],
+}
+
 /// The energy terms of the step per node, on the team, into `values` (one per node:
 /// [`NodalEnergy::of_sums`]'s power, kinetic energy, work rate and dissipation rate; `done`:
 /// preallocated, one per [`NODE_BLOCK`] nodes). Call after the remap of both phases (`g.vel`
 /// and the liquid's `vel` hold the remapped velocities, `g.momentum` and `g.acc` those of the
 /// step).
-pub fn nodal_energy<R: Real>(
+pub fn nodal_energy<E: Element, R: Real>(
     team: &Team,
     values: &mut [[f64; 4]],
     done: &mut [()],
@@ -86,67 +99,94 @@ pub fn nodal_energy<R: Real>(
     team.for_blocks(nodes, NODE_BLOCK, done, |r| {
         // SAFETY: the nodes of this block are this call's only.
         let out = unsafe { out.range(r.clone()) };
-        for (n, value) in r.zip(out) {
+        // The solid's arrays sliced to the block once (one length): the loop indexes them
+        // without bounds checks.
+        let len = out.len();
+        let (mass, f_ext, f_int, vel) = (
+            &g.mass[r.clone()][..len],
+            &g.f_ext[r.clone()][..len],
+            &g.f_int[r.clone()][..len],
+            &g.vel[r.clone()][..len],
+        );
+        let (momentum, acc, traction, fixed) = (
+            &g.momentum[r.clone()][..len],
+            &g.acc[r.clone()][..len],
+            &traction[r.clone()][..len],
+            &loads.fixed[r.clone()][..len],
+        );
+        // The liquid's likewise (two-phase cases).
+        let liquid = g.liquid.as_ref().map(|l| Liquid {
+            mass: &l.mass[r.clone()][..len],
+            mass_n: &l.mass_n[r.clone()][..len],
+            momentum: &l.momentum[r.clone()][..len],
+            force: &l.force[r.clone()][..len],
+            acc: &l.acc[r.clone()][..len],
+            vel: &l.vel[r.clone()][..len],
+            traction: &liquid_traction[r.clone()][..len],
+            fixed: &loads.liquid_fixed[r.clone()][..len],
+        });
+        for (i, value) in out.iter_mut().enumerate() {
             let mut s = NodalEnergy::default();
-            let ms = g.mass[n];
+            let ms = mass[i];
             // The end-of-step power of gravity and the solid's loads, and the nodal kinetic
-            // energy (every node).
-            for a in 0..3 {
-                let ext = g.f_ext[n][a] + scale * traction[n][a];
-                s.power_end += (ext * g.vel[n][a]).f64();
-                s.kinetic += 0.5 * (ms * g.vel[n][a] * g.vel[n][a]).f64();
-                if let Some(l) = &g.liquid {
-                    s.kinetic += 0.5 * (l.mass_n[n] * l.vel[n][a] * l.vel[n][a]).f64();
+            // energy (every node). Only the element's dimensions: a section's nodes have no
+            // z-force or z-velocity, whose terms would add zeros.
+            for a in 0..E::DIM {
+                let ext = f_ext[i][a] + scale * traction[i][a];
+                s.power_end += (ext * vel[i][a]).f64();
+                s.kinetic += 0.5 * (ms * vel[i][a] * vel[i][a]).f64();
+                if let Some(l) = &liquid {
+                    s.kinetic += 0.5 * (l.mass_n[i] * l.vel[i][a] * l.vel[i][a]).f64();
                 }
             }
             if ms <= eps {
                 *value = [s.power_end, s.kinetic, 0.0, 0.0];
                 continue;
             }
-            let wet = g.liquid.as_ref().filter(|l| l.mass[n] > eps);
-            for a in 0..3 {
-                if loads.fixed[n][a] && wet.is_none() {
+            let wet = liquid.as_ref().filter(|l| l.mass[i] > eps);
+            for a in 0..E::DIM {
+                if fixed[i][a] && wet.is_none() {
                     continue;
                 }
                 // Loads on the liquid (two-phase cases only: a dry run has none).
-                let lt = if g.liquid.is_some() {
-                    liquid_scale * liquid_traction[n][a]
+                let lt = if let Some(l) = &liquid {
+                    liquid_scale * l.traction[i][a]
                 } else {
                     R::ZERO
                 };
-                let ext = if g.liquid.is_some() && loads.liquid_load_on_mixture {
-                    g.f_ext[n][a] + scale * traction[n][a] + lt
+                let ext = if liquid.is_some() && loads.liquid_load_on_mixture {
+                    f_ext[i][a] + scale * traction[i][a] + lt
                 } else {
-                    g.f_ext[n][a] + scale * traction[n][a]
+                    f_ext[i][a] + scale * traction[i][a]
                 };
-                let f_mix = g.f_int[n][a] + ext;
+                let f_mix = f_int[i][a] + ext;
                 // The points' mean velocity over the step at this node (0 where fixed).
-                let v = if loads.fixed[n][a] {
+                let v = if fixed[i][a] {
                     R::ZERO
                 } else {
-                    half * (g.momentum[n][a] / ms + g.vel[n][a])
+                    half * (momentum[i][a] / ms + vel[i][a])
                 };
-                let a_s = g.acc[n][a];
+                let a_s = acc[i][a];
                 let Some(l) = wet else {
                     // A dry node: its force less what moved it is what damping took.
                     s.work += (ext * v).f64();
                     s.dissipated += ((f_mix - ms * a_s) * v).f64();
                     continue;
                 };
-                let mw = l.mass[n];
+                let mw = l.mass[i];
                 let mut power = (f_mix * v).f64();
                 let mut external = (ext * v).f64();
                 let mut kinetic = (ms * a_s * v).f64();
-                if !loads.liquid_fixed[n][a] {
+                if !l.fixed[i][a] {
                     // The liquid's relative motion: its force and its weight and loads do work
                     // on n (w̃ - ṽ) (the liquid's equation put into the mixture's).
-                    let w = half * (l.momentum[n][a] / mw + l.vel[n][a]);
-                    let porosity = l.mass_n[n] / mw;
+                    let w = half * (l.momentum[i][a] / mw + l.vel[i][a]);
+                    let porosity = l.mass_n[i] / mw;
                     let relative = porosity * (w - v);
-                    let f_w = l.force[n][a] + lt;
+                    let f_w = l.force[i][a] + lt;
                     power += (f_w * relative).f64();
                     external += ((mw * loads.gravity[a] + lt) * relative).f64();
-                    kinetic += (l.mass_n[n] * l.acc[n][a] * w).f64();
+                    kinetic += (l.mass_n[i] * l.acc[i][a] * w).f64();
                 }
                 s.work += external;
                 s.dissipated += power - kinetic;
@@ -159,6 +199,7 @@ pub fn nodal_energy<R: Real>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::tet4::Tet4;
     use crate::state::grid::LiquidNodes;
     use crate::step::grid_update::{grid_update_two_phase, DampingRule, Drag, GridScratch};
 
@@ -187,7 +228,7 @@ mod tests {
         let dt = 1e-3;
         let team = Team::new(1, crate::parallel::team::Pin::None).unwrap();
         let (traction, liquid_traction) = ([[0.1, 0.2, 0.0]], [[0.0, -0.3, 0.0]]);
-        grid_update_two_phase(
+        grid_update_two_phase::<Tet4, _>(
             &team,
             &mut GridScratch::new(1),
             g,
@@ -228,7 +269,7 @@ mod tests {
     /// The pass's terms summed over the nodes in node order.
     fn energy_of(team: &Team, g: &Grid<f64>, loads: &Loads<'_, f64>, dt: f64) -> NodalEnergy {
         let mut values = vec![[0.0; 4]; g.mass.len()];
-        nodal_energy(team, &mut values, &mut [(); 1], g, loads);
+        nodal_energy::<Tet4, _>(team, &mut values, &mut [(); 1], g, loads);
         let mut t = [0.0; 4];
         for v in &values {
             for c in 0..4 {
@@ -277,7 +318,7 @@ mod tests {
             g.momentum[k] = [0.0, m * shares[k] * v0, 0.0];
         }
         let traction = [[0.0; 3], [0.0, load, 0.0]];
-        crate::step::grid_update::grid_update(
+        crate::step::grid_update::grid_update::<Tet4, _>(
             &team,
             &mut GridScratch::new(2),
             &mut g,

@@ -307,13 +307,22 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
                     } else {
                         [l[2][2]; W]
                     };
+                    // A section's out-of-plane shear increments are +0 exactly (its L has no
+                    // z-row or z-column, and Δt is positive and finite): written as such.
+                    let out_of_plane = |a: usize, b: usize| {
+                        if E::DIM == 2 {
+                            R::ZERO
+                        } else {
+                            half * (l[a][b] + l[b][a]) * dt
+                        }
+                    };
                     let mut de: [[R; W]; 6] = [
                         [l[0][0] * dt; W],
                         [l[1][1] * dt; W],
                         hoop.map(|h| h * dt),
                         [half * (l[0][1] + l[1][0]) * dt; W],
-                        [half * (l[1][2] + l[2][1]) * dt; W],
-                        [half * (l[2][0] + l[0][2]) * dt; W],
+                        [out_of_plane(1, 2); W],
+                        [out_of_plane(2, 0); W],
                     ];
                     if let Some(sm) = cx.smoothing {
                         // The normal increments in the section's plane take the correction: all
@@ -410,7 +419,9 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
                         // Work of the mean stress over the step (exact for a linear law) on the
                         // start volume; shear components count twice (tensor shear strains).
                         let mut w = [R::ZERO; W];
-                        for c in 0..6 {
+                        // (A section's out-of-plane shears add (σ0 + σ1) · +0 = ±0 to a sum
+                        // that starts at +0 and so is never -0: left out, the same bits.)
+                        for c in 0..if E::DIM == 2 { 4 } else { 6 } {
                             let twice = if c < 3 { R::ONE } else { R::of(2.0) };
                             for q in 0..W {
                                 w[q] += twice * (s0[c][q] + s1[c][q]) * de[c][q];
