@@ -121,7 +121,8 @@ pub const MASS_EPS: f64 = 1e-12;
 
 /// a = (f_int + f_ext + traction) / m, with local damping f ← f - α |f| sign(v) per component
 /// (at rest as `rule` says, see [`DampingRule`])
-/// and zero acceleration in fixed directions. `traction` holds nodal face loads at multiplier 1,
+/// and zero acceleration in fixed directions, over the element's [`Element::DIM`] components (a
+/// 2D section's z-acceleration is 0). `traction` holds nodal face loads at multiplier 1,
 /// `scale` the multiplier; `fixed[n][a]` marks fixed components.
 ///
 /// Returns this process's sums for the out-of-balance force ratio of Anura3D's quasi-static
@@ -226,7 +227,8 @@ impl ForceSums {
 /// as in Anura3D, zero velocity in the explicit drag and the damping. Loads on the liquid
 /// (`liquid_traction` × `liquid_scale`) act on the liquid and, with `liquid_load_on_mixture`,
 /// as part of the total traction, on the mixture too (Anura3D applies them to the liquid
-/// alone). Nodes without liquid mass follow the dry update. Returns the out-of-balance
+/// alone). Nodes without liquid mass follow the dry update. As [`grid_update`], over the
+/// element's [`Element::DIM`] components. Returns the out-of-balance
 /// force ratios of the mixture, as [`grid_update`], and of the liquid: |F_w + Q (v - w)| /
 /// |M_w g + loads + Q (v - w)| over the free liquid components (start-of-step velocities, as
 /// Anura3D's convergence check; 0 without external force). `gravity` is the acceleration of

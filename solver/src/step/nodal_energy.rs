@@ -82,7 +82,7 @@ struct Liquid<'a, R: Real> {
 /// [`NodalEnergy::of_sums`]'s power, kinetic energy, work rate and dissipation rate; `done`:
 /// preallocated, one per [`NODE_BLOCK`] nodes). Call after the remap of both phases (`g.vel`
 /// and the liquid's `vel` hold the remapped velocities, `g.momentum` and `g.acc` those of the
-/// step).
+/// step). Over the element's [`Element::DIM`] components: a 2D section's z-terms are zeros.
 pub fn nodal_energy<E: Element, R: Real>(
     team: &Team,
     values: &mut [[f64; 4]],
