@@ -5,6 +5,7 @@
 //! width.
 
 use crate::element::Element;
+use crate::parallel::gather::node_slots;
 use crate::real::{Real, V3};
 
 /// Points per batch of particle to grid's shape values, of grid to particle and of the
@@ -77,4 +78,39 @@ pub fn interpolate<E: Element, R: Real, const W: usize>(
         }
     }
     out
+}
+
+/// Lanes of a per-element sum: one per element node, padded to four (a triangle's fourth lane
+/// carries zeros and is never stored).
+pub const LANES: usize = 4;
+
+/// An element's sums held value by value across its nodes (`sums[c][k]`: value c of node k), so
+/// that each value's update is one operation over the nodes, which the compiler turns into
+/// vector instructions (particle to grid's and grid to particle's per-element sums). Each node's
+/// arithmetic is the one a node-by-node loop does, in the same order, so the sums are the same
+/// bits; from 0, added point by point in order, they are also the bits of adding into the
+/// scatter's buffer in place.
+pub type Lanes<R, const W: usize> = [[R; LANES]; W];
+
+/// One value of `per_node` for each node of the element, zero past its last.
+#[inline(always)]
+pub fn lanes<E: Element, R: Real>(per_node: impl Fn(usize) -> R) -> [R; LANES] {
+    std::array::from_fn(|k| if k < E::NODES { per_node(k) } else { R::ZERO })
+}
+
+/// Stores the element's sums into the scatter's buffer, node by node: `width` values of each
+/// node's `stride`, from `offset` on.
+#[inline(always)]
+pub fn store<E: Element, R: Real, const W: usize>(
+    sums: &Lanes<R, W>,
+    four: &mut [R],
+    stride: usize,
+    offset: usize,
+    width: usize,
+) {
+    for (k, slot) in node_slots::<E, R>(four, stride).enumerate() {
+        for (c, v) in slot[offset..offset + width].iter_mut().enumerate() {
+            *v = sums[c][k];
+        }
+    }
 }

@@ -7,12 +7,12 @@ use crate::element::tri3::Tri3;
 use crate::element::Element;
 use crate::material::liquid::Fluid;
 use crate::parallel::avx2::use_avx2;
-use crate::parallel::gather::{node_slots, Layout, Slots, ELEMENT_BLOCK};
+use crate::parallel::gather::{Layout, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::batch::{interpolate, Batch, TETRAHEDRA};
+use crate::step::batch::{interpolate, lanes, store, Batch, Lanes, LANES, TETRAHEDRA};
 use crate::step::contact::{maps, OneBody};
 use crate::step::stress::GuardSums;
 
@@ -130,6 +130,9 @@ pub fn grid_to_particle<E: Element, R: Real>(
                 let acc_w_e = liquid_acc
                     .filter(|_| with_liquid)
                     .map(|a| E::nodes(|k| a[corners[k] as usize]));
+                // The element's re-mapped momenta (the solid's, then the liquid's), value by
+                // value across its nodes, stored into `four` at the end.
+                let mut sums: Lanes<R, 6> = [[R::ZERO; LANES]; 6];
                 let mut j = 0;
                 while j < count {
                     let b =
@@ -182,10 +185,11 @@ pub fn grid_to_particle<E: Element, R: Real>(
                                 v[c] = flip * v[c] + pic * grid_v[c];
                             }
                         }
-                        for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
-                            let w = mass[i] * n[k];
-                            for c in 0..E::DIM {
-                                slot[c] += w * v[c];
+                        // Node by node the operations of a loop over the nodes.
+                        let w = lanes::<E, R>(|k| mass[i] * n[k]);
+                        for c in 0..E::DIM {
+                            for k in 0..LANES {
+                                sums[c][k] += w[k] * v[c];
                             }
                         }
                         if want {
@@ -212,9 +216,10 @@ pub fn grid_to_particle<E: Element, R: Real>(
                         // `LiquidPoints::volume0`).
                         let g = range.start + i;
                         let mw = f.rho_w * volume0.map_or(volume[g], |v0| v0[g]);
-                        for (k, slot) in node_slots::<E, R>(four, width(with_liquid)).enumerate() {
-                            for c in 0..E::DIM {
-                                slot[E::DIM + c] += mw * n[k] * w[c];
+                        let wl = lanes::<E, R>(|k| mw * n[k]);
+                        for c in 0..E::DIM {
+                            for k in 0..LANES {
+                                sums[E::DIM + c][k] += wl[k] * w[c];
                             }
                         }
                         if want {
@@ -223,6 +228,8 @@ pub fn grid_to_particle<E: Element, R: Real>(
                     }
                     j += b.len;
                 }
+                let width = width(with_liquid);
+                store::<E, R, 6>(&sums, four, width, 0, width);
                 (kinetic, kinetic_w)
             }
         };

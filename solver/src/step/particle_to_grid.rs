@@ -7,12 +7,12 @@ use crate::element::tri3::Tri3;
 use crate::element::Element;
 use crate::material::liquid::Fluid;
 use crate::parallel::avx2::use_avx2;
-use crate::parallel::gather::{node_slots, Layout, Slots};
+use crate::parallel::gather::{Layout, Slots};
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::batch::TETRAHEDRA;
+use crate::step::batch::{lanes, store, Lanes, LANES, TETRAHEDRA};
 use crate::step::contact::{maps, OneBody};
 use crate::step::mixed::Mixed;
 
@@ -36,22 +36,6 @@ fn vector<E: Element, R: Real>(s: &[R], at: usize) -> V3<R> {
     v
 }
 
-/// Lanes of a per-element sum: one per element node, padded to four (a triangle's fourth lane
-/// carries zeros and is never stored).
-const LANES: usize = 4;
-
-/// An element's sums held value by value across its nodes (`sums[c][k]`: value c of node k), so
-/// that each value's update is one operation over the nodes, which the compiler turns into
-/// vector instructions. Each node's arithmetic is the one a node-by-node loop does, in the same
-/// order, so the sums are the same bits.
-type Lanes<R, const W: usize> = [[R; LANES]; W];
-
-/// One value of `per_node` for each node of the element, zero past its last.
-#[inline(always)]
-fn lanes<E: Element, R: Real>(per_node: impl Fn(usize) -> R) -> [R; LANES] {
-    std::array::from_fn(|k| if k < E::NODES { per_node(k) } else { R::ZERO })
-}
-
 /// Component `a` of f = σ ∇N_k (σ symmetric, xx yy zz xy yz zx) for every node k, from the
 /// gradients by component (`grad[b][k]` = ∂N_k/∂x_b); in a 2D element (∂N/∂z = 0) the sum runs
 /// over the in-plane components only.
@@ -73,23 +57,6 @@ fn tractions<E: Element, R: Real>(s: &[R; 6], grad: &[[R; LANES]; 3], a: usize) 
 #[inline(always)]
 fn gradients_by_component<E: Element, R: Real>(grad: &[V3<R>]) -> [[R; LANES]; 3] {
     std::array::from_fn(|b| lanes::<E, R>(|k| grad[k][b]))
-}
-
-/// Stores the element's sums into the scatter's buffer, node by node: `width` values of each
-/// node's `stride`, from `offset` on.
-#[inline(always)]
-fn store<E: Element, R: Real, const W: usize>(
-    sums: &Lanes<R, W>,
-    four: &mut [R],
-    stride: usize,
-    offset: usize,
-    width: usize,
-) {
-    for (k, slot) in node_slots::<E, R>(four, stride).enumerate() {
-        for (c, v) in slot[offset..offset + width].iter_mut().enumerate() {
-            *v = sums[c][k];
-        }
-    }
 }
 
 /// What the liquid's share of particle to grid needs (two-phase cases): each material's fluid
