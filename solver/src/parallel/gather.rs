@@ -411,7 +411,7 @@ impl<R: Real, E: Element> Layout<R, E> {
     where
         F: Fn(usize, Range<usize>, &mut [R]) + Sync,
     {
-        self.scatter_with::<W, false, (), _>(
+        self.scatter_with::<W, false, false, (), _>(
             team,
             slots,
             |_| (),
@@ -427,7 +427,13 @@ impl<R: Real, E: Element> Layout<R, E> {
     /// With `WIDE`, each thread's elements run compiled with AVX2 ([`avx2::call`]: `element`
     /// is inlined there, so pass a closure of its own to each instantiation); it panics where
     /// the processor lacks AVX2 (choose `WIDE` by [`avx2::use_avx2`]).
-    pub fn scatter_with<const W: usize, const WIDE: bool, S, F>(
+    ///
+    /// With `WRITES`, `element` writes every value of its buffer for an element with points
+    /// (sums it formed itself from 0, stored, rather than added into the buffer), so the
+    /// buffer is not cleared after each element: its stale values are never read (an element
+    /// without points still writes nothing, and its buffer is not read). In debug builds the
+    /// buffer is filled with a marker before each such call and checked to hold none after.
+    pub fn scatter_with<const W: usize, const WIDE: bool, const WRITES: bool, S, F>(
         &self,
         team: &Team,
         slots: &mut Slots<R>,
@@ -453,6 +459,8 @@ impl<R: Real, E: Element> Layout<R, E> {
             let mut buffer = [R::ZERO; WIDTH * MAX_NODES];
             let own = &mut buffer[..per_element];
             let mut state = init(k);
+            // A NaN with a payload no arithmetic produces (debug builds, `WRITES`).
+            let marker = R::of(f64::from_bits(0x7ff4_0000_0bad_ca7e));
             let elements = || {
                 // The buffer is zero at the top of the loop: it starts so, an element without
                 // points leaves it so, and the others' values are cleared once handed on (runs
@@ -470,10 +478,20 @@ impl<R: Real, E: Element> Layout<R, E> {
                     .zip(targets_of)
                     .zip(bounds)
                 {
+                    if WRITES && cfg!(debug_assertions) && first != end {
+                        own.fill(marker);
+                    }
                     element(e, *first as usize..*end as usize, own, &mut state);
+                    if WRITES && cfg!(debug_assertions) && first != end {
+                        debug_assert!(
+                            own.iter()
+                                .all(|v| v.f64().to_bits() != marker.f64().to_bits()),
+                            "element {e} left values of its buffer unwritten"
+                        );
+                    }
                     if first == end {
                         debug_assert!(
-                            own.iter().all(|v| v.f64().to_bits() == 0),
+                            WRITES || own.iter().all(|v| v.f64().to_bits() == 0),
                             "element {e} has no points but added to its buffer"
                         );
                         // Only a slot or a node's first element takes zeros: most empty
@@ -512,7 +530,9 @@ impl<R: Real, E: Element> Layout<R, E> {
                             }
                         }
                     }
-                    own.fill(R::ZERO);
+                    if !WRITES {
+                        own.fill(R::ZERO);
+                    }
                 }
             };
             if WIDE {
@@ -571,7 +591,8 @@ impl<R: Real, E: Element> Layout<R, E> {
         self.halo.as_deref()
     }
 
-    /// Both passes: [`Layout::scatter`] with `element`, then [`Layout::gather`] handing each
+    /// Both passes: [`Layout::scatter_with`] with `element`, which writes every value of its
+    /// buffer for an element with points (`WRITES`), then [`Layout::gather`] handing each
     /// node's `W` sums to `node` as a slice (so that one `node` serves passes of any width).
     pub fn sum_to_nodes<const W: usize, const WIDE: bool, F, G>(
         &self,
@@ -583,7 +604,7 @@ impl<R: Real, E: Element> Layout<R, E> {
         F: Fn(usize, Range<usize>, &mut [R]) + Sync,
         G: Fn(usize, &[R]) + Sync,
     {
-        self.scatter_with::<W, WIDE, (), _>(
+        self.scatter_with::<W, WIDE, true, (), _>(
             team,
             slots,
             |_| (),

@@ -279,12 +279,12 @@ pub fn grid_to_particle<E: Element, R: Real>(
             debug_assert_eq!(width($with_liquid), $width);
             if wide {
                 let element = element_pass!(false, $with_liquid, $w);
-                layout.scatter_with::<$width, true, _, _>(team, slots, init, |e, r, f, _| {
+                layout.scatter_with::<$width, true, true, _, _>(team, slots, init, |e, r, f, _| {
                     element(e, r, f);
                 })
             } else {
                 let element = element_pass!(false, $with_liquid, $w);
-                layout.scatter_with::<$width, false, _, _>(team, slots, init, |e, r, f, _| {
+                layout.scatter_with::<$width, false, true, _, _>(team, slots, init, |e, r, f, _| {
                     element(e, r, f);
                 })
             }
@@ -293,10 +293,10 @@ pub fn grid_to_particle<E: Element, R: Real>(
             debug_assert_eq!(width($with_liquid), $width);
             if wide {
                 let element = guarded_pass!($g, $with_liquid, $w);
-                layout.scatter_with::<$width, true, _, _>(team, slots, init, element)
+                layout.scatter_with::<$width, true, true, _, _>(team, slots, init, element)
             } else {
                 let element = guarded_pass!($g, $with_liquid, $w);
-                layout.scatter_with::<$width, false, _, _>(team, slots, init, element)
+                layout.scatter_with::<$width, false, true, _, _>(team, slots, init, element)
             }
         }};
     }

@@ -740,14 +740,14 @@ pub fn update_pore_pressure<E: Element, R: Real>(
     // Each copy ([`crate::parallel::avx2`]) with a closure of its own, so that `rate_sums` is
     // inlined into it and compiled with its instruction set.
     if use_avx2() {
-        layout.scatter_with::<2, true, (), _>(
+        layout.scatter_with::<2, true, true, (), _>(
             team,
             slots,
             |_| (),
             |e, points, two, _| rate_sums(&pass, e, points, two),
         );
     } else {
-        layout.scatter_with::<2, false, (), _>(
+        layout.scatter_with::<2, false, true, (), _>(
             team,
             slots,
             |_| (),
