@@ -462,9 +462,11 @@ impl<R: Real, E: Element> Layout<R, E> {
             // A NaN with a payload no arithmetic produces (debug builds, `WRITES`).
             let marker = R::of(f64::from_bits(0x7ff4_0000_0bad_ca7e));
             let elements = || {
-                // The buffer is zero at the top of the loop: it starts so, an element without
-                // points leaves it so, and the others' values are cleared once handed on (runs
-                // of empty elements, as in a void mesh, zero nothing).
+                // Without `WRITES` the buffer is zero at the top of the loop: it starts so, an
+                // element without points leaves it so, and the others' values are cleared once
+                // handed on (runs of empty elements, as in a void mesh, zero nothing). With
+                // `WRITES` it holds the last element's values, which the next element with
+                // points overwrites and an element without points leaves unread.
                 // The piece's `direct` entries and point starts sliced once and walked beside
                 // its slots, so that the loop indexes nothing (a void mesh's empty elements
                 // paid a bounds check per access).
