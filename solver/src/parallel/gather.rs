@@ -506,13 +506,20 @@ impl<R: Real, E: Element> Layout<R, E> {
                         }
                         continue;
                     }
+                    // A node's values as one array of `W`: its copy or sum is formed whole
+                    // and then stored, so the compiler moves it in vector registers (element by
+                    // element through slices it cannot tell apart from the accumulators, it
+                    // loaded, added and stored each value on its own, and called `memcpy` for
+                    // a slot's copy).
                     for ((values, to), &target) in own
                         .chunks_exact(W)
                         .zip(slot.chunks_exact_mut(W))
                         .zip(targets)
                     {
+                        let values: &[R; W] = values.try_into().expect("chunks of W");
                         if target == TO_SLOT {
-                            to.copy_from_slice(values);
+                            let to: &mut [R; W] = to.try_into().expect("chunks of W");
+                            *to = *values;
                             continue;
                         }
                         let n = (target & !DIRECT_FIRST) as usize;
@@ -520,17 +527,13 @@ impl<R: Real, E: Element> Layout<R, E> {
                         // (`direct_slots`), which one thread takes in element order, so no other
                         // thread touches its accumulator, and the accumulators lie past every
                         // slot.
-                        let acc = unsafe { shared.range(acc_at + W * n..acc_at + W * n + W) };
-                        if target & DIRECT_FIRST != 0 {
+                        let acc = unsafe { shared.array::<W>(acc_at + W * n) };
+                        *acc = if target & DIRECT_FIRST != 0 {
                             // 0 + v, not v: the slot pass's sum starts from 0 (and 0 + -0 is +0).
-                            for (a, &v) in acc.iter_mut().zip(values) {
-                                *a = R::ZERO + v;
-                            }
+                            values.map(|v| R::ZERO + v)
                         } else {
-                            for (a, &v) in acc.iter_mut().zip(values) {
-                                *a += v;
-                            }
-                        }
+                            std::array::from_fn(|i| acc[i] + values[i])
+                        };
                     }
                     if !WRITES {
                         own.fill(R::ZERO);

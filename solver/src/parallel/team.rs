@@ -463,6 +463,20 @@ impl<'a, T> Shared<'a, T> {
         unsafe { self.ptr.add(i).write(v) }
     }
 
+    /// The `N` elements from `start`, mutably, as an array.
+    ///
+    /// # Safety
+    /// No other thread may access any of them while the array lives.
+    #[inline]
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn array<const N: usize>(&self, start: usize) -> &mut [T; N] {
+        assert!(start <= self.len && N <= self.len - start);
+        // SAFETY: the `N` elements lie inside the borrowed slice (checked above), which
+        // outlives `'a`, and an array of `N` has the layout of `N` consecutive elements;
+        // exclusive access to them is the caller's promise.
+        unsafe { &mut *self.ptr.add(start).cast::<[T; N]>() }
+    }
+
     /// The sub-slice `r`, mutably.
     ///
     /// # Safety
@@ -480,6 +494,27 @@ impl<'a, T> Shared<'a, T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_shared_array_is_its_run_of_the_slice_and_stays_inside_it() {
+        let mut v: Vec<u32> = (0..10).collect();
+        let s = Shared::new(&mut v);
+        // SAFETY: one thread, and the arrays do not outlive their statements.
+        unsafe {
+            assert_eq!(*s.array::<3>(7), [7, 8, 9]);
+            assert_eq!(*s.array::<0>(10), [0u32; 0]);
+            *s.array::<2>(4) = [40, 50];
+        }
+        assert_eq!(v[3..7], [3, 40, 50, 6]);
+        let s = Shared::new(&mut v);
+        for (start, ok) in [(8, false), (11, false), (usize::MAX, false), (7, true)] {
+            // SAFETY: as above.
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| unsafe {
+                s.array::<3>(start)[0]
+            }));
+            assert_eq!(r.is_ok(), ok, "start {start}");
+        }
+    }
 
     #[test]
     fn ranges_cover_everything_in_order_and_balance() {
