@@ -83,7 +83,9 @@ pub struct Layout<R: Real, E: Element = Tet4> {
     owned: usize,
     /// For each slot (NODES e + k), the node it adds straight into ([`DIRECT_FIRST`] set on the
     /// node's first element), or [`TO_SLOT`] for a node whose elements more than one thread
-    /// holds (and for every slot on a rank of several, whose sums cross the halo).
+    /// holds (and for every slot on a rank of several, whose sums cross the halo). Every node
+    /// it names is below `direct_node.len()`: the scatter indexes the accumulators unchecked
+    /// on it.
     direct: Vec<u32>,
     /// Whether node n is summed straight into its accumulator (all its elements one thread's).
     direct_node: Vec<bool>,
@@ -447,6 +449,13 @@ impl<R: Real, E: Element> Layout<R, E> {
         let per_element = E::NODES * W;
         let acc_at = self.accumulators();
         debug_assert_eq!(slots.len(), acc_at + WIDTH * self.direct_node.len());
+        // Every `direct` entry names a node below `direct_node.len()` (`direct_slots`), so this
+        // one check bounds every accumulator the loop below hands values to.
+        let nodes = self.direct_node.len();
+        assert!(
+            slots.len() >= acc_at + W * nodes,
+            "slots too short for the accumulators"
+        );
         let shared = Shared::new(slots);
         let pieces = &self.pieces;
         let direct = &self.direct;
@@ -523,11 +532,13 @@ impl<R: Real, E: Element> Layout<R, E> {
                             continue;
                         }
                         let n = (target & !DIRECT_FIRST) as usize;
+                        debug_assert!(n < nodes, "a direct entry past the nodes");
                         // SAFETY: a node with a `direct` entry has every element in this piece
                         // (`direct_slots`), which one thread takes in element order, so no other
                         // thread touches its accumulator, and the accumulators lie past every
-                        // slot.
-                        let acc = unsafe { shared.array::<W>(acc_at + W * n) };
+                        // slot; `n` is below `nodes` (`direct_slots`), whose accumulators the
+                        // slots hold (asserted above).
+                        let acc = unsafe { shared.array_unchecked::<W>(acc_at + W * n) };
                         *acc = if target & DIRECT_FIRST != 0 {
                             // 0 + v, not v: the slot pass's sum starts from 0 (and 0 + -0 is +0).
                             values.map(|v| R::ZERO + v)

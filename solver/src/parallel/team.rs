@@ -477,6 +477,21 @@ impl<'a, T> Shared<'a, T> {
         unsafe { &mut *self.ptr.add(start).cast::<[T; N]>() }
     }
 
+    /// [`Shared::array`] without its bounds check, for a loop that checked its bounds once
+    /// (checked in debug builds).
+    ///
+    /// # Safety
+    /// `start + N` must not exceed the slice's length, and no other thread may access the
+    /// elements while the array lives.
+    #[inline]
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn array_unchecked<const N: usize>(&self, start: usize) -> &mut [T; N] {
+        debug_assert!(start <= self.len && N <= self.len - start);
+        // SAFETY: the elements lie inside the borrowed slice (the caller's promise, checked in
+        // debug builds), which outlives `'a`; exclusive access is the caller's promise.
+        unsafe { &mut *self.ptr.add(start).cast::<[T; N]>() }
+    }
+
     /// The sub-slice `r`, mutably.
     ///
     /// # Safety
@@ -502,6 +517,7 @@ mod tests {
         // SAFETY: one thread, and the arrays do not outlive their statements.
         unsafe {
             assert_eq!(*s.array::<3>(7), [7, 8, 9]);
+            assert_eq!(*s.array_unchecked::<3>(7), [7, 8, 9]);
             assert_eq!(*s.array::<0>(10), [0u32; 0]);
             *s.array::<2>(4) = [40, 50];
         }
