@@ -448,10 +448,10 @@ impl<R: Real, E: Element> Layout<R, E> {
         const { assert!(E::NODES <= MAX_NODES) };
         let per_element = E::NODES * W;
         let acc_at = self.accumulators();
-        debug_assert_eq!(slots.len(), acc_at + WIDTH * self.direct_node.len());
-        // Every `direct` entry names a node below `direct_node.len()` (`direct_slots`), so this
-        // one check bounds every accumulator the loop below hands values to.
         let nodes = self.direct_node.len();
+        debug_assert_eq!(slots.len(), acc_at + WIDTH * nodes);
+        // Every `direct` entry names a node below `nodes` (`direct_slots`), so this one check
+        // bounds every accumulator the loop below hands values to.
         assert!(
             slots.len() >= acc_at + W * nodes,
             "slots too short for the accumulators"
@@ -742,7 +742,7 @@ unsafe fn empty_element<R: Real, const W: usize>(
         } else if target & DIRECT_FIRST != 0 {
             let n = (target & !DIRECT_FIRST) as usize;
             // SAFETY: the caller's.
-            unsafe { shared.range(acc_at + W * n..acc_at + W * n + W) }.fill(R::ZERO);
+            *unsafe { shared.array::<W>(acc_at + W * n) } = [R::ZERO; W];
         }
     }
 }
