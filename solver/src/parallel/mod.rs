@@ -10,6 +10,7 @@ pub mod machine;
 #[cfg(feature = "mpi")]
 pub mod mpi_comm;
 pub mod partition;
+pub mod placement;
 pub mod pool;
 pub mod sort;
 pub mod team;

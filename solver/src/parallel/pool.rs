@@ -6,15 +6,23 @@
 //! puts its idle workers to sleep and its caller too, so every pass paid two or three
 //! wake-ups of the operating system: on the README's default job (4,104 points, about a
 //! millisecond of work per step) that was 45 % of a one-thread run. Here the workers wait for
-//! the next pass spinning for a short while (50 µs) before they sleep, and so does the
-//! caller for the end of the pass; between the passes of a step nobody sleeps, and a run that
-//! stops stepping (output, the end) leaves its workers asleep after that.
+//! the next pass spinning for a short while (50 µs) before they sleep; between the passes of a
+//! step nobody sleeps, and a run that stops stepping (output, the end) leaves its workers
+//! asleep after that.
+//!
+//! The caller is the team's thread 0: it hands the pass over, runs share 0 itself and then
+//! waits (spinning, then asleep) for the workers. A team of N threads is N threads, not N
+//! workers and a waiting caller: with the caller waiting beside N workers on N cores (until
+//! 2026-11-28) one core held two runnable threads, and the caller's spinning and yielding
+//! cost the worker beside it a switch of context per yield (measured on 2 cores, 2 threads,
+//! the BCN column collapse: 580,000–730,000 context switches per run against 15,000–18,000,
+//! docs/design.md §5.1).
 //!
 //! A pass is handed over as a borrowed closure: [`Pool::run`] does not return before every
 //! worker has finished with it (and has let go of it), which is what makes lending the
-//! borrow to the workers sound. A worker that panics does not take the others down: the panic
-//! is caught, the pass completes on the other workers, and [`Pool::run`] resumes it on the
-//! caller.
+//! borrow to the workers sound. A panic does not take the others down: a worker's is caught,
+//! the caller's is held, the pass completes on the other threads, and [`Pool::run`] resumes it
+//! on the caller.
 
 use std::any::Any;
 use std::cell::UnsafeCell;
@@ -69,14 +77,17 @@ unsafe impl Send for SendJob {}
 // before the read), so no read and write of it overlap.
 unsafe impl Sync for Shared {}
 
-/// `threads` workers, each started by `start(k)` (its placement) and then waiting for passes.
+/// A team of `threads`: the caller, which runs share 0 of every pass itself, and
+/// `threads - 1` workers, each started by `start(k)` (its placement) and then waiting for
+/// passes.
 pub struct Pool {
     shared: Arc<Shared>,
     handles: Vec<JoinHandle<()>>,
 }
 
 impl Pool {
-    /// Starts `threads` workers named `mpm-worker-K`; each first runs `start(K)`.
+    /// A pool for a team of `threads` (at least 1): starts workers `mpm-worker-K` for
+    /// K = 1..threads; each first runs `start(K)`. Share 0 is the caller's.
     pub fn new(
         threads: usize,
         start: impl Fn(usize) + Send + Sync + 'static,
@@ -97,9 +108,9 @@ impl Pool {
         let start = Arc::new(start);
         let mut pool = Pool {
             shared: shared.clone(),
-            handles: Vec::with_capacity(threads),
+            handles: Vec::with_capacity(threads.saturating_sub(1)),
         };
-        for k in 0..threads {
+        for k in 1..threads {
             let (shared, start) = (shared.clone(), start.clone());
             let handle = std::thread::Builder::new()
                 .name(format!("mpm-worker-{k}"))
@@ -113,17 +124,19 @@ impl Pool {
         Ok(pool)
     }
 
-    /// Runs `f(k)` on every worker k and returns when all have finished; a worker's panic is
-    /// resumed here once the others are done.
+    /// Runs `f(0)` on the caller and `f(k)` on every worker k, and returns when all have
+    /// finished; a panic (the caller's first, else a worker's) is resumed here once all are
+    /// done.
     pub fn run(&self, f: &(dyn Fn(usize) + Sync)) {
         let s = &*self.shared;
         let n = self.handles.len();
         if n == 0 {
+            f(0);
             return;
         }
         // SAFETY: only the lifetime is erased (same fat pointer); the workers drop their copy
-        // before they count themselves done, and this function returns only after every worker
-        // has (below), so the closure is never used after its borrow ends.
+        // before they count themselves done, and this function returns (or unwinds) only after
+        // every worker has (below), so the closure is never used after its borrow ends.
         let job: Job = unsafe {
             std::mem::transmute::<&(dyn Fn(usize) + Sync), &'static (dyn Fn(usize) + Sync)>(f)
         };
@@ -140,6 +153,8 @@ impl Pool {
             let _g = s.wake_lock.lock().expect("not poisoned");
             s.wake.notify_all();
         }
+        // The caller's own share: a panic is held until the workers are done with the closure.
+        let mine = catch_unwind(AssertUnwindSafe(|| f(0)));
         wait_until(
             || s.remaining.load(SeqCst) == 0,
             || {
@@ -154,6 +169,9 @@ impl Pool {
         debug_assert_eq!(s.remaining.load(SeqCst), 0, "a worker still on the pass");
         // Out of the lock before unwinding (a guard held through a panic poisons it).
         let panic = s.panic.lock().expect("not poisoned").take();
+        if let Err(p) = mine {
+            resume_unwind(p);
+        }
         if let Some(p) = panic {
             resume_unwind(p);
         }
@@ -277,14 +295,48 @@ mod tests {
 
     #[test]
     fn workers_start_placed_and_stop_when_dropped() {
-        let started = Arc::new(AtomicUsize::new(0));
+        let started = Arc::new(Mutex::new(Vec::new()));
         let s = started.clone();
-        let pool = Pool::new(4, move |_| {
-            s.fetch_add(1, SeqCst);
+        let pool = Pool::new(4, move |k| {
+            s.lock().unwrap().push(k);
         })
         .unwrap();
         pool.run(&|_| ());
-        assert_eq!(started.load(SeqCst), 4);
+        // Share 0 is the caller's: workers 1 to 3 only.
+        let mut k = started.lock().unwrap().clone();
+        k.sort_unstable();
+        assert_eq!(k, [1, 2, 3]);
         drop(pool);
+    }
+
+    #[test]
+    fn the_caller_runs_share_zero_and_its_panic_waits_for_the_workers() {
+        let pool = Pool::new(3, |_| ()).unwrap();
+        let me = std::thread::current().id();
+        let on_caller: Vec<AtomicBool> = (0..3).map(|_| AtomicBool::new(false)).collect();
+        pool.run(&|k| on_caller[k].store(std::thread::current().id() == me, SeqCst));
+        let on: Vec<bool> = on_caller.iter().map(|b| b.load(SeqCst)).collect();
+        assert_eq!(on, [true, false, false]);
+        // The caller's panic comes back only after the slow workers are done with the pass.
+        let finished = AtomicUsize::new(0);
+        let r = catch_unwind(AssertUnwindSafe(|| {
+            pool.run(&|k| {
+                if k == 0 {
+                    panic!("the caller's share");
+                }
+                std::thread::sleep(Duration::from_millis(20));
+                finished.fetch_add(1, SeqCst);
+            })
+        }));
+        assert!(r.is_err());
+        assert_eq!(finished.load(SeqCst), 2);
+        // A pool of one runs everything on the caller.
+        let one = Pool::new(1, |_| ()).unwrap();
+        let ran = AtomicUsize::new(0);
+        one.run(&|k| {
+            assert_eq!((k, std::thread::current().id()), (0, me));
+            ran.fetch_add(1, SeqCst);
+        });
+        assert_eq!(ran.load(SeqCst), 1);
     }
 }

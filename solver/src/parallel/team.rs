@@ -30,9 +30,12 @@ pub enum Pin {
     Auto,
 }
 
-/// A pool of `threads` workers.
+/// A team of `threads`: the calling thread and `threads - 1` workers.
 pub struct Team {
     pool: crate::parallel::pool::Pool,
+    /// The token of the calling thread's pin, where the team pinned it
+    /// ([`crate::parallel::placement`]).
+    caller_pin: Option<u64>,
     /// Number of threads.
     pub threads: usize,
     /// The core each thread was pinned to (`None` where pinning was not asked for or refused).
@@ -113,6 +116,16 @@ impl std::ops::AddAssign for TeamLoad {
     }
 }
 
+impl Drop for Team {
+    fn drop(&mut self) {
+        // The caller's placement from before the team, unless a newer team has pinned it since
+        // (or the team ends on another thread, whose placement it never changed).
+        if let Some(token) = self.caller_pin {
+            crate::parallel::placement::release_caller(Some(token));
+        }
+    }
+}
+
 impl std::fmt::Debug for Team {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Team")
@@ -136,6 +149,9 @@ impl Team {
     /// Starts `threads` workers (0: one per free core available to the process, at least one),
     /// pinned as `pin` asks.
     pub fn new(threads: usize, pin: Pin) -> Result<Team, TeamError> {
+        // A team that kept this thread pinned is being replaced: the new one looks at every
+        // core the process may use.
+        crate::parallel::placement::release_caller(None);
         let all = core_affinity::get_core_ids().unwrap_or_default();
         let available = std::thread::available_parallelism().map_or(1, |n| n.get());
         let look = (threads == 0 || pin == Pin::Auto) && available > 1 && all.len() > 1;
@@ -173,21 +189,13 @@ impl Team {
             (0..threads).map(|_| std::sync::Mutex::new(None)).collect();
         let granted = std::sync::Arc::new(granted);
         let g = granted.clone();
-        // One thread works on the caller's own thread: no hand-over at all. It is pinned only
-        // when asked for by `Pin::Cores` (the caller stays pinned for the rest of the process;
-        // `Pin::Auto` leaves a lone thread to the OS, which moves it off a busy core).
-        let inline = threads == 1;
-        if inline && pin == Pin::Cores {
-            if let Some(&core) = cores.first() {
-                if core_affinity::set_for_current(core) {
-                    *granted[0].lock().expect("not poisoned") = Some(core.id);
-                }
-            }
-        }
-        let workers = if inline { 0 } else { threads };
-        let pool = crate::parallel::pool::Pool::new(workers, move |k| {
-            if !cores.is_empty() {
-                let core = cores[k % cores.len()];
+        let worker_cores = cores.clone();
+        // Thread 0 is the caller's own (the pool hands it share 0 of every pass); workers
+        // 1.. are started here, before the caller is pinned, so that unpinned ones do not
+        // inherit its core.
+        let pool = crate::parallel::pool::Pool::new(threads, move |k| {
+            if !worker_cores.is_empty() {
+                let core = worker_cores[k % worker_cores.len()];
                 if core_affinity::set_for_current(core) {
                     *g[k].lock().expect("not poisoned") = Some(core.id);
                 }
@@ -199,6 +207,20 @@ impl Team {
         })?;
         // Every worker has placed itself once it has run a pass.
         pool.run(&|_| ());
+        // The caller is pinned with the team's threads, for the team's life; a team of one
+        // only when asked for by `Pin::Cores` (`Pin::Auto` leaves a lone thread to the OS,
+        // which moves it off a busy core). rayon's pool (reading and set-up) is started first,
+        // so that its threads do not inherit the caller's core either.
+        let mut caller_pin = None;
+        let pin_caller = !(threads == 1 && pin == Pin::Auto);
+        if let (true, Some(&core)) = (pin_caller, cores.first()) {
+            let _ = rayon::current_num_threads();
+            let token = crate::parallel::placement::token();
+            if crate::parallel::placement::pin_caller(core.id, token) {
+                *granted[0].lock().expect("not poisoned") = Some(core.id);
+                caller_pin = Some(token);
+            }
+        }
         let pinned: Vec<Option<usize>> = granted
             .iter()
             .map(|m| *m.lock().expect("not poisoned"))
@@ -206,6 +228,7 @@ impl Team {
         let watching = pin == Pin::Auto && pinned.iter().any(Option::is_some);
         Ok(Team {
             pool,
+            caller_pin,
             threads,
             pinned,
             busy,
@@ -267,8 +290,8 @@ impl Team {
         Ok(team)
     }
 
-    /// Runs `f(k)` on every thread k = 0..threads, each on its own worker (a team of one on the
-    /// calling thread), and waits. Each thread's time inside `f` is counted for
+    /// Runs `f(k)` on every thread k = 0..threads, `f(0)` on the calling thread and each other
+    /// on its own worker, and waits. Each thread's time inside `f` is counted for
     /// [`Team::take_load`] (two clock reads per thread).
     pub fn run<F: Fn(usize) + Sync>(&self, f: F) {
         let start = Instant::now();
@@ -280,11 +303,7 @@ impl Team {
             last[k].0.store(busy, Ordering::Relaxed);
             total[k].0.fetch_add(busy, Ordering::Relaxed);
         };
-        if self.threads == 1 {
-            timed(0);
-        } else {
-            self.pool.run(&timed);
-        }
+        self.pool.run(&timed);
         let wall = start.elapsed().as_nanos() as u64;
         // The pass has joined: every thread's store is visible here.
         let (busiest, busy) = last.iter().fold((0, 0), |(m, s), c| {
@@ -548,6 +567,52 @@ mod tests {
         for x in &r {
             assert_eq!(x.len(), 250);
         }
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_pinned_team_pins_its_caller_as_thread_zero_and_gives_its_placement_back() {
+        // On a thread of its own: the test runner's threads keep their placement.
+        std::thread::spawn(|| {
+            let ids = |c: Vec<core_affinity::CoreId>| c.iter().map(|c| c.id).collect::<Vec<_>>();
+            let before = ids(core_affinity::get_core_ids().unwrap());
+            let team = Team::new(2, Pin::Cores).unwrap();
+            let zero = team.pinned[0].expect("the caller pinned");
+            // Thread 0 is the caller, on the team's first core.
+            let me = std::thread::current().id();
+            let caller = std::sync::Mutex::new(None);
+            team.run(|k| {
+                if std::thread::current().id() == me {
+                    *caller.lock().unwrap() = Some(k);
+                }
+            });
+            assert_eq!(*caller.lock().unwrap(), Some(0));
+            assert_eq!(ids(core_affinity::get_core_ids().unwrap()), [zero]);
+            // A replacement sees every core, pins the caller in turn, and keeps its pin when
+            // the old team ends.
+            let next = team.replacement(None, &[]).unwrap();
+            drop(team);
+            assert!(
+                next.pinned.iter().all(Option::is_none),
+                "unpinned: {:?}",
+                next.pinned
+            );
+            assert_eq!(ids(core_affinity::get_core_ids().unwrap()), before);
+            drop(next);
+            let pinned_again = Team::new(2, Pin::Cores).unwrap();
+            let again = pinned_again.pinned[0].unwrap();
+            let newer = Team::new(1, Pin::Cores).unwrap();
+            drop(pinned_again);
+            assert_eq!(
+                ids(core_affinity::get_core_ids().unwrap()),
+                [newer.pinned[0].unwrap()],
+                "the newer team's pin stays (first team on core {again})"
+            );
+            drop(newer);
+            assert_eq!(ids(core_affinity::get_core_ids().unwrap()), before);
+        })
+        .join()
+        .unwrap();
     }
 
     #[test]
