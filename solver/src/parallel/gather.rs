@@ -39,8 +39,14 @@ pub use crate::parallel::team::ELEMENT_BLOCK;
 
 /// Element blocks per chunk of the passes that hand out work while they run (1,024 elements,
 /// about 4,000 points: a few dozen chunks per thread on a million points, each long enough
-/// that claiming it costs nothing next to its work).
+/// that claiming it costs nothing next to its work), at most: see [`MIN_CHUNKS`].
 pub const CHUNK_BLOCKS: usize = 16;
+
+/// Chunks per thread at least, where the thread has that many element blocks: a small model's
+/// thread holds only a few chunks of [`CHUNK_BLOCKS`] (the 2,400-point BCN column collapse,
+/// 4,600 elements: three per thread at two threads), too few to even out points whose update
+/// costs differ (a plastic zone's Mohr-Coulomb returns), so its chunks are made smaller.
+pub const MIN_CHUNKS: usize = 8;
 
 /// Where the scatter cuts each thread's elements into pieces, in thousandths of the thread's
 /// points: a first piece of three quarters, then two eighths. A thread takes its own pieces
@@ -747,14 +753,15 @@ unsafe fn empty_element<R: Real, const W: usize>(
     }
 }
 
-/// The threads' element ranges cut into chunks of [`CHUNK_BLOCKS`] blocks (the ranges start
-/// on block boundaries, so every chunk holds whole blocks but a thread's last): the chunks,
-/// and each thread's.
+/// The threads' element ranges cut into chunks of [`CHUNK_BLOCKS`] blocks, or fewer so that a
+/// thread has [`MIN_CHUNKS`] (the ranges start on block boundaries, so every chunk holds whole
+/// blocks but a thread's last): the chunks, and each thread's.
 fn chunks_of(ranges: &[Range<usize>]) -> (Vec<Range<usize>>, Vec<Range<usize>>) {
-    let size = CHUNK_BLOCKS * ELEMENT_BLOCK;
     let mut chunks = Vec::new();
     let mut own = Vec::with_capacity(ranges.len());
     for r in ranges {
+        let blocks = r.len().div_ceil(ELEMENT_BLOCK);
+        let size = blocks.div_ceil(MIN_CHUNKS).clamp(1, CHUNK_BLOCKS) * ELEMENT_BLOCK;
         let first = chunks.len();
         let mut e = r.start;
         while e < r.end {
@@ -820,23 +827,31 @@ mod tests {
     #[test]
     fn chunks_cut_each_thread_in_whole_blocks() {
         let size = CHUNK_BLOCKS * ELEMENT_BLOCK;
+        let large = 8 * size;
         let ranges = [
-            0..size + 64,
-            size + 64..size + 64,
-            size + 64..3 * size + 100,
+            0..large + 64,
+            large + 64..large + 64,
+            large + 64..large + 2 * size + 100,
         ];
         let (chunks, own) = chunks_of(&ranges);
-        assert_eq!(
-            chunks,
-            [
-                0..size,
-                size..size + 64,
-                size + 64..2 * size + 64,
-                2 * size + 64..3 * size + 64,
-                3 * size + 64..3 * size + 100
-            ]
-        );
-        assert_eq!(own, [0..2, 2..2, 2..5]);
+        // The first thread: eight chunks of the largest size and its last block.
+        let mut expected: Vec<Range<usize>> = (0..8).map(|c| c * size..(c + 1) * size).collect();
+        expected.push(large..large + 64);
+        // The third: 34 blocks (its last part-filled), chunks of 5 blocks (8 × 5 ≥ 34): six
+        // and the rest.
+        let (start, five) = (large + 64, 5 * ELEMENT_BLOCK);
+        for c in 0..6 {
+            expected.push(start + c * five..start + (c + 1) * five);
+        }
+        expected.push(start + 6 * five..large + 2 * size + 100);
+        assert_eq!(chunks, expected);
+        assert_eq!(own, [0..9, 9..9, 9..16]);
+        // A small thread: a chunk per block.
+        let small = std::iter::once(0..3 * ELEMENT_BLOCK - 5).collect::<Vec<_>>();
+        let (chunks, own) = chunks_of(&small);
+        assert_eq!(chunks, [0..64, 64..128, 128..187]);
+        assert_eq!(own.len(), 1);
+        assert_eq!(own[0], 0..3);
     }
 
     #[test]
