@@ -15,7 +15,7 @@
 //! workers and a waiting caller: with the caller waiting beside N workers on N cores (until
 //! 2026-11-28) one core held two runnable threads, and the caller's spinning and yielding
 //! cost the worker beside it a switch of context per yield (measured on 2 cores, 2 threads,
-//! the BCN column collapse: 580,000–730,000 context switches per run against 15,000–18,000,
+//! the BCN column collapse: 580,000–910,000 context switches per run against 12,000–20,000,
 //! docs/design.md §5.1).
 //!
 //! A pass is handed over as a borrowed closure: [`Pool::run`] does not return before every

@@ -146,8 +146,8 @@ pub struct TeamError {
 }
 
 impl Team {
-    /// Starts `threads` workers (0: one per free core available to the process, at least one),
-    /// pinned as `pin` asks.
+    /// A team of `threads` (0: one per free core available to the process, at least one): the
+    /// calling thread and `threads - 1` workers started here, pinned as `pin` asks.
     pub fn new(threads: usize, pin: Pin) -> Result<Team, TeamError> {
         // A team that kept this thread pinned is being replaced: the new one looks at every
         // core the process may use.
@@ -189,13 +189,19 @@ impl Team {
             (0..threads).map(|_| std::sync::Mutex::new(None)).collect();
         let granted = std::sync::Arc::new(granted);
         let g = granted.clone();
-        let worker_cores = cores.clone();
+        // The caller is pinned with the team's threads; a team of one only when asked for by
+        // `Pin::Cores` (`Pin::Auto` leaves a lone thread to the OS, which moves it off a busy
+        // core).
+        let caller_core = cores
+            .first()
+            .copied()
+            .filter(|_| threads > 1 || pin == Pin::Cores);
         // Thread 0 is the caller's own (the pool hands it share 0 of every pass); workers
         // 1.. are started here, before the caller is pinned, so that unpinned ones do not
         // inherit its core.
         let pool = crate::parallel::pool::Pool::new(threads, move |k| {
-            if !worker_cores.is_empty() {
-                let core = worker_cores[k % worker_cores.len()];
+            if !cores.is_empty() {
+                let core = cores[k % cores.len()];
                 if core_affinity::set_for_current(core) {
                     *g[k].lock().expect("not poisoned") = Some(core.id);
                 }
@@ -207,13 +213,10 @@ impl Team {
         })?;
         // Every worker has placed itself once it has run a pass.
         pool.run(&|_| ());
-        // The caller is pinned with the team's threads, for the team's life; a team of one
-        // only when asked for by `Pin::Cores` (`Pin::Auto` leaves a lone thread to the OS,
-        // which moves it off a busy core). rayon's pool (reading and set-up) is started first,
-        // so that its threads do not inherit the caller's core either.
+        // The caller's pin lasts the team's life. rayon's pool (reading and set-up) is started
+        // first, so that its threads do not inherit the caller's core either.
         let mut caller_pin = None;
-        let pin_caller = !(threads == 1 && pin == Pin::Auto);
-        if let (true, Some(&core)) = (pin_caller, cores.first()) {
+        if let Some(core) = caller_core {
             let _ = rayon::current_num_threads();
             let token = crate::parallel::placement::token();
             if crate::parallel::placement::pin_caller(core.id, token) {
