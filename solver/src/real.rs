@@ -1,6 +1,8 @@
 //! The solver's precision: one generic parameter, so f32 and f64 share one code path.
 
 use std::fmt::Debug;
+
+use crate::parallel::four::Four;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// A floating-point type the solver can run in (`f64` now, `f32` from the same code).
@@ -22,6 +24,8 @@ pub trait Real:
     + DivAssign
     + 'static
 {
+    /// Four lanes of this precision as one vector value ([`crate::parallel::four`]).
+    type Four: Four<Self>;
     /// Name written to `run.json`.
     const NAME: &'static str;
     /// Zero.
@@ -73,8 +77,9 @@ pub trait Real:
 }
 
 macro_rules! real {
-    ($t:ty, $bits:ty, $name:expr) => {
+    ($t:ty, $bits:ty, $name:expr, $four:ty) => {
         impl Real for $t {
+            type Four = $four;
             const NAME: &'static str = $name;
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -105,8 +110,11 @@ macro_rules! real {
         }
     };
 }
-real!(f64, u64, "f64");
-real!(f32, u32, "f32");
+#[cfg(target_arch = "x86_64")]
+real!(f64, u64, "f64", crate::parallel::four::F64x4);
+#[cfg(not(target_arch = "x86_64"))]
+real!(f64, u64, "f64", crate::parallel::four::Lanes4<f64>);
+real!(f32, u32, "f32", crate::parallel::four::Lanes4<f32>);
 
 /// A 3-vector.
 pub type V3<R> = [R; 3];

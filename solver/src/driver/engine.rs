@@ -2169,7 +2169,8 @@ mod tests {
     }
 
     /// The AVX2 copies of particle to grid, grid to particle and the stress pass give the bits
-    /// of the portable ones: dry, two-phase, Mohr-Coulomb and plane strain, in both precisions,
+    /// of the portable ones: dry, two-phase, Mohr-Coulomb, mixed integration and plane strain,
+    /// in both precisions,
     /// stepped until stresses, velocities and (in the Mohr-Coulomb column) returns are well
     /// under way.
     #[test]
@@ -2183,6 +2184,8 @@ mod tests {
             ("golden/column_dry.toml", 60),
             ("golden/column_saturated.toml", 60),
             ("mc_column.toml", 60),
+            // MPM-MIXED: full elements' Gauss-point tractions before their points' sums.
+            ("oracle_mc_footing.toml", 20),
         ] {
             let portable = state_bits::<f64, Tet4>(scene, steps, true);
             assert!(portable.iter().any(|&b| b != 0), "{scene}: no state");

@@ -7,6 +7,7 @@ use crate::element::tri3::Tri3;
 use crate::element::Element;
 use crate::material::liquid::Fluid;
 use crate::parallel::avx2::use_avx2;
+use crate::parallel::four::Four;
 use crate::parallel::gather::{Layout, Slots};
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
@@ -133,6 +134,13 @@ pub fn particle_to_grid<E: Element, R: Real>(
         liquid,
         body,
         stride: stride(liquid.is_some()),
+        // (f64 only: f32's four lanes are an array, which took more instructions than the
+        // point loop.)
+        four: if wide && R::BYTES == 8 {
+            R::Four::token()
+        } else {
+            None
+        },
     };
     let mass = Shared::new(&mut g.mass);
     let momentum = Shared::new(&mut g.momentum);
@@ -185,7 +193,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
                     team,
                     slots,
                     |e, points, four| {
-                        element_sums::<E, R, $liquid, { $points }>(&pass, e, points, four)
+                        element_sums::<E, R, $liquid, { $points }, true>(&pass, e, points, four)
                     },
                     node,
                 )
@@ -194,7 +202,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
                     team,
                     slots,
                     |e, points, four| {
-                        element_sums::<E, R, $liquid, { $points }>(&pass, e, points, four)
+                        element_sums::<E, R, $liquid, { $points }, false>(&pass, e, points, four)
                     },
                     node,
                 )
@@ -233,13 +241,15 @@ struct Pass<'a, E: Element, R: Real> {
     body: Option<OneBody>,
     /// Values per node of the pass.
     stride: usize,
+    /// Where the pass runs its AVX2 copy: the token of [`Real::Four`]'s instructions.
+    four: Option<<R::Four as Four<R>>::Token>,
 }
 
 /// Element `e`'s sums into `four` ([`particle_to_grid`]): the solid's, and the liquid's with
 /// `WITH_LIQUID` (the dry variant compiles without the liquid's code); its points' shape values
 /// in batches of `W`.
 #[inline(always)]
-fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
+fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, const WIDE: bool>(
     cx: &Pass<'_, E, R>,
     e: usize,
     range: std::ops::Range<usize>,
@@ -365,6 +375,52 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
     // point order.
     let corners = cx.mesh.corners[e].as_ref();
     let (first, map) = (&cx.mesh.x[corners[0] as usize], &cx.mesh.map[e]);
+    // The AVX2 copy (f64): each point's sums as explicit four-lane vectors, one lane per node
+    // ([`crate::parallel::four`]): the same operations in the same order as the loop below, so
+    // the same bits, without the shuffles and stack traffic the compiler made of that loop
+    // (docs/design.md §9).
+    if WIDE {
+        if let Some(t) = cx.four {
+            let points = Points {
+                active,
+                material,
+                x,
+                mass,
+                vel,
+                volume,
+                stress,
+                pore,
+                liquid: liquid_points,
+                map,
+                first,
+            };
+            debug_assert!(crate::parallel::avx2::present());
+            // SAFETY: `WIDE` only in the scatter's AVX2 copy, which asserts that the processor
+            // has AVX2.
+            unsafe {
+                node_lane_sums_avx2::<E, R, WITH_LIQUID>(
+                    t,
+                    cx,
+                    &points,
+                    full,
+                    &by_component,
+                    &mut sums,
+                    &mut wet,
+                )
+            };
+            store::<E, R, 10>(&sums, four, cx.stride, 0, solid_width::<E>());
+            if WITH_LIQUID {
+                store::<E, R, 12>(
+                    &wet,
+                    four,
+                    cx.stride,
+                    solid_width::<E>(),
+                    liquid_width::<E>(),
+                );
+            }
+            return;
+        }
+    }
     let mut j = 0;
     // (Not `Batch`, which the stress and grid-to-particle passes share: the batch
     // here takes every point and skips inside, measured 15 % faster on the
@@ -476,6 +532,166 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize>(
             solid_width::<E>(),
             liquid_width::<E>(),
         );
+    }
+}
+
+/// The liquid's loads, and an element's points' liquid velocities and (where the liquid mass is
+/// held fixed) initial volumes.
+type LiquidSlices<'a, R> = (LiquidLoads<'a, R>, &'a [V3<R>], Option<&'a [R]>);
+
+/// An element's points, each array sliced to them (one length), for [`node_lane_sums`].
+struct Points<'a, E: Element, R: Real> {
+    active: &'a [bool],
+    material: &'a [u32],
+    x: &'a [V3<R>],
+    mass: &'a [R],
+    vel: &'a [V3<R>],
+    volume: &'a [R],
+    stress: &'a [[R; 6]],
+    pore: Option<&'a [R]>,
+    liquid: Option<LiquidSlices<'a, R>>,
+    map: &'a E::Map<R>,
+    first: &'a V3<R>,
+}
+
+/// [`node_lane_sums`] compiled with AVX2, where the four-lane operations are single
+/// instructions (a function of its own: inlined into the scatter's element closure, the
+/// saturated pass's closure grew too large for the compiler to inline into its AVX2 copy).
+///
+/// # Safety
+/// On x86-64 the processor must have AVX2 ([`crate::parallel::avx2::present`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
+#[allow(clippy::too_many_arguments)]
+unsafe fn node_lane_sums_avx2<E: Element, R: Real, const WITH_LIQUID: bool>(
+    t: <R::Four as Four<R>>::Token,
+    cx: &Pass<'_, E, R>,
+    points: &Points<'_, E, R>,
+    full: bool,
+    by_component: &[[R; LANES]; 3],
+    sums: &mut Lanes<R, 10>,
+    wet: &mut Lanes<R, 12>,
+) {
+    node_lane_sums::<E, R, WITH_LIQUID>(t, cx, points, full, by_component, sums, wet);
+}
+
+/// An element's sums over its points ([`element_sums`]), added to `sums` (the solid's) and,
+/// with `WITH_LIQUID`, `wet` (the liquid's): each point's contribution as four-lane vectors,
+/// one lane per node (a triangle's fourth lane carries zeros and is never stored), with the
+/// operations of the point loop of [`element_sums`] in its order (the same bits).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
+    t: <R::Four as Four<R>>::Token,
+    cx: &Pass<'_, E, R>,
+    points: &Points<'_, E, R>,
+    full: bool,
+    by_component: &[[R; LANES]; 3],
+    sums: &mut Lanes<R, 10>,
+    wet: &mut Lanes<R, 12>,
+) {
+    let Points {
+        active,
+        material,
+        x,
+        mass,
+        vel,
+        volume,
+        stress,
+        pore,
+        liquid,
+        map,
+        first,
+    } = *points;
+    let count = x.len();
+    let (active, material) = (&active[..count], &material[..count]);
+    let (mass, vel, volume, stress) = (
+        &mass[..count],
+        &vel[..count],
+        &volume[..count],
+        &stress[..count],
+    );
+    let splat = |v: R| R::Four::splat(t, v);
+    let g: [R::Four; 3] = std::array::from_fn(|b| R::Four::load(t, &by_component[b]));
+    let mut s4: [R::Four; 10] = std::array::from_fn(|c| R::Four::load(t, &sums[c]));
+    let mut w4: [R::Four; 12] = std::array::from_fn(|c| R::Four::load(t, &wet[c]));
+    for i in 0..count {
+        if !active[i] || !maps(cx.body, material[i]) {
+            continue;
+        }
+        let nl = E::shape_lanes::<R, 1>(map, first, &x[i].map(|c| [c]));
+        let n = R::Four::load(t, &std::array::from_fn(|k| nl[k][0]));
+        let (m, v) = (mass[i], vel[i]);
+        let gravity = &cx.gravity[material[i] as usize];
+        let vol = if full { R::ZERO } else { volume[i] };
+        let mut s = stress[i].map(|c| vol * c);
+        if let Some(pore) = pore {
+            let vp = vol * pore[i];
+            s[0] += vp;
+            s[1] += vp;
+            s[2] += vp;
+        }
+        let w = splat(m) * n;
+        s4[0] = s4[0] + w;
+        for a in 0..E::DIM {
+            // Row a of the symmetric σ (xx yy zz xy yz zx), as [`tractions`] sums it (the
+            // in-plane components only in 2D).
+            const ROWS: [[usize; 3]; 3] = [[0, 3, 5], [3, 1, 4], [5, 4, 2]];
+            let r = ROWS[a];
+            let f = if E::DIM == 2 {
+                splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1]
+            } else {
+                splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1] + splat(s[r[2]]) * g[2]
+            };
+            s4[1 + a] = s4[1 + a] + w * splat(v[a]);
+            s4[1 + E::DIM + a] = s4[1 + E::DIM + a] - f;
+            s4[1 + 2 * E::DIM + a] = s4[1 + 2 * E::DIM + a] + w * splat(gravity[a]);
+        }
+        if E::AXISYMMETRIC {
+            // An axisymmetric section's hoop stress pulls each node towards the axis:
+            // f_r -= V σ_θθ N / r (x the radius; V per radian), after the point's traction.
+            let hoop = s[2] / x[i][0];
+            s4[1 + E::DIM] = s4[1 + E::DIM] - splat(hoop) * n;
+        }
+        if !WITH_LIQUID {
+            continue;
+        }
+        let (Some((loads, w_all, volume0)), Some(pore)) = (liquid, pore) else {
+            continue;
+        };
+        let Some(f) = loads.fluids[material[i] as usize] else {
+            continue;
+        };
+        let vol = volume[i];
+        // The liquid's mass, weight and drag are taken on the initial volume where the case
+        // holds the liquid mass fixed.
+        let vw = volume0.map_or(vol, |v0| v0[i]);
+        let mw = f.rho_w * vw;
+        let pw = if full { R::ZERO } else { pore[i] * vol };
+        let wv = w_all[i];
+        let mn = splat(mw) * n;
+        let nmw = splat(f.n * mw) * n;
+        w4[0] = w4[0] + mn;
+        w4[1] = w4[1] + nmw;
+        w4[2] = w4[2] + splat(f.drag * vw) * n;
+        for a in 0..E::DIM {
+            let force = mn * splat(loads.gravity[a]) - splat(pw) * g[a];
+            w4[3 + a] = w4[3 + a] + mn * splat(wv[a]);
+            w4[3 + E::DIM + a] = w4[3 + E::DIM + a] + force;
+            w4[3 + 2 * E::DIM + a] = w4[3 + 2 * E::DIM + a] + nmw * splat(loads.gravity[a]);
+        }
+        if E::AXISYMMETRIC {
+            // The pore pressure's hoop force, as the solid's.
+            let hoop = pw / x[i][0];
+            w4[3 + E::DIM] = w4[3 + E::DIM] - splat(hoop) * n;
+        }
+    }
+    for (sum, v) in sums.iter_mut().zip(s4) {
+        *sum = v.to_array();
+    }
+    if WITH_LIQUID {
+        for (sum, v) in wet.iter_mut().zip(w4) {
+            *sum = v.to_array();
+        }
     }
 }
 

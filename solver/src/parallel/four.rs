@@ -1,0 +1,172 @@
+//! Four lanes of one precision as one vector value, written out where the compiler's own
+//! vectorizer does badly: the per-point bodies of the scatters hold one lane per node of a
+//! tetrahedron, and left to the compiler they were mostly shuffles and stack traffic
+//! (docs/design.md §9). Each operation is the lane-wise IEEE operation (no fused
+//! multiply-add), so code written with [`Four`] gives the bits of the same code written lane by
+//! lane.
+//!
+//! f64 takes one 256-bit AVX register ([`F64x4`]) on x86-64; f32, and f64 elsewhere, take a
+//! plain array ([`Lanes4`]), which the compiler vectorizes as it can. An [`F64x4`] is made only
+//! from an [`Avx`] token, which exists only where the processor runs AVX2, so its operations
+//! are safe to call; they compile to single instructions only where inlined into code compiled
+//! with AVX (the passes' AVX2 copies, [`crate::parallel::avx2`]).
+
+use std::ops::{Add, Mul, Sub};
+
+/// Four lanes of `R` as one value.
+pub trait Four<R: Copy>:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self>
+{
+    /// What proves that the processor runs this type's instructions.
+    type Token: Copy + Send + Sync;
+    /// The token, where the processor runs this type's instructions.
+    fn token() -> Option<Self::Token>;
+    /// All four lanes `v`.
+    fn splat(t: Self::Token, v: R) -> Self;
+    /// The lanes of `a`.
+    fn load(t: Self::Token, a: &[R; 4]) -> Self;
+    /// The lanes as an array.
+    fn to_array(self) -> [R; 4];
+}
+
+/// Four lanes as a plain array (f32, and f64 off x86-64): each operation lane by lane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lanes4<R>([R; 4]);
+
+macro_rules! lanes4_op {
+    ($tr:ident, $f:ident, $op:tt) => {
+        impl<R: Copy + std::ops::$tr<Output = R>> $tr for Lanes4<R> {
+            type Output = Self;
+            #[inline(always)]
+            fn $f(self, o: Self) -> Self {
+                Lanes4(std::array::from_fn(|k| self.0[k] $op o.0[k]))
+            }
+        }
+    };
+}
+lanes4_op!(Add, add, +);
+lanes4_op!(Sub, sub, -);
+lanes4_op!(Mul, mul, *);
+
+impl<R> Four<R> for Lanes4<R>
+where
+    R: Copy + Add<Output = R> + Sub<Output = R> + Mul<Output = R>,
+{
+    type Token = ();
+    #[inline(always)]
+    fn token() -> Option<()> {
+        Some(())
+    }
+    #[inline(always)]
+    fn splat(_: (), v: R) -> Self {
+        Lanes4([v; 4])
+    }
+    #[inline(always)]
+    fn load(_: (), a: &[R; 4]) -> Self {
+        Lanes4(*a)
+    }
+    #[inline(always)]
+    fn to_array(self) -> [R; 4] {
+        self.0
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+pub use x86::{Avx, F64x4};
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::Four;
+    use std::arch::x86_64::{
+        __m256d, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_storeu_pd,
+        _mm256_sub_pd,
+    };
+    use std::ops::{Add, Mul, Sub};
+
+    /// Proof that the processor runs AVX2 (and so AVX): made only by [`Four::token`] after
+    /// asking the processor.
+    #[derive(Debug, Clone, Copy)]
+    pub struct Avx(());
+
+    /// Four f64 lanes in one 256-bit AVX register; exists only where the processor runs AVX2
+    /// (made from an [`Avx`]).
+    #[derive(Debug, Clone, Copy)]
+    pub struct F64x4(__m256d);
+
+    macro_rules! avx_op {
+        ($tr:ident, $f:ident, $intr:ident) => {
+            impl $tr for F64x4 {
+                type Output = Self;
+                #[inline(always)]
+                fn $f(self, o: Self) -> Self {
+                    // SAFETY: an F64x4 exists only where the processor runs AVX (made from an
+                    // `Avx` token, which `token` makes only after asking it).
+                    F64x4(unsafe { $intr(self.0, o.0) })
+                }
+            }
+        };
+    }
+    avx_op!(Add, add, _mm256_add_pd);
+    avx_op!(Sub, sub, _mm256_sub_pd);
+    avx_op!(Mul, mul, _mm256_mul_pd);
+
+    impl Four<f64> for F64x4 {
+        type Token = Avx;
+        #[inline(always)]
+        fn token() -> Option<Avx> {
+            crate::parallel::avx2::present().then_some(Avx(()))
+        }
+        #[inline(always)]
+        fn splat(_: Avx, v: f64) -> Self {
+            debug_assert!(crate::parallel::avx2::present());
+            // SAFETY: the token proves that the processor runs AVX.
+            F64x4(unsafe { _mm256_set1_pd(v) })
+        }
+        #[inline(always)]
+        fn load(_: Avx, a: &[f64; 4]) -> Self {
+            debug_assert!(crate::parallel::avx2::present());
+            // SAFETY: the token proves AVX; `a` holds four f64 (an unaligned load).
+            F64x4(unsafe { _mm256_loadu_pd(a.as_ptr()) })
+        }
+        #[inline(always)]
+        fn to_array(self) -> [f64; 4] {
+            let mut a = [0.0; 4];
+            // SAFETY: an F64x4 exists only where the processor runs AVX; `a` has room for
+            // four f64 (an unaligned store).
+            unsafe { _mm256_storeu_pd(a.as_mut_ptr(), self.0) };
+            a
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::real::Real;
+
+    /// Each lane's operations give the bits of the same scalar operations.
+    fn lane_by_lane<R: Real>() {
+        let Some(t) = <R::Four as Four<R>>::token() else {
+            eprintln!("skipped: no four-lane type on this processor");
+            return;
+        };
+        let mut rng = crate::test_rng::uniform(7);
+        for _ in 0..1000 {
+            let a: [R; 4] = std::array::from_fn(|_| R::of((rng() - 0.5) * 1e3));
+            let b: [R; 4] = std::array::from_fn(|_| R::of((rng() - 0.5) * 1e-3));
+            let c = R::of(rng() - 0.5);
+            let (va, vb) = (R::Four::load(t, &a), R::Four::load(t, &b));
+            let got = (va * vb + R::Four::splat(t, c) - vb).to_array();
+            for k in 0..4 {
+                let want = a[k] * b[k] + c - b[k];
+                assert_eq!(got[k].f64().to_bits(), want.f64().to_bits());
+            }
+        }
+    }
+
+    #[test]
+    fn four_lanes_are_the_scalar_operations() {
+        lane_by_lane::<f64>();
+        lane_by_lane::<f32>();
+    }
+}
