@@ -114,6 +114,9 @@ macro_rules! real {
 real!(f64, u64, "f64", crate::parallel::four::F64x4);
 #[cfg(not(target_arch = "x86_64"))]
 real!(f64, u64, "f64", crate::parallel::four::Lanes4<f64>);
+#[cfg(target_arch = "x86_64")]
+real!(f32, u32, "f32", crate::parallel::four::F32x4);
+#[cfg(not(target_arch = "x86_64"))]
 real!(f32, u32, "f32", crate::parallel::four::Lanes4<f32>);
 
 /// A 3-vector.

@@ -5,8 +5,9 @@
 //! multiply-add), so code written with [`Four`] gives the bits of the same code written lane by
 //! lane.
 //!
-//! f64 takes one 256-bit AVX register ([`F64x4`]) on x86-64; f32, and f64 elsewhere, take a
-//! plain array ([`Lanes4`]), which the compiler vectorizes as it can. An [`F64x4`] is made only
+//! On x86-64, f64 takes one 256-bit AVX register ([`F64x4`]) and f32 one 128-bit SSE register
+//! ([`F32x4`]); elsewhere both take a plain array ([`Lanes4`]), which the compiler vectorizes
+//! as it can. An [`F64x4`] is made only
 //! from an [`Avx`] token, which exists only where the processor runs AVX2, so its operations
 //! are safe to call; they compile to single instructions only where inlined into code compiled
 //! with AVX (the passes' AVX2 copies, [`crate::parallel::avx2`]).
@@ -72,14 +73,15 @@ where
 }
 
 #[cfg(target_arch = "x86_64")]
-pub use x86::{Avx, F64x4};
+pub use x86::{Avx, F32x4, F64x4, Sse};
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::Four;
     use std::arch::x86_64::{
-        __m256d, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_storeu_pd,
-        _mm256_sub_pd,
+        __m128, __m256d, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd,
+        _mm256_storeu_pd, _mm256_sub_pd, _mm_add_ps, _mm_loadu_ps, _mm_mul_ps, _mm_set1_ps,
+        _mm_storeu_ps, _mm_sub_ps,
     };
     use std::ops::{Add, Mul, Sub};
 
@@ -93,22 +95,60 @@ mod x86 {
     #[derive(Debug, Clone, Copy)]
     pub struct F64x4(__m256d);
 
-    macro_rules! avx_op {
-        ($tr:ident, $f:ident, $intr:ident) => {
-            impl $tr for F64x4 {
+    /// Proof that the processor runs SSE: every x86-64 processor does (a token, so that
+    /// [`F32x4`] has the shape of [`F64x4`]).
+    #[derive(Debug, Clone, Copy)]
+    pub struct Sse(());
+
+    /// Four f32 lanes in one 128-bit SSE register (SSE is part of x86-64).
+    #[derive(Debug, Clone, Copy)]
+    pub struct F32x4(__m128);
+
+    macro_rules! vector_op {
+        ($ty:ident, $tr:ident, $f:ident, $intr:ident) => {
+            impl $tr for $ty {
                 type Output = Self;
                 #[inline(always)]
                 fn $f(self, o: Self) -> Self {
                     // SAFETY: an F64x4 exists only where the processor runs AVX (made from an
-                    // `Avx` token, which `token` makes only after asking it).
-                    F64x4(unsafe { $intr(self.0, o.0) })
+                    // `Avx` token, which `token` makes only after asking it); an F32x4 needs
+                    // SSE, which every x86-64 processor runs.
+                    $ty(unsafe { $intr(self.0, o.0) })
                 }
             }
         };
     }
-    avx_op!(Add, add, _mm256_add_pd);
-    avx_op!(Sub, sub, _mm256_sub_pd);
-    avx_op!(Mul, mul, _mm256_mul_pd);
+    vector_op!(F64x4, Add, add, _mm256_add_pd);
+    vector_op!(F64x4, Sub, sub, _mm256_sub_pd);
+    vector_op!(F64x4, Mul, mul, _mm256_mul_pd);
+    vector_op!(F32x4, Add, add, _mm_add_ps);
+    vector_op!(F32x4, Sub, sub, _mm_sub_ps);
+    vector_op!(F32x4, Mul, mul, _mm_mul_ps);
+
+    impl Four<f32> for F32x4 {
+        type Token = Sse;
+        #[inline(always)]
+        fn token() -> Option<Sse> {
+            Some(Sse(()))
+        }
+        #[inline(always)]
+        fn splat(_: Sse, v: f32) -> Self {
+            // SAFETY: SSE is part of x86-64.
+            F32x4(unsafe { _mm_set1_ps(v) })
+        }
+        #[inline(always)]
+        fn load(_: Sse, a: &[f32; 4]) -> Self {
+            // SAFETY: SSE is part of x86-64; `a` holds four f32 (an unaligned load).
+            F32x4(unsafe { _mm_loadu_ps(a.as_ptr()) })
+        }
+        #[inline(always)]
+        fn to_array(self) -> [f32; 4] {
+            let mut a = [0.0; 4];
+            // SAFETY: SSE is part of x86-64; `a` has room for four f32 (an unaligned store).
+            unsafe { _mm_storeu_ps(a.as_mut_ptr(), self.0) };
+            a
+        }
+    }
 
     impl Four<f64> for F64x4 {
         type Token = Avx;

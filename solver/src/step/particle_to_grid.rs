@@ -134,9 +134,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
         liquid,
         body,
         stride: stride(liquid.is_some()),
-        // (f64 only: f32's four lanes are an array, which took more instructions than the
-        // point loop.)
-        four: if wide && R::BYTES == 8 {
+        four: if wide || cfg!(target_feature = "avx2") {
             R::Four::token()
         } else {
             None
@@ -375,11 +373,11 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
     // point order.
     let corners = cx.mesh.corners[e].as_ref();
     let (first, map) = (&cx.mesh.x[corners[0] as usize], &cx.mesh.map[e]);
-    // The AVX2 copy (f64): each point's sums as explicit four-lane vectors, one lane per node
-    // ([`crate::parallel::four`]): the same operations in the same order as the loop below, so
-    // the same bits, without the shuffles and stack traffic the compiler made of that loop
-    // (docs/design.md §9).
-    if WIDE {
+    // The AVX2 copy, or a build for AVX2: each point's sums as explicit four-lane
+    // vectors, one lane per node ([`crate::parallel::four`]): the same operations in the same
+    // order as the loop below, so the same bits, without the shuffles and stack traffic the
+    // compiler made of that loop (docs/design.md §9).
+    if WIDE || cfg!(target_feature = "avx2") {
         if let Some(t) = cx.four {
             let points = Points {
                 active,
@@ -396,7 +394,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
             };
             debug_assert!(crate::parallel::avx2::present());
             // SAFETY: `WIDE` only in the scatter's AVX2 copy, which asserts that the processor
-            // has AVX2.
+            // has AVX2; a build that assumes AVX2 (x86-64-v3) runs only where it has it.
             unsafe {
                 node_lane_sums_avx2::<E, R, WITH_LIQUID>(
                     t,
