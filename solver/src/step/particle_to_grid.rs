@@ -437,14 +437,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
             let n = &nq[..E::NODES];
             let (m, v) = (mass[i], vel[i]);
             let gravity = &cx.gravity[material[i] as usize];
-            let vol = if full { R::ZERO } else { volume[i] };
-            let mut s = stress[i].map(|c| vol * c);
-            if let Some(pore) = pore {
-                let vp = vol * pore[i];
-                s[0] += vp;
-                s[1] += vp;
-                s[2] += vp;
-            }
+            let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
             // An axisymmetric section's hoop stress pulls each node towards the axis:
             // f_r -= V σ_θθ N / r (x the radius; V per radian).
             let hoop = if E::AXISYMMETRIC {
@@ -481,12 +474,8 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
             let (Some(f), Some(pore)) = (loads.fluids[material[i] as usize], pore) else {
                 continue;
             };
-            let vol = volume[i];
-            // The liquid's mass, weight and drag are taken on the initial volume where
-            // the case holds the liquid mass fixed.
-            let vw = volume0.map_or(vol, |v0| v0[i]);
-            let mw = f.rho_w * vw;
-            let pw = if full { R::ZERO } else { pore[i] * vol };
+            let (vw, mw, pw) =
+                liquid_volume_mass_pressure(&f, full, volume[i], volume0.map(|v0| v0[i]), pore[i]);
             let w = w_all[i];
             // The pore pressure's hoop force, as the solid's (axisymmetric sections).
             let hoop = if E::AXISYMMETRIC {
@@ -531,6 +520,38 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
             liquid_width::<E>(),
         );
     }
+}
+
+/// A point's volume times its total stress, V (σ' + p I) (`pore` its pore pressure p, where the
+/// case has one), as particle to grid's internal force takes it: 0 for the point of a full
+/// element under mixed integration, whose element's Gauss point takes its force.
+#[inline(always)]
+fn volume_stress<R: Real>(full: bool, volume: R, stress: &[R; 6], pore: Option<R>) -> [R; 6] {
+    let vol = if full { R::ZERO } else { volume };
+    let mut s = stress.map(|c| vol * c);
+    if let Some(p) = pore {
+        let vp = vol * p;
+        s[0] += vp;
+        s[1] += vp;
+        s[2] += vp;
+    }
+    s
+}
+
+/// A saturated point's liquid volume, liquid mass and V p (0 for a full element's point under
+/// mixed integration) for particle to grid. The liquid's mass, weight and drag are taken on the
+/// initial volume `volume0` where the case holds the liquid mass fixed.
+#[inline(always)]
+fn liquid_volume_mass_pressure<R: Real>(
+    f: &Fluid<R>,
+    full: bool,
+    volume: R,
+    volume0: Option<R>,
+    pore: R,
+) -> (R, R, R) {
+    let vw = volume0.unwrap_or(volume);
+    let pw = if full { R::ZERO } else { pore * volume };
+    (vw, f.rho_w * vw, pw)
 }
 
 /// The liquid's loads, and an element's points' liquid velocities and (where the liquid mass is
@@ -620,14 +641,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         let n = R::Four::load(t, &std::array::from_fn(|k| nl[k][0]));
         let (m, v) = (mass[i], vel[i]);
         let gravity = &cx.gravity[material[i] as usize];
-        let vol = if full { R::ZERO } else { volume[i] };
-        let mut s = stress[i].map(|c| vol * c);
-        if let Some(pore) = pore {
-            let vp = vol * pore[i];
-            s[0] += vp;
-            s[1] += vp;
-            s[2] += vp;
-        }
+        let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
         let w = splat(m) * n;
         s4[0] = s4[0] + w;
         for a in 0..E::DIM {
@@ -659,12 +673,8 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         let Some(f) = loads.fluids[material[i] as usize] else {
             continue;
         };
-        let vol = volume[i];
-        // The liquid's mass, weight and drag are taken on the initial volume where the case
-        // holds the liquid mass fixed.
-        let vw = volume0.map_or(vol, |v0| v0[i]);
-        let mw = f.rho_w * vw;
-        let pw = if full { R::ZERO } else { pore[i] * vol };
+        let (vw, mw, pw) =
+            liquid_volume_mass_pressure(&f, full, volume[i], volume0.map(|v0| v0[i]), pore[i]);
         let wv = w_all[i];
         let mn = splat(mw) * n;
         let nmw = splat(f.n * mw) * n;
