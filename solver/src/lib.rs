@@ -2,7 +2,8 @@
 //! lumped masses, local damping) on linear tetrahedra, generic over the precision.
 //!
 //! The folders, from the bottom up (each uses only those above it in this list, see
-//! docs/design.md §7.4): [`element`] (mesh, locating points), [`material`] (laws), [`state`]
+//! docs/design.md §7.4), on the ground the precision ([`real`]) and its four-lane vectors
+//! ([`four`]); then [`element`] (mesh, locating points), [`material`] (laws), [`state`]
 //! (points, nodes), [`parallel`] (thread team, deterministic sums), [`step`] (the phases of a
 //! step), [`input`] (scenes and Anura3D cases resolved into a [`input::case::Case`]),
 //! [`driver`] (the engine, the loop over output times, output files) and [`jobs`]
@@ -13,6 +14,7 @@
 // better as index loops; and `!(x > 0.0)` is deliberate where NaN must be rejected too.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod four;
 pub mod real;
 
 pub mod element;

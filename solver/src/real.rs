@@ -2,7 +2,7 @@
 
 use std::fmt::Debug;
 
-use crate::parallel::four::Four;
+use crate::four::Four;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// A floating-point type the solver can run in (`f64` now, `f32` from the same code).
@@ -24,7 +24,7 @@ pub trait Real:
     + DivAssign
     + 'static
 {
-    /// Four lanes of this precision as one vector value ([`crate::parallel::four`]).
+    /// Four lanes of this precision as one vector value ([`crate::four`]).
     type Four: Four<Self>;
     /// Name written to `run.json`.
     const NAME: &'static str;
@@ -111,13 +111,13 @@ macro_rules! real {
     };
 }
 #[cfg(target_arch = "x86_64")]
-real!(f64, u64, "f64", crate::parallel::four::F64x4);
+real!(f64, u64, "f64", crate::four::F64x4);
 #[cfg(not(target_arch = "x86_64"))]
-real!(f64, u64, "f64", crate::parallel::four::Lanes4<f64>);
+real!(f64, u64, "f64", crate::four::Lanes4<f64>);
 #[cfg(target_arch = "x86_64")]
-real!(f32, u32, "f32", crate::parallel::four::F32x4);
+real!(f32, u32, "f32", crate::four::F32x4);
 #[cfg(not(target_arch = "x86_64"))]
-real!(f32, u32, "f32", crate::parallel::four::Lanes4<f32>);
+real!(f32, u32, "f32", crate::four::Lanes4<f32>);
 
 /// A 3-vector.
 pub type V3<R> = [R; 3];

@@ -3,7 +3,6 @@
 pub mod avx2;
 pub mod comm;
 pub mod exact;
-pub mod four;
 pub mod gather;
 pub mod halo;
 pub mod huge_pages;

@@ -5,9 +5,9 @@ use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::tri3::Tri3;
 use crate::element::Element;
+use crate::four::Four;
 use crate::material::liquid::Fluid;
 use crate::parallel::avx2::use_avx2;
-use crate::parallel::four::Four;
 use crate::parallel::gather::{Layout, Slots};
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
@@ -374,7 +374,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
     let corners = cx.mesh.corners[e].as_ref();
     let (first, map) = (&cx.mesh.x[corners[0] as usize], &cx.mesh.map[e]);
     // The AVX2 copy, or a build for AVX2: each point's sums as explicit four-lane
-    // vectors, one lane per node ([`crate::parallel::four`]): the same operations in the same
+    // vectors, one lane per node ([`crate::four`]): the same operations in the same
     // order as the loop below, so the same bits, without the shuffles and stack traffic the
     // compiler made of that loop (docs/design.md §9).
     if WIDE || cfg!(target_feature = "avx2") {

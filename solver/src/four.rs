@@ -10,7 +10,9 @@
 //! as it can. An [`F64x4`] is made only
 //! from an [`Avx`] token, which exists only where the processor runs AVX2, so its operations
 //! are safe to call; they compile to single instructions only where inlined into code compiled
-//! with AVX (the passes' AVX2 copies, [`crate::parallel::avx2`]).
+//! with AVX (the passes' AVX2 copies, [`crate::parallel::avx2`]). Each precision names its type
+//! as [`crate::real::Real::Four`]; this file imports nothing of the crate, so that the
+//! precision, on the ground floor, needs nothing above it.
 
 use std::ops::{Add, Mul, Sub};
 
@@ -154,17 +156,17 @@ mod x86 {
         type Token = Avx;
         #[inline(always)]
         fn token() -> Option<Avx> {
-            crate::parallel::avx2::present().then_some(Avx(()))
+            std::arch::is_x86_feature_detected!("avx2").then_some(Avx(()))
         }
         #[inline(always)]
         fn splat(_: Avx, v: f64) -> Self {
-            debug_assert!(crate::parallel::avx2::present());
+            debug_assert!(std::arch::is_x86_feature_detected!("avx"));
             // SAFETY: the token proves that the processor runs AVX.
             F64x4(unsafe { _mm256_set1_pd(v) })
         }
         #[inline(always)]
         fn load(_: Avx, a: &[f64; 4]) -> Self {
-            debug_assert!(crate::parallel::avx2::present());
+            debug_assert!(std::arch::is_x86_feature_detected!("avx"));
             // SAFETY: the token proves AVX; `a` holds four f64 (an unaligned load).
             F64x4(unsafe { _mm256_loadu_pd(a.as_ptr()) })
         }
@@ -182,31 +184,41 @@ mod x86 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::real::Real;
 
-    /// Each lane's operations give the bits of the same scalar operations.
-    fn lane_by_lane<R: Real>() {
-        let Some(t) = <R::Four as Four<R>>::token() else {
-            eprintln!("skipped: no four-lane type on this processor");
-            return;
-        };
-        let mut rng = crate::test_rng::uniform(7);
-        for _ in 0..1000 {
-            let a: [R; 4] = std::array::from_fn(|_| R::of((rng() - 0.5) * 1e3));
-            let b: [R; 4] = std::array::from_fn(|_| R::of((rng() - 0.5) * 1e-3));
-            let c = R::of(rng() - 0.5);
-            let (va, vb) = (R::Four::load(t, &a), R::Four::load(t, &b));
-            let got = (va * vb + R::Four::splat(t, c) - vb).to_array();
-            for k in 0..4 {
-                let want = a[k] * b[k] + c - b[k];
-                assert_eq!(got[k].f64().to_bits(), want.f64().to_bits());
+    /// Each lane of `a * b + c - b` in the four-lane type `$four` has the bits of the same
+    /// scalar operations in `$r`.
+    macro_rules! lane_by_lane {
+        ($r:ty, $four:ty) => {{
+            let Some(t) = <$four as Four<$r>>::token() else {
+                eprintln!(
+                    "skipped: {} needs what this processor lacks",
+                    stringify!($four)
+                );
+                return;
+            };
+            let mut rng = crate::test_rng::uniform(7);
+            for _ in 0..1000 {
+                let a: [$r; 4] = std::array::from_fn(|_| (rng() * 1e3) as $r);
+                let b: [$r; 4] = std::array::from_fn(|_| (rng() * 1e-3) as $r);
+                let c = rng() as $r;
+                let (va, vb) = (<$four>::load(t, &a), <$four>::load(t, &b));
+                let got = (va * vb + <$four>::splat(t, c) - vb).to_array();
+                for k in 0..4 {
+                    let want = a[k] * b[k] + c - b[k];
+                    assert_eq!(got[k].to_bits(), want.to_bits());
+                }
             }
-        }
+        }};
     }
 
     #[test]
     fn four_lanes_are_the_scalar_operations() {
-        lane_by_lane::<f64>();
-        lane_by_lane::<f32>();
+        lane_by_lane!(f64, Lanes4<f64>);
+        lane_by_lane!(f32, Lanes4<f32>);
+        #[cfg(target_arch = "x86_64")]
+        {
+            lane_by_lane!(f32, F32x4);
+            lane_by_lane!(f64, F64x4);
+        }
     }
 }
