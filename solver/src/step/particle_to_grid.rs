@@ -377,138 +377,131 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
     // vectors, one lane per node ([`crate::four`]): the same operations in the same
     // order as the loop below, so the same bits, without the shuffles and stack traffic the
     // compiler made of that loop (docs/design.md §9).
-    if WIDE || cfg!(target_feature = "avx2") {
-        if let Some(t) = cx.four {
-            let points = Points {
-                active,
-                material,
-                x,
-                mass,
-                vel,
-                volume,
-                stress,
-                pore,
-                liquid: liquid_points,
-                map,
-                first,
-            };
-            debug_assert!(crate::parallel::avx2::present());
-            // SAFETY: `WIDE` only in the scatter's AVX2 copy, which asserts that the processor
-            // has AVX2; a build that assumes AVX2 (x86-64-v3) runs only where it has it.
-            unsafe {
-                node_lane_sums_avx2::<E, R, WITH_LIQUID>(
-                    t,
-                    cx,
-                    &points,
+    if let Some(t) = cx.four.filter(|_| WIDE || cfg!(target_feature = "avx2")) {
+        let points = Points {
+            active,
+            material,
+            x,
+            mass,
+            vel,
+            volume,
+            stress,
+            pore,
+            liquid: liquid_points,
+            map,
+            first,
+        };
+        debug_assert!(crate::parallel::avx2::present());
+        // SAFETY: `WIDE` only in the scatter's AVX2 copy, which asserts that the processor
+        // has AVX2; a build that assumes AVX2 (x86-64-v3) runs only where it has it.
+        unsafe {
+            node_lane_sums_avx2::<E, R, WITH_LIQUID>(
+                t,
+                cx,
+                &points,
+                full,
+                &by_component,
+                &mut sums,
+                &mut wet,
+            )
+        };
+    } else {
+        let mut j = 0;
+        // (Not `Batch`, which the stress and grid-to-particle passes share: the batch
+        // here takes every point and skips inside, measured 15 % faster on the
+        // saturated f64 column's particle to grid.)
+        while j < count {
+            let batch = (count - j).min(W);
+            // Lanes past the element's last point repeat it (computed, never used).
+            let xl: [[R; W]; 3] =
+                std::array::from_fn(|a| std::array::from_fn(|q| x[j + q.min(batch - 1)][a]));
+            let nl = E::shape_lanes(map, first, &xl);
+            for i in j..j + batch {
+                if !active[i] || !maps(cx.body, material[i]) {
+                    continue;
+                }
+                let nq: [R; 4] = std::array::from_fn(|k| nl[k][i - j]);
+                let n = &nq[..E::NODES];
+                let (m, v) = (mass[i], vel[i]);
+                let gravity = &cx.gravity[material[i] as usize];
+                let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
+                // An axisymmetric section's hoop stress pulls each node towards the axis:
+                // f_r -= V σ_θθ N / r (x the radius; V per radian).
+                let hoop = if E::AXISYMMETRIC {
+                    s[2] / x[i][0]
+                } else {
+                    R::ZERO
+                };
+                // Node by node the same operations as σ ∇N_k and m N_k (v, g) node after
+                // node.
+                let w = lanes::<E, R>(|k| m * n[k]);
+                for k in 0..LANES {
+                    sums[0][k] += w[k];
+                }
+                for a in 0..E::DIM {
+                    let f = tractions::<E, R>(&s, &by_component, a);
+                    for k in 0..LANES {
+                        sums[1 + a][k] += w[k] * v[a];
+                        sums[1 + E::DIM + a][k] -= f[k];
+                        sums[1 + 2 * E::DIM + a][k] += w[k] * gravity[a];
+                    }
+                }
+                if E::AXISYMMETRIC {
+                    let nk = lanes::<E, R>(|k| n[k]);
+                    for k in 0..LANES {
+                        sums[1 + E::DIM][k] -= hoop * nk[k];
+                    }
+                }
+                if !WITH_LIQUID {
+                    continue;
+                }
+                let Some((loads, w_all, volume0)) = liquid_points else {
+                    continue;
+                };
+                let (Some(f), Some(pore)) = (loads.fluids[material[i] as usize], pore) else {
+                    continue;
+                };
+                let (vw, mw, pw) = liquid_volume_mass_pressure(
+                    &f,
                     full,
-                    &by_component,
-                    &mut sums,
-                    &mut wet,
-                )
-            };
-            store::<E, R, 10>(&sums, four, cx.stride, 0, solid_width::<E>());
-            if WITH_LIQUID {
-                store::<E, R, 12>(
-                    &wet,
-                    four,
-                    cx.stride,
-                    solid_width::<E>(),
-                    liquid_width::<E>(),
+                    volume[i],
+                    volume0.map(|v0| v0[i]),
+                    pore[i],
                 );
-            }
-            return;
-        }
-    }
-    let mut j = 0;
-    // (Not `Batch`, which the stress and grid-to-particle passes share: the batch
-    // here takes every point and skips inside, measured 15 % faster on the
-    // saturated f64 column's particle to grid.)
-    while j < count {
-        let batch = (count - j).min(W);
-        // Lanes past the element's last point repeat it (computed, never used).
-        let xl: [[R; W]; 3] =
-            std::array::from_fn(|a| std::array::from_fn(|q| x[j + q.min(batch - 1)][a]));
-        let nl = E::shape_lanes(map, first, &xl);
-        for i in j..j + batch {
-            if !active[i] || !maps(cx.body, material[i]) {
-                continue;
-            }
-            let nq: [R; 4] = std::array::from_fn(|k| nl[k][i - j]);
-            let n = &nq[..E::NODES];
-            let (m, v) = (mass[i], vel[i]);
-            let gravity = &cx.gravity[material[i] as usize];
-            let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
-            // An axisymmetric section's hoop stress pulls each node towards the axis:
-            // f_r -= V σ_θθ N / r (x the radius; V per radian).
-            let hoop = if E::AXISYMMETRIC {
-                s[2] / x[i][0]
-            } else {
-                R::ZERO
-            };
-            // Node by node the same operations as σ ∇N_k and m N_k (v, g) node after
-            // node.
-            let w = lanes::<E, R>(|k| m * n[k]);
-            for k in 0..LANES {
-                sums[0][k] += w[k];
-            }
-            for a in 0..E::DIM {
-                let f = tractions::<E, R>(&s, &by_component, a);
-                for k in 0..LANES {
-                    sums[1 + a][k] += w[k] * v[a];
-                    sums[1 + E::DIM + a][k] -= f[k];
-                    sums[1 + 2 * E::DIM + a][k] += w[k] * gravity[a];
-                }
-            }
-            if E::AXISYMMETRIC {
+                let w = w_all[i];
+                // The pore pressure's hoop force, as the solid's (axisymmetric sections).
+                let hoop = if E::AXISYMMETRIC {
+                    pw / x[i][0]
+                } else {
+                    R::ZERO
+                };
+                // Node by node the same operations as a loop over the nodes.
                 let nk = lanes::<E, R>(|k| n[k]);
+                let (mn, nmw) = (
+                    lanes::<E, R>(|k| mw * n[k]),
+                    lanes::<E, R>(|k| f.n * mw * n[k]),
+                );
                 for k in 0..LANES {
-                    sums[1 + E::DIM][k] -= hoop * nk[k];
+                    wet[0][k] += mn[k];
+                    wet[1][k] += nmw[k];
+                    wet[2][k] += f.drag * vw * nk[k];
+                }
+                for a in 0..E::DIM {
+                    for k in 0..LANES {
+                        wet[3 + a][k] += mn[k] * w[a];
+                        let force = mn[k] * loads.gravity[a] - pw * by_component[a][k];
+                        wet[3 + E::DIM + a][k] += force;
+                        wet[3 + 2 * E::DIM + a][k] += nmw[k] * loads.gravity[a];
+                    }
+                }
+                if E::AXISYMMETRIC {
+                    for k in 0..LANES {
+                        wet[3 + E::DIM][k] -= hoop * nk[k];
+                    }
                 }
             }
-            if !WITH_LIQUID {
-                continue;
-            }
-            let Some((loads, w_all, volume0)) = liquid_points else {
-                continue;
-            };
-            let (Some(f), Some(pore)) = (loads.fluids[material[i] as usize], pore) else {
-                continue;
-            };
-            let (vw, mw, pw) =
-                liquid_volume_mass_pressure(&f, full, volume[i], volume0.map(|v0| v0[i]), pore[i]);
-            let w = w_all[i];
-            // The pore pressure's hoop force, as the solid's (axisymmetric sections).
-            let hoop = if E::AXISYMMETRIC {
-                pw / x[i][0]
-            } else {
-                R::ZERO
-            };
-            // Node by node the same operations as a loop over the nodes.
-            let nk = lanes::<E, R>(|k| n[k]);
-            let (mn, nmw) = (
-                lanes::<E, R>(|k| mw * n[k]),
-                lanes::<E, R>(|k| f.n * mw * n[k]),
-            );
-            for k in 0..LANES {
-                wet[0][k] += mn[k];
-                wet[1][k] += nmw[k];
-                wet[2][k] += f.drag * vw * nk[k];
-            }
-            for a in 0..E::DIM {
-                for k in 0..LANES {
-                    wet[3 + a][k] += mn[k] * w[a];
-                    let force = mn[k] * loads.gravity[a] - pw * by_component[a][k];
-                    wet[3 + E::DIM + a][k] += force;
-                    wet[3 + 2 * E::DIM + a][k] += nmw[k] * loads.gravity[a];
-                }
-            }
-            if E::AXISYMMETRIC {
-                for k in 0..LANES {
-                    wet[3 + E::DIM][k] -= hoop * nk[k];
-                }
-            }
+            j += batch;
         }
-        j += batch;
     }
     store::<E, R, 10>(&sums, four, cx.stride, 0, solid_width::<E>());
     if WITH_LIQUID {
