@@ -30,6 +30,9 @@ pub trait Four<R: Copy>:
     fn load(t: Self::Token, a: &[R; 4]) -> Self;
     /// The lanes as an array.
     fn to_array(self) -> [R; 4];
+    /// Whether some lane is less than the same lane of `o` (an ordered comparison: false
+    /// where either is NaN, as `<` on the scalars).
+    fn any_lt(self, o: Self) -> bool;
 }
 
 /// Four lanes as a plain array (f32, and f64 off x86-64): each operation lane by lane.
@@ -53,7 +56,7 @@ lanes4_op!(Mul, mul, *);
 
 impl<R> Four<R> for Lanes4<R>
 where
-    R: Copy + Add<Output = R> + Sub<Output = R> + Mul<Output = R>,
+    R: Copy + Add<Output = R> + Sub<Output = R> + Mul<Output = R> + PartialOrd,
 {
     type Token = ();
     #[inline(always)]
@@ -72,6 +75,10 @@ where
     fn to_array(self) -> [R; 4] {
         self.0
     }
+    #[inline(always)]
+    fn any_lt(self, o: Self) -> bool {
+        (0..4).any(|k| self.0[k] < o.0[k])
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -81,9 +88,10 @@ pub use x86::{Avx, F32x4, F64x4, Sse};
 mod x86 {
     use super::Four;
     use std::arch::x86_64::{
-        __m128, __m256d, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd,
-        _mm256_storeu_pd, _mm256_sub_pd, _mm_add_ps, _mm_loadu_ps, _mm_mul_ps, _mm_set1_ps,
-        _mm_storeu_ps, _mm_sub_ps,
+        __m128, __m256d, _mm256_add_pd, _mm256_cmp_pd, _mm256_loadu_pd, _mm256_movemask_pd,
+        _mm256_mul_pd, _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm_add_ps, _mm_cmplt_ps,
+        _mm_loadu_ps, _mm_movemask_ps, _mm_mul_ps, _mm_set1_ps, _mm_storeu_ps, _mm_sub_ps,
+        _CMP_LT_OQ,
     };
     use std::ops::{Add, Mul, Sub};
 
@@ -150,6 +158,11 @@ mod x86 {
             unsafe { _mm_storeu_ps(a.as_mut_ptr(), self.0) };
             a
         }
+        #[inline(always)]
+        fn any_lt(self, o: Self) -> bool {
+            // SAFETY: SSE is part of x86-64. (`cmplt` is ordered: false with a NaN.)
+            unsafe { _mm_movemask_ps(_mm_cmplt_ps(self.0, o.0)) != 0 }
+        }
     }
 
     impl Four<f64> for F64x4 {
@@ -177,6 +190,12 @@ mod x86 {
             // four f64 (an unaligned store).
             unsafe { _mm256_storeu_pd(a.as_mut_ptr(), self.0) };
             a
+        }
+        #[inline(always)]
+        fn any_lt(self, o: Self) -> bool {
+            // SAFETY: an F64x4 exists only where the processor runs AVX. (Ordered, quiet:
+            // false with a NaN, as `<`.)
+            unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0, o.0)) != 0 }
         }
     }
 }
@@ -206,6 +225,15 @@ mod tests {
                 for k in 0..4 {
                     let want = a[k] * b[k] + c - b[k];
                     assert_eq!(got[k].to_bits(), want.to_bits());
+                }
+                // The comparison, with NaNs and equal lanes among the values.
+                let mut d = a;
+                d[(c * 4.0) as usize % 4] = <$r>::NAN;
+                let e: [$r; 4] = std::array::from_fn(|k| if k % 2 == 0 { d[k] } else { b[k] });
+                for (x, y) in [(d, e), (e, d), (d, d), (b, a)] {
+                    let want = (0..4).any(|k| x[k] < y[k]);
+                    let got = <$four>::load(t, &x).any_lt(<$four>::load(t, &y));
+                    assert_eq!(got, want, "{x:?} < {y:?}");
                 }
             }
         }};

@@ -2145,9 +2145,24 @@ mod tests {
         portable: bool,
     ) -> Vec<u64> {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../testdata");
-        let case = crate::input::scene::load(&dir.join(scene)).unwrap();
+        // `NAME+objective`: the scene with Anura3D's objective stress terms on, started
+        // shearing.
+        let (scene, objective) = match scene.strip_suffix("+objective") {
+            Some(s) => (s, true),
+            None => (scene, false),
+        };
+        let mut case = crate::input::scene::load(&dir.join(scene)).unwrap();
+        case.objective_stress |= objective;
         crate::parallel::avx2::with_portable(portable, || {
             let mut engine = super::Engine::<R, E>::new(&case, false).unwrap();
+            if objective {
+                // A shearing start (v_x growing with y), so that the spin, and with it the
+                // co-rotation, is not zero.
+                let p = &mut engine.particles;
+                for (v, x) in p.v.iter_mut().zip(&p.x) {
+                    v[0] += x[1] * R::of(0.05);
+                }
+            }
             for _ in 0..steps {
                 engine.step(engine.dt, None).unwrap();
             }
@@ -2170,7 +2185,8 @@ mod tests {
 
     /// The AVX2 copies of particle to grid, grid to particle and the stress pass give the bits
     /// of the portable ones: dry, two-phase, Mohr-Coulomb, mixed integration and plane strain,
-    /// in both precisions,
+    /// one and four points per element, with and without the objective terms, in both
+    /// precisions,
     /// stepped until stresses, velocities and (in the Mohr-Coulomb column) returns are well
     /// under way.
     #[test]
@@ -2186,6 +2202,11 @@ mod tests {
             ("mc_column.toml", 60),
             // MPM-MIXED: full elements' Gauss-point tractions before their points' sums.
             ("oracle_mc_footing.toml", 20),
+            // Four points per element: the stress pass's linear-elastic lanes take whole
+            // batches (the columns above hold one point per element), dry and saturated, with
+            // the objective terms.
+            ("column_gravity.toml+objective", 40),
+            ("oedometer.toml+objective", 40),
         ] {
             let portable = state_bits::<f64, Tet4>(scene, steps, true);
             assert!(portable.iter().any(|&b| b != 0), "{scene}: no state");

@@ -219,6 +219,7 @@ impl<E: Element, R: Real> Mesh<E, R> {
 mod tests {
     use super::*;
     use crate::element::tri3::Tri3;
+    use crate::four::Four;
     use mpm_shared::{generate, ElementType};
 
     #[test]
@@ -282,6 +283,13 @@ mod tests {
             });
             let x: [[R; W]; 3] = std::array::from_fn(|a| points.map(|p| p[a]));
             let lanes = E::shape_lanes(&mesh.map[e], first, &x);
+            // With four points, the explicit four-lane version too, where the processor runs it.
+            let four = (W == 4).then(R::Four::token).flatten().map(|t| {
+                let x = std::array::from_fn(|a| {
+                    R::Four::load(t, &std::array::from_fn(|q| x[a][q % W]))
+                });
+                E::shape_four(t, &mesh.map[e], first, &x).map(|v| v.to_array())
+            });
             for (q, p) in points.iter().enumerate() {
                 let one = mesh.shape(e, p);
                 for k in 0..4 {
@@ -291,6 +299,13 @@ mod tests {
                         want.to_bits(),
                         "e{e} q{q} k{k}"
                     );
+                    if let Some(four) = &four {
+                        assert_eq!(
+                            four[k][q].f64().to_bits(),
+                            want.to_bits(),
+                            "four e{e} q{q} k{k}"
+                        );
+                    }
                 }
             }
         }
@@ -304,6 +319,7 @@ mod tests {
         shape_lanes_match::<Tet4, f32, 4>(&TetMesh::<f32>::new(&tets).unwrap());
         let tris = generate::rect_mesh([3, 2], [1.5, 1.0]);
         shape_lanes_match::<Tri3, f64, 1>(&Mesh::<Tri3, f64>::new(&tris).unwrap());
+        shape_lanes_match::<Tri3, f64, 4>(&Mesh::<Tri3, f64>::new(&tris).unwrap());
         shape_lanes_match::<Tri3, f32, 4>(&Mesh::<Tri3, f32>::new(&tris).unwrap());
     }
 }

@@ -4,6 +4,7 @@
 use mpm_shared::{Dimension, ElementType};
 
 use crate::element::{Element, Geometry};
+use crate::four::Four;
 use crate::real::{Real, V3};
 
 /// The 4-node linear tetrahedron (10-node models are computed with their corners, as Anura3D
@@ -116,6 +117,20 @@ impl Element for Tet4 {
         let (l2, l3, l4) = (row(&m[0]), row(&m[1]), row(&m[2]));
         let l1 = std::array::from_fn(|q| R::ONE - l2[q] - l3[q] - l4[q]);
         [l1, l2, l3, l4]
+    }
+
+    #[inline(always)]
+    fn shape_four<R: Real>(
+        t: <R::Four as Four<R>>::Token,
+        m: &[V3<R>; 3],
+        x1: &V3<R>,
+        x: &[R::Four; 3],
+    ) -> [R::Four; 4] {
+        let s = |v: R| R::Four::splat(t, v);
+        let d: [R::Four; 3] = std::array::from_fn(|a| x[a] - s(x1[a]));
+        let row = |r: &V3<R>| s(r[0]) * d[0] + s(r[1]) * d[1] + s(r[2]) * d[2];
+        let (l2, l3, l4) = (row(&m[0]), row(&m[1]), row(&m[2]));
+        [s(R::ONE) - l2 - l3 - l4, l2, l3, l4]
     }
 
     #[inline]

@@ -36,6 +36,16 @@ impl<R: Real> LinearElastic<R> {
         *s = lanes.map(|[x]| x);
     }
 
+    /// What [`LinearElastic::update`] adds to each component for strain increment `de`: the
+    /// same operations, so `s[c] + increment(de)[c]` is the updated component to the bit (for
+    /// passes that share one increment among the points of an element).
+    #[inline(always)]
+    pub fn increment(&self, de: &[R; 6]) -> [R; 6] {
+        let g2 = self.shear + self.shear;
+        let tr = self.lambda * (de[0] + de[1] + de[2]);
+        std::array::from_fn(|c| if c < 3 { tr + g2 * de[c] } else { g2 * de[c] })
+    }
+
     /// [`LinearElastic::update`] of `W` points at once (`s[c][q]`, `de[c][q]`: component c of
     /// point q), each point's arithmetic the one-point update's.
     #[inline(always)]
@@ -56,6 +66,22 @@ impl<R: Real> LinearElastic<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_increment_is_what_the_update_adds() {
+        let law = LinearElastic::<f64>::new(2.5e4, 0.27);
+        let mut rng = crate::test_rng::uniform(3);
+        for _ in 0..200 {
+            let s0: [f64; 6] = std::array::from_fn(|_| (rng() - 0.5) * 1e3);
+            let de: [f64; 6] = std::array::from_fn(|_| (rng() - 0.5) * 1e-4);
+            let mut s = s0;
+            law.update(&mut s, &de);
+            let inc = law.increment(&de);
+            for c in 0..6 {
+                assert_eq!(s[c].to_bits(), (s0[c] + inc[c]).to_bits(), "component {c}");
+            }
+        }
+    }
 
     #[test]
     fn uniaxial_strain_gives_oedometric_modulus() {

@@ -6,6 +6,7 @@ use std::ops::Range;
 use crate::element::locate::{locate_width, merge, relocate, run_inside, Outcome, NOTHING_FOUND};
 use crate::element::mesh::Mesh;
 use crate::element::{batch_width, Element};
+use crate::four::Four;
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::material::mohr_coulomb::MohrCoulomb;
@@ -18,6 +19,8 @@ use crate::state::particles::Particles;
 use crate::step::batch::{interpolate, Batch, TETRAHEDRA};
 use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
+
+mod lanes;
 
 /// Points per batch of the elements of a Mohr-Coulomb material, whatever the element type and
 /// precision (docs/design.md §5.3); [`update_stress_and_move`] expands widths 1 and 4 only.
@@ -75,7 +78,14 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         ),
         None => (None, &[][..], &[][..], R::ZERO),
     };
+    let wide = use_avx2();
+    debug_assert!(!wide || crate::parallel::avx2::present());
     let cx = Pass {
+        four: if wide || cfg!(target_feature = "avx2") {
+            R::Four::token()
+        } else {
+            None
+        },
         layout,
         mesh,
         g,
@@ -107,8 +117,6 @@ pub fn update_stress_and_move<E: Element, R: Real>(
     // its chunks to the others (each point's update and each block's sums are the same
     // whichever thread computes them). Each chunk in the baseline instruction set or, where the
     // processor has it and the build does not assume it, with AVX2 (the same bits).
-    let wide = use_avx2();
-    debug_assert!(!wide || crate::parallel::avx2::present());
     team.run_chunks(layout.thread_chunks(), |t, c| {
         if wide {
             // SAFETY: `wide` only where the processor has AVX2 (`use_avx2`).
@@ -122,6 +130,9 @@ pub fn update_stress_and_move<E: Element, R: Real>(
 /// What [`update_stress_and_move`]'s chunks read and write: its arguments, and the particle
 /// arrays each chunk takes its own range of.
 struct Pass<'a, E: Element, R: Real> {
+    /// Where the pass runs its AVX2 copy (or the build assumes AVX2): the token of
+    /// [`Real::Four`]'s instructions, for the linear-elastic points' explicit lanes.
+    four: Option<<R::Four as Four<R>>::Token>,
     layout: &'a Layout<R, E>,
     mesh: &'a Mesh<E, R>,
     g: &'a Grid<R>,
@@ -260,6 +271,40 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
         let first = &mesh.x[corners[0] as usize];
         let map = &mesh.map[e];
         let (end, mut j) = (points.end - r.start, points.start - r.start);
+        // The points before this one are located (with `located`).
+        let mut located_from = j;
+        // Linear-elastic points of a tetrahedron four at a time in explicit four-lane
+        // vectors, in the AVX2 copy and in a build that assumes AVX2 ([`lanes`]; the same
+        // bits). They stop at the first batch they do not take, and the general loop below
+        // goes on from there. (A triangle's three points in four lanes ran more instructions
+        // than the point loop: docs/design.md §9.)
+        if let Some(t) = cx.four.filter(|_| WIDE || cfg!(target_feature = "avx2")) {
+            if E::DIM == 3 && cx.smoothing.is_none() {
+                let el = lanes::ElementView {
+                    e,
+                    l: &l,
+                    vel,
+                    map,
+                    first,
+                    corners,
+                };
+                let points = lanes::Points {
+                    x: &mut *x,
+                    u: &mut *u,
+                    stress: &mut *stress,
+                    volume: &mut *volume,
+                    pore: pore.as_deref_mut(),
+                    active,
+                    material,
+                    mass,
+                    element: &mut *element,
+                };
+                let open = sums.is_some().then_some(&mut open);
+                let locate = located.is_some().then_some((&mut found, r.start));
+                j = lanes::elastic_batches(cx, t, &el, points, j, end, open, locate);
+                located_from = j;
+            }
+        }
         // The batch loop, expanded once per batch width (one is used per element type
         // and precision, [`batch_width`]).
         macro_rules! batches {
@@ -487,7 +532,7 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
             // runs of `w` of them tested at once (most points stay in their element), the
             // others walked, as the locate pass does.
             let (end, w) = (points.end - r.start, locate_width::<E, R>());
-            let mut i = points.start - r.start;
+            let mut i = located_from;
             while i < end {
                 if w > 1 && i + w <= end && active[i..i + w].iter().all(|&a| a) {
                     let inside = match w {

@@ -1,0 +1,425 @@
+//! The stress pass for the points of a linear-elastic material, four points at a time as
+//! explicit four-lane vectors ([`crate::four`]), one lane per point.
+//!
+//! In a linear element the strain increment, the law's stress increment, the spin and the
+//! volume factor are the same at every point, so they are formed once per element; each point
+//! then needs its shape values, its velocity, the co-rotation of its stress and its guard
+//! terms, which four points side by side take as single vector operations. Left to the
+//! compiler the same batch ran more instructions than one point at a time (docs/design.md §9),
+//! so the f64 pass went point by point. Each lane does the point loop's operations in the same
+//! order, so the bits are those of [`super::chunk`]'s general batches, whatever the width.
+
+use crate::element::locate::{relocate, tolerance, Outcome};
+use crate::element::Element;
+use crate::four::Four;
+use crate::material::law::Law;
+use crate::real::{Real, V3};
+use crate::step::batch::Batch;
+use crate::step::contact::maps;
+
+use super::{Open, Pass};
+
+/// A chunk's point arrays, each sliced to the chunk's range and indexed by the position in it.
+pub(super) struct Points<'s, R: Real> {
+    pub x: &'s mut [V3<R>],
+    pub u: &'s mut [V3<R>],
+    pub stress: &'s mut [[R; 6]],
+    pub volume: &'s mut [R],
+    /// The pore pressures, in a two-phase run.
+    pub pore: Option<&'s mut [R]>,
+    pub active: &'s [bool],
+    pub material: &'s [u32],
+    pub mass: &'s [R],
+    /// Each point's element, which the located points' walks update.
+    pub element: &'s mut [u32],
+}
+
+/// What one element shares among its points: its index, velocity gradient `l` (∂v_a/∂x_b),
+/// nodal velocities, map and first corner, and its corners.
+pub(super) struct ElementView<'e, E: Element, R: Real> {
+    pub e: usize,
+    pub l: &'e [[R; 3]; 3],
+    pub vel: &'e [V3<R>],
+    pub map: &'e E::Map<R>,
+    pub first: &'e V3<R>,
+    pub corners: &'e [u32],
+}
+
+/// Updates the points of element `el` from position `j` up to `end`, four at a time, as
+/// [`super::chunk`]'s batches do, for as long as each batch's points that take part are of one
+/// linear-elastic material (that of the first point taking part): the stress, position,
+/// displacement and volume, the pore pressure's rate, with `open` the guard's sums, and with
+/// `locate` (the chunk's outcome and its first point's index) the points' new elements, as
+/// the chunk's locate test and walk find them: a batch whose new shape values all lie within
+/// the tolerance stays, the points of any other are walked. Returns where it stopped: `end`,
+/// or the first batch it does not take, which the general loop continues from (the points
+/// before it updated and located).
+///
+/// For tetrahedra, without strain smoothing (the caller's check).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn elastic_batches<E: Element, R: Real>(
+    cx: &Pass<'_, E, R>,
+    t: <R::Four as Four<R>>::Token,
+    el: &ElementView<'_, E, R>,
+    p: Points<'_, R>,
+    mut j: usize,
+    end: usize,
+    mut open: Option<&mut Open>,
+    mut locate: Option<(&mut Outcome, usize)>,
+) -> usize {
+    debug_assert!(E::DIM == 3 && !E::AXISYMMETRIC && cx.smoothing.is_none());
+    let Points {
+        x,
+        u,
+        stress,
+        volume,
+        mut pore,
+        active,
+        material,
+        mass,
+        element,
+    } = p;
+    let takes_part = |i: usize| active[i] && maps(cx.body, material[i]);
+    let Some(lead) = (j..end).find(|&i| takes_part(i)).map(|i| material[i]) else {
+        return j;
+    };
+    let Law::LinearElastic(law) = &cx.laws[lead as usize] else {
+        return j;
+    };
+    let terms = Terms::new::<E>(cx, t, el, law, lead);
+    let guard = open.is_some();
+    let sums = GuardTerms {
+        rho0: cx.initial_density[lead as usize],
+        min_ratio: cx.min_ratio,
+        n_over_kw: cx.fluids[lead as usize]
+            .as_ref()
+            .map_or(R::ZERO, |f| f.n_over_kw),
+    };
+    while j < end {
+        // Four points that all take part (the common case) are updated in place; the
+        // others through copies, of which only the points taking part are written back.
+        if j + 4 <= end
+            && active[j..j + 4].iter().all(|&a| a)
+            && material[j..j + 4].iter().all(|&m| m == lead)
+        {
+            debug_assert!(
+                element[j..j + 4].iter().all(|&h| h as usize == el.e),
+                "points not sorted by element"
+            );
+            let r = j..j + 4;
+            let volume4: &mut [R; 4] = (&mut volume[r.clone()]).try_into().unwrap();
+            let mut pore4 = pore
+                .as_deref_mut()
+                .map(|p| <&mut [R; 4]>::try_from(&mut p[r.clone()]).unwrap());
+            let (strain, outside) = four_points::<E, R>(
+                &terms,
+                el.map,
+                el.first,
+                (&mut x[r.clone()]).try_into().unwrap(),
+                (&mut u[r.clone()]).try_into().unwrap(),
+                (&mut stress[r.clone()]).try_into().unwrap(),
+                volume4,
+                pore4.as_deref_mut(),
+                guard,
+                locate.is_some(),
+            );
+            let mass4 = *<&[R; 4]>::try_from(&mass[r]).unwrap();
+            if let Some(open) = open.as_deref_mut() {
+                sums.add(open, [true; 4], strain, *volume4, mass4, pore4.map(|p| *p));
+            }
+            if let Some((found, offset)) = locate.as_mut().filter(|_| outside) {
+                for i in j..j + 4 {
+                    relocate(cx.mesh, found, *offset + i, &mut element[i], &x[i]);
+                }
+            }
+            j += 4;
+            continue;
+        }
+        let b = match Batch::<4>::new(j, end, takes_part) {
+            Ok(b) => b,
+            Err(skip) => {
+                j += skip;
+                continue;
+            }
+        };
+        if b.points().any(|i| material[i] != lead) {
+            break;
+        }
+        debug_assert!(
+            b.points().all(|i| element[i] as usize == el.e),
+            "points not sorted by element"
+        );
+        let (mut x4, mut u4) = (b.at.map(|i| x[i]), b.at.map(|i| u[i]));
+        let (mut s4, mut v4) = (b.at.map(|i| stress[i]), b.at.map(|i| volume[i]));
+        let mut p4 = pore.as_deref().map(|p| b.at.map(|i| p[i]));
+        let (strain, outside) = four_points::<E, R>(
+            &terms,
+            el.map,
+            el.first,
+            &mut x4,
+            &mut u4,
+            &mut s4,
+            &mut v4,
+            p4.as_mut(),
+            guard,
+            locate.is_some(),
+        );
+        for i in b.points() {
+            let q = i - j;
+            (x[i], u[i], stress[i], volume[i]) = (x4[q], u4[q], s4[q], v4[q]);
+            if let (Some(p), Some(p4)) = (pore.as_deref_mut(), &p4) {
+                p[i] = p4[q];
+            }
+        }
+        if let Some(open) = open.as_deref_mut() {
+            sums.add(open, b.on, strain, v4, b.at.map(|i| mass[i]), p4);
+        }
+        // (The lanes past the batch's points repeat one of its points.)
+        if let Some((found, offset)) = locate.as_mut().filter(|_| outside) {
+            for i in b.points() {
+                relocate(cx.mesh, found, *offset + i, &mut element[i], &x[i]);
+            }
+        }
+        j += b.len;
+    }
+    j
+}
+
+/// What the guard's sums take of a batch besides its points' values (for one material).
+struct GuardTerms<R: Real> {
+    rho0: R,
+    min_ratio: R,
+    n_over_kw: R,
+}
+
+impl<R: Real> GuardTerms<R> {
+    /// Adds the batch's points (`on`: the lanes whose point takes part) to `open`, point by
+    /// point in order, as the point loop adds them: the strain-energy term, the liquid's
+    /// energy, and the volume check's margin (V ρ0 - r m).
+    #[inline(always)]
+    fn add(
+        &self,
+        open: &mut Open,
+        on: [bool; 4],
+        strain: [R; 4],
+        v1: [R; 4],
+        mass: [R; 4],
+        pore: Option<[R; 4]>,
+    ) {
+        for q in 0..4 {
+            if !on[q] {
+                continue;
+            }
+            let margin = v1[q] * self.rho0 - self.min_ratio * mass[q];
+            open.strain += strain[q].f64();
+            if let Some(pore) = pore {
+                let p = pore[q];
+                open.liquid += (v1[q] * p * p * self.n_over_kw + R::ZERO * p).f64();
+            }
+            let m = margin.f64();
+            if m < open.volume_margin {
+                open.volume_margin = m;
+            }
+        }
+    }
+}
+
+/// An element's terms, each formed as the point loop forms it at every point, and held in
+/// all four lanes.
+struct Terms<R: Real> {
+    t: <R::Four as Four<R>>::Token,
+    /// Nodal velocities (`[k][c]`; zero past the element's nodes).
+    vel: [[R::Four; 3]; 4],
+    /// The strain increment (xx yy zz xy yz zx).
+    de: [R::Four; 6],
+    /// The law's stress increment.
+    increment: [R::Four; 6],
+    /// The spin increment (ω_xy, ω_yz, ω_zx), with the objective terms.
+    spin: Option<[R; 3]>,
+    /// tr Δε.
+    ev: R::Four,
+    /// The volume factor 1 + tr Δε.
+    grow: R::Four,
+    dt: R::Four,
+    /// The pore pressure's nodal rates, where the material has a liquid and the run one.
+    rate: Option<[R::Four; 4]>,
+    /// The locate tolerance, negative: a shape value below it is outside.
+    tol: R::Four,
+}
+
+impl<R: Real> Terms<R> {
+    #[inline(always)]
+    fn new<E: Element>(
+        cx: &Pass<'_, E, R>,
+        t: <R::Four as Four<R>>::Token,
+        el: &ElementView<'_, E, R>,
+        law: &crate::material::linear_elastic::LinearElastic<R>,
+        lead: u32,
+    ) -> Self {
+        let (l, dt, half) = (el.l, cx.dt, R::of(0.5));
+        let out_of_plane = |a: usize, b: usize| {
+            if E::DIM == 2 {
+                R::ZERO
+            } else {
+                half * (l[a][b] + l[b][a]) * dt
+            }
+        };
+        let de = [
+            l[0][0] * dt,
+            l[1][1] * dt,
+            l[2][2] * dt,
+            half * (l[0][1] + l[1][0]) * dt,
+            out_of_plane(1, 2),
+            out_of_plane(2, 0),
+        ];
+        let s = |v: R| R::Four::splat(t, v);
+        let increment = law.increment(&de);
+        let rate = cx
+            .pore_rate
+            .as_ref()
+            .filter(|r| r.fluids[lead as usize].is_some())
+            .map(|r| {
+                std::array::from_fn(|k| {
+                    s(if k < E::NODES {
+                        r.nodal[el.corners[k] as usize]
+                    } else {
+                        R::ZERO
+                    })
+                })
+            });
+        Terms {
+            t,
+            vel: std::array::from_fn(|k| {
+                std::array::from_fn(|c| s(if k < E::NODES { el.vel[k][c] } else { R::ZERO }))
+            }),
+            increment: std::array::from_fn(|c| s(increment[c])),
+            spin: cx.objective.then(|| {
+                [
+                    half * (l[0][1] - l[1][0]) * dt, // ω_xy
+                    half * (l[1][2] - l[2][1]) * dt, // ω_yz
+                    half * (l[2][0] - l[0][2]) * dt, // ω_zx
+                ]
+            }),
+            ev: s(de[0] + de[1] + de[2]),
+            grow: s(R::ONE + de[0] + de[1] + de[2]),
+            de: std::array::from_fn(|c| s(de[c])),
+            dt: s(dt),
+            rate,
+            tol: s(R::of(-tolerance::<R>())),
+        }
+    }
+}
+
+/// One batch of four points of the element (`x`, `u`, `stress`, `volume` and the pore
+/// pressures, updated in place): the point loop's update, lane by lane. Returns each point's
+/// strain-energy term for the guard's sums (with `guard`; zeros without), and with `locate`
+/// whether a point's new shape values put it outside the element (beyond the locate
+/// tolerance, [`crate::element::locate::run_inside`]'s test).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn four_points<E: Element, R: Real>(
+    k: &Terms<R>,
+    map: &E::Map<R>,
+    first: &V3<R>,
+    x: &mut [V3<R>; 4],
+    u: &mut [V3<R>; 4],
+    stress: &mut [[R; 6]; 4],
+    volume: &mut [R; 4],
+    pore: Option<&mut [R; 4]>,
+    guard: bool,
+    locate: bool,
+) -> ([R; 4], bool) {
+    let t = k.t;
+    let lanes = |v: [R; 4]| R::Four::load(t, &v);
+    let zero = R::Four::splat(t, R::ZERO);
+    let xl: [R::Four; 3] = std::array::from_fn(|a| lanes(x.map(|v| v[a])));
+    let n = E::shape_four(t, map, first, &xl);
+    // The pore pressure's smoothed rate, from the nodes at the start-of-step position.
+    if let (Some(p), Some(rate)) = (pore, &k.rate) {
+        let mut change = zero;
+        for kk in 0..E::NODES {
+            change = change + n[kk] * rate[kk];
+        }
+        *p = (lanes(*p) + change * k.dt).to_array();
+    }
+    let mut dx = [zero; 3];
+    for kk in 0..E::NODES {
+        for c in 0..E::DIM {
+            dx[c] = dx[c] + n[kk] * k.vel[kk][c];
+        }
+    }
+    let s0: [R::Four; 6] = std::array::from_fn(|c| lanes(stress.map(|v| v[c])));
+    let mut s1: [R::Four; 6] = std::array::from_fn(|c| s0[c] + k.increment[c]);
+    if let Some(spin) = &k.spin {
+        // Anura3D's objective terms, after the law's update: the co-rotation and -tr(Δε) σ
+        // of the start-of-step stress.
+        let h = rotation_four::<R>(t, &s0, spin);
+        for c in 0..6 {
+            s1[c] = s1[c] + (h[c] - k.ev * s0[c]);
+        }
+    }
+    let v0 = lanes(*volume);
+    let v1 = v0 * k.grow;
+    let mut x1 = xl;
+    let mut u1 = [zero; 3];
+    for a in 0..E::DIM {
+        x1[a] = xl[a] + k.dt * dx[a];
+        u1[a] = lanes(u.map(|v| v[a])) + k.dt * dx[a];
+    }
+    // (`from_fn`, not `map`: `map` is not inlined here, and the intrinsics in its closure
+    // would become calls.)
+    let x1a: [[R; 4]; 3] = std::array::from_fn(|a| x1[a].to_array());
+    let u1a: [[R; 4]; 3] = std::array::from_fn(|a| u1[a].to_array());
+    let s1a: [[R; 4]; 6] = std::array::from_fn(|c| s1[c].to_array());
+    for q in 0..4 {
+        for a in 0..E::DIM {
+            x[q][a] = x1a[a][q];
+            u[q][a] = u1a[a][q];
+        }
+        stress[q] = std::array::from_fn(|c| s1a[c][q]);
+    }
+    *volume = v1.to_array();
+    let outside = locate && {
+        let n1 = E::shape_four(t, map, first, &x1);
+        let mut out = false;
+        for nk in n1.iter().take(E::NODES) {
+            out |= nk.any_lt(k.tol);
+        }
+        out
+    };
+    if !guard {
+        return ([R::ZERO; 4], outside);
+    }
+    // As the point loop: the work of the mean stress on the start volume (shear components
+    // twice, tensor shear strains; a section's out-of-plane ones, +0, left out), and a NaN for
+    // a non-finite position or volume.
+    let mut w = zero;
+    for c in 0..if E::DIM == 2 { 4 } else { 6 } {
+        let twice = R::Four::splat(t, if c < 3 { R::ONE } else { R::of(2.0) });
+        w = w + twice * (s0[c] + s1[c]) * k.de[c];
+    }
+    let finite = zero * (x1[0] + x1[1] + x1[2] + v1);
+    ((w * v0 + finite).to_array(), outside)
+}
+
+/// [`super::rotation_lanes`] of four points' stresses (`s[c]`: component c, lane q: point q)
+/// for the spin increment `w` (ω_xy, ω_yz, ω_zx): the same operations.
+#[inline(always)]
+fn rotation_four<R: Real>(
+    t: <R::Four as Four<R>>::Token,
+    s: &[R::Four; 6],
+    w: &[R; 3],
+) -> [R::Four; 6] {
+    let [xx, yy, zz, xy, yz, zx] = *s;
+    let sp = |v: R| R::Four::splat(t, v);
+    let (wxy, wyz, wzx, two) = (sp(w[0]), sp(w[1]), sp(w[2]), sp(R::of(2.0)));
+    [
+        two * (wxy * xy - wzx * zx),
+        two * (wyz * yz - wxy * xy),
+        two * (wzx * zx - wyz * yz),
+        wxy * (yy - xx) + wyz * zx - wzx * yz,
+        wyz * (zz - yy) + wzx * xy - wxy * zx,
+        wzx * (xx - zz) + wxy * yz - wyz * xy,
+    ]
+}
