@@ -21,14 +21,21 @@ use super::{Open, Pass};
 
 /// A chunk's point arrays, each sliced to the chunk's range and indexed by the position in it.
 pub(super) struct Points<'s, R: Real> {
+    /// Positions.
     pub x: &'s mut [V3<R>],
+    /// Displacements.
     pub u: &'s mut [V3<R>],
+    /// Stresses (xx yy zz xy yz zx).
     pub stress: &'s mut [[R; 6]],
+    /// Volumes.
     pub volume: &'s mut [R],
     /// The pore pressures, in a two-phase run.
     pub pore: Option<&'s mut [R]>,
+    /// Whether each point is active.
     pub active: &'s [bool],
+    /// Material indices.
     pub material: &'s [u32],
+    /// Masses.
     pub mass: &'s [R],
     /// Each point's element, which the located points' walks update.
     pub element: &'s mut [u32],
@@ -37,11 +44,17 @@ pub(super) struct Points<'s, R: Real> {
 /// What one element shares among its points: its index, velocity gradient `l` (∂v_a/∂x_b),
 /// nodal velocities, map and first corner, and its corners.
 pub(super) struct ElementView<'e, E: Element, R: Real> {
+    /// The element's index.
     pub e: usize,
+    /// Its velocity gradient, L[a][b] = ∂v_a/∂x_b.
     pub l: &'e [[R; 3]; 3],
+    /// Its nodes' velocities.
     pub vel: &'e [V3<R>],
+    /// Its map from global to local coordinates.
     pub map: &'e E::Map<R>,
+    /// Its first corner's position.
     pub first: &'e V3<R>,
+    /// Its corner nodes.
     pub corners: &'e [u32],
 }
 
