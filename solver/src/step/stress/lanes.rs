@@ -17,7 +17,7 @@ use crate::real::{Real, V3};
 use crate::step::batch::Batch;
 use crate::step::contact::maps;
 
-use super::{Open, Pass};
+use super::{spin_increment, strain_increment, Open, Pass};
 
 /// A chunk's point arrays, each sliced to the chunk's range and indexed by the position in it.
 pub(super) struct Points<'s, R: Real> {
@@ -270,22 +270,8 @@ impl<R: Real> Terms<R> {
         law: &crate::material::linear_elastic::LinearElastic<R>,
         lead: u32,
     ) -> Self {
-        let (l, dt, half) = (el.l, cx.dt, R::of(0.5));
-        let out_of_plane = |a: usize, b: usize| {
-            if E::DIM == 2 {
-                R::ZERO
-            } else {
-                half * (l[a][b] + l[b][a]) * dt
-            }
-        };
-        let de = [
-            l[0][0] * dt,
-            l[1][1] * dt,
-            l[2][2] * dt,
-            half * (l[0][1] + l[1][0]) * dt,
-            out_of_plane(1, 2),
-            out_of_plane(2, 0),
-        ];
+        let dt = cx.dt;
+        let de = strain_increment::<E, R>(el.l, dt);
         let s = |v: R| R::Four::splat(t, v);
         let increment = law.increment(&de);
         let rate = cx
@@ -307,13 +293,7 @@ impl<R: Real> Terms<R> {
                 std::array::from_fn(|c| s(if k < E::NODES { el.vel[k][c] } else { R::ZERO }))
             }),
             increment: std::array::from_fn(|c| s(increment[c])),
-            spin: cx.objective.then(|| {
-                [
-                    half * (l[0][1] - l[1][0]) * dt, // ω_xy
-                    half * (l[1][2] - l[2][1]) * dt, // ω_yz
-                    half * (l[2][0] - l[0][2]) * dt, // ω_zx
-                ]
-            }),
+            spin: cx.objective.then(|| spin_increment(el.l, dt)),
             ev: s(de[0] + de[1] + de[2]),
             grow: s(R::ONE + de[0] + de[1] + de[2]),
             de: std::array::from_fn(|c| s(de[c])),

@@ -345,30 +345,13 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
                         }
                     }
                     let dx = interpolate::<E, R, W>(&n, vel);
-                    // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the
-                    // radius).
-                    let hoop: [R; W] = if E::AXISYMMETRIC {
-                        std::array::from_fn(|q| dx[0][q] / xl[0][q])
-                    } else {
-                        [l[2][2]; W]
-                    };
-                    // A section's out-of-plane shear increments are +0 exactly (its L has no
-                    // z-row or z-column, and Δt is positive and finite): written as such.
-                    let out_of_plane = |a: usize, b: usize| {
-                        if E::DIM == 2 {
-                            R::ZERO
-                        } else {
-                            half * (l[a][b] + l[b][a]) * dt
-                        }
-                    };
-                    let mut de: [[R; W]; 6] = [
-                        [l[0][0] * dt; W],
-                        [l[1][1] * dt; W],
-                        hoop.map(|h| h * dt),
-                        [half * (l[0][1] + l[1][0]) * dt; W],
-                        [out_of_plane(1, 2); W],
-                        [out_of_plane(2, 0); W],
-                    ];
+                    let element_de = strain_increment::<E, R>(&l, dt);
+                    let mut de: [[R; W]; 6] = std::array::from_fn(|c| [element_de[c]; W]);
+                    if E::AXISYMMETRIC {
+                        // In an axisymmetric section ε_zz is the hoop strain u_r / r (x is the
+                        // radius), point by point.
+                        de[2] = std::array::from_fn(|q| dx[0][q] / xl[0][q] * dt);
+                    }
                     if let Some(sm) = cx.smoothing {
                         // The normal increments in the section's plane take the correction: all
                         // three in 3D, the two in-plane ones in plane strain (Anura3D's rule;
@@ -418,12 +401,7 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
                     // law's update as Anura3D adds them (for a plastic law the order matters:
                     // the return sees the unrotated trial).
                     if cx.objective {
-                        let w = [
-                            half * (l[0][1] - l[1][0]) * dt, // ω_xy
-                            half * (l[1][2] - l[2][1]) * dt, // ω_yz
-                            half * (l[2][0] - l[0][2]) * dt, // ω_zx
-                        ];
-                        let mut h = rotation_lanes(&s0, &w);
+                        let mut h = rotation_lanes(&s0, &spin_increment(&l, dt));
                         for q in 0..W {
                             let ev = de[0][q] + de[1][q] + de[2][q];
                             for c in 0..6 {
@@ -608,6 +586,43 @@ unsafe fn plastic_lanes_avx2<R: Real, const W: usize>(
     on: &[bool; W],
 ) {
     mc.update_lanes(s, de, on)
+}
+
+/// The strain increment sym(L) Δt of a linear element (xx yy zz xy yz zx, tensor shears) from
+/// its velocity gradient `l` (L[a][b] = ∂v_a/∂x_b): the same at all its points, except an
+/// axisymmetric section's ε_zz, the hoop strain, which the caller forms per point. A section's
+/// out-of-plane shear increments are +0 exactly (its L has no z-row or z-column, and Δt is
+/// positive and finite): written as such.
+#[inline(always)]
+fn strain_increment<E: Element, R: Real>(l: &[[R; 3]; 3], dt: R) -> [R; 6] {
+    let half = R::of(0.5);
+    let out_of_plane = |a: usize, b: usize| {
+        if E::DIM == 2 {
+            R::ZERO
+        } else {
+            half * (l[a][b] + l[b][a]) * dt
+        }
+    };
+    [
+        l[0][0] * dt,
+        l[1][1] * dt,
+        l[2][2] * dt,
+        half * (l[0][1] + l[1][0]) * dt,
+        out_of_plane(1, 2),
+        out_of_plane(2, 0),
+    ]
+}
+
+/// The spin increment skew(L) Δt (ω_xy, ω_yz, ω_zx) of an element with velocity gradient
+/// `l`, for Anura3D's objective terms.
+#[inline(always)]
+fn spin_increment<R: Real>(l: &[[R; 3]; 3], dt: R) -> [R; 3] {
+    let half = R::of(0.5);
+    [
+        half * (l[0][1] - l[1][0]) * dt,
+        half * (l[1][2] - l[2][1]) * dt,
+        half * (l[2][0] - l[0][2]) * dt,
+    ]
 }
 
 /// [`rotation`] of each point's stress in a batch of `W`: (Ωσ - σΩ)_ij = Σ_k Ω_ik σ_kj - σ_ik Ω_kj,
