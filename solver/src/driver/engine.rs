@@ -2146,13 +2146,21 @@ mod tests {
     ) -> Vec<u64> {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../testdata");
         // `NAME+objective`: the scene with Anura3D's objective stress terms on, started
-        // shearing.
+        // shearing; `+ten`: with ten points per element (a tetrahedron's batches of four,
+        // four and two).
         let (scene, objective) = match scene.strip_suffix("+objective") {
+            Some(s) => (s, true),
+            None => (scene, false),
+        };
+        let (scene, ten) = match scene.strip_suffix("+ten") {
             Some(s) => (s, true),
             None => (scene, false),
         };
         let mut case = crate::input::scene::load(&dir.join(scene)).unwrap();
         case.objective_stress |= objective;
+        if ten {
+            case.points_per_element.iter_mut().for_each(|n| *n = 10);
+        }
         crate::parallel::avx2::with_portable(portable, || {
             let mut engine = super::Engine::<R, E>::new(&case, false).unwrap();
             if objective {
@@ -2185,7 +2193,7 @@ mod tests {
 
     /// The AVX2 copies of particle to grid, grid to particle and the stress pass give the bits
     /// of the portable ones: dry, two-phase, Mohr-Coulomb, mixed integration and plane strain,
-    /// one and four points per element, with and without the objective terms, in both
+    /// one, three, four and ten points per element, with and without the objective terms, in both
     /// precisions,
     /// stepped until stresses, velocities and (in the Mohr-Coulomb column) returns are well
     /// under way.
@@ -2207,6 +2215,9 @@ mod tests {
             // the objective terms.
             ("column_gravity.toml+objective", 40),
             ("oedometer.toml+objective", 40),
+            // Ten points per element: the last two of each element in the lanes too.
+            ("column_gravity.toml+ten+objective", 30),
+            ("oedometer.toml+ten", 30),
         ] {
             let portable = state_bits::<f64, Tet4>(scene, steps, true);
             assert!(portable.iter().any(|&b| b != 0), "{scene}: no state");
@@ -2220,16 +2231,19 @@ mod tests {
                 "{scene} f32"
             );
         }
-        let scene = "oedometer_2d.toml";
-        let portable = state_bits::<f64, Tri3>(scene, 60, true);
-        assert!(
-            portable == state_bits::<f64, Tri3>(scene, 60, false),
-            "{scene} f64"
-        );
-        let portable = state_bits::<f32, Tri3>(scene, 60, true);
-        assert!(
-            portable == state_bits::<f32, Tri3>(scene, 60, false),
-            "{scene} f32"
-        );
+        // Plane strain, three points per element: the stress pass's lanes take each
+        // element's three in four lanes.
+        for scene in ["oedometer_2d.toml", "oedometer_2d.toml+objective"] {
+            let portable = state_bits::<f64, Tri3>(scene, 60, true);
+            assert!(
+                portable == state_bits::<f64, Tri3>(scene, 60, false),
+                "{scene} f64"
+            );
+            let portable = state_bits::<f32, Tri3>(scene, 60, true);
+            assert!(
+                portable == state_bits::<f32, Tri3>(scene, 60, false),
+                "{scene} f32"
+            );
+        }
     }
 }

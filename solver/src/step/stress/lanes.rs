@@ -8,6 +8,11 @@
 //! compiler the same batch ran more instructions than one point at a time (docs/design.md §9),
 //! so the f64 pass went point by point. Each lane does the point loop's operations in the same
 //! order, so the bits are those of [`super::chunk`]'s general batches, whatever the width.
+//!
+//! An element's last one to three points (a triangle's three, the last two of a tetrahedron's
+//! ten) load four lanes in place too, the lanes past the element reading the next element's
+//! points, which are computed and never stored: copied into a batch of their own, a
+//! triangle's three ran more instructions than the point loop.
 
 use crate::element::locate::{relocate, tolerance, Outcome};
 use crate::element::Element;
@@ -68,7 +73,8 @@ pub(super) struct ElementView<'e, E: Element, R: Real> {
 /// or the first batch it does not take, which the general loop continues from (the points
 /// before it updated and located).
 ///
-/// For tetrahedra, without strain smoothing (the caller's check).
+/// For tetrahedra and plane-strain triangles (not axisymmetric sections, whose hoop strain
+/// differs from point to point), without strain smoothing (the caller's check).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn elastic_batches<E: Element, R: Real>(
@@ -81,7 +87,7 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
     mut open: Option<&mut Open>,
     mut locate: Option<(&mut Outcome, usize)>,
 ) -> usize {
-    debug_assert!(E::DIM == 3 && !E::AXISYMMETRIC && cx.smoothing.is_none());
+    debug_assert!(!E::AXISYMMETRIC && cx.smoothing.is_none());
     let Points {
         x,
         u,
@@ -109,45 +115,71 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
             .as_ref()
             .map_or(R::ZERO, |f| f.n_over_kw),
     };
+    // The chunk's points: a batch's lanes may read past the element's points (never past
+    // these).
+    let n = x.len();
     while j < end {
-        // Four points that all take part (the common case) are updated in place; the
-        // others through copies, of which only the points taking part are written back.
-        if j + 4 <= end
-            && active[j..j + 4].iter().all(|&a| a)
-            && material[j..j + 4].iter().all(|&m| m == lead)
-        {
-            debug_assert!(
-                element[j..j + 4].iter().all(|&h| h as usize == el.e),
-                "points not sorted by element"
-            );
-            let r = j..j + 4;
-            let volume4: &mut [R; 4] = (&mut volume[r.clone()]).try_into().unwrap();
-            let mut pore4 = pore
-                .as_deref_mut()
-                .map(|p| <&mut [R; 4]>::try_from(&mut p[r.clone()]).unwrap());
-            let (strain, outside) = four_points::<E, R>(
-                &terms,
-                el.map,
-                el.first,
-                (&mut x[r.clone()]).try_into().unwrap(),
-                (&mut u[r.clone()]).try_into().unwrap(),
-                (&mut stress[r.clone()]).try_into().unwrap(),
-                volume4,
-                pore4.as_deref_mut(),
-                guard,
-                locate.is_some(),
-            );
-            let mass4 = *<&[R; 4]>::try_from(&mass[r]).unwrap();
-            if let Some(open) = open.as_deref_mut() {
-                sums.add(open, [true; 4], strain, *volume4, mass4, pore4.map(|p| *p));
+        // The next four points, or the element's last one to three, if all take part (the
+        // common case), are updated in place: four lanes loaded from the chunk's arrays, the
+        // lanes past the element's points (the next element's) computed and never stored.
+        // The others go through copies, of which only the points taking part are written back.
+        let live = (end - j).min(4);
+        let all_take_part = |live: usize| {
+            active[j..j + live].iter().all(|&a| a)
+                && material[j..j + live].iter().all(|&m| m == lead)
+        };
+        // One batch in place, `$live` a constant in each copy (a count known only at run time
+        // made loops of the stores and of the guard's sums).
+        macro_rules! in_place {
+            ($live:literal) => {{
+                const LIVE: usize = $live;
+                debug_assert!(
+                    element[j..j + LIVE].iter().all(|&h| h as usize == el.e),
+                    "points not sorted by element"
+                );
+                let r = j..j + 4;
+                let volume4: &mut [R; 4] = (&mut volume[r.clone()]).try_into().unwrap();
+                let mut pore4 = pore
+                    .as_deref_mut()
+                    .map(|p| <&mut [R; 4]>::try_from(&mut p[r.clone()]).unwrap());
+                let (strain, outside) = four_points::<E, R, LIVE>(
+                    &terms,
+                    el.map,
+                    el.first,
+                    (&mut x[r.clone()]).try_into().unwrap(),
+                    (&mut u[r.clone()]).try_into().unwrap(),
+                    (&mut stress[r.clone()]).try_into().unwrap(),
+                    volume4,
+                    pore4.as_deref_mut(),
+                    guard,
+                    locate.is_some(),
+                );
+                let mass4 = *<&[R; 4]>::try_from(&mass[r]).unwrap();
+                if let Some(open) = open.as_deref_mut() {
+                    let on = std::array::from_fn(|q| q < LIVE);
+                    sums.add(open, on, strain, *volume4, mass4, pore4.map(|p| *p));
+                }
+                if let Some((found, offset)) = locate.as_mut().filter(|_| outside) {
+                    for i in j..j + LIVE {
+                        relocate(cx.mesh, found, *offset + i, &mut element[i], &x[i]);
+                    }
+                }
+                j += LIVE;
+                continue;
+            }};
+        }
+        if j + 4 <= n {
+            // (Four by a constant count, the common case: one compare of each array's four.)
+            if live == 4 && all_take_part(4) {
+                in_place!(4);
             }
-            if let Some((found, offset)) = locate.as_mut().filter(|_| outside) {
-                for i in j..j + 4 {
-                    relocate(cx.mesh, found, *offset + i, &mut element[i], &x[i]);
+            if live < 4 && all_take_part(live) {
+                match live {
+                    3 => in_place!(3),
+                    2 => in_place!(2),
+                    _ => in_place!(1),
                 }
             }
-            j += 4;
-            continue;
         }
         let b = match Batch::<4>::new(j, end, takes_part) {
             Ok(b) => b,
@@ -166,7 +198,7 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
         let (mut x4, mut u4) = (b.at.map(|i| x[i]), b.at.map(|i| u[i]));
         let (mut s4, mut v4) = (b.at.map(|i| stress[i]), b.at.map(|i| volume[i]));
         let mut p4 = pore.as_deref().map(|p| b.at.map(|i| p[i]));
-        let (strain, outside) = four_points::<E, R>(
+        let (strain, outside) = four_points::<E, R, 4>(
             &terms,
             el.map,
             el.first,
@@ -259,6 +291,8 @@ struct Terms<R: Real> {
     rate: Option<[R::Four; 4]>,
     /// The locate tolerance, negative: a shape value below it is outside.
     tol: R::Four,
+    /// The same, one value.
+    tol_value: R,
 }
 
 impl<R: Real> Terms<R> {
@@ -300,18 +334,20 @@ impl<R: Real> Terms<R> {
             dt: s(dt),
             rate,
             tol: s(R::of(-tolerance::<R>())),
+            tol_value: R::of(-tolerance::<R>()),
         }
     }
 }
 
 /// One batch of four points of the element (`x`, `u`, `stress`, `volume` and the pore
-/// pressures, updated in place): the point loop's update, lane by lane. Returns each point's
-/// strain-energy term for the guard's sums (with `guard`; zeros without), and with `locate`
-/// whether a point's new shape values put it outside the element (beyond the locate
-/// tolerance, [`crate::element::locate::run_inside`]'s test).
+/// pressures, updated in place in the first `LIVE` lanes, the others computed and left as they
+/// were): the point loop's update, lane by lane. Returns each point's strain-energy term for
+/// the guard's sums (with `guard`; zeros without), and with `locate` whether one of the `LIVE`
+/// points' new shape values put it outside the element (beyond the locate tolerance,
+/// [`crate::element::locate::run_inside`]'s test).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn four_points<E: Element, R: Real>(
+fn four_points<E: Element, R: Real, const LIVE: usize>(
     k: &Terms<R>,
     map: &E::Map<R>,
     first: &V3<R>,
@@ -323,6 +359,7 @@ fn four_points<E: Element, R: Real>(
     guard: bool,
     locate: bool,
 ) -> ([R; 4], bool) {
+    const { assert!(LIVE >= 1 && LIVE <= 4) };
     let t = k.t;
     let lanes = |v: [R; 4]| R::Four::load(t, &v);
     let zero = R::Four::splat(t, R::ZERO);
@@ -334,7 +371,8 @@ fn four_points<E: Element, R: Real>(
         for kk in 0..E::NODES {
             change = change + n[kk] * rate[kk];
         }
-        *p = (lanes(*p) + change * k.dt).to_array();
+        let p1 = lanes(*p) + change * k.dt;
+        store_live::<R, LIVE>(p1, p);
     }
     let mut dx = [zero; 3];
     for kk in 0..E::NODES {
@@ -365,19 +403,32 @@ fn four_points<E: Element, R: Real>(
     let x1a: [[R; 4]; 3] = std::array::from_fn(|a| x1[a].to_array());
     let u1a: [[R; 4]; 3] = std::array::from_fn(|a| u1[a].to_array());
     let s1a: [[R; 4]; 6] = std::array::from_fn(|c| s1[c].to_array());
-    for q in 0..4 {
+    for q in 0..LIVE {
         for a in 0..E::DIM {
             x[q][a] = x1a[a][q];
             u[q][a] = u1a[a][q];
         }
         stress[q] = std::array::from_fn(|c| s1a[c][q]);
     }
-    *volume = v1.to_array();
+    store_live::<R, LIVE>(v1, volume);
     let outside = locate && {
+        // The lanes past `LIVE` never outside: -∞ (no value is below it, NaN neither).
+        let tol = if LIVE == 4 {
+            k.tol
+        } else {
+            let below = R::of(f64::NEG_INFINITY);
+            lanes(std::array::from_fn(|q| {
+                if q < LIVE {
+                    k.tol_value
+                } else {
+                    below
+                }
+            }))
+        };
         let n1 = E::shape_four(t, map, first, &x1);
         let mut out = false;
         for nk in n1.iter().take(E::NODES) {
-            out |= nk.any_lt(k.tol);
+            out |= nk.any_lt(tol);
         }
         out
     };
@@ -394,6 +445,18 @@ fn four_points<E: Element, R: Real>(
     }
     let finite = zero * (x1[0] + x1[1] + x1[2] + v1);
     ((w * v0 + finite).to_array(), outside)
+}
+
+/// Stores the first `LIVE` lanes of `v` into `to`, leaving the others (all four: one vector
+/// store).
+#[inline(always)]
+fn store_live<R: Real, const LIVE: usize>(v: R::Four, to: &mut [R; 4]) {
+    if LIVE == 4 {
+        *to = v.to_array();
+    } else {
+        let a = v.to_array();
+        to[..LIVE].copy_from_slice(&a[..LIVE]);
+    }
 }
 
 /// [`super::rotation_lanes`] of four points' stresses (`s[c]`: component c, lane q: point q)

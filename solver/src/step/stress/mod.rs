@@ -273,13 +273,12 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
         let (end, mut j) = (points.end - r.start, points.start - r.start);
         // The points before this one are located (with `located`).
         let mut located_from = j;
-        // Linear-elastic points of a tetrahedron four at a time in explicit four-lane
-        // vectors, in the AVX2 copy and in a build that assumes AVX2 ([`lanes`]; the same
-        // bits). They stop at the first batch they do not take, and the general loop below
-        // goes on from there. (A triangle's three points in four lanes ran more instructions
-        // than the point loop: docs/design.md §9.)
+        // Linear-elastic points of a tetrahedron or a plane-strain triangle four at a time in
+        // explicit four-lane vectors, in the AVX2 copy and in a build that assumes AVX2
+        // ([`lanes`]; the same bits). They stop at the first batch they do not take, and the
+        // general loop below goes on from there.
         if let Some(t) = cx.four.filter(|_| WIDE || cfg!(target_feature = "avx2")) {
-            if E::DIM == 3 && cx.smoothing.is_none() {
+            if !E::AXISYMMETRIC && cx.smoothing.is_none() {
                 let el = lanes::ElementView {
                     e,
                     l: &l,
