@@ -33,6 +33,13 @@ pub trait Four<R: Copy>:
     /// Whether some lane is less than the same lane of `o` (an ordered comparison: false
     /// where either is NaN, as `<` on the scalars).
     fn any_lt(self, o: Self) -> bool;
+    /// The four vectors' lanes transposed: lane k of vector q of the result is lane q of
+    /// vector k (values moved, not computed).
+    #[inline(always)]
+    fn transpose(t: Self::Token, v: [Self; 4]) -> [Self; 4] {
+        let a: [[R; 4]; 4] = std::array::from_fn(|q| v[q].to_array());
+        std::array::from_fn(|q| Self::load(t, &std::array::from_fn(|k| a[k][q])))
+    }
 }
 
 /// Four lanes as a plain array (f32, and f64 off x86-64): each operation lane by lane.
@@ -89,9 +96,10 @@ mod x86 {
     use super::Four;
     use std::arch::x86_64::{
         __m128, __m256d, _mm256_add_pd, _mm256_cmp_pd, _mm256_loadu_pd, _mm256_movemask_pd,
-        _mm256_mul_pd, _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm_add_ps, _mm_cmplt_ps,
-        _mm_loadu_ps, _mm_movemask_ps, _mm_mul_ps, _mm_set1_ps, _mm_storeu_ps, _mm_sub_ps,
-        _CMP_LT_OQ,
+        _mm256_mul_pd, _mm256_permute2f128_pd, _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd,
+        _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm_add_ps, _mm_cmplt_ps, _mm_loadu_ps,
+        _mm_movehl_ps, _mm_movelh_ps, _mm_movemask_ps, _mm_mul_ps, _mm_set1_ps, _mm_storeu_ps,
+        _mm_sub_ps, _mm_unpackhi_ps, _mm_unpacklo_ps, _CMP_LT_OQ,
     };
     use std::ops::{Add, Mul, Sub};
 
@@ -163,6 +171,22 @@ mod x86 {
             // SAFETY: SSE is part of x86-64. (`cmplt` is ordered: false with a NaN.)
             unsafe { _mm_movemask_ps(_mm_cmplt_ps(self.0, o.0)) != 0 }
         }
+        #[inline(always)]
+        fn transpose(_: Sse, v: [Self; 4]) -> [Self; 4] {
+            let [r0, r1, r2, r3] = [v[0].0, v[1].0, v[2].0, v[3].0];
+            // SAFETY: SSE is part of x86-64.
+            unsafe {
+                // (r0[0] r1[0] r0[1] r1[1]), (r2[0] r3[0] r2[1] r3[1]), and the upper halves.
+                let (a, b) = (_mm_unpacklo_ps(r0, r1), _mm_unpacklo_ps(r2, r3));
+                let (c, d) = (_mm_unpackhi_ps(r0, r1), _mm_unpackhi_ps(r2, r3));
+                [
+                    F32x4(_mm_movelh_ps(a, b)),
+                    F32x4(_mm_movehl_ps(b, a)),
+                    F32x4(_mm_movelh_ps(c, d)),
+                    F32x4(_mm_movehl_ps(d, c)),
+                ]
+            }
+        }
     }
 
     impl Four<f64> for F64x4 {
@@ -196,6 +220,23 @@ mod x86 {
             // SAFETY: an F64x4 exists only where the processor runs AVX. (Ordered, quiet:
             // false with a NaN, as `<`.)
             unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0, o.0)) != 0 }
+        }
+        #[inline(always)]
+        fn transpose(_: Avx, v: [Self; 4]) -> [Self; 4] {
+            let [r0, r1, r2, r3] = [v[0].0, v[1].0, v[2].0, v[3].0];
+            // SAFETY: an F64x4 exists only where the processor runs AVX.
+            unsafe {
+                // (r0[0] r1[0] r0[2] r1[2]), (r0[1] r1[1] r0[3] r1[3]), and of r2, r3; then
+                // each result's halves from the low or the high halves of two of these.
+                let (a, b) = (_mm256_unpacklo_pd(r0, r1), _mm256_unpackhi_pd(r0, r1));
+                let (c, d) = (_mm256_unpacklo_pd(r2, r3), _mm256_unpackhi_pd(r2, r3));
+                [
+                    F64x4(_mm256_permute2f128_pd::<0x20>(a, c)),
+                    F64x4(_mm256_permute2f128_pd::<0x20>(b, d)),
+                    F64x4(_mm256_permute2f128_pd::<0x31>(a, c)),
+                    F64x4(_mm256_permute2f128_pd::<0x31>(b, d)),
+                ]
+            }
         }
     }
 }
@@ -234,6 +275,15 @@ mod tests {
                     let want = (0..4).any(|k| x[k] < y[k]);
                     let got = <$four>::load(t, &x).any_lt(<$four>::load(t, &y));
                     assert_eq!(got, want, "{x:?} < {y:?}");
+                }
+                // The transpose: lane k of result q is lane q of input k.
+                let m: [[$r; 4]; 4] = [a, b, d, e];
+                let got = <$four>::transpose(t, m.map(|r| <$four>::load(t, &r)));
+                for q in 0..4 {
+                    let lanes = got[q].to_array();
+                    for k in 0..4 {
+                        assert_eq!(lanes[k].to_bits(), m[k][q].to_bits(), "transpose {q} {k}");
+                    }
                 }
             }
         }};

@@ -5,6 +5,7 @@ use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::tri3::Tri3;
 use crate::element::Element;
+use crate::four::Four;
 use crate::material::liquid::Fluid;
 use crate::parallel::avx2::use_avx2;
 use crate::parallel::gather::{Layout, Slots, ELEMENT_BLOCK};
@@ -15,6 +16,8 @@ use crate::state::particles::Particles;
 use crate::step::batch::{interpolate, lanes, store, Batch, Lanes, LANES, TETRAHEDRA};
 use crate::step::contact::{maps, OneBody};
 use crate::step::stress::GuardSums;
+
+mod lanes;
 
 /// What the liquid's share of grid to particle needs (two-phase cases): each material's fluid
 /// (`None` for a dry material) and the liquid's fixities.
@@ -90,8 +93,15 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // variant compiles without the code it does not need and, with one caller, is inlined
     // into its scatter (one closure for four variants was left a call, its re-map width a
     // value at run time).
+    // Where the AVX2 copy (or a build that assumes AVX2) takes an element's points in
+    // explicit four-lane vectors ([`lanes`]; FLIP only: the PIC blend goes point by point).
+    let lane_token = if (wide || cfg!(target_feature = "avx2")) && pic == R::ZERO {
+        R::Four::token()
+    } else {
+        None
+    };
     macro_rules! element_pass {
-        ($want:expr, $with_liquid:expr, $w:expr) => {
+        ($want:literal, $with_liquid:literal, $w:expr, $wide:literal) => {
             |e: usize, range: std::ops::Range<usize>, four: &mut [R]| {
                 const W: usize = $w;
                 let (want, with_liquid): (bool, bool) = ($want, $with_liquid);
@@ -134,6 +144,46 @@ pub fn grid_to_particle<E: Element, R: Real>(
                 // value across its nodes, stored into `four` at the end.
                 let mut sums: Lanes<R, 6> = [[R::ZERO; LANES]; 6];
                 let mut j = 0;
+                // The points in four-lane vectors as far as they go (all of them, commonly),
+                // the point loop below from where they stop.
+                if let Some(t) = lane_token.filter(|_| $wide || cfg!(target_feature = "avx2")) {
+                    let points = lanes::ElementPoints::<E, R> {
+                        x,
+                        mass,
+                        active,
+                        material,
+                        vel: &mut *vel,
+                        liquid: match (liquid, w_pts.as_deref_mut(), acc_w_e.as_ref()) {
+                            (Some(l), Some(w), Some(a)) if with_liquid => {
+                                Some(lanes::LiquidPoints {
+                                    w,
+                                    volume: &volume[range.clone()],
+                                    volume0: volume0.map(|v0| &v0[range.clone()]),
+                                    fluids: l.fluids,
+                                    acc: a.as_ref(),
+                                })
+                            }
+                            _ => None,
+                        },
+                        map,
+                        first,
+                        acc: acc_e,
+                    };
+                    debug_assert!(crate::parallel::avx2::present());
+                    // SAFETY: `$wide` only in the scatter's AVX2 copy, which runs where the
+                    // processor has AVX2; a build that assumes AVX2 runs only where it has it.
+                    j = unsafe {
+                        element_lanes_avx2::<E, R, $want, $with_liquid>(
+                            t,
+                            body,
+                            dt,
+                            points,
+                            &mut sums,
+                            &mut kinetic,
+                            &mut kinetic_w,
+                        )
+                    };
+                }
                 while j < count {
                     let b =
                         match Batch::<W>::new(j, count, |i| active[i] && maps(body, material[i])) {
@@ -240,12 +290,12 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // The guarded variants: each element's kinetic sums into its block's slot, the liquid's
     // after the block's last element.
     macro_rules! guarded_pass {
-        ($guard:expr, $with_liquid:expr, $w:expr) => {
+        ($guard:expr, $with_liquid:literal, $w:expr, $wide:literal) => {
             |e: usize,
              range: std::ops::Range<usize>,
              four: &mut [R],
              pending: &mut [f64; ELEMENT_BLOCK]| {
-                let element = element_pass!(true, $with_liquid, $w);
+                let element = element_pass!(true, $with_liquid, $w, $wide);
                 let (kinetic, kinetic_w) = element(e, range, four);
                 let b = e / ELEMENT_BLOCK;
                 // SAFETY: the scatter hands element e to one thread only, once, in element
@@ -275,27 +325,27 @@ pub fn grid_to_particle<E: Element, R: Real>(
     // width (a literal, so that each closure has one caller: the solid's 3 or 2 values per
     // node, then as many for the liquid), once for each instruction set.
     macro_rules! run {
-        (None, $with_liquid:expr, $w:expr, $width:literal) => {{
+        (None, $with_liquid:literal, $w:expr, $width:literal) => {{
             debug_assert_eq!(width($with_liquid), $width);
             if wide {
-                let element = element_pass!(false, $with_liquid, $w);
+                let element = element_pass!(false, $with_liquid, $w, true);
                 layout.scatter_with::<$width, true, true, _, _>(team, slots, init, |e, r, f, _| {
                     element(e, r, f);
                 })
             } else {
-                let element = element_pass!(false, $with_liquid, $w);
+                let element = element_pass!(false, $with_liquid, $w, false);
                 layout.scatter_with::<$width, false, true, _, _>(team, slots, init, |e, r, f, _| {
                     element(e, r, f);
                 })
             }
         }};
-        ($g:expr, $with_liquid:expr, $w:expr, $width:literal) => {{
+        ($g:expr, $with_liquid:literal, $w:expr, $width:literal) => {{
             debug_assert_eq!(width($with_liquid), $width);
             if wide {
-                let element = guarded_pass!($g, $with_liquid, $w);
+                let element = guarded_pass!($g, $with_liquid, $w, true);
                 layout.scatter_with::<$width, true, true, _, _>(team, slots, init, element)
             } else {
-                let element = guarded_pass!($g, $with_liquid, $w);
+                let element = guarded_pass!($g, $with_liquid, $w, false);
                 layout.scatter_with::<$width, false, true, _, _>(team, slots, init, element)
             }
         }};
@@ -326,6 +376,26 @@ pub fn grid_to_particle<E: Element, R: Real>(
             .zip(liquid)
             .map(|(gl, l)| (&gl.mass[..], l.fixed, &mut gl.vel[..])),
     );
+}
+
+/// [`lanes::element_lanes`] compiled with AVX2 (a function of its own: inlined into the
+/// scatter's element closure, the saturated pass's closure would grow past what the compiler
+/// inlines into its AVX2 copy, as particle to grid's did).
+///
+/// # Safety
+/// On x86-64 the processor must have AVX2 ([`crate::parallel::avx2::present`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
+#[allow(clippy::too_many_arguments)]
+unsafe fn element_lanes_avx2<E: Element, R: Real, const WANT: bool, const WITH_LIQUID: bool>(
+    t: <R::Four as Four<R>>::Token,
+    body: Option<OneBody>,
+    dt: R,
+    points: lanes::ElementPoints<'_, E, R>,
+    sums: &mut Lanes<R, 6>,
+    kinetic: &mut f64,
+    kinetic_w: &mut f64,
+) -> usize {
+    lanes::element_lanes::<E, R, WANT, WITH_LIQUID>(t, body, dt, points, sums, kinetic, kinetic_w)
 }
 
 /// v · w over the element's dimensions.
