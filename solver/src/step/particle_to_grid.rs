@@ -689,63 +689,61 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         ..
     } = *points;
     let splat = |v: R| R::Four::splat(t, v);
-    {
-        if !active[i] || !maps(cx.body, material[i]) {
-            return;
-        }
-        let (m, v) = (mass[i], vel[i]);
-        let gravity = &cx.gravity[material[i] as usize];
-        let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
-        let w = splat(m) * n;
-        s4[0] = s4[0] + w;
-        for a in 0..E::DIM {
-            // Row a of the symmetric σ (xx yy zz xy yz zx), as [`tractions`] sums it (the
-            // in-plane components only in 2D).
-            const ROWS: [[usize; 3]; 3] = [[0, 3, 5], [3, 1, 4], [5, 4, 2]];
-            let r = ROWS[a];
-            let f = if E::DIM == 2 {
-                splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1]
-            } else {
-                splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1] + splat(s[r[2]]) * g[2]
-            };
-            s4[1 + a] = s4[1 + a] + w * splat(v[a]);
-            s4[1 + E::DIM + a] = s4[1 + E::DIM + a] - f;
-            s4[1 + 2 * E::DIM + a] = s4[1 + 2 * E::DIM + a] + w * splat(gravity[a]);
-        }
-        if E::AXISYMMETRIC {
-            // An axisymmetric section's hoop stress pulls each node towards the axis:
-            // f_r -= V σ_θθ N / r (x the radius; V per radian), after the point's traction.
-            let hoop = s[2] / x[i][0];
-            s4[1 + E::DIM] = s4[1 + E::DIM] - splat(hoop) * n;
-        }
-        if !WITH_LIQUID {
-            return;
-        }
-        let (Some((loads, w_all, volume0)), Some(pore)) = (liquid, pore) else {
-            return;
+    if !active[i] || !maps(cx.body, material[i]) {
+        return;
+    }
+    let (m, v) = (mass[i], vel[i]);
+    let gravity = &cx.gravity[material[i] as usize];
+    let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
+    let w = splat(m) * n;
+    s4[0] = s4[0] + w;
+    for a in 0..E::DIM {
+        // Row a of the symmetric σ (xx yy zz xy yz zx), as [`tractions`] sums it (the
+        // in-plane components only in 2D).
+        const ROWS: [[usize; 3]; 3] = [[0, 3, 5], [3, 1, 4], [5, 4, 2]];
+        let r = ROWS[a];
+        let f = if E::DIM == 2 {
+            splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1]
+        } else {
+            splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1] + splat(s[r[2]]) * g[2]
         };
-        let Some(f) = loads.fluids[material[i] as usize] else {
-            return;
-        };
-        let (vw, mw, pw) =
-            liquid_volume_mass_pressure(&f, full, volume[i], volume0.map(|v0| v0[i]), pore[i]);
-        let wv = w_all[i];
-        let mn = splat(mw) * n;
-        let nmw = splat(f.n * mw) * n;
-        w4[0] = w4[0] + mn;
-        w4[1] = w4[1] + nmw;
-        w4[2] = w4[2] + splat(f.drag * vw) * n;
-        for a in 0..E::DIM {
-            let force = mn * splat(loads.gravity[a]) - splat(pw) * g[a];
-            w4[3 + a] = w4[3 + a] + mn * splat(wv[a]);
-            w4[3 + E::DIM + a] = w4[3 + E::DIM + a] + force;
-            w4[3 + 2 * E::DIM + a] = w4[3 + 2 * E::DIM + a] + nmw * splat(loads.gravity[a]);
-        }
-        if E::AXISYMMETRIC {
-            // The pore pressure's hoop force, as the solid's.
-            let hoop = pw / x[i][0];
-            w4[3 + E::DIM] = w4[3 + E::DIM] - splat(hoop) * n;
-        }
+        s4[1 + a] = s4[1 + a] + w * splat(v[a]);
+        s4[1 + E::DIM + a] = s4[1 + E::DIM + a] - f;
+        s4[1 + 2 * E::DIM + a] = s4[1 + 2 * E::DIM + a] + w * splat(gravity[a]);
+    }
+    if E::AXISYMMETRIC {
+        // An axisymmetric section's hoop stress pulls each node towards the axis:
+        // f_r -= V σ_θθ N / r (x the radius; V per radian), after the point's traction.
+        let hoop = s[2] / x[i][0];
+        s4[1 + E::DIM] = s4[1 + E::DIM] - splat(hoop) * n;
+    }
+    if !WITH_LIQUID {
+        return;
+    }
+    let (Some((loads, w_all, volume0)), Some(pore)) = (liquid, pore) else {
+        return;
+    };
+    let Some(f) = loads.fluids[material[i] as usize] else {
+        return;
+    };
+    let (vw, mw, pw) =
+        liquid_volume_mass_pressure(&f, full, volume[i], volume0.map(|v0| v0[i]), pore[i]);
+    let wv = w_all[i];
+    let mn = splat(mw) * n;
+    let nmw = splat(f.n * mw) * n;
+    w4[0] = w4[0] + mn;
+    w4[1] = w4[1] + nmw;
+    w4[2] = w4[2] + splat(f.drag * vw) * n;
+    for a in 0..E::DIM {
+        let force = mn * splat(loads.gravity[a]) - splat(pw) * g[a];
+        w4[3 + a] = w4[3 + a] + mn * splat(wv[a]);
+        w4[3 + E::DIM + a] = w4[3 + E::DIM + a] + force;
+        w4[3 + 2 * E::DIM + a] = w4[3 + 2 * E::DIM + a] + nmw * splat(loads.gravity[a]);
+    }
+    if E::AXISYMMETRIC {
+        // The pore pressure's hoop force, as the solid's.
+        let hoop = pw / x[i][0];
+        w4[3 + E::DIM] = w4[3 + E::DIM] - splat(hoop) * n;
     }
 }
 

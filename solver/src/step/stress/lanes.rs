@@ -291,8 +291,6 @@ struct Terms<R: Real> {
     rate: Option<[R::Four; 4]>,
     /// The locate tolerance, negative: a shape value below it is outside.
     tol: R::Four,
-    /// The same, one value.
-    tol_value: R,
 }
 
 impl<R: Real> Terms<R> {
@@ -334,7 +332,6 @@ impl<R: Real> Terms<R> {
             dt: s(dt),
             rate,
             tol: s(R::of(-tolerance::<R>())),
-            tol_value: R::of(-tolerance::<R>()),
         }
     }
 }
@@ -419,7 +416,7 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
             let below = R::of(f64::NEG_INFINITY);
             lanes(std::array::from_fn(|q| {
                 if q < LIVE {
-                    k.tol_value
+                    R::of(-tolerance::<R>())
                 } else {
                     below
                 }
