@@ -13,11 +13,13 @@
 //! written and read back only to be added in element order, which that thread's own element loop
 //! already follows: it adds such a node's values straight into an accumulator per node instead
 //! (the first element's as 0 + v, as the slot pass starts its sum from 0, so that even the
-//! sign of a zero is the same). Only the nodes at the ranges' borders go through the slots. The
-//! sums are the same bits either way; the slots' bytes, the largest stream of the pass, are
-//! spared for the interior (docs/design.md §5).
+//! sign of a zero is the same). Only the nodes at the ranges' borders go through the slots, and
+//! those that a piece another thread took shares with its owner's other pieces (`NodeSum`).
+//! The sums are the same bits either way; the slots' bytes, the largest stream of the pass,
+//! are spared for the interior (docs/design.md §5).
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
@@ -50,11 +52,11 @@ pub const MIN_CHUNKS: usize = 8;
 
 /// Where the scatter cuts each thread's elements into pieces, in thousandths of the thread's
 /// points: a first piece of three quarters, then two eighths. A thread takes its own pieces
-/// in order, then the pieces still left of the others ([`Team::run_chunks`]), so a thread that
-/// its core slows down hands its last quarter to the others instead of holding them at the
-/// barrier. The scatter's chunks are few and large, unlike the stress pass's
-/// ([`CHUNK_BLOCKS`]): a node whose elements lie in two pieces goes through the slots, so every
-/// cut adds slot traffic (docs/design.md §5).
+/// in order, then the pieces still left of the others from their back ([`Team::run_pieces`]),
+/// so a thread that its core slows down hands its last quarter to the others instead of
+/// holding them at the barrier. The scatter's chunks are few and large, unlike the stress
+/// pass's ([`CHUNK_BLOCKS`]): a node whose elements lie in two pieces that different threads
+/// run goes through the slots, so every piece taken adds slot traffic (docs/design.md §5).
 pub const SCATTER_CUTS: [u64; 2] = [750, 875];
 
 /// Layout and scratch of the parallel step.
@@ -90,11 +92,18 @@ pub struct Layout<R: Real, E: Element = Tet4> {
     /// For each slot (NODES e + k), the node it adds straight into ([`DIRECT_FIRST`] set on the
     /// node's first element), or [`TO_SLOT`] for a node whose elements more than one thread
     /// holds (and for every slot on a rank of several, whose sums cross the halo). Every node
-    /// it names is below `direct_node.len()`: the scatter indexes the accumulators unchecked
-    /// on it.
+    /// it names is below `node_sum.len()`: the scatter indexes the accumulators unchecked on
+    /// it.
     direct: Vec<u32>,
-    /// Whether node n is summed straight into its accumulator (all its elements one thread's).
-    direct_node: Vec<bool>,
+    /// `direct` for a piece another thread took from its owner: the entries of nodes whose
+    /// elements lie in several pieces of the owner ([`NodeSum::Chain`]) go to their slots.
+    direct_taken: Vec<u32>,
+    /// How each node's sum is formed.
+    node_sum: Vec<NodeSum>,
+    /// Per thread: the first element of the pieces of its range that other threads took in
+    /// the last scatter ([`Team::run_pieces`]: always the last pieces of the range), or
+    /// `usize::MAX` where it ran all its own. Written by the scatter, read by the gather.
+    taken_from: Vec<AtomicUsize>,
     /// The elements of each chunk that [`Team::run_chunks`] hands out: each thread's elements
     /// cut, in order, into pieces of [`CHUNK_BLOCKS`] whole blocks.
     chunks: Vec<Range<usize>>,
@@ -119,6 +128,21 @@ const TO_SLOT: u32 = u32::MAX;
 
 /// Set in a `direct` entry on the node's first element: its accumulator starts there.
 const DIRECT_FIRST: u32 = 1 << 31;
+
+/// How a node's sum is formed from the scatter's values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum NodeSum {
+    /// Its slots, in element order (its elements lie in more than one thread's range).
+    Slots,
+    /// Its accumulator (all its elements lie in one piece).
+    Direct,
+    /// Its accumulator, then the slots of its elements in pieces other threads took, in
+    /// element order (its elements lie in several pieces of one thread). The pieces a thread
+    /// runs of its own are a first run of its range, run in order ([`Team::run_pieces`]), so
+    /// the accumulator holds the sum of the node's first elements taken in element order, and
+    /// the slots add the rest in the same order: the same bits as the slots alone.
+    Chain,
+}
 
 /// Most nodes an element has (the scatter's element buffer is sized for it).
 const MAX_NODES: usize = 4;
@@ -220,11 +244,13 @@ impl<R: Real, E: Element> Layout<R, E> {
         }
         owned_start.push(owned_node.len() as u32);
         let (pieces, thread_pieces) = pieces_of(&element_ranges, &elem_start);
-        let (direct, direct_node) = if halo.is_none() {
-            direct_slots::<E>(&pieces, &node_start, &node_slot)
+        let (direct, direct_taken, node_sum) = if halo.is_none() {
+            direct_slots::<E>(&pieces, &thread_pieces, &node_start, &node_slot)
         } else {
-            (vec![TO_SLOT; E::NODES * ne], vec![false; nn])
+            let all = vec![TO_SLOT; E::NODES * ne];
+            (all.clone(), all, vec![NodeSum::Slots; nn])
         };
+        let taken_from = (0..threads).map(|_| AtomicUsize::new(usize::MAX)).collect();
         let (chunks, thread_chunks) = chunks_of(&element_ranges);
         let layout = Layout {
             elem_start,
@@ -242,7 +268,9 @@ impl<R: Real, E: Element> Layout<R, E> {
             order: halo.as_ref().map(|_| order.to_vec()),
             owned,
             direct,
-            direct_node,
+            direct_taken,
+            node_sum,
+            taken_from,
             _types: std::marker::PhantomData,
         };
         layout.debug_check();
@@ -349,7 +377,7 @@ impl<R: Real, E: Element> Layout<R, E> {
     /// Zeroed slots and node accumulators for this layout (allocated zeroed, so pages are
     /// placed by the threads that first write them).
     pub fn new_slots(&self) -> Slots<R> {
-        vec![R::ZERO; self.accumulators() + WIDTH * self.direct_node.len()]
+        vec![R::ZERO; self.accumulators() + WIDTH * self.node_sum.len()]
     }
 
     /// Where the node accumulators start in the slots.
@@ -358,7 +386,9 @@ impl<R: Real, E: Element> Layout<R, E> {
     }
 
     /// The share of element corners whose sums go through the slots (the rest add straight into
-    /// their node's accumulator): what the slot traffic of a pass is scaled by.
+    /// their node's accumulator): what the slot traffic of a pass is scaled by. (A piece that
+    /// another thread takes sends its nodes shared with the owner's other pieces through the
+    /// slots too, only when it is taken.)
     pub fn slot_share(&self) -> f64 {
         let through = self.direct.iter().filter(|&&d| d == TO_SLOT).count();
         through as f64 / self.direct.len().max(1) as f64
@@ -404,8 +434,9 @@ impl<R: Real, E: Element> Layout<R, E> {
     /// [`Layout::particles_of`], read once by the scatter beside its own test of it;
     /// [`node_slots`] splits the buffer by node), and hands each node's values on:
     /// into the node's accumulator when all the node's elements lie in this piece
-    /// ([`SCATTER_CUTS`]), else into its slot. The pieces are handed out while the pass runs
-    /// ([`Team::run_chunks`]), each to one thread, which takes its elements in order: `element`
+    /// ([`SCATTER_CUTS`]), or in pieces of this piece's thread that it runs itself, else into
+    /// its slot (`NodeSum`). The pieces are handed out while the pass runs
+    /// ([`Team::run_pieces`]), each to one thread, which takes its elements in order: `element`
     /// must write only what belongs to its element.
     ///
     /// An element without points must add nothing to its buffer (checked in debug builds):
@@ -454,7 +485,7 @@ impl<R: Real, E: Element> Layout<R, E> {
         const { assert!(E::NODES <= MAX_NODES) };
         let per_element = E::NODES * W;
         let acc_at = self.accumulators();
-        let nodes = self.direct_node.len();
+        let nodes = self.node_sum.len();
         debug_assert_eq!(slots.len(), acc_at + WIDTH * nodes);
         // Every `direct` entry names a node below `nodes` (`direct_slots`), so this one check
         // bounds every accumulator the loop below hands values to.
@@ -464,11 +495,26 @@ impl<R: Real, E: Element> Layout<R, E> {
         );
         let shared = Shared::new(slots);
         let pieces = &self.pieces;
-        let direct = &self.direct;
         let start = &self.elem_start;
         assert!(!WIDE || avx2::present(), "an AVX2 scatter without AVX2");
-        team.run_chunks(&self.thread_pieces, |k, c| {
+        for t in &self.taken_from {
+            t.store(usize::MAX, Ordering::Relaxed);
+        }
+        let taken_from = &self.taken_from;
+        // The team's broadcast orders the stores above before every claim, and its join the
+        // claims' records before the gather reads them.
+        team.run_pieces(&self.thread_pieces, |k, c, owner| {
             let r = pieces[c].clone();
+            // A piece another thread took: its nodes shared with the owner's other pieces go
+            // through their slots (the owner's pieces it runs itself come first, so the
+            // smallest start taken is where the slots begin: `NodeSum::Chain`).
+            let taken = k != owner;
+            let direct = if taken {
+                taken_from[owner].fetch_min(r.start, Ordering::Relaxed);
+                &self.direct_taken
+            } else {
+                &self.direct
+            };
             // SAFETY: the pieces are disjoint and each is handed out once, so are their slots.
             let mine = unsafe { shared.range(per_element * r.start..per_element * r.end) };
             let mut buffer = [R::ZERO; WIDTH * MAX_NODES];
@@ -541,9 +587,13 @@ impl<R: Real, E: Element> Layout<R, E> {
                         debug_assert!(n < nodes, "a direct entry past the nodes");
                         // SAFETY: a node with a `direct` entry has every element in this piece
                         // (`direct_slots`), which one thread takes in element order, so no other
-                        // thread touches its accumulator, and the accumulators lie past every
-                        // slot; `n` is below `nodes` (`direct_slots`), whose accumulators the
-                        // slots hold (asserted above).
+                        // thread touches its accumulator; a node whose elements lie in several
+                        // pieces of one thread is added to only by that thread, which runs the
+                        // pieces it keeps one after the other in element order (the pieces
+                        // others take use `direct_taken`, which sends the node's values to
+                        // slots). The accumulators lie past every slot; `n` is
+                        // below `nodes` (`direct_slots`), whose accumulators the slots hold
+                        // (asserted above).
                         let acc = unsafe { shared.array_unchecked::<W>(acc_at + W * n) };
                         *acc = if target & DIRECT_FIRST != 0 {
                             // 0 + v, not v: the slot pass's sum starts from 0 (and 0 + -0 is +0).
@@ -642,21 +692,44 @@ impl<R: Real, E: Element> Layout<R, E> {
         F: Fn(usize, [R; W]) + Sync,
     {
         let acc_at = self.accumulators();
+        let slot_sum = |sum: &mut [R; W], s: u32| {
+            let v = &slots[W * s as usize..W * s as usize + W];
+            for c in 0..W {
+                sum[c] += v[c];
+            }
+        };
         team.run(|k| {
             for n in self.node_ranges[k].clone() {
-                if self.direct_node[n] {
-                    // Sliced once: one bounds check per node, not one per value.
-                    let sum = &slots[acc_at + W * n..acc_at + W * n + W];
-                    node(n, std::array::from_fn(|c| sum[c]));
+                let kind = self.node_sum[n];
+                if kind == NodeSum::Slots {
+                    let mut sum = [R::ZERO; W];
+                    for &s in &self.node_slot
+                        [self.node_start[n] as usize..self.node_start[n + 1] as usize]
+                    {
+                        slot_sum(&mut sum, s);
+                    }
+                    node(n, sum);
                     continue;
                 }
-                let mut sum = [R::ZERO; W];
-                for &s in
-                    &self.node_slot[self.node_start[n] as usize..self.node_start[n + 1] as usize]
-                {
-                    let v = &slots[W * s as usize..W * s as usize + W];
-                    for c in 0..W {
-                        sum[c] += v[c];
+                // Sliced once: one bounds check per node, not one per value.
+                let acc = &slots[acc_at + W * n..acc_at + W * n + W];
+                let mut sum: [R; W] = std::array::from_fn(|c| acc[c]);
+                if kind == NodeSum::Chain {
+                    let list = &self.node_slot
+                        [self.node_start[n] as usize..self.node_start[n + 1] as usize];
+                    let element = |s: u32| s as usize / E::NODES;
+                    let first = element(list[0]);
+                    let home = self.element_ranges.partition_point(|r| r.end <= first);
+                    let from = self.taken_from[home].load(Ordering::Relaxed);
+                    if element(list[list.len() - 1]) >= from {
+                        // Some of its elements' pieces were taken: their slots follow the
+                        // accumulator (which holds nothing when the first was taken too).
+                        if first >= from {
+                            sum = [R::ZERO; W];
+                        }
+                        for &s in list.iter().filter(|&&s| element(s) >= from) {
+                            slot_sum(&mut sum, s);
+                        }
                     }
                 }
                 node(n, sum);
@@ -684,19 +757,27 @@ pub fn exact_total<const K: usize>(comm: &dyn Communicator, partials: &[[f64; K]
     std::array::from_fn(|c| ExactSum::from_words(all[c]).value())
 }
 
-/// The `direct` entries of [`Layout`] (and which nodes they cover) for one process: a node all
-/// of whose slots (`node_slot[node_start[n]..node_start[n + 1]]`, in element order) belong to
-/// elements of one range of `element_ranges` (the scatter's pieces) adds straight into its
-/// accumulator, its first element marked.
+/// The `direct` entries of [`Layout`] (and how each node's sum is formed) for one process,
+/// from the scatter's `pieces` and each thread's run of them (`thread_pieces`): a node all of
+/// whose slots (`node_slot[node_start[n]..node_start[n + 1]]`, in element order) belong to
+/// elements of one piece adds straight into its accumulator, its first element marked; one
+/// whose slots lie in several pieces of one thread does too, but through its slots in the
+/// entries for a taken piece (the second table); the others go through their slots.
 fn direct_slots<E: Element>(
-    element_ranges: &[Range<usize>],
+    pieces: &[Range<usize>],
+    thread_pieces: &[Range<usize>],
     node_start: &[u32],
     node_slot: &[u32],
-) -> (Vec<u32>, Vec<bool>) {
-    let elements = element_ranges.last().map_or(0, |r| r.end);
+) -> (Vec<u32>, Vec<u32>, Vec<NodeSum>) {
+    let elements = pieces.last().map_or(0, |r| r.end);
+    // Each element's piece and thread.
+    let mut piece = vec![0u32; elements];
     let mut thread = vec![0u32; elements];
-    for (k, r) in element_ranges.iter().enumerate() {
-        thread[r.clone()].fill(k as u32);
+    for (k, own) in thread_pieces.iter().enumerate() {
+        for c in own.clone() {
+            piece[pieces[c].clone()].fill(c as u32);
+            thread[pieces[c].clone()].fill(k as u32);
+        }
     }
     let nodes = node_start.len() - 1;
     assert!(
@@ -704,27 +785,39 @@ fn direct_slots<E: Element>(
         "more nodes than a slot entry can name"
     );
     let mut direct = vec![TO_SLOT; E::NODES * elements];
-    let mut direct_node = vec![false; nodes];
+    let mut node_sum = vec![NodeSum::Slots; nodes];
+    let element = |s: u32| s as usize / E::NODES;
     for n in 0..nodes {
         let list = &node_slot[node_start[n] as usize..node_start[n + 1] as usize];
         let Some(&first) = list.first() else {
             continue;
         };
-        let home = thread[first as usize / E::NODES];
-        if list.iter().any(|&s| thread[s as usize / E::NODES] != home) {
+        let (home, home_piece) = (thread[element(first)], piece[element(first)]);
+        if list.iter().any(|&s| thread[element(s)] != home) {
             continue;
         }
         debug_assert!(
             list.windows(2).all(|w| w[0] < w[1]),
             "a node's slots out of element order"
         );
-        direct_node[n] = true;
+        node_sum[n] = if list.iter().all(|&s| piece[element(s)] == home_piece) {
+            NodeSum::Direct
+        } else {
+            NodeSum::Chain
+        };
         direct[first as usize] = n as u32 | DIRECT_FIRST;
         for &s in &list[1..] {
             direct[s as usize] = n as u32;
         }
     }
-    (direct, direct_node)
+    // A taken piece runs beside its owner's: only nodes within one piece add straight in.
+    let mut direct_taken = direct.clone();
+    for (t, &d) in direct_taken.iter_mut().zip(&direct) {
+        if d != TO_SLOT && node_sum[(d & !DIRECT_FIRST) as usize] == NodeSum::Chain {
+            *t = TO_SLOT;
+        }
+    }
+    (direct, direct_taken, node_sum)
 }
 
 /// The scatter's hand-on for an element without points (its buffer all zeros): its slots
@@ -823,6 +916,120 @@ pub fn element_starts(element: &[u32], elements: usize) -> Vec<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::mesh::TetMesh;
+    use crate::parallel::team::Pin;
+    use mpm_shared::{generate, ElementType};
+    use std::sync::atomic::AtomicU64;
+
+    /// Points in element order, 0 to 3 per element (some elements empty).
+    fn points_of(elements: usize) -> Particles<f64> {
+        let element: Vec<u32> = (0..elements as u32)
+            .flat_map(|e| std::iter::repeat_n(e, (e as usize * 7 + e as usize / 5) % 4))
+            .collect();
+        let n = element.len();
+        Particles::<f64> {
+            x: vec![[0.0; 3]; n],
+            u: vec![[0.0; 3]; n],
+            v: vec![[0.0; 3]; n],
+            mass: vec![1.0; n],
+            volume: vec![1.0; n],
+            stress: vec![[0.0; 6]; n],
+            element,
+            material: vec![0; n],
+            id: (0..n as u32).collect(),
+            active: vec![true; n],
+            state: Vec::new(),
+            state_len: 0,
+            liquid: None,
+        }
+    }
+
+    /// A value whose sums depend on the order they are taken in: magnitudes 1e-8 to 1e8.
+    fn value(e: usize, k: usize, c: usize) -> f64 {
+        let h = ((e * 4 + k) * 3 + c) as u64 * 2_654_435_761 % 1_000_003;
+        (h as f64 / 7.0 - 70_000.0) * 10f64.powi((h % 17) as i32 - 8)
+    }
+
+    /// Each node's sum of [`value`] over its element corners that have points, scattered and
+    /// gathered on `layout`; `slow(thread, piece owner, element)` the elements that sleep.
+    fn node_sums(
+        team: &Team,
+        layout: &Layout<f64, Tet4>,
+        slow: impl Fn(usize, usize) -> bool + Sync,
+    ) -> Vec<[u64; 3]> {
+        let mut slots = layout.new_slots();
+        let thread_of = |e: usize| {
+            layout
+                .element_ranges
+                .iter()
+                .position(|r| r.contains(&e))
+                .unwrap()
+        };
+        layout.scatter_with::<3, false, false, usize, _>(
+            team,
+            &mut slots,
+            |k| k,
+            |e, points, own, &mut k| {
+                if points.is_empty() {
+                    return;
+                }
+                if slow(thread_of(e), e) && k == thread_of(e) {
+                    std::thread::sleep(std::time::Duration::from_millis(40));
+                }
+                for (kk, to) in own.chunks_exact_mut(3).enumerate() {
+                    for (c, t) in to.iter_mut().enumerate() {
+                        *t += value(e, kk, c);
+                    }
+                }
+            },
+        );
+        let sums: Vec<[AtomicU64; 3]> = (0..layout.node_sum.len())
+            .map(|_| std::array::from_fn(|_| AtomicU64::new(0)))
+            .collect();
+        layout.gather::<3, _>(team, &slots, |n, s| {
+            for c in 0..3 {
+                sums[n][c].store(s[c].to_bits(), Ordering::Relaxed);
+            }
+        });
+        sums.iter()
+            .map(|s| std::array::from_fn(|c| s[c].load(Ordering::Relaxed)))
+            .collect()
+    }
+
+    #[test]
+    fn taken_pieces_give_the_sums_of_one_thread_bit_for_bit() {
+        let mesh =
+            TetMesh::new(&generate::box_mesh([8, 8, 8], [1.0; 3], ElementType::Tet4)).unwrap();
+        let p = points_of(mesh.elements());
+        let one = Layout::new(&mesh, &p, 1);
+        let want = node_sums(&Team::new(1, Pin::None).unwrap(), &one, |_, _| false);
+        for threads in [2, 3] {
+            let team = Team::new(threads, Pin::None).unwrap();
+            let layout = one.for_threads(&mesh, &p, threads);
+            assert!(
+                layout.node_sum.contains(&NodeSum::Chain),
+                "no node spans two pieces of a thread"
+            );
+            // Nobody slow; thread 0 slow on its first element (the others take its last
+            // pieces); every thread but the last slow.
+            for slow_threads in [0, 1, threads - 1] {
+                let first: Vec<usize> = (0..threads)
+                    .map(|k| {
+                        let r = layout.element_ranges[k].clone();
+                        r.clone()
+                            .find(|&e| p.element.contains(&(e as u32)))
+                            .unwrap()
+                    })
+                    .collect();
+                let got = node_sums(&team, &layout, |k, e| k < slow_threads && e == first[k]);
+                assert_eq!(got, want, "{threads} threads, {slow_threads} slow");
+                let taken = layout.taken_from[0].load(Ordering::Relaxed) != usize::MAX;
+                if slow_threads > 0 {
+                    assert!(taken, "{threads} threads: no piece of thread 0 was taken");
+                }
+            }
+        }
+    }
 
     #[test]
     fn chunks_cut_each_thread_in_whole_blocks() {
@@ -916,9 +1123,12 @@ mod tests {
                 fill[n as usize] += 1;
             }
         }
-        let (direct, nodes) = direct_slots::<Tet4>(&[0..2, 2..3], &node_start, &node_slot);
+        let (direct, taken, nodes) =
+            direct_slots::<Tet4>(&[0..2, 2..3], &[0..1, 1..2], &node_start, &node_slot);
+        assert_eq!(direct, taken);
         // Nodes 0 and 1 are thread 0's alone, 5 thread 1's; 2, 3 and 4 straddle the border.
-        assert_eq!(nodes, [true, true, false, false, false, true]);
+        use NodeSum::{Chain, Direct, Slots};
+        assert_eq!(nodes, [Direct, Direct, Slots, Slots, Slots, Direct]);
         let first = |n: u32| n | DIRECT_FIRST;
         assert_eq!(
             direct,
@@ -937,10 +1147,37 @@ mod tests {
                 first(5)
             ]
         );
+        // Thread 0's elements in two pieces: node 1, on elements 0 and 1, chains from one to
+        // the other; node 0 lies in one piece.
+        let (direct, taken, nodes) =
+            direct_slots::<Tet4>(&[0..1, 1..2, 2..3], &[0..2, 2..3], &node_start, &node_slot);
+        assert_eq!(nodes, [Direct, Chain, Slots, Slots, Slots, Direct]);
+        let on_owner = [
+            first(0),
+            first(1),
+            TO_SLOT,
+            TO_SLOT,
+            1,
+            TO_SLOT,
+            TO_SLOT,
+            TO_SLOT,
+            TO_SLOT,
+            TO_SLOT,
+            TO_SLOT,
+            first(5),
+        ];
+        assert_eq!(direct, on_owner);
+        // In a piece another thread took, node 1 goes through its slots.
+        let mut on_taker = on_owner;
+        on_taker[1] = TO_SLOT;
+        on_taker[4] = TO_SLOT;
+        assert_eq!(taken, on_taker);
         // One thread: every node direct, each first on its first element.
         let one_thread: [Range<usize>; 1] = [Range { start: 0, end: 3 }];
-        let (direct, nodes) = direct_slots::<Tet4>(&one_thread, &node_start, &node_slot);
-        assert!(nodes.iter().all(|&d| d));
+        let one_thread_pieces: [Range<usize>; 1] = [Range { start: 0, end: 1 }];
+        let (direct, _, nodes) =
+            direct_slots::<Tet4>(&one_thread, &one_thread_pieces, &node_start, &node_slot);
+        assert!(nodes.iter().all(|&d| d == Direct));
         assert_eq!(direct[4..8], [1, 2, 3, first(4)]);
     }
 }

@@ -358,6 +358,60 @@ impl Team {
         });
     }
 
+    /// Runs `f(t, c, owner)` once for every piece `c` of `owned` (one range of piece numbers
+    /// per thread, disjoint), on some thread `t`, `owner` being the thread whose range holds
+    /// `c`. Each thread takes its own pieces from the front, in order; its own done, it takes
+    /// the pieces still left of the threads after it (in turn) from the back. So the pieces a
+    /// thread runs of its own are always a first run of its range, taken in order, and the
+    /// ones others took the rest: a scatter sums a node whose elements lie in several pieces
+    /// of one thread straight into its accumulator on the owner, and only the taken pieces'
+    /// shares through slots ([`crate::parallel::gather`]).
+    pub fn run_pieces<F: Fn(usize, usize, usize) + Sync>(&self, owned: &[Range<usize>], f: F) {
+        assert_eq!(owned.len(), self.threads, "a range of pieces per thread");
+        // Each cursor holds the front (low half) and the back (high half) of the pieces left.
+        let pack = |front: u64, back: u64| front | back << 32;
+        for (c, r) in self.cursors.iter().zip(owned) {
+            assert!(
+                r.end <= u32::MAX as usize,
+                "more pieces than a cursor counts"
+            );
+            c.0.store(pack(r.start as u64, r.end as u64), Ordering::Relaxed);
+        }
+        let cursors = &self.cursors;
+        let threads = self.threads;
+        // The broadcast orders the stores above before every worker's first claim.
+        self.run(|t| {
+            for v in (t..threads).chain(0..t) {
+                let cursor = &cursors[v].0;
+                let mut now = cursor.load(Ordering::Relaxed);
+                loop {
+                    let (front, back) = (now & u32::MAX as u64, now >> 32);
+                    if front >= back {
+                        break;
+                    }
+                    // The owner claims the front, the others the back: one compare-and-swap.
+                    let (next, c) = if v == t {
+                        (pack(front + 1, back), front)
+                    } else {
+                        (pack(front, back - 1), back - 1)
+                    };
+                    match cursor.compare_exchange_weak(
+                        now,
+                        next,
+                        Ordering::Relaxed,
+                        Ordering::Relaxed,
+                    ) {
+                        Ok(_) => {
+                            f(t, c as usize, v);
+                            now = cursor.load(Ordering::Relaxed);
+                        }
+                        Err(seen) => now = seen,
+                    }
+                }
+            }
+        });
+    }
+
     /// Where the team's time went in the runs since the last call (the counters start again
     /// from zero).
     pub fn take_load(&self) -> TeamLoad {
