@@ -973,8 +973,16 @@ mod tests {
                 if points.is_empty() {
                     return;
                 }
-                if slow(thread_of(e), e) && k == thread_of(e) {
-                    std::thread::sleep(std::time::Duration::from_millis(40));
+                // A slow element waits until another thread took a piece of its thread's (at
+                // most 2 s: a loaded machine may start the workers late).
+                let owner = thread_of(e);
+                if slow(owner, e) && k == owner {
+                    let start = std::time::Instant::now();
+                    while layout.taken_from[owner].load(Ordering::Relaxed) == usize::MAX
+                        && start.elapsed().as_secs() < 2
+                    {
+                        std::thread::sleep(std::time::Duration::from_millis(1));
+                    }
                 }
                 for (kk, to) in own.chunks_exact_mut(3).enumerate() {
                     for (c, t) in to.iter_mut().enumerate() {

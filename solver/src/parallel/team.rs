@@ -730,6 +730,65 @@ mod tests {
     }
 
     #[test]
+    fn a_thread_runs_a_first_run_of_its_pieces_in_order_and_the_others_take_the_rest() {
+        for slow in [0, 1, 2] {
+            let team = Team::new(3, Pin::None).unwrap();
+            let owned = [0..6, 6..9, 9..15];
+            // Per piece: the thread that ran it and the order in which it started.
+            let by: Vec<AtomicU64> = (0..15).map(|_| AtomicU64::new(u64::MAX)).collect();
+            let seq: Vec<AtomicU64> = (0..15).map(|_| AtomicU64::new(u64::MAX)).collect();
+            let clock = AtomicU64::new(0);
+            team.run_pieces(&owned, |t, c, owner| {
+                assert!(
+                    owned[owner].contains(&c),
+                    "piece {c} given to the wrong owner"
+                );
+                seq[c].store(clock.fetch_add(1, Ordering::Relaxed), Ordering::Relaxed);
+                assert_eq!(
+                    by[c].swap(t as u64, Ordering::Relaxed),
+                    u64::MAX,
+                    "piece {c} ran twice"
+                );
+                // The slow thread's first piece waits until another thread took one of its
+                // pieces (at most 2 s: a loaded machine may start the workers late).
+                if t == slow && owner == slow && c == owned[slow].start {
+                    let start = std::time::Instant::now();
+                    while owned[slow].clone().all(|d| {
+                        let b = by[d].load(Ordering::Relaxed);
+                        b == u64::MAX || b == slow as u64
+                    }) && start.elapsed().as_secs() < 2
+                    {
+                        std::thread::sleep(std::time::Duration::from_millis(1));
+                    }
+                }
+            });
+            for (v, r) in owned.iter().enumerate() {
+                let ran: Vec<u64> = r.clone().map(|c| by[c].load(Ordering::Relaxed)).collect();
+                assert!(
+                    ran.iter().all(|&t| t != u64::MAX),
+                    "a piece of {v} never ran"
+                );
+                // The owner's are a first run of its range, started in order.
+                // (none, when a thread starts late and the others take all of its pieces).
+                let mine = ran.iter().take_while(|&&t| t == v as u64).count();
+                assert!(
+                    ran[mine..].iter().all(|&t| t != v as u64),
+                    "thread {v}'s own pieces are not a first run: {ran:?}"
+                );
+                let started: Vec<u64> = r
+                    .clone()
+                    .take(mine)
+                    .map(|c| seq[c].load(Ordering::Relaxed))
+                    .collect();
+                assert!(started.windows(2).all(|w| w[0] < w[1]), "{started:?}");
+                if v == slow {
+                    assert!(mine < r.len(), "nobody took a piece of the slow thread {v}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn block_sums_do_not_depend_on_the_thread_count() {
         let data: Vec<f64> = (0..100_000)
             .map(|i| ((i * 7919) % 1000) as f64 * 1e-3 + 1e-9)
