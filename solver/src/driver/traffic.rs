@@ -161,19 +161,7 @@ mod tests {
     use crate::element::tri3::Tri3;
 
     fn points(n: usize, liquid: bool) -> Particles<f64> {
-        let mut p = Particles::<f64> {
-            x: vec![[0.0; 3]; n],
-            u: vec![[0.0; 3]; n],
-            v: vec![[0.0; 3]; n],
-            mass: vec![1.0; n],
-            volume: vec![1.0; n],
-            stress: vec![[0.0; 6]; n],
-            element: vec![0; n],
-            material: vec![0; n],
-            id: (0..n as u32).collect(),
-            active: vec![true; n],
-            ..Default::default()
-        };
+        let mut p = Particles::<f64>::at_rest(vec![0; n]);
         if liquid {
             p.add_liquid(|_| 0.0, false);
         }

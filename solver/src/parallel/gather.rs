@@ -926,22 +926,7 @@ mod tests {
         let element: Vec<u32> = (0..elements as u32)
             .flat_map(|e| std::iter::repeat_n(e, (e as usize * 7 + e as usize / 5) % 4))
             .collect();
-        let n = element.len();
-        Particles::<f64> {
-            x: vec![[0.0; 3]; n],
-            u: vec![[0.0; 3]; n],
-            v: vec![[0.0; 3]; n],
-            mass: vec![1.0; n],
-            volume: vec![1.0; n],
-            stress: vec![[0.0; 6]; n],
-            element,
-            material: vec![0; n],
-            id: (0..n as u32).collect(),
-            active: vec![true; n],
-            state: Vec::new(),
-            state_len: 0,
-            liquid: None,
-        }
+        Particles::at_rest(element)
     }
 
     /// A value whose sums depend on the order they are taken in: magnitudes 1e-8 to 1e8.
@@ -1138,28 +1123,6 @@ mod tests {
         use NodeSum::{Chain, Direct, Slots};
         assert_eq!(nodes, [Direct, Direct, Slots, Slots, Slots, Direct]);
         let first = |n: u32| n | DIRECT_FIRST;
-        assert_eq!(
-            direct,
-            [
-                first(0),
-                first(1),
-                TO_SLOT,
-                TO_SLOT,
-                1,
-                TO_SLOT,
-                TO_SLOT,
-                TO_SLOT,
-                TO_SLOT,
-                TO_SLOT,
-                TO_SLOT,
-                first(5)
-            ]
-        );
-        // Thread 0's elements in two pieces: node 1, on elements 0 and 1, chains from one to
-        // the other; node 0 lies in one piece.
-        let (direct, taken, nodes) =
-            direct_slots::<Tet4>(&[0..1, 1..2, 2..3], &[0..2, 2..3], &node_start, &node_slot);
-        assert_eq!(nodes, [Direct, Chain, Slots, Slots, Slots, Direct]);
         let on_owner = [
             first(0),
             first(1),
@@ -1174,6 +1137,13 @@ mod tests {
             TO_SLOT,
             first(5),
         ];
+        assert_eq!(direct, on_owner);
+        // Thread 0's elements in two pieces: node 1, on elements 0 and 1, chains from one to
+        // the other; node 0 lies in one piece.
+        let (direct, taken, nodes) =
+            direct_slots::<Tet4>(&[0..1, 1..2, 2..3], &[0..2, 2..3], &node_start, &node_slot);
+        assert_eq!(nodes, [Direct, Chain, Slots, Slots, Slots, Direct]);
+        // On the owner, the entries of the one-piece-per-thread layout.
         assert_eq!(direct, on_owner);
         // In a piece another thread took, node 1 goes through its slots.
         let mut on_taker = on_owner;

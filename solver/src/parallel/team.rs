@@ -330,32 +330,14 @@ impl Team {
             .collect()
     }
 
-    /// Runs `f(t, c)` once for every chunk `c` of `owned`, on some thread `t` (one range of chunk numbers per thread,
-    /// disjoint): each thread takes its own chunks in order, then, its own done, the chunks
-    /// still left of the threads after it (in turn), so that a thread its core slows down
-    /// does not hold the others at the barrier. Which thread runs a chunk varies from run to
-    /// run: `f` must write only what belongs to the chunk, so that results do not depend on it.
+    /// Runs `f(t, c)` once for every chunk `c` of `owned` (one range of chunk numbers per
+    /// thread, disjoint), on some thread `t`, handed out as [`Team::run_pieces`] hands out
+    /// pieces: each thread takes its own chunks in order, then, its own done, the chunks still
+    /// left of the others, so that a thread its core slows down does not hold the others at
+    /// the barrier. Which thread runs a chunk varies from run to run: `f` must write only what
+    /// belongs to the chunk, so that results do not depend on it.
     pub fn run_chunks<F: Fn(usize, usize) + Sync>(&self, owned: &[Range<usize>], f: F) {
-        assert_eq!(owned.len(), self.threads, "a range of chunks per thread");
-        for (c, r) in self.cursors.iter().zip(owned) {
-            c.0.store(r.start as u64, Ordering::Relaxed);
-        }
-        let cursors = &self.cursors;
-        let threads = self.threads;
-        // The broadcast orders the stores above before every worker's first claim.
-        self.run(|t| {
-            for v in (t..threads).chain(0..t) {
-                let end = owned[v].end as u64;
-                loop {
-                    // Each number is handed out once: the claim is one atomic add.
-                    let c = cursors[v].0.fetch_add(1, Ordering::Relaxed);
-                    if c >= end {
-                        break;
-                    }
-                    f(t, c as usize);
-                }
-            }
-        });
+        self.run_pieces(owned, |t, c, _| f(t, c));
     }
 
     /// Runs `f(t, c, owner)` once for every piece `c` of `owned` (one range of piece numbers

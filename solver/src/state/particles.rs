@@ -251,6 +251,26 @@ pub struct LiquidPoints<R: Real> {
 }
 
 impl<R: Real> Particles<R> {
+    /// Points at rest at the origin, one per entry of `element` (their elements), of unit mass
+    /// and volume, unstressed, active, of material 0 (for tests).
+    #[cfg(test)]
+    pub(crate) fn at_rest(element: Vec<u32>) -> Self {
+        let n = element.len();
+        Self {
+            x: vec![[R::ZERO; 3]; n],
+            u: vec![[R::ZERO; 3]; n],
+            v: vec![[R::ZERO; 3]; n],
+            mass: vec![R::ONE; n],
+            volume: vec![R::ONE; n],
+            stress: vec![[R::ZERO; 6]; n],
+            element,
+            material: vec![0; n],
+            id: (0..n as u32).collect(),
+            active: vec![true; n],
+            ..Default::default()
+        }
+    }
+
     /// Number of points.
     pub fn len(&self) -> usize {
         self.x.len()
