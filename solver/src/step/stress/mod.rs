@@ -786,6 +786,7 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         });
         return false;
     }
+    let wide = use_avx2();
     let pass = RatePass {
         mesh,
         x,
@@ -795,22 +796,27 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         fluids,
         vel,
         wvel,
+        four: if wide || cfg!(target_feature = "avx2") {
+            R::Four::token()
+        } else {
+            None
+        },
     };
     // Each copy ([`crate::parallel::avx2`]) with a closure of its own, so that `rate_sums` is
     // inlined into it and compiled with its instruction set.
-    if use_avx2() {
+    if wide {
         layout.scatter_with::<2, true, true, (), _>(
             team,
             slots,
             |_| (),
-            |e, points, two, _| rate_sums(&pass, e, points, two),
+            |e, points, two, _| rate_sums::<E, R, true>(&pass, e, points, two),
         );
     } else {
         layout.scatter_with::<2, false, true, (), _>(
             team,
             slots,
             |_| (),
-            |e, points, two, _| rate_sums(&pass, e, points, two),
+            |e, points, two, _| rate_sums::<E, R, false>(&pass, e, points, two),
         );
     }
     let nodal = Shared::new(&mut gl.rate);
@@ -883,6 +889,9 @@ struct RatePass<'a, E: Element, R: Real> {
     fluids: &'a [Option<Fluid<R>>],
     vel: &'a [V3<R>],
     wvel: &'a [V3<R>],
+    /// Where the pass runs its AVX2 copy (or a build for AVX2): the token of [`Real::Four`]'s
+    /// instructions.
+    four: Option<<R::Four as Four<R>>::Token>,
 }
 
 /// Element `e`'s two sums per node for the smoothed pore-pressure rate: Σ V N r and Σ V N over
@@ -891,8 +900,11 @@ struct RatePass<'a, E: Element, R: Real> {
 /// tetrahedra, one in triangles), each point's arithmetic as a point-by-point loop does it,
 /// and the sums are added point by point in order, in registers, from 0: the bits of adding
 /// into the slots in place.
+///
+/// In the AVX2 copy (`WIDE`) a tetrahedron's sums are four-lane vectors, one lane per node
+/// ([`rate_lane_sums`]): the same operations in the same order, so the same bits.
 #[inline(always)]
-fn rate_sums<E: Element, R: Real>(
+fn rate_sums<E: Element, R: Real, const WIDE: bool>(
     cx: &RatePass<'_, E, R>,
     e: usize,
     points: Range<usize>,
@@ -914,6 +926,22 @@ fn rate_sums<E: Element, R: Real>(
         &cx.material[points][..end],
     );
     let volume = &volume[..end];
+    if E::DIM == 3 && !E::AXISYMMETRIC {
+        if let Some(t) = cx.four.filter(|_| WIDE || cfg!(target_feature = "avx2")) {
+            let points = RatePoints {
+                x,
+                volume,
+                active,
+                material,
+            };
+            let [s0, s1] = rate_lane_sums::<E, R>(t, cx, &nodal, map, first, &points);
+            let (s0, s1) = (s0.to_array(), s1.to_array());
+            for (k, slot) in node_slots::<E, R>(two, 2).enumerate() {
+                slot.copy_from_slice(&[s0[k], s1[k]]);
+            }
+            return;
+        }
+    }
     let mut sums = [[R::ZERO; 2]; 4];
     let mut j = 0;
     macro_rules! batches {
@@ -955,6 +983,67 @@ fn rate_sums<E: Element, R: Real>(
     for (slot, s) in node_slots::<E, R>(two, 2).zip(sums) {
         slot.copy_from_slice(&s);
     }
+}
+
+/// An element's points for [`rate_lane_sums`], each array sliced to them (one length).
+struct RatePoints<'a, R: Real> {
+    x: &'a [V3<R>],
+    volume: &'a [R],
+    active: &'a [bool],
+    material: &'a [u32],
+}
+
+/// [`rate_sums`] of a tetrahedron as four-lane vectors, one lane per node: Σ V N r and Σ V N.
+/// The shape values of four points at a time, one lane per point, turned into one lane per
+/// node for each point by a transpose (each point's own bits, as particle to grid takes
+/// them); each point's V N and V N r added point by point in order, from zero, as the point
+/// loop adds them.
+#[inline(always)]
+fn rate_lane_sums<E: Element, R: Real>(
+    t: <R::Four as Four<R>>::Token,
+    cx: &RatePass<'_, E, R>,
+    nodal: &NodalVelocities<E, R>,
+    map: &E::Map<R>,
+    first: &V3<R>,
+    p: &RatePoints<'_, R>,
+) -> [R::Four; 2] {
+    let count = p.x.len();
+    let (x, volume) = (p.x, &p.volume[..count]);
+    let (active, material) = (&p.active[..count], &p.material[..count]);
+    let splat = |v: R| R::Four::splat(t, v);
+    let (mut s0, mut s1) = (splat(R::ZERO), splat(R::ZERO));
+    // The rate of the last material seen (one per material in a linear element): formed again
+    // only where the material changes, to the same bits.
+    let mut last: Option<(u32, R::Four)> = None;
+    let mut j = 0;
+    while j < count {
+        let live = (count - j).min(4);
+        // The lanes past the element's points repeat its last (computed, never used).
+        let at = [0, 1, 2, 3].map(|q: usize| j + q.min(live - 1));
+        let xl: [R::Four; 3] = std::array::from_fn(|a| R::Four::load(t, &at.map(|i| x[i][a])));
+        let per_point = R::Four::transpose(t, E::shape_four(t, map, first, &xl));
+        for (i, &n) in (j..j + live).zip(per_point.iter()) {
+            if !active[i] {
+                continue;
+            }
+            let rate = match last {
+                Some((m, r)) if m == material[i] => r,
+                _ => {
+                    let Some(f) = &cx.fluids[material[i] as usize] else {
+                        continue;
+                    };
+                    let r = splat(nodal.rate(f, |_| R::ZERO, R::ONE));
+                    last = Some((material[i], r));
+                    r
+                }
+            };
+            let vn = splat(volume[i]) * n;
+            s0 = s0 + vn * rate;
+            s1 = s1 + vn;
+        }
+        j += live;
+    }
+    [s0, s1]
 }
 
 /// Adds Ω σ - σ Ω to `s` for the skew increment Ω with Ω_xy = `w[0]`, Ω_yz = `w[1]`, Ω_zx = `w[2]`
