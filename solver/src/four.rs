@@ -40,6 +40,34 @@ pub trait Four<R: Copy>:
         let a: [[R; 4]; 4] = std::array::from_fn(|q| v[q].to_array());
         std::array::from_fn(|q| Self::load(t, &std::array::from_fn(|k| a[k][q])))
     }
+    /// Four points' 3-vectors (one point's values after another, as the point arrays hold
+    /// them) one vector per component: lane q of vector a is `p[q][a]` (values moved).
+    #[inline(always)]
+    fn load_points3(t: Self::Token, p: &[[R; 3]; 4]) -> [Self; 3] {
+        std::array::from_fn(|a| Self::load(t, &std::array::from_fn(|q| p[q][a])))
+    }
+    /// The inverse of [`Four::load_points3`]: `p[q][a]` becomes lane q of `v[a]`.
+    #[inline(always)]
+    fn store_points3(v: [Self; 3], p: &mut [[R; 3]; 4]) {
+        let a: [[R; 4]; 3] = std::array::from_fn(|c| v[c].to_array());
+        for (q, pq) in p.iter_mut().enumerate() {
+            *pq = std::array::from_fn(|c| a[c][q]);
+        }
+    }
+    /// Four points' six values (a stress: xx yy zz xy yz zx) one vector per value: lane q of
+    /// vector c is `p[q][c]` (values moved).
+    #[inline(always)]
+    fn load_points6(t: Self::Token, p: &[[R; 6]; 4]) -> [Self; 6] {
+        std::array::from_fn(|c| Self::load(t, &std::array::from_fn(|q| p[q][c])))
+    }
+    /// The inverse of [`Four::load_points6`]: `p[q][c]` becomes lane q of `v[c]`.
+    #[inline(always)]
+    fn store_points6(v: [Self; 6], p: &mut [[R; 6]; 4]) {
+        let a: [[R; 4]; 6] = std::array::from_fn(|c| v[c].to_array());
+        for (q, pq) in p.iter_mut().enumerate() {
+            *pq = std::array::from_fn(|c| a[c][q]);
+        }
+    }
 }
 
 /// Four lanes as a plain array (f32, and f64 off x86-64): each operation lane by lane.
@@ -95,12 +123,21 @@ pub use x86::{Avx, F32x4, F64x4, Sse};
 mod x86 {
     use super::Four;
     use std::arch::x86_64::{
-        __m128, __m256d, _mm256_add_pd, _mm256_cmp_pd, _mm256_loadu_pd, _mm256_movemask_pd,
-        _mm256_mul_pd, _mm256_permute2f128_pd, _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd,
-        _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm_add_ps, _mm_cmplt_ps, _mm_loadu_ps,
-        _mm_movehl_ps, _mm_movelh_ps, _mm_movemask_ps, _mm_mul_ps, _mm_set1_ps, _mm_storeu_ps,
-        _mm_sub_ps, _mm_unpackhi_ps, _mm_unpacklo_ps, _CMP_LT_OQ,
+        __m128, __m128d, __m256d, _mm256_add_pd, _mm256_blend_pd, _mm256_castpd128_pd256,
+        _mm256_castpd256_pd128, _mm256_cmp_pd, _mm256_extractf128_pd, _mm256_insertf128_pd,
+        _mm256_loadu_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_permute2f128_pd,
+        _mm256_permute_pd, _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm256_unpackhi_pd,
+        _mm256_unpacklo_pd, _mm_add_ps, _mm_castpd_ps, _mm_castps_pd, _mm_cmplt_ps, _mm_load_sd,
+        _mm_loadu_pd, _mm_loadu_ps, _mm_movehl_ps, _mm_movelh_ps, _mm_movemask_ps, _mm_mul_ps,
+        _mm_set1_ps, _mm_shuffle_ps, _mm_store_sd, _mm_storeu_pd, _mm_storeu_ps, _mm_sub_ps,
+        _mm_unpackhi_ps, _mm_unpacklo_ps, _CMP_LT_OQ,
     };
+
+    /// `_mm_shuffle_ps`'s selector: lanes 0 and 1 from the first operand's lanes `a0`, `a1`,
+    /// lanes 2 and 3 from the second's `b2`, `b3`.
+    const fn pick(a0: i32, a1: i32, b2: i32, b3: i32) -> i32 {
+        a0 | a1 << 2 | b2 << 4 | b3 << 6
+    }
     use std::ops::{Add, Mul, Sub};
 
     /// Proof that the processor runs AVX2 (and so AVX): made only by [`Four::token`] after
@@ -187,6 +224,88 @@ mod x86 {
                 ]
             }
         }
+        #[inline(always)]
+        fn load_points3(_: Sse, p: &[[f32; 3]; 4]) -> [Self; 3] {
+            let m = p.as_ptr().cast::<f32>();
+            // SAFETY: SSE is part of x86-64; `p` is 12 consecutive f32, read as three
+            // unaligned fours: (x0 y0 z0 x1), (y1 z1 x2 y2), (z2 x3 y3 z3).
+            unsafe {
+                let (a, b, c) = (
+                    _mm_loadu_ps(m),
+                    _mm_loadu_ps(m.add(4)),
+                    _mm_loadu_ps(m.add(8)),
+                );
+                // Two of each component per shuffle, then the two pairs into one.
+                let x02 = _mm_shuffle_ps::<{ pick(2, 0, 1, 0) }>(b, c);
+                let x = _mm_shuffle_ps::<{ pick(0, 3, 0, 2) }>(a, x02);
+                let y01 = _mm_shuffle_ps::<{ pick(1, 0, 0, 0) }>(a, b);
+                let y23 = _mm_shuffle_ps::<{ pick(3, 0, 2, 0) }>(b, c);
+                let y = _mm_shuffle_ps::<{ pick(0, 2, 0, 2) }>(y01, y23);
+                let z01 = _mm_shuffle_ps::<{ pick(2, 0, 1, 0) }>(a, b);
+                let z23 = _mm_shuffle_ps::<{ pick(0, 0, 3, 0) }>(c, c);
+                let z = _mm_shuffle_ps::<{ pick(0, 2, 0, 2) }>(z01, z23);
+                [F32x4(x), F32x4(y), F32x4(z)]
+            }
+        }
+        #[inline(always)]
+        fn store_points3(v: [Self; 3], p: &mut [[f32; 3]; 4]) {
+            let [x, y, z] = [v[0].0, v[1].0, v[2].0];
+            let m = p.as_mut_ptr().cast::<f32>();
+            // SAFETY: SSE is part of x86-64; `p` is 12 consecutive f32, written as three
+            // unaligned fours (the inverse of `load_points3`'s shuffles).
+            unsafe {
+                let pair = |u: __m128, w: __m128| _mm_shuffle_ps::<{ pick(0, 2, 0, 2) }>(u, w);
+                let a = pair(
+                    _mm_shuffle_ps::<{ pick(0, 0, 0, 0) }>(x, y),
+                    _mm_shuffle_ps::<{ pick(0, 0, 1, 0) }>(z, x),
+                );
+                let b = pair(
+                    _mm_shuffle_ps::<{ pick(1, 0, 1, 0) }>(y, z),
+                    _mm_shuffle_ps::<{ pick(2, 0, 2, 0) }>(x, y),
+                );
+                let c = pair(
+                    _mm_shuffle_ps::<{ pick(2, 0, 3, 0) }>(z, x),
+                    _mm_shuffle_ps::<{ pick(3, 0, 3, 0) }>(y, z),
+                );
+                _mm_storeu_ps(m, a);
+                _mm_storeu_ps(m.add(4), b);
+                _mm_storeu_ps(m.add(8), c);
+            }
+        }
+        #[inline(always)]
+        fn load_points6(t: Sse, p: &[[f32; 6]; 4]) -> [Self; 6] {
+            // SAFETY: SSE is part of x86-64 (SSE2 for the 64-bit loads); each row is six
+            // consecutive f32, read as an unaligned four and an unaligned two.
+            unsafe {
+                let lo: [Self; 4] = std::array::from_fn(|q| F32x4(_mm_loadu_ps(p[q].as_ptr())));
+                let hi: [__m128; 4] = std::array::from_fn(|q| {
+                    _mm_castpd_ps(_mm_load_sd(p[q].as_ptr().add(4).cast::<f64>()))
+                });
+                let [c0, c1, c2, c3] = Self::transpose(t, lo);
+                // (s4 s5) of points 0 and 1, of 2 and 3; then each value's four.
+                let (h01, h23) = (_mm_movelh_ps(hi[0], hi[1]), _mm_movelh_ps(hi[2], hi[3]));
+                let c4 = _mm_shuffle_ps::<{ pick(0, 2, 0, 2) }>(h01, h23);
+                let c5 = _mm_shuffle_ps::<{ pick(1, 3, 1, 3) }>(h01, h23);
+                [c0, c1, c2, c3, F32x4(c4), F32x4(c5)]
+            }
+        }
+        #[inline(always)]
+        fn store_points6(v: [Self; 6], p: &mut [[f32; 6]; 4]) {
+            let rows = Self::transpose(Sse(()), [v[0], v[1], v[2], v[3]]);
+            // SAFETY: SSE is part of x86-64 (SSE2 for the 64-bit stores); each row is six
+            // consecutive f32, written as an unaligned four and an unaligned two.
+            unsafe {
+                // (s4_0 s5_0 s4_1 s5_1), (s4_2 s5_2 s4_3 s5_3).
+                let h01 = _mm_unpacklo_ps(v[4].0, v[5].0);
+                let h23 = _mm_unpackhi_ps(v[4].0, v[5].0);
+                let hi = [h01, _mm_movehl_ps(h01, h01), h23, _mm_movehl_ps(h23, h23)];
+                for q in 0..4 {
+                    let r = p[q].as_mut_ptr();
+                    _mm_storeu_ps(r, rows[q].0);
+                    _mm_store_sd(r.add(4).cast::<f64>(), _mm_castps_pd(hi[q]));
+                }
+            }
+        }
     }
 
     impl Four<f64> for F64x4 {
@@ -238,6 +357,84 @@ mod x86 {
                 ]
             }
         }
+        #[inline(always)]
+        fn load_points3(_: Avx, p: &[[f64; 3]; 4]) -> [Self; 3] {
+            debug_assert!(std::arch::is_x86_feature_detected!("avx"));
+            let m = p.as_ptr().cast::<f64>();
+            // SAFETY: the token proves AVX; `p` is 12 consecutive f64, read as three unaligned
+            // fours: (x0 y0 z0 x1), (y1 z1 x2 y2), (z2 x3 y3 z3).
+            unsafe {
+                let (a, b, c) = (
+                    _mm256_loadu_pd(m),
+                    _mm256_loadu_pd(m.add(4)),
+                    _mm256_loadu_pd(m.add(8)),
+                );
+                // (x0 y0 y3 z3) and (z0 x1 z2 x3): the outer and the inner halves.
+                let outer = _mm256_permute2f128_pd::<0x30>(a, c);
+                let inner = _mm256_permute2f128_pd::<0x21>(a, c);
+                let x = _mm256_blend_pd::<0b0100>(_mm256_blend_pd::<0b1010>(outer, inner), b);
+                // (y1 y0 y3 y2), each pair then swapped.
+                let y = _mm256_permute_pd::<0b0101>(_mm256_blend_pd::<0b1001>(outer, b));
+                let z = _mm256_blend_pd::<0b1000>(_mm256_blend_pd::<0b0010>(inner, b), outer);
+                [F64x4(x), F64x4(y), F64x4(z)]
+            }
+        }
+        #[inline(always)]
+        fn store_points3(v: [Self; 3], p: &mut [[f64; 3]; 4]) {
+            let [x, y, z] = [v[0].0, v[1].0, v[2].0];
+            let m = p.as_mut_ptr().cast::<f64>();
+            // SAFETY: an F64x4 exists only where the processor runs AVX; `p` is 12
+            // consecutive f64, written as three unaligned fours (the inverse of
+            // `load_points3`).
+            unsafe {
+                let swapped = _mm256_permute_pd::<0b0101>(y);
+                let outer = _mm256_blend_pd::<0b1000>(_mm256_blend_pd::<0b0110>(x, swapped), z);
+                let inner = _mm256_blend_pd::<0b1010>(z, x);
+                let b = _mm256_blend_pd::<0b0100>(_mm256_blend_pd::<0b0010>(swapped, z), x);
+                _mm256_storeu_pd(m, _mm256_permute2f128_pd::<0x20>(outer, inner));
+                _mm256_storeu_pd(m.add(4), b);
+                _mm256_storeu_pd(m.add(8), _mm256_permute2f128_pd::<0x31>(inner, outer));
+            }
+        }
+        #[inline(always)]
+        fn load_points6(t: Avx, p: &[[f64; 6]; 4]) -> [Self; 6] {
+            debug_assert!(std::arch::is_x86_feature_detected!("avx"));
+            // SAFETY: the token proves AVX; each row is six consecutive f64, read as an
+            // unaligned four and an unaligned two.
+            unsafe {
+                let lo: [Self; 4] = std::array::from_fn(|q| F64x4(_mm256_loadu_pd(p[q].as_ptr())));
+                let hi: [__m128d; 4] = std::array::from_fn(|q| _mm_loadu_pd(p[q].as_ptr().add(4)));
+                let [c0, c1, c2, c3] = Self::transpose(t, lo);
+                // (s4 s5) of points 0 and 2, of 1 and 3; then each value's four.
+                let h02 = _mm256_insertf128_pd::<1>(_mm256_castpd128_pd256(hi[0]), hi[2]);
+                let h13 = _mm256_insertf128_pd::<1>(_mm256_castpd128_pd256(hi[1]), hi[3]);
+                let c4 = F64x4(_mm256_unpacklo_pd(h02, h13));
+                let c5 = F64x4(_mm256_unpackhi_pd(h02, h13));
+                [c0, c1, c2, c3, c4, c5]
+            }
+        }
+        #[inline(always)]
+        fn store_points6(v: [Self; 6], p: &mut [[f64; 6]; 4]) {
+            let rows = Self::transpose(Avx(()), [v[0], v[1], v[2], v[3]]);
+            // SAFETY: an F64x4 exists only where the processor runs AVX; each row is six
+            // consecutive f64, written as an unaligned four and an unaligned two.
+            unsafe {
+                // (s4_0 s5_0 s4_2 s5_2), (s4_1 s5_1 s4_3 s5_3).
+                let h02 = _mm256_unpacklo_pd(v[4].0, v[5].0);
+                let h13 = _mm256_unpackhi_pd(v[4].0, v[5].0);
+                let hi = [
+                    _mm256_castpd256_pd128(h02),
+                    _mm256_castpd256_pd128(h13),
+                    _mm256_extractf128_pd::<1>(h02),
+                    _mm256_extractf128_pd::<1>(h13),
+                ];
+                for q in 0..4 {
+                    let r = p[q].as_mut_ptr();
+                    _mm256_storeu_pd(r, rows[q].0);
+                    _mm_storeu_pd(r.add(4), hi[q]);
+                }
+            }
+        }
     }
 }
 
@@ -275,6 +472,26 @@ mod tests {
                     let want = (0..4).any(|k| x[k] < y[k]);
                     let got = <$four>::load(t, &x).any_lt(<$four>::load(t, &y));
                     assert_eq!(got, want, "{x:?} < {y:?}");
+                }
+                // Points' values in and out of lanes: lane q of vector c is point q's value c.
+                let p3: [[$r; 3]; 4] = std::array::from_fn(|q| [a[q], b[q], d[q]]);
+                let v3 = <$four>::load_points3(t, &p3);
+                let mut back3 = [[0.0; 3]; 4];
+                <$four>::store_points3(v3, &mut back3);
+                let p6: [[$r; 6]; 4] =
+                    std::array::from_fn(|q| [a[q], b[q], d[q], e[q], -a[q], c * b[q]]);
+                let v6 = <$four>::load_points6(t, &p6);
+                let mut back6 = [[0.0; 6]; 4];
+                <$four>::store_points6(v6, &mut back6);
+                for q in 0..4 {
+                    for c in 0..3 {
+                        assert_eq!(v3[c].to_array()[q].to_bits(), p3[q][c].to_bits());
+                        assert_eq!(back3[q][c].to_bits(), p3[q][c].to_bits());
+                    }
+                    for c in 0..6 {
+                        assert_eq!(v6[c].to_array()[q].to_bits(), p6[q][c].to_bits());
+                        assert_eq!(back6[q][c].to_bits(), p6[q][c].to_bits());
+                    }
                 }
                 // The transpose: lane k of result q is lane q of input k.
                 let m: [[$r; 4]; 4] = [a, b, d, e];

@@ -360,7 +360,7 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
     let t = k.t;
     let lanes = |v: [R; 4]| R::Four::load(t, &v);
     let zero = R::Four::splat(t, R::ZERO);
-    let xl: [R::Four; 3] = std::array::from_fn(|a| lanes(x.map(|v| v[a])));
+    let xl = R::Four::load_points3(t, x);
     let n = E::shape_four(t, map, first, &xl);
     // The pore pressure's smoothed rate, from the nodes at the start-of-step position.
     if let (Some(p), Some(rate)) = (pore, &k.rate) {
@@ -377,7 +377,7 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
             dx[c] = dx[c] + n[kk] * k.vel[kk][c];
         }
     }
-    let s0: [R::Four; 6] = std::array::from_fn(|c| lanes(stress.map(|v| v[c])));
+    let s0 = R::Four::load_points6(t, stress);
     let mut s1: [R::Four; 6] = std::array::from_fn(|c| s0[c] + k.increment[c]);
     if let Some(spin) = &k.spin {
         // Anura3D's objective terms, after the law's update: the co-rotation and -tr(Δε) σ
@@ -389,23 +389,31 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
     }
     let v0 = lanes(*volume);
     let v1 = v0 * k.grow;
-    let mut x1 = xl;
-    let mut u1 = [zero; 3];
+    let u0 = R::Four::load_points3(t, u);
+    // (A section's out-of-plane components as loaded: stored back, they keep their bits.)
+    let (mut x1, mut u1) = (xl, u0);
     for a in 0..E::DIM {
         x1[a] = xl[a] + k.dt * dx[a];
-        u1[a] = lanes(u.map(|v| v[a])) + k.dt * dx[a];
+        u1[a] = u0[a] + k.dt * dx[a];
     }
-    // (`from_fn`, not `map`: `map` is not inlined here, and the intrinsics in its closure
-    // would become calls.)
-    let x1a: [[R; 4]; 3] = std::array::from_fn(|a| x1[a].to_array());
-    let u1a: [[R; 4]; 3] = std::array::from_fn(|a| u1[a].to_array());
-    let s1a: [[R; 4]; 6] = std::array::from_fn(|c| s1[c].to_array());
-    for q in 0..LIVE {
-        for a in 0..E::DIM {
-            x[q][a] = x1a[a][q];
-            u[q][a] = u1a[a][q];
+    if LIVE == 4 {
+        // Four points' values back to one point after another, moved in registers.
+        R::Four::store_points3(x1, x);
+        R::Four::store_points3(u1, u);
+        R::Four::store_points6(s1, stress);
+    } else {
+        // (`from_fn`, not `map`: `map` is not inlined here, and the intrinsics in its closure
+        // would become calls.)
+        let x1a: [[R; 4]; 3] = std::array::from_fn(|a| x1[a].to_array());
+        let u1a: [[R; 4]; 3] = std::array::from_fn(|a| u1[a].to_array());
+        let s1a: [[R; 4]; 6] = std::array::from_fn(|c| s1[c].to_array());
+        for q in 0..LIVE {
+            for a in 0..E::DIM {
+                x[q][a] = x1a[a][q];
+                u[q][a] = u1a[a][q];
+            }
+            stress[q] = std::array::from_fn(|c| s1a[c][q]);
         }
-        stress[q] = std::array::from_fn(|c| s1a[c][q]);
     }
     store_live::<R, LIVE>(v1, volume);
     let outside = locate && {
