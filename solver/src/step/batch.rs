@@ -5,6 +5,7 @@
 //! width.
 
 use crate::element::Element;
+use crate::four::Four;
 use crate::parallel::gather::node_slots;
 use crate::real::{Real, V3};
 
@@ -59,6 +60,27 @@ impl<const W: usize> Batch<W> {
     pub fn gather<T: Copy, const C: usize>(&self, v: &[[T; C]]) -> [[T; W]; C] {
         std::array::from_fn(|c| self.at.map(|i| v[i][c]))
     }
+}
+
+/// The shape values of points `j..j + live` of `x` (one to four of an element whose map and
+/// first corner are `map`, `first`), one node-lane vector per point: formed four points at a
+/// time, one lane per point, and turned by a transpose (each point's own bits; the lanes past
+/// `live` repeat the last point, computed and never used).
+#[inline(always)]
+pub fn node_lane_shapes<E: Element, R: Real>(
+    t: <R::Four as Four<R>>::Token,
+    map: &E::Map<R>,
+    first: &V3<R>,
+    x: &[V3<R>],
+    j: usize,
+    live: usize,
+) -> [R::Four; 4] {
+    let at = [0, 1, 2, 3].map(|q: usize| j + q.min(live - 1));
+    let mut xl = [R::Four::splat(t, R::ZERO); 3];
+    for (a, v) in xl.iter_mut().enumerate() {
+        *v = R::Four::load(t, &at.map(|i| x[i][a]));
+    }
+    R::Four::transpose(t, E::shape_four(t, map, first, &xl))
 }
 
 /// Σ_k N_k a_k at each point of a batch, from the shape values by node (`n[k][q]`) and the

@@ -13,7 +13,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::batch::{lanes, store, Lanes, LANES, TETRAHEDRA};
+use crate::step::batch::{lanes, node_lane_shapes, store, Lanes, LANES, TETRAHEDRA};
 use crate::step::contact::{maps, OneBody};
 use crate::step::mixed::Mixed;
 
@@ -639,13 +639,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     let mut j = if E::DIM == 2 { count } else { 0 };
     while j < count {
         let live = (count - j).min(4);
-        // The lanes past the element's points repeat its last (computed, never used).
-        let at = [0, 1, 2, 3].map(|q: usize| j + q.min(live - 1));
-        let mut xl = [R::Four::splat(t, R::ZERO); 3];
-        for (a, v) in xl.iter_mut().enumerate() {
-            *v = R::Four::load(t, &at.map(|i| x[i][a]));
-        }
-        let per_point = R::Four::transpose(t, E::shape_four(t, map, first, &xl));
+        let per_point = node_lane_shapes::<E, R>(t, map, first, x, j, live);
         for (i, &n) in (j..j + live).zip(per_point.iter()) {
             point_sums::<E, R, WITH_LIQUID>(t, cx, points, i, n, full, &g, &mut s4, &mut w4);
         }

@@ -16,7 +16,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::batch::{interpolate, Batch, TETRAHEDRA};
+use crate::step::batch::{interpolate, node_lane_shapes, Batch, TETRAHEDRA};
 use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
 
@@ -1018,10 +1018,7 @@ fn rate_lane_sums<E: Element, R: Real>(
     let mut j = 0;
     while j < count {
         let live = (count - j).min(4);
-        // The lanes past the element's points repeat its last (computed, never used).
-        let at = [0, 1, 2, 3].map(|q: usize| j + q.min(live - 1));
-        let xl: [R::Four; 3] = std::array::from_fn(|a| R::Four::load(t, &at.map(|i| x[i][a])));
-        let per_point = R::Four::transpose(t, E::shape_four(t, map, first, &xl));
+        let per_point = node_lane_shapes::<E, R>(t, map, first, x, j, live);
         for (i, &n) in (j..j + live).zip(per_point.iter()) {
             if !active[i] {
                 continue;
