@@ -108,11 +108,19 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
     };
     let terms = Terms::new::<E>(cx, t, el, law, lead);
     let guard = open.is_some();
+    // Without guards the pass has no per-material guard values (empty slices); the terms are
+    // then never used.
     let sums = GuardTerms {
-        rho0: cx.initial_density[lead as usize],
+        rho0: cx
+            .initial_density
+            .get(lead as usize)
+            .copied()
+            .unwrap_or(R::ZERO),
         min_ratio: cx.min_ratio,
-        n_over_kw: cx.fluids[lead as usize]
-            .as_ref()
+        n_over_kw: cx
+            .fluids
+            .get(lead as usize)
+            .and_then(Option::as_ref)
             .map_or(R::ZERO, |f| f.n_over_kw),
     };
     // The chunk's points: a batch's lanes may read past the element's points (never past
