@@ -191,3 +191,50 @@ fn the_check_names_the_precision_and_the_cheaper_settings_of_the_accuracy_map() 
     };
     assert_ne!(memory(&f64_plan), memory(&f32_plan));
 }
+
+/// Single precision cuts a wave front's precursor from the nodal accelerations and re-mapped
+/// velocities (`step::tail`): after each step of the saturated column (a sudden top load, whose
+/// front runs down the column), no nonzero component of either phase lies below `f32::TAIL` of
+/// the pair's largest, and the front has left such values behind in double precision, which
+/// keeps them.
+#[test]
+fn single_precision_cuts_the_front_s_precursor_from_the_nodes_and_double_keeps_it() {
+    use mpm_solve::state::grid::Grid;
+    /// The fields' smallest nonzero magnitude over their largest.
+    fn spread<R: Real>(g: &Grid<R>) -> [f64; 2] {
+        let l = g.liquid.as_ref().expect("a two-phase grid");
+        [[&g.acc, &l.acc], [&g.vel, &l.vel]].map(|pair| {
+            let values = pair
+                .iter()
+                .flat_map(|f| f.iter().flatten())
+                .map(|v| v.f64().abs());
+            let largest = values.clone().fold(0.0, f64::max);
+            let smallest = values.filter(|&v| v > 0.0).fold(f64::INFINITY, f64::min);
+            smallest / largest
+        })
+    }
+    fn run_steps<R: Real>(steps: usize) -> Vec<[f64; 2]> {
+        let case = mpm_solve::input::scene::load(&common::testdata("golden/column_saturated.toml"))
+            .unwrap();
+        let mut engine = Engine::<R, Tet4>::new(&case, false).unwrap();
+        (0..steps)
+            .map(|_| {
+                engine.step(engine.dt, None).unwrap();
+                spread(&engine.grid)
+            })
+            .collect()
+    }
+    // The documented cut (2⁻⁴⁰ of the largest), written out so that a change of it is seen.
+    let tail = 2f64.powi(-40);
+    assert_eq!((f32::TAIL, f64::TAIL), (tail, 0.0));
+    for (s, step) in run_steps::<f32>(20).iter().enumerate() {
+        for (v, field) in step.iter().zip(["acceleration", "velocity"]) {
+            assert!(*v >= tail, "f32 step {}: {field} spread {v:e}", s + 1);
+        }
+    }
+    let kept = run_steps::<f64>(20);
+    assert!(
+        kept.iter().flatten().any(|&v| v < tail),
+        "the f64 run shows no precursor to cut: {kept:?}"
+    );
+}

@@ -26,6 +26,7 @@ use crate::step::grid_update::{DampingRule, Drag};
 use crate::step::load_curve::LoadCurve;
 use crate::step::nodal_energy::NodalEnergy;
 use crate::step::stress::{Guard, GuardSums};
+use crate::step::tail::{self, Nodal};
 use crate::step::{grid_to_particle, grid_update, nodal_energy, particle_to_grid, stress};
 use std::sync::Arc;
 
@@ -1035,6 +1036,13 @@ impl<R: Real, E: Element> Engine<R, E> {
                 R::of(dt),
                 &*self.comm,
             );
+            tail::cut_grid(
+                &self.team,
+                &*self.comm,
+                &mut self.grid_scratch.tail,
+                &mut self.grid,
+                Nodal::Acceleration,
+            );
         } else {
             // Each body's nodes (no loads on nodes with contact: the soil's traction array is
             // zero for the structure too), then, with contact, the force sums over both.
@@ -1051,6 +1059,13 @@ impl<R: Real, E: Element> Engine<R, E> {
                     R::of(case.damping),
                     case.damping_rule,
                     &*self.comm,
+                );
+                tail::cut_grid(
+                    &self.team,
+                    &*self.comm,
+                    &mut scratch.tail,
+                    grid,
+                    Nodal::Acceleration,
                 );
                 crate::step::wall_friction::apply_walls(&self.walls, grid, &self.fixed, R::of(dt));
             }
@@ -1149,6 +1164,24 @@ impl<R: Real, E: Element> Engine<R, E> {
                     fluids: &self.fluids,
                     fixed: &self.liquid_fixed,
                 }),
+            );
+        }
+        // Each body's re-mapped velocities, their precursor cut before walls and prescribed
+        // velocities set theirs.
+        tail::cut_grid(
+            &self.team,
+            &*self.comm,
+            &mut self.grid_scratch.tail,
+            &mut self.grid,
+            Nodal::Velocity,
+        );
+        if let Some(c) = &mut self.contact {
+            tail::cut_grid(
+                &self.team,
+                &*self.comm,
+                &mut c.scratch.tail,
+                &mut c.grid,
+                Nodal::Velocity,
             );
         }
         // Walls: no re-mapped velocity into a wall (each body's).

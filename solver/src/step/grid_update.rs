@@ -22,6 +22,8 @@ pub struct GridScratch<R> {
     /// ([`crate::parallel::gather::Layout::sum_owned`]), so that the sums are the same for any
     /// thread and rank count.
     pub node_sums: Vec<[f64; 4]>,
+    /// A value per block for [`crate::step::tail::cut`].
+    pub tail: Vec<R>,
 }
 
 impl<R: Real> GridScratch<R> {
@@ -32,6 +34,7 @@ impl<R: Real> GridScratch<R> {
             heaviest: vec![R::ZERO; blocks],
             done: vec![(); blocks],
             node_sums: vec![[0.0; 4]; nodes],
+            tail: vec![R::ZERO; blocks],
         }
     }
 

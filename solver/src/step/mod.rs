@@ -14,5 +14,6 @@ pub mod prescribed;
 pub mod reaction;
 pub mod smoothing;
 pub mod stress;
+pub mod tail;
 pub mod time_step;
 pub mod wall_friction;
