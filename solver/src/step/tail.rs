@@ -46,11 +46,11 @@ pub fn cut_grid<R: Real>(
     }
 }
 
-/// Sets to zero every component of `fields` (nodal vectors over the mesh's nodes) whose
-/// magnitude is below [`Real::TAIL`] times the largest finite magnitude among them all, over
-/// every process's nodes, on the team. Does nothing where the precision keeps every value
-/// (`TAIL` 0) or the fields are all zero. `blocks` holds at least one value per [`NODE_BLOCK`]
-/// nodes of the longest field (preallocated: a step allocates nothing).
+/// Sets to zero every component of `fields` (nodal vectors over the mesh's nodes, all of one
+/// length, at most two fields) whose magnitude is below [`Real::TAIL`] times the largest finite
+/// magnitude among them all, over every process's nodes, on the team. Does nothing where the
+/// precision keeps every value (`TAIL` 0) or the fields are all zero. `blocks` holds at least
+/// one value per [`NODE_BLOCK`] nodes (preallocated: a step allocates nothing).
 pub fn cut<R: Real>(
     team: &Team,
     comm: &dyn Communicator,
@@ -60,44 +60,63 @@ pub fn cut<R: Real>(
     if R::TAIL == 0.0 {
         return;
     }
-    let mut largest = R::ZERO;
-    for field in fields.iter() {
-        let field = &**field;
-        team.for_blocks(field.len(), NODE_BLOCK, blocks, |r| {
-            field[r].iter().flatten().fold(R::ZERO, |m, &x| {
-                let a = x.abs();
-                // A non-finite value (a diverging run, which the guards report) sets no scale.
-                if a > m && a.f64().is_finite() {
-                    a
-                } else {
-                    m
+    let n = fields.first().map_or(0, |f| f.len());
+    assert!(
+        fields.iter().all(|f| f.len() == n),
+        "nodal fields of different lengths"
+    );
+    // One pass over the nodes for the largest of every field, one for the cut: each a single
+    // run of the team.
+    {
+        let fields: &[&mut [V3<R>]] = fields;
+        team.for_blocks(n, NODE_BLOCK, blocks, |r| {
+            let mut m = R::ZERO;
+            for field in fields {
+                for &x in field[r.clone()].iter().flatten() {
+                    let a = x.abs();
+                    // A non-finite value (a diverging run, which the guards report) sets no
+                    // scale.
+                    if a > m && a.f64().is_finite() {
+                        m = a;
+                    }
                 }
-            })
+            }
+            m
         });
-        let used = field.len().div_ceil(NODE_BLOCK);
-        largest = blocks[..used].iter().fold(largest, |a, &b| a.max(b));
     }
+    let largest = blocks[..n.div_ceil(NODE_BLOCK)]
+        .iter()
+        .fold(R::ZERO, |a, &b| a.max(b));
     // A node shared by ranks holds its whole value on each after the exchange, so the largest
     // over the ranks is the mesh's.
     let below = R::of(comm.max(largest.f64()) * R::TAIL);
     if below == R::ZERO {
         return;
     }
-    for field in fields.iter_mut() {
-        let n = field.len();
-        let out = Shared::new(field);
-        team.for_blocks(n, NODE_BLOCK, blocks, |r| {
+    let out: [Option<Shared<'_, V3<R>>>; MAX_FIELDS] = {
+        assert!(
+            fields.len() <= MAX_FIELDS,
+            "more nodal fields than a cut takes"
+        );
+        let mut it = fields.iter_mut();
+        std::array::from_fn(|_| it.next().map(|f| Shared::new(f)))
+    };
+    team.for_blocks(n, NODE_BLOCK, blocks, |r| {
+        for field in out.iter().flatten() {
             // SAFETY: the nodes of block r are this call's only.
-            let nodes = unsafe { out.range(r) };
+            let nodes = unsafe { field.range(r.clone()) };
             for x in nodes.iter_mut().flatten() {
                 if x.abs() < below {
                     *x = R::ZERO;
                 }
             }
-            R::ZERO
-        });
-    }
+        }
+        R::ZERO
+    });
 }
+
+/// The most nodal fields one [`cut`] takes (a two-phase grid's two).
+const MAX_FIELDS: usize = 2;
 
 #[cfg(test)]
 mod tests {
