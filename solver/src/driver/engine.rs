@@ -1039,7 +1039,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             tail::cut_grid(
                 &self.team,
                 &*self.comm,
-                &mut self.grid_scratch.tail,
+                &mut self.grid_scratch,
                 &mut self.grid,
                 Nodal::Acceleration,
             );
@@ -1060,13 +1060,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                     case.damping_rule,
                     &*self.comm,
                 );
-                tail::cut_grid(
-                    &self.team,
-                    &*self.comm,
-                    &mut scratch.tail,
-                    grid,
-                    Nodal::Acceleration,
-                );
+                tail::cut_grid(&self.team, &*self.comm, scratch, grid, Nodal::Acceleration);
                 crate::step::wall_friction::apply_walls(&self.walls, grid, &self.fixed, R::of(dt));
             }
             if let Some(c) = &mut self.contact {
@@ -1168,21 +1162,11 @@ impl<R: Real, E: Element> Engine<R, E> {
         }
         // Each body's re-mapped velocities, their precursor cut before walls and prescribed
         // velocities set theirs.
-        tail::cut_grid(
-            &self.team,
-            &*self.comm,
-            &mut self.grid_scratch.tail,
-            &mut self.grid,
-            Nodal::Velocity,
-        );
-        if let Some(c) = &mut self.contact {
-            tail::cut_grid(
-                &self.team,
-                &*self.comm,
-                &mut c.scratch.tail,
-                &mut c.grid,
-                Nodal::Velocity,
-            );
+        let structure = self.contact.as_mut().map(|c| (&mut c.scratch, &mut c.grid));
+        for (scratch, grid) in
+            std::iter::once((&mut self.grid_scratch, &mut self.grid)).chain(structure)
+        {
+            tail::cut_grid(&self.team, &*self.comm, scratch, grid, Nodal::Velocity);
         }
         // Walls: no re-mapped velocity into a wall (each body's).
         crate::step::wall_friction::hold_remapped(&self.walls, &mut self.grid.vel);

@@ -15,15 +15,15 @@ pub const NODE_BLOCK: usize = 1024;
 /// nothing).
 #[derive(Debug, Clone)]
 pub struct GridScratch<R> {
-    heaviest: Vec<R>,
+    /// A value per block: each block's heaviest node (the empty-node threshold), then the
+    /// largest nodal magnitude of [`crate::step::tail::cut_grid`].
+    pub(crate) per_block: Vec<R>,
     done: Vec<()>,
     /// Per node, the terms of the force sums: |f_mix|, |f_ext| over the free solid components
     /// and the same for the liquid (0 at empty nodes). Summed by the layout's owned-node blocks
     /// ([`crate::parallel::gather::Layout::sum_owned`]), so that the sums are the same for any
     /// thread and rank count.
     pub node_sums: Vec<[f64; 4]>,
-    /// A value per block for [`crate::step::tail::cut`].
-    pub tail: Vec<R>,
 }
 
 impl<R: Real> GridScratch<R> {
@@ -31,21 +31,20 @@ impl<R: Real> GridScratch<R> {
     pub fn new(nodes: usize) -> Self {
         let blocks = nodes.div_ceil(NODE_BLOCK);
         GridScratch {
-            heaviest: vec![R::ZERO; blocks],
+            per_block: vec![R::ZERO; blocks],
             done: vec![(); blocks],
             node_sums: vec![[0.0; 4]; nodes],
-            tail: vec![R::ZERO; blocks],
         }
     }
 
     /// The mass below which a node counts as empty ([`MASS_EPS`] of the heaviest node of every
     /// process), on the team.
     fn empty_below(&mut self, team: &Team, comm: &dyn Communicator, mass: &[R]) -> R {
-        team.for_blocks(mass.len(), NODE_BLOCK, &mut self.heaviest, |r| {
+        team.for_blocks(mass.len(), NODE_BLOCK, &mut self.per_block, |r| {
             mass[r].iter().fold(R::ZERO, |a, &b| a.max(b))
         });
         let blocks = mass.len().div_ceil(NODE_BLOCK);
-        let heaviest = self.heaviest[..blocks]
+        let heaviest = self.per_block[..blocks]
             .iter()
             .fold(R::ZERO, |a, &b| a.max(b));
         // A rank's nodes shared with another hold part of their mass only, never more: the

@@ -15,7 +15,7 @@ use crate::parallel::comm::Communicator;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
-use crate::step::grid_update::NODE_BLOCK;
+use crate::step::grid_update::{GridScratch, NODE_BLOCK};
 
 /// Which nodal vectors of a grid [`cut_grid`] cuts (the solid's and, in a two-phase grid, the
 /// liquid's, against one largest).
@@ -27,14 +27,16 @@ pub enum Nodal {
     Velocity,
 }
 
-/// [`cut`] of a grid's accelerations or re-mapped velocities, both phases together.
+/// [`cut`] of a grid's accelerations or re-mapped velocities, both phases together, with the
+/// per-block values of the grid's scratch.
 pub fn cut_grid<R: Real>(
     team: &Team,
     comm: &dyn Communicator,
-    blocks: &mut [R],
+    scratch: &mut GridScratch<R>,
     g: &mut Grid<R>,
     which: Nodal,
 ) {
+    let blocks = &mut scratch.per_block;
     let solid = match which {
         Nodal::Acceleration => &mut g.acc,
         Nodal::Velocity => &mut g.vel,

@@ -108,21 +108,14 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
     };
     let terms = Terms::new::<E>(cx, t, el, law, lead);
     let guard = open.is_some();
-    // Without guards the pass has no per-material guard values (empty slices); the terms are
-    // then never used.
-    let sums = GuardTerms {
-        rho0: cx
-            .initial_density
-            .get(lead as usize)
-            .copied()
-            .unwrap_or(R::ZERO),
+    // The guard's per-material values exist only with the guards (empty slices without).
+    let sums = guard.then(|| GuardTerms {
+        rho0: cx.initial_density[lead as usize],
         min_ratio: cx.min_ratio,
-        n_over_kw: cx
-            .fluids
-            .get(lead as usize)
-            .and_then(Option::as_ref)
+        n_over_kw: cx.fluids[lead as usize]
+            .as_ref()
             .map_or(R::ZERO, |f| f.n_over_kw),
-    };
+    });
     // The chunk's points: a batch's lanes may read past the element's points (never past
     // these).
     let n = x.len();
@@ -163,7 +156,7 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
                     locate.is_some(),
                 );
                 let mass4 = *<&[R; 4]>::try_from(&mass[r]).unwrap();
-                if let Some(open) = open.as_deref_mut() {
+                if let (Some(open), Some(sums)) = (open.as_deref_mut(), &sums) {
                     let on = std::array::from_fn(|q| q < LIVE);
                     sums.add(open, on, strain, *volume4, mass4, pore4.map(|p| *p));
                 }
@@ -225,7 +218,7 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
                 p[i] = p4[q];
             }
         }
-        if let Some(open) = open.as_deref_mut() {
+        if let (Some(open), Some(sums)) = (open.as_deref_mut(), &sums) {
             sums.add(open, b.on, strain, v4, b.at.map(|i| mass[i]), p4);
         }
         // (The lanes past the batch's points repeat one of its points.)
