@@ -5,7 +5,7 @@ use crate::element::mesh::Mesh;
 use crate::element::tet4::Tet4;
 use crate::element::tri3::Tri3;
 use crate::element::Element;
-use crate::four::Four;
+use crate::four::{Four, Lanes4};
 use crate::material::liquid::Fluid;
 use crate::parallel::avx2::use_avx2;
 use crate::parallel::gather::{Layout, Slots};
@@ -373,6 +373,9 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
     // point order.
     let corners = cx.mesh.corners[e].as_ref();
     let (first, map) = (&cx.mesh.x[corners[0] as usize], &cx.mesh.map[e]);
+    // The points of the element's first point's material take their weight as g Σ m N_k,
+    // formed once ([`Totals`]); any other's, point by point with its own g.
+    let lead = material[0];
     // The AVX2 copy, or a build for AVX2: each point's sums as explicit four-lane
     // vectors, one lane per node ([`crate::four`]): the same operations in the same
     // order as the loop below, so the same bits, without the shuffles and stack traffic the
@@ -399,7 +402,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
                 t,
                 cx,
                 &points,
-                full,
+                (full, lead),
                 &by_component,
                 &mut sums,
                 &mut wet,
@@ -410,6 +413,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
         // (Not `Batch`, which the stress and grid-to-particle passes share: the batch
         // here takes every point and skips inside, measured 15 % faster on the
         // saturated f64 column's particle to grid.)
+        let mut totals = Totals::<R, Lanes4<R>>::new((), lead);
         while j < count {
             let batch = (count - j).min(W);
             // Lanes past the element's last point repeat it (computed, never used).
@@ -425,6 +429,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
                 let (m, v) = (mass[i], vel[i]);
                 let gravity = &cx.gravity[material[i] as usize];
                 let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
+                totals.add_stress(&s);
                 // An axisymmetric section's hoop stress pulls each node towards the axis:
                 // f_r -= V σ_θθ N / r (x the radius; V per radian).
                 let hoop = if E::AXISYMMETRIC {
@@ -432,18 +437,23 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
                 } else {
                     R::ZERO
                 };
-                // Node by node the same operations as σ ∇N_k and m N_k (v, g) node after
-                // node.
+                // Node by node the same operations as m N_k (v, g) node after node.
                 let w = lanes::<E, R>(|k| m * n[k]);
                 for k in 0..LANES {
                     sums[0][k] += w[k];
                 }
                 for a in 0..E::DIM {
-                    let f = tractions::<E, R>(&s, &by_component, a);
                     for k in 0..LANES {
                         sums[1 + a][k] += w[k] * v[a];
-                        sums[1 + E::DIM + a][k] -= f[k];
-                        sums[1 + 2 * E::DIM + a][k] += w[k] * gravity[a];
+                    }
+                }
+                if material[i] == lead {
+                    totals.lead_mass = totals.lead_mass + Lanes4::load((), &w);
+                } else {
+                    for a in 0..E::DIM {
+                        for k in 0..LANES {
+                            sums[1 + 2 * E::DIM + a][k] += w[k] * gravity[a];
+                        }
                     }
                 }
                 if E::AXISYMMETRIC {
@@ -469,6 +479,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
                     pore[i],
                 );
                 let w = w_all[i];
+                totals.pore += pw;
                 // The pore pressure's hoop force, as the solid's (axisymmetric sections).
                 let hoop = if E::AXISYMMETRIC {
                     pw / x[i][0]
@@ -489,9 +500,6 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
                 for a in 0..E::DIM {
                     for k in 0..LANES {
                         wet[3 + a][k] += mn[k] * w[a];
-                        let force = mn[k] * loads.gravity[a] - pw * by_component[a][k];
-                        wet[3 + E::DIM + a][k] += force;
-                        wet[3 + 2 * E::DIM + a][k] += nmw[k] * loads.gravity[a];
                     }
                 }
                 if E::AXISYMMETRIC {
@@ -502,6 +510,16 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
             }
             j += batch;
         }
+        // The element's totals into its node lanes, as the four-lane path forms them (plain
+        // lanes: the same operations, lane by lane).
+        let liquid_gravity = liquid_points.map(|(loads, _, _)| loads.gravity);
+        let g = by_component.map(|b| Lanes4::load((), &b));
+        let mut s4 = sums.map(|c| Lanes4::load((), &c));
+        let mut w4 = wet.map(|c| Lanes4::load((), &c));
+        let gravity = (cx.gravity[lead as usize], liquid_gravity);
+        totals.close::<E, WITH_LIQUID>((), &g, gravity, &mut s4, &mut w4);
+        sums = s4.map(Lanes4::to_array);
+        wet = w4.map(Lanes4::to_array);
     }
     store::<E, R, 10>(&sums, four, cx.stride, 0, solid_width::<E>());
     if WITH_LIQUID {
@@ -512,6 +530,87 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
             solid_width::<E>(),
             liquid_width::<E>(),
         );
+    }
+}
+
+/// What an element's points add up beside their node lanes, for the terms whose node factor is
+/// the same at every point. A linear element's ∇N_k is one per element, so the internal force
+/// -Σ_p V_p (σ'_p + p_p I) ∇N_k is -(Σ_p V_p (σ'_p + p_p I)) ∇N_k, and the liquid's pressure
+/// force -Σ_p V_p p_p ∇N_k is -(Σ_p V_p p_p) ∇N_k; the weight Σ_p m_p N_k g of the points of
+/// one material is g Σ_p m_p N_k (the liquid's weight likewise, from the liquid mass sum).
+/// Each is then formed once per element rather than once per point (docs/design.md §9): the
+/// sums are taken in another order than point by point, so the bits differ from that order's,
+/// not the value (and not at all with one point per element).
+/// `F`: the node lanes' type (four-lane vectors, or plain lanes where the pass runs without
+/// them: the same operations).
+struct Totals<R, F> {
+    /// Σ V (σ' + p I) over the points that take part (0 for a full element's points under
+    /// mixed integration), in point order.
+    stress: [R; 6],
+    /// Σ V p over the saturated points, in point order.
+    pore: R,
+    /// The material whose points' weight is formed from their mass sum: the element's first
+    /// point's (all of them, nearly always); the others' weight is added point by point.
+    lead: u32,
+    /// Σ m N_k over the points of `lead` that take part, one lane per node, in point order.
+    lead_mass: F,
+}
+
+impl<R: Real, F: Four<R>> Totals<R, F> {
+    fn new(t: F::Token, lead: u32) -> Self {
+        Totals {
+            stress: [R::ZERO; 6],
+            pore: R::ZERO,
+            lead,
+            lead_mass: F::splat(t, R::ZERO),
+        }
+    }
+
+    /// Adds a point's V (σ' + p I).
+    #[inline(always)]
+    fn add_stress(&mut self, s: &[R; 6]) {
+        for (t, v) in self.stress.iter_mut().zip(s) {
+            *t += *v;
+        }
+    }
+
+    /// Adds the totals' terms to the element's node lanes (`g[b]`: ∂N_k/∂x_b by node), once
+    /// every point has added its own: the internal force; the weight of `lead`'s points
+    /// (`gravity` that material's); with `WITH_LIQUID` and the liquid's gravity, the liquid
+    /// force (its weight from the liquid mass sum `w4[0]`, less the pressure's) and the
+    /// liquid's weight on the mixture (from `w4[1]`).
+    #[inline(always)]
+    fn close<E: Element, const WITH_LIQUID: bool>(
+        &self,
+        t: F::Token,
+        g: &[F; 3],
+        (gravity, liquid_gravity): (V3<R>, Option<V3<R>>),
+        s4: &mut [F; 10],
+        w4: &mut [F; 12],
+    ) {
+        let splat = |v: R| F::splat(t, v);
+        // Row a of the symmetric σ (xx yy zz xy yz zx), as [`tractions`] sums it (the
+        // in-plane components only in 2D).
+        const ROWS: [[usize; 3]; 3] = [[0, 3, 5], [3, 1, 4], [5, 4, 2]];
+        let s = &self.stress;
+        for a in 0..E::DIM {
+            let r = ROWS[a];
+            let f = if E::DIM == 2 {
+                splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1]
+            } else {
+                splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1] + splat(s[r[2]]) * g[2]
+            };
+            s4[1 + E::DIM + a] = s4[1 + E::DIM + a] - f;
+            s4[1 + 2 * E::DIM + a] = s4[1 + 2 * E::DIM + a] + self.lead_mass * splat(gravity[a]);
+        }
+        let Some(lg) = liquid_gravity.filter(|_| WITH_LIQUID) else {
+            return;
+        };
+        for a in 0..E::DIM {
+            let force = w4[0] * splat(lg[a]) - splat(self.pore) * g[a];
+            w4[3 + E::DIM + a] = w4[3 + E::DIM + a] + force;
+            w4[3 + 2 * E::DIM + a] = w4[3 + 2 * E::DIM + a] + w4[1] * splat(lg[a]);
+        }
     }
 }
 
@@ -578,25 +677,27 @@ unsafe fn node_lane_sums_avx2<E: Element, R: Real, const WITH_LIQUID: bool>(
     t: <R::Four as Four<R>>::Token,
     cx: &Pass<'_, E, R>,
     points: &Points<'_, E, R>,
-    full: bool,
+    element: (bool, u32),
     by_component: &[[R; LANES]; 3],
     sums: &mut Lanes<R, 10>,
     wet: &mut Lanes<R, 12>,
 ) {
-    node_lane_sums::<E, R, WITH_LIQUID>(t, cx, points, full, by_component, sums, wet);
+    node_lane_sums::<E, R, WITH_LIQUID>(t, cx, points, element, by_component, sums, wet);
 }
 
 /// An element's sums over its points ([`element_sums`]), added to `sums` (the solid's) and,
 /// with `WITH_LIQUID`, `wet` (the liquid's): each point's contribution as four-lane vectors,
 /// one lane per node (a triangle's fourth lane carries zeros and is never stored), with the
-/// operations of the point loop of [`element_sums`] in its order (the same bits).
+/// operations of the point loop of [`element_sums`] in its order (the same bits). `element`:
+/// whether the element is full (mixed integration), and the material whose points' weight is
+/// formed once ([`Totals`]).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     t: <R::Four as Four<R>>::Token,
     cx: &Pass<'_, E, R>,
     points: &Points<'_, E, R>,
-    full: bool,
+    (full, lead): (bool, u32),
     by_component: &[[R; LANES]; 3],
     sums: &mut Lanes<R, 10>,
     wet: &mut Lanes<R, 12>,
@@ -621,6 +722,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     let g: [R::Four; 3] = std::array::from_fn(|b| R::Four::load(t, &by_component[b]));
     let mut s4: [R::Four; 10] = std::array::from_fn(|c| R::Four::load(t, &sums[c]));
     let mut w4: [R::Four; 12] = std::array::from_fn(|c| R::Four::load(t, &wet[c]));
+    let mut totals = Totals::<R, R::Four>::new(t, lead);
     // A triangle's shape values point by point (in four lanes and transposed, as below, the
     // 2D dry column ran 30 instructions per particle-step more).
     if E::DIM == 2 {
@@ -630,7 +732,8 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
             }
             let nl = E::shape_lanes::<R, 1>(map, first, &xi.map(|c| [c]));
             let n = R::Four::load(t, &std::array::from_fn(|k| nl[k][0]));
-            point_sums::<E, R, WITH_LIQUID>(t, cx, points, i, n, full, &g, &mut s4, &mut w4);
+            let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
+            point_sums::<E, R, WITH_LIQUID>(t, cx, points, i, n, full, s, w, sum);
         }
     }
     // A tetrahedron's four points' shape values at a time, one lane per point, turned into one
@@ -641,10 +744,14 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         let live = (count - j).min(4);
         let per_point = node_lane_shapes::<E, R>(t, map, first, x, j, live);
         for (i, &n) in (j..j + live).zip(per_point.iter()) {
-            point_sums::<E, R, WITH_LIQUID>(t, cx, points, i, n, full, &g, &mut s4, &mut w4);
+            let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
+            point_sums::<E, R, WITH_LIQUID>(t, cx, points, i, n, full, s, w, sum);
         }
         j += live;
     }
+    let liquid_gravity = points.liquid.map(|(loads, _, _)| loads.gravity);
+    let gravity = (cx.gravity[lead as usize], liquid_gravity);
+    totals.close::<E, WITH_LIQUID>(t, &g, gravity, &mut s4, &mut w4);
     for (sum, v) in sums.iter_mut().zip(s4) {
         *sum = v.to_array();
     }
@@ -656,7 +763,9 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
 }
 
 /// Point `i`'s contributions to its element's sums ([`node_lane_sums`]), its shape values `n`
-/// one lane per node, if it takes part.
+/// one lane per node, if it takes part: into the node lanes, and into the element's totals the
+/// terms it takes once for all its points ([`Totals`]). `full`: whether the element is full
+/// (mixed integration).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
@@ -666,9 +775,9 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     i: usize,
     n: R::Four,
     full: bool,
-    g: &[R::Four; 3],
     s4: &mut [R::Four; 10],
     w4: &mut [R::Four; 12],
+    totals: &mut Totals<R, R::Four>,
 ) {
     let Points {
         active,
@@ -689,21 +798,18 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     let (m, v) = (mass[i], vel[i]);
     let gravity = &cx.gravity[material[i] as usize];
     let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
+    totals.add_stress(&s);
     let w = splat(m) * n;
     s4[0] = s4[0] + w;
     for a in 0..E::DIM {
-        // Row a of the symmetric σ (xx yy zz xy yz zx), as [`tractions`] sums it (the
-        // in-plane components only in 2D).
-        const ROWS: [[usize; 3]; 3] = [[0, 3, 5], [3, 1, 4], [5, 4, 2]];
-        let r = ROWS[a];
-        let f = if E::DIM == 2 {
-            splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1]
-        } else {
-            splat(s[r[0]]) * g[0] + splat(s[r[1]]) * g[1] + splat(s[r[2]]) * g[2]
-        };
         s4[1 + a] = s4[1 + a] + w * splat(v[a]);
-        s4[1 + E::DIM + a] = s4[1 + E::DIM + a] - f;
-        s4[1 + 2 * E::DIM + a] = s4[1 + 2 * E::DIM + a] + w * splat(gravity[a]);
+    }
+    if material[i] == totals.lead {
+        totals.lead_mass = totals.lead_mass + w;
+    } else {
+        for a in 0..E::DIM {
+            s4[1 + 2 * E::DIM + a] = s4[1 + 2 * E::DIM + a] + w * splat(gravity[a]);
+        }
     }
     if E::AXISYMMETRIC {
         // An axisymmetric section's hoop stress pulls each node towards the axis:
@@ -723,16 +829,13 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     let (vw, mw, pw) =
         liquid_volume_mass_pressure(&f, full, volume[i], volume0.map(|v0| v0[i]), pore[i]);
     let wv = w_all[i];
+    totals.pore += pw;
     let mn = splat(mw) * n;
-    let nmw = splat(f.n * mw) * n;
     w4[0] = w4[0] + mn;
-    w4[1] = w4[1] + nmw;
+    w4[1] = w4[1] + splat(f.n * mw) * n;
     w4[2] = w4[2] + splat(f.drag * vw) * n;
     for a in 0..E::DIM {
-        let force = mn * splat(loads.gravity[a]) - splat(pw) * g[a];
         w4[3 + a] = w4[3 + a] + mn * splat(wv[a]);
-        w4[3 + E::DIM + a] = w4[3 + E::DIM + a] + force;
-        w4[3 + 2 * E::DIM + a] = w4[3 + 2 * E::DIM + a] + nmw * splat(loads.gravity[a]);
     }
     if E::AXISYMMETRIC {
         // The pore pressure's hoop force, as the solid's.
@@ -762,6 +865,189 @@ pub fn add_point_loads<E: Element, R: Real>(
             let node = mesh.corners[e].as_ref()[k] as usize;
             for a in 0..3 {
                 g.f_ext[node][a] += n[k] * scale * f[a];
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::mesh::TetMesh;
+    use crate::parallel::team::Pin;
+    use crate::state::grid::LiquidNodes;
+    use crate::state::particles::LiquidPoints;
+    use mpm_shared::{generate, ElementType};
+
+    /// Points of 0 to 6 per element, inside it, with masses, velocities, stresses and pore
+    /// pressures of magnitudes that differ from point to point; every third element with a
+    /// point of material 1 (dry, its own gravity) among those of material 0 (saturated).
+    fn points(mesh: &TetMesh<f64>) -> Particles<f64> {
+        let mut rng = crate::test_rng::uniform(11);
+        let element: Vec<u32> = (0..mesh.elements() as u32)
+            .flat_map(|e| std::iter::repeat_n(e, (e as usize * 5 + 3) % 7))
+            .collect();
+        let mut p = Particles::<f64>::at_rest(element);
+        let n = p.len();
+        for i in 0..n {
+            let e = p.element[i] as usize;
+            let corners = mesh.corners[e];
+            // A point inside: barycentric weights from 0.05 up, normalised.
+            let w: [f64; 4] = std::array::from_fn(|_| 0.05 + rng());
+            let total: f64 = w.iter().sum();
+            p.x[i] = std::array::from_fn(|a| {
+                (0..4)
+                    .map(|k| w[k] / total * mesh.x[corners[k] as usize][a])
+                    .sum()
+            });
+            p.mass[i] = 0.5 + rng();
+            p.volume[i] = 1e-3 * (0.5 + rng());
+            p.v[i] = std::array::from_fn(|_| rng() - 0.5);
+            p.stress[i] = std::array::from_fn(|_| 1e3 * (rng() - 0.5));
+            if e % 3 == 0 && i % 2 == 1 {
+                p.material[i] = 1;
+            }
+        }
+        p.liquid = Some(LiquidPoints {
+            w: (0..n)
+                .map(|_| std::array::from_fn(|_| rng() - 0.5))
+                .collect(),
+            p: (0..n).map(|_| -1e2 * rng()).collect(),
+            volume0: None,
+        });
+        p
+    }
+
+    /// Each node's mass, momentum, internal and external force, then the liquid's mass,
+    /// porosity-weighted mass, drag, momentum and force, summed point by point as the
+    /// equations of docs/design.md §4.2 write them: V (σ' + p I) ∇N for each point, and each
+    /// point's weight with its own material's gravity.
+    fn reference(
+        mesh: &TetMesh<f64>,
+        p: &Particles<f64>,
+        gravity: &[V3<f64>],
+        fluids: &[Option<Fluid<f64>>],
+        liquid_gravity: V3<f64>,
+    ) -> Vec<Vec<f64>> {
+        let nodes = mesh.x.len();
+        let mut out = vec![vec![0.0; nodes]; 19];
+        let l = p.liquid.as_ref().unwrap();
+        for i in 0..p.len() {
+            let e = p.element[i] as usize;
+            let n = mesh.shape(e, &p.x[i]);
+            let (grad, corners) = (&mesh.grad[e], &mesh.corners[e]);
+            let material = p.material[i] as usize;
+            let fluid = fluids[material];
+            // (A dry material's points carry pore pressure 0 in a run; here they do not, and
+            // their total stress takes it as the pass does.)
+            let mut s = p.stress[i];
+            for c in s.iter_mut().take(3) {
+                *c += l.p[i];
+            }
+            const ROWS: [[usize; 3]; 3] = [[0, 3, 5], [3, 1, 4], [5, 4, 2]];
+            for k in 0..4 {
+                let node = corners[k] as usize;
+                let w = p.mass[i] * n[k];
+                out[0][node] += w;
+                for a in 0..3 {
+                    let traction: f64 = (0..3).map(|b| s[ROWS[a][b]] * grad[k][b]).sum();
+                    out[1 + a][node] += w * p.v[i][a];
+                    out[4 + a][node] -= p.volume[i] * traction;
+                    out[7 + a][node] += w * gravity[material][a];
+                }
+                let Some(f) = fluid else { continue };
+                let mw = f.rho_w * p.volume[i];
+                out[10][node] += mw * n[k];
+                out[11][node] += f.n * mw * n[k];
+                out[12][node] += f.drag * p.volume[i] * n[k];
+                for a in 0..3 {
+                    out[13 + a][node] += mw * n[k] * l.w[i][a];
+                    let pressure = p.volume[i] * l.p[i] * grad[k][a];
+                    out[16 + a][node] += mw * n[k] * liquid_gravity[a] - pressure;
+                    // The liquid's weight, on the mixture's external force.
+                    out[7 + a][node] += f.n * mw * n[k] * liquid_gravity[a];
+                }
+            }
+        }
+        out
+    }
+
+    /// The pass's node values in [`reference`]'s order.
+    fn of_grid(g: &Grid<f64>) -> Vec<Vec<f64>> {
+        let l = g.liquid.as_ref().unwrap();
+        let v3 = |v: &[V3<f64>], a: usize| v.iter().map(|x| x[a]).collect::<Vec<_>>();
+        let mut out = vec![g.mass.clone()];
+        for field in [&g.momentum, &g.f_int, &g.f_ext] {
+            out.extend((0..3).map(|a| v3(field, a)));
+        }
+        out.extend([l.mass.clone(), l.mass_n.clone(), l.drag.clone()]);
+        for field in [&l.momentum, &l.force] {
+            out.extend((0..3).map(|a| v3(field, a)));
+        }
+        out
+    }
+
+    /// The element totals (the stress, pore-pressure and mass sums formed once per element)
+    /// give the nodal values of the point-by-point equations to round-off, with several
+    /// points per element and two materials in some elements (one saturated, one dry, with
+    /// different gravity), on one and two threads, in the AVX2 and the portable copies, which
+    /// agree bit for bit.
+    #[test]
+    fn element_totals_give_the_point_by_point_sums() {
+        let mesh =
+            TetMesh::new(&generate::box_mesh([3, 4, 3], [1.0; 3], ElementType::Tet4)).unwrap();
+        let p = points(&mesh);
+        let gravity = vec![[0.0, -9.81, 0.0], [1.5, -4.0, 0.5]];
+        let spec = crate::material::liquid::LiquidSpec::new(0.4, 1000.0, 2e6, 1e-12, 1e-6).unwrap();
+        let fluids = vec![Some(Fluid::new(&spec)), None];
+        let liquid_gravity = [0.0, -9.81, 0.0];
+        let want = reference(&mesh, &p, &gravity, &fluids, liquid_gravity);
+        let mut first: Option<Vec<Vec<u64>>> = None;
+        for (threads, portable) in [(1, true), (1, false), (2, false), (2, true)] {
+            let team = Team::new(threads, Pin::None).unwrap();
+            let layout = Layout::new(&mesh, &p, threads);
+            let mut slots = layout.new_slots();
+            let mut g = Grid::<f64>::new(mesh.x.len());
+            g.liquid = Some(LiquidNodes::new(mesh.x.len()));
+            let loads = LiquidLoads {
+                fluids: &fluids,
+                gravity: liquid_gravity,
+            };
+            crate::parallel::avx2::with_portable(portable, || {
+                particle_to_grid(
+                    &team,
+                    &layout,
+                    &mut slots,
+                    &mesh,
+                    &p,
+                    &gravity,
+                    None,
+                    &mut g,
+                    None,
+                    Some(loads),
+                )
+            });
+            let got = of_grid(&g);
+            for (field, (w, v)) in want.iter().zip(&got).enumerate() {
+                let scale = w.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                for (node, (a, b)) in w.iter().zip(v).enumerate() {
+                    assert!(
+                        (a - b).abs() <= 1e-12 * scale,
+                        "field {field} node {node}: {b} against {a} ({threads} threads, \
+                         portable {portable})"
+                    );
+                }
+            }
+            let bits: Vec<Vec<u64>> = got
+                .iter()
+                .map(|f| f.iter().map(|x| x.to_bits()).collect())
+                .collect();
+            match &first {
+                None => first = Some(bits),
+                Some(b) => assert!(
+                    *b == bits,
+                    "{threads} threads, portable {portable}: other bits"
+                ),
             }
         }
     }
