@@ -120,6 +120,41 @@ pub fn lanes<E: Element, R: Real>(per_node: impl Fn(usize) -> R) -> [R; LANES] {
     std::array::from_fn(|k| if k < E::NODES { per_node(k) } else { R::ZERO })
 }
 
+/// [`store`] of a tetrahedron's sums held as four-lane vectors (`sums[c]`: value c of each
+/// node): the `W` values of each node's `stride` from `offset` on, four values at a time turned
+/// from value lanes into node lanes by a transpose and stored whole, the last one to three
+/// value by value (values moved, not computed: the same bits).
+#[inline(always)]
+pub fn store_tetrahedron<R: Real, const W: usize>(
+    t: <R::Four as Four<R>>::Token,
+    sums: &[R::Four; W],
+    four: &mut [R],
+    stride: usize,
+    offset: usize,
+) {
+    // (Indexed, not `array::from_fn` or an array's iterator: the AVX2 copies must not call
+    // the library's array helpers, `scripts/check-avx2-copies`.)
+    let mut nodes = node_slots::<crate::element::tet4::Tet4, R>(four, stride);
+    let mut next = || &mut nodes.next().expect("four nodes")[offset..offset + W];
+    let slots: [&mut [R]; 4] = [next(), next(), next(), next()];
+    let mut c = 0;
+    while c + 4 <= W {
+        let lanes = R::Four::transpose(t, [sums[c], sums[c + 1], sums[c + 2], sums[c + 3]]);
+        for k in 0..4 {
+            let to: &mut [R; 4] = (&mut slots[k][c..c + 4]).try_into().expect("four values");
+            *to = lanes[k].to_array();
+        }
+        c += 4;
+    }
+    while c < W {
+        let lanes = sums[c].to_array();
+        for k in 0..4 {
+            slots[k][c] = lanes[k];
+        }
+        c += 1;
+    }
+}
+
 /// Stores the element's sums into the scatter's buffer, node by node: `width` values of each
 /// node's `stride`, from `offset` on.
 #[inline(always)]

@@ -13,7 +13,9 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::batch::{lanes, node_lane_shapes, store, Lanes, LANES, TETRAHEDRA};
+use crate::step::batch::{
+    lanes, node_lane_shapes, store, store_tetrahedron, Lanes, LANES, TETRAHEDRA,
+};
 use crate::step::contact::{maps, OneBody};
 use crate::step::mixed::Mixed;
 
@@ -404,10 +406,14 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
                 &points,
                 (full, lead),
                 &by_component,
-                &mut sums,
-                &mut wet,
+                (&mut sums, &mut wet),
+                (four, cx.stride),
             )
         };
+        // A tetrahedron's sums went into the buffer straight from their vectors.
+        if E::NODES == 4 {
+            return;
+        }
     } else {
         let mut j = 0;
         // (Not `Batch`, which the stress and grid-to-particle passes share: the batch
@@ -679,10 +685,10 @@ unsafe fn node_lane_sums_avx2<E: Element, R: Real, const WITH_LIQUID: bool>(
     points: &Points<'_, E, R>,
     element: (bool, u32),
     by_component: &[[R; LANES]; 3],
-    sums: &mut Lanes<R, 10>,
-    wet: &mut Lanes<R, 12>,
+    sums: (&mut Lanes<R, 10>, &mut Lanes<R, 12>),
+    buffer: (&mut [R], usize),
 ) {
-    node_lane_sums::<E, R, WITH_LIQUID>(t, cx, points, element, by_component, sums, wet);
+    node_lane_sums::<E, R, WITH_LIQUID>(t, cx, points, element, by_component, sums, buffer);
 }
 
 /// An element's sums over its points ([`element_sums`]), added to `sums` (the solid's) and,
@@ -690,7 +696,9 @@ unsafe fn node_lane_sums_avx2<E: Element, R: Real, const WITH_LIQUID: bool>(
 /// one lane per node (a triangle's fourth lane carries zeros and is never stored), with the
 /// operations of the point loop of [`element_sums`] in its order (the same bits). `element`:
 /// whether the element is full (mixed integration), and the material whose points' weight is
-/// formed once ([`Totals`]).
+/// formed once ([`Totals`]). A tetrahedron's sums are stored from their vectors into the
+/// scatter's buffer (`buffer`: the buffer and the pass's values per node), a triangle's
+/// returned in `sums` (the solid's and the liquid's) for [`store`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
@@ -699,8 +707,8 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     points: &Points<'_, E, R>,
     (full, lead): (bool, u32),
     by_component: &[[R; LANES]; 3],
-    sums: &mut Lanes<R, 10>,
-    wet: &mut Lanes<R, 12>,
+    (sums, wet): (&mut Lanes<R, 10>, &mut Lanes<R, 12>),
+    (four, stride): (&mut [R], usize),
 ) {
     let (x, map, first) = (points.x, points.map, points.first);
     let count = x.len();
@@ -752,6 +760,14 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     let liquid_gravity = points.liquid.map(|(loads, _, _)| loads.gravity);
     let gravity = (cx.gravity[lead as usize], liquid_gravity);
     totals.close::<E, WITH_LIQUID>(t, &g, gravity, &mut s4, &mut w4);
+    if E::NODES == 4 {
+        const { assert!(solid_width::<Tet4>() == 10 && liquid_width::<Tet4>() == 12) };
+        store_tetrahedron::<R, 10>(t, &s4, four, stride, 0);
+        if WITH_LIQUID {
+            store_tetrahedron::<R, 12>(t, &w4, four, stride, 10);
+        }
+        return;
+    }
     for (sum, v) in sums.iter_mut().zip(s4) {
         *sum = v.to_array();
     }
