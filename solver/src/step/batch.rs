@@ -171,3 +171,47 @@ pub fn store<E: Element, R: Real, const W: usize>(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::tet4::Tet4;
+
+    /// [`store_tetrahedron`] writes the values [`store`] writes, where `store` writes them,
+    /// and leaves the rest of the buffer alone: the solid's 10 values and the liquid's 12
+    /// after them, of a 22-value pass, in both precisions.
+    fn stores_as_store<R: Real>() {
+        let Some(t) = R::Four::token() else {
+            eprintln!("skipped: this processor lacks the four-lane type's instructions");
+            return;
+        };
+        let mut rng = crate::test_rng::uniform(5);
+        let mut value = || R::of(rng() * 2e3 - 1e3);
+        let solid: Lanes<R, 10> = std::array::from_fn(|_| std::array::from_fn(|_| value()));
+        let liquid: Lanes<R, 12> = std::array::from_fn(|_| std::array::from_fn(|_| value()));
+        let marker = R::of(-7.5);
+        let (mut want, mut got) = (vec![marker; 4 * 22], vec![marker; 4 * 22]);
+        store::<Tet4, R, 10>(&solid, &mut want, 22, 0, 10);
+        store::<Tet4, R, 12>(&liquid, &mut want, 22, 10, 12);
+        let vectors =
+            |l: &[[R; 4]]| -> Vec<R::Four> { l.iter().map(|c| R::Four::load(t, c)).collect() };
+        let (s4, w4) = (vectors(&solid), vectors(&liquid));
+        store_tetrahedron::<R, 10>(t, s4.as_slice().try_into().unwrap(), &mut got, 22, 0);
+        store_tetrahedron::<R, 12>(t, w4.as_slice().try_into().unwrap(), &mut got, 22, 10);
+        let bits = |v: &[R]| v.iter().map(|x| x.f64().to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&got), bits(&want));
+        // Only the solid's: the liquid's places keep their marker.
+        let mut dry = vec![marker; 4 * 22];
+        store_tetrahedron::<R, 10>(t, s4.as_slice().try_into().unwrap(), &mut dry, 22, 0);
+        for (k, node) in dry.chunks_exact(22).enumerate() {
+            assert!(node[10..].iter().all(|&x| x == marker), "node {k}");
+            assert_eq!(bits(&node[..10]), bits(&want[22 * k..22 * k + 10]));
+        }
+    }
+
+    #[test]
+    fn a_tetrahedron_s_vectors_store_as_its_lanes() {
+        stores_as_store::<f64>();
+        stores_as_store::<f32>();
+    }
+}
