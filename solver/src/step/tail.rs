@@ -72,18 +72,10 @@ pub fn cut<R: Real>(
     {
         let fields: &[&mut [V3<R>]] = fields;
         team.for_blocks(n, NODE_BLOCK, blocks, |r| {
-            let mut m = R::ZERO;
-            for field in fields {
-                for &x in field[r.clone()].iter().flatten() {
-                    let a = x.abs();
-                    // A non-finite value (a diverging run, which the guards report) sets no
-                    // scale.
-                    if a > m && a.f64().is_finite() {
-                        m = a;
-                    }
-                }
-            }
-            m
+            // A non-finite value (a diverging run, which the guards report) sets no scale.
+            fields.iter().fold(R::ZERO, |m, field| {
+                m.max(R::largest_finite_magnitude(field[r.clone()].as_flattened()))
+            })
         });
     }
     let largest = blocks[..n.div_ceil(NODE_BLOCK)]
@@ -107,10 +99,10 @@ pub fn cut<R: Real>(
         for field in out.iter().flatten() {
             // SAFETY: the nodes of block r are this call's only.
             let nodes = unsafe { field.range(r.clone()) };
-            for x in nodes.iter_mut().flatten() {
-                if x.abs() < below {
-                    *x = R::ZERO;
-                }
+            // (Every value stored, cut or kept: a select the compiler makes vector
+            // operations, where a store only of the cut ones stayed a branch per value.)
+            for x in nodes.as_flattened_mut() {
+                *x = if x.abs() < below { R::ZERO } else { *x };
             }
         }
         R::ZERO
