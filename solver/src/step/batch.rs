@@ -155,6 +155,20 @@ pub fn store_tetrahedron<R: Real, const W: usize>(
     }
 }
 
+/// A tetrahedron's slots in the scatter's buffer (`four`: four nodes of `W` values each, one
+/// node after another) as four rows of `W` values.
+///
+/// # Panics
+/// If `four` does not hold exactly four rows of `W` values.
+#[inline(always)]
+pub fn node_rows<R, const W: usize>(four: &mut [R]) -> &mut [[R; W]; 4] {
+    assert_eq!(four.len(), 4 * W, "a slot width other than the scatter's");
+    // SAFETY: `four` holds exactly 4 W values, one after another (checked above), and
+    // [[R; W]; 4] is 4 W values of R one after another, without padding (an array's layout):
+    // the same memory, borrowed mutably once, for as long as `four` is.
+    unsafe { &mut *four.as_mut_ptr().cast::<[[R; W]; 4]>() }
+}
+
 /// Stores the element's sums into the scatter's buffer, node by node: `width` values of each
 /// node's `stride`, from `offset` on.
 #[inline(always)]
@@ -176,6 +190,26 @@ pub fn store<E: Element, R: Real, const W: usize>(
 mod tests {
     use super::*;
     use crate::element::tet4::Tet4;
+
+    /// Row k, value c of [`node_rows`] is value c of node k's slot, written through to the
+    /// buffer; a buffer of another width is refused.
+    #[test]
+    fn node_rows_are_the_nodes_slots() {
+        let mut four: Vec<f64> = (0..24).map(f64::from).collect();
+        let rows = node_rows::<f64, 6>(&mut four);
+        for (k, row) in rows.iter().enumerate() {
+            for (c, &v) in row.iter().enumerate() {
+                assert_eq!(v, (6 * k + c) as f64);
+            }
+        }
+        rows[2][5] = -1.0;
+        assert_eq!(four[17], -1.0);
+        let wrong = std::panic::catch_unwind(|| {
+            let mut short = vec![0.0f32; 11];
+            node_rows::<f32, 3>(&mut short)[0][0]
+        });
+        assert!(wrong.is_err());
+    }
 
     /// [`store_tetrahedron`] writes the values [`store`] writes, where `store` writes them,
     /// and leaves the rest of the buffer alone: the solid's 10 values and the liquid's 12

@@ -179,11 +179,14 @@ pub fn grid_to_particle<E: Element, R: Real>(
                             dt,
                             points,
                             &mut sums,
+                            &mut *four,
                             &mut kinetic,
                             &mut kinetic_w,
                         )
                     };
                 }
+                // (The lanes store the sums of a tetrahedron whose points they took all.)
+                let stored = E::NODES == 4 && j == count;
                 while j < count {
                     let b =
                         match Batch::<W>::new(j, count, |i| active[i] && maps(body, material[i])) {
@@ -278,8 +281,10 @@ pub fn grid_to_particle<E: Element, R: Real>(
                     }
                     j += b.len;
                 }
-                let width = width(with_liquid);
-                store::<E, R, 6>(&sums, four, width, 0, width);
+                if !stored {
+                    let width = width(with_liquid);
+                    store::<E, R, 6>(&sums, four, width, 0, width);
+                }
                 (kinetic, kinetic_w)
             }
         };
@@ -392,10 +397,13 @@ unsafe fn element_lanes_avx2<E: Element, R: Real, const WANT: bool, const WITH_L
     dt: R,
     points: lanes::ElementPoints<'_, E, R>,
     sums: &mut Lanes<R, 6>,
+    four: &mut [R],
     kinetic: &mut f64,
     kinetic_w: &mut f64,
 ) -> usize {
-    lanes::element_lanes::<E, R, WANT, WITH_LIQUID>(t, body, dt, points, sums, kinetic, kinetic_w)
+    lanes::element_lanes::<E, R, WANT, WITH_LIQUID>(
+        t, body, dt, points, sums, four, kinetic, kinetic_w,
+    )
 }
 
 /// v · w over the element's dimensions.
