@@ -741,7 +741,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
             let nl = E::shape_lanes::<R, 1>(map, first, &xi.map(|c| [c]));
             let n = R::Four::load(t, &std::array::from_fn(|k| nl[k][0]));
             let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
-            point_sums::<E, R, WITH_LIQUID>(t, cx, points, i, n, full, s, w, sum);
+            point_sums::<E, R, WITH_LIQUID, false>(t, cx, points, i, n, full, s, w, sum);
         }
     }
     // A tetrahedron's four points' shape values at a time, one lane per point, turned into one
@@ -751,9 +751,22 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     while j < count {
         let live = (count - j).min(4);
         let per_point = node_lane_shapes::<E, R>(t, map, first, x, j, live);
-        for (i, &n) in (j..j + live).zip(per_point.iter()) {
-            let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
-            point_sums::<E, R, WITH_LIQUID>(t, cx, points, i, n, full, s, w, sum);
+        // Four points that all take part, of the lead material (the common case: one compare
+        // of each array's four), skip each point's checks (13 instructions per point).
+        let of_lead = live == 4
+            && points.active[j..j + 4] == [true; 4]
+            && points.material[j..j + 4] == [lead; 4]
+            && maps(cx.body, lead);
+        if of_lead {
+            for (i, &n) in (j..j + 4).zip(per_point.iter()) {
+                let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
+                point_sums::<E, R, WITH_LIQUID, true>(t, cx, points, i, n, full, s, w, sum);
+            }
+        } else {
+            for (i, &n) in (j..j + live).zip(per_point.iter()) {
+                let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
+                point_sums::<E, R, WITH_LIQUID, false>(t, cx, points, i, n, full, s, w, sum);
+            }
         }
         j += live;
     }
@@ -781,10 +794,11 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
 /// Point `i`'s contributions to its element's sums ([`node_lane_sums`]), its shape values `n`
 /// one lane per node, if it takes part: into the node lanes, and into the element's totals the
 /// terms it takes once for all its points ([`Totals`]). `full`: whether the element is full
-/// (mixed integration).
+/// (mixed integration). `OF_LEAD`: the caller knows that the point takes part and is of the
+/// totals' lead material (the same operations, without the checks).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
+fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool, const OF_LEAD: bool>(
     t: <R::Four as Four<R>>::Token,
     cx: &Pass<'_, E, R>,
     points: &Points<'_, E, R>,
@@ -808,11 +822,13 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         ..
     } = *points;
     let splat = |v: R| R::Four::splat(t, v);
-    if !active[i] || !maps(cx.body, material[i]) {
+    if !OF_LEAD && (!active[i] || !maps(cx.body, material[i])) {
         return;
     }
+    debug_assert!(!OF_LEAD || (active[i] && material[i] == totals.lead));
+    let material_i = if OF_LEAD { totals.lead } else { material[i] };
     let (m, v) = (mass[i], vel[i]);
-    let gravity = &cx.gravity[material[i] as usize];
+    let gravity = &cx.gravity[material_i as usize];
     let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
     totals.add_stress(&s);
     let w = splat(m) * n;
@@ -820,7 +836,7 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     for a in 0..E::DIM {
         s4[1 + a] = s4[1 + a] + w * splat(v[a]);
     }
-    if material[i] == totals.lead {
+    if OF_LEAD || material_i == totals.lead {
         totals.lead_mass = totals.lead_mass + w;
     } else {
         for a in 0..E::DIM {
@@ -839,7 +855,7 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     let (Some((loads, w_all, volume0)), Some(pore)) = (liquid, pore) else {
         return;
     };
-    let Some(f) = loads.fluids[material[i] as usize] else {
+    let Some(f) = loads.fluids[material_i as usize] else {
         return;
     };
     let (vw, mw, pw) =
