@@ -14,7 +14,7 @@ use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 use crate::step::batch::{
-    lanes, node_lane_shapes, store, store_tetrahedron, Lanes, LANES, TETRAHEDRA,
+    four_of, lanes, node_lane_shapes, store, store_tetrahedron, Lanes, LANES, TETRAHEDRA,
 };
 use crate::step::contact::{maps, OneBody};
 use crate::step::mixed::Mixed;
@@ -751,12 +751,10 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     while j < count {
         let live = (count - j).min(4);
         let per_point = node_lane_shapes::<E, R>(t, map, first, x, j, live);
-        // Four points that all take part, of the lead material (the common case: one compare
-        // of each array's four), skip each point's checks (13 instructions per point).
-        let of_lead = live == 4
-            && points.active[j..j + 4] == [true; 4]
-            && points.material[j..j + 4] == [lead; 4]
-            && maps(cx.body, lead);
+        // Four points that all take part, of the lead material (the common case), skip each
+        // point's checks.
+        let of_lead =
+            live == 4 && four_of(points.active, points.material, j, lead) && maps(cx.body, lead);
         if of_lead {
             for (i, &n) in (j..j + 4).zip(per_point.iter()) {
                 let (s, w, sum) = (&mut s4, &mut w4, &mut totals);

@@ -14,7 +14,7 @@ use crate::element::Element;
 use crate::four::Four;
 use crate::material::liquid::Fluid;
 use crate::real::{Real, V3};
-use crate::step::batch::{node_rows, Lanes};
+use crate::step::batch::{four_of, node_rows, Lanes};
 use crate::step::contact::{maps, OneBody};
 
 /// An element's points, each array sliced to them (one length), and what grid to particle
@@ -97,10 +97,9 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
         let live = (count - j).min(4);
         let lead = material[j];
         // All of the batch's points take part when each is active and of `lead`, which the
-        // body maps (four by a constant count, the common case: one compare of each array's
-        // four; point by point, the check ran 13 instructions per particle-step).
+        // body maps (four, the common case, by one compare of each array's four).
         let all_of_lead = if live == 4 {
-            active[j..j + 4] == [true; 4] && material[j..j + 4] == [lead; 4]
+            four_of(active, material, j, lead)
         } else {
             (j..j + live).all(|i| active[i] && material[i] == lead)
         };
@@ -126,7 +125,7 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
         }
         j += live;
     }
-    if E::NODES == 4 && j == count {
+    if stores_sums::<E>(j, count) {
         // The scatter's slots of a tetrahedron's nodes: the solid's three values of each node,
         // and with the liquid its three after them.
         if WITH_LIQUID {
@@ -140,6 +139,13 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
         *sum = v.to_array();
     }
     j
+}
+
+/// Whether [`element_lanes`], having taken `taken` of the element's `count` points, stored
+/// the element's sums into the scatter's buffer itself: a tetrahedron's, all points taken.
+#[inline(always)]
+pub(super) fn stores_sums<E: Element>(taken: usize, count: usize) -> bool {
+    E::NODES == 4 && taken == count
 }
 
 /// An element's values in all four lanes.

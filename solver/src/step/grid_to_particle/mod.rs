@@ -185,8 +185,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
                         )
                     };
                 }
-                // (The lanes store the sums of a tetrahedron whose points they took all.)
-                let stored = E::NODES == 4 && j == count;
+                let stored = lanes::stores_sums::<E>(j, count);
                 while j < count {
                     let b =
                         match Batch::<W>::new(j, count, |i| active[i] && maps(body, material[i])) {
