@@ -68,6 +68,15 @@ pub trait Four<R: Copy>:
             *pq = std::array::from_fn(|c| a[c][q]);
         }
     }
+    /// Two vectors' lanes interleaved, lane q of `a` then of `b`: `p` becomes (a0 b0 a1 b1
+    /// a2 b2 a3 b3) (values moved).
+    #[inline(always)]
+    fn store_pairs(a: Self, b: Self, p: &mut [R; 8]) {
+        let (a, b) = (a.to_array(), b.to_array());
+        for q in 0..4 {
+            (p[2 * q], p[2 * q + 1]) = (a[q], b[q]);
+        }
+    }
 }
 
 /// Four lanes as a plain array (f32, and f64 off x86-64): each operation lane by lane.
@@ -306,6 +315,15 @@ mod x86 {
                 }
             }
         }
+        #[inline(always)]
+        fn store_pairs(a: Self, b: Self, p: &mut [f32; 8]) {
+            // SAFETY: SSE is part of x86-64; `p` holds eight f32 (two unaligned stores of
+            // (a0 b0 a1 b1) and (a2 b2 a3 b3)).
+            unsafe {
+                _mm_storeu_ps(p.as_mut_ptr(), _mm_unpacklo_ps(a.0, b.0));
+                _mm_storeu_ps(p.as_mut_ptr().add(4), _mm_unpackhi_ps(a.0, b.0));
+            }
+        }
     }
 
     impl Four<f64> for F64x4 {
@@ -435,6 +453,19 @@ mod x86 {
                 }
             }
         }
+        #[inline(always)]
+        fn store_pairs(a: Self, b: Self, p: &mut [f64; 8]) {
+            // SAFETY: an F64x4 exists only where the processor runs AVX; `p` holds eight f64
+            // (two unaligned stores).
+            unsafe {
+                // (a0 b0 a2 b2) and (a1 b1 a3 b3); then their low halves and their high ones.
+                let lo = _mm256_unpacklo_pd(a.0, b.0);
+                let hi = _mm256_unpackhi_pd(a.0, b.0);
+                let m = p.as_mut_ptr();
+                _mm256_storeu_pd(m, _mm256_permute2f128_pd::<0x20>(lo, hi));
+                _mm256_storeu_pd(m.add(4), _mm256_permute2f128_pd::<0x31>(lo, hi));
+            }
+        }
     }
 }
 
@@ -492,6 +523,13 @@ mod tests {
                         assert_eq!(v6[c].to_array()[q].to_bits(), p6[q][c].to_bits());
                         assert_eq!(back6[q][c].to_bits(), p6[q][c].to_bits());
                     }
+                }
+                // Two vectors' lanes interleaved.
+                let mut pairs = [0.0; 8];
+                <$four>::store_pairs(<$four>::load(t, &a), <$four>::load(t, &d), &mut pairs);
+                for q in 0..4 {
+                    assert_eq!(pairs[2 * q].to_bits(), a[q].to_bits(), "pairs {q}");
+                    assert_eq!(pairs[2 * q + 1].to_bits(), d[q].to_bits(), "pairs {q}");
                 }
                 // The transpose: lane k of result q is lane q of input k.
                 let m: [[$r; 4]; 4] = [a, b, d, e];

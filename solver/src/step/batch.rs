@@ -75,12 +75,46 @@ pub fn node_lane_shapes<E: Element, R: Real>(
     j: usize,
     live: usize,
 ) -> [R::Four; 4] {
-    let at = [0, 1, 2, 3].map(|q: usize| j + q.min(live - 1));
-    let mut xl = [R::Four::splat(t, R::ZERO); 3];
-    for (a, v) in xl.iter_mut().enumerate() {
-        *v = R::Four::load(t, &at.map(|i| x[i][a]));
-    }
+    let xl = point_lanes3::<R>(t, x, j, live);
     R::Four::transpose(t, E::shape_four(t, map, first, &xl))
+}
+
+/// Points `j..j + live`' values of `a` as lanes (lane q: point j + q; the lanes past `live` the
+/// last of them again): four points' by one load.
+#[inline(always)]
+pub fn point_lanes<R: Real>(
+    t: <R::Four as Four<R>>::Token,
+    a: &[R],
+    j: usize,
+    live: usize,
+) -> R::Four {
+    if live == 4 {
+        return R::Four::load(t, a[j..j + 4].try_into().expect("four points"));
+    }
+    R::Four::load(t, &[0, 1, 2, 3].map(|q: usize| a[j + q.min(live - 1)]))
+}
+
+/// Points `j..j + live`' 3-vectors of `a` one vector per component (lane q: point j + q; the
+/// lanes past `live` the last of them again): four points' by [`Four::load_points3`], from
+/// their twelve consecutive values.
+#[inline(always)]
+pub fn point_lanes3<R: Real>(
+    t: <R::Four as Four<R>>::Token,
+    a: &[V3<R>],
+    j: usize,
+    live: usize,
+) -> [R::Four; 3] {
+    if live == 4 {
+        let four: &[V3<R>; 4] = a[j..j + 4].try_into().expect("four points");
+        return R::Four::load_points3(t, four);
+    }
+    let at = [0, 1, 2, 3].map(|q: usize| j + q.min(live - 1));
+    // (A loop, not `from_fn`: the intrinsics in its closure would become calls.)
+    let mut v = [R::Four::splat(t, R::ZERO); 3];
+    for (c, vc) in v.iter_mut().enumerate() {
+        *vc = R::Four::load(t, &at.map(|i| a[i][c]));
+    }
+    v
 }
 
 /// Σ_k N_k a_k at each point of a batch, from the shape values by node (`n[k][q]`) and the

@@ -14,7 +14,7 @@ use crate::element::Element;
 use crate::four::Four;
 use crate::material::liquid::Fluid;
 use crate::real::{Real, V3};
-use crate::step::batch::{four_of, node_rows, Lanes};
+use crate::step::batch::{four_of, node_rows, point_lanes, point_lanes3, Lanes};
 use crate::step::contact::{maps, OneBody};
 
 /// An element's points, each array sliced to them (one length), and what grid to particle
@@ -175,13 +175,9 @@ impl<E: Element, R: Real> Kernel<E, R> {
     ) {
         const { assert!(LIVE >= 1 && LIVE <= 4) };
         let t = self.t;
-        let at = [0, 1, 2, 3].map(|q: usize| j + q.min(LIVE - 1));
-        let mut xl = [R::Four::splat(t, R::ZERO); 3];
-        for (a, v) in xl.iter_mut().enumerate() {
-            *v = R::Four::load(t, &at.map(|i| p.x[i][a]));
-        }
+        let xl = point_lanes3::<R>(t, p.x, j, LIVE);
         let n = E::shape_four(t, p.map, p.first, &xl);
-        let m = R::Four::load(t, &at.map(|i| p.mass[i]));
+        let m = point_lanes::<R>(t, p.mass, j, LIVE);
         // The shape values times the mass, one lane per node for each point.
         let mn = R::Four::transpose(t, [m * n[0], m * n[1], m * n[2], m * n[3]]);
         let v = self.update(&n, &self.acc, p.vel, j, LIVE);
@@ -198,7 +194,7 @@ impl<E: Element, R: Real> Kernel<E, R> {
         };
         // The same liquid mass as particle to grid mapped (see `LiquidPoints::volume0`).
         let vol = l.volume0.unwrap_or(l.volume);
-        let mw = R::Four::splat(t, f.rho_w) * R::Four::load(t, &at.map(|i| vol[i]));
+        let mw = R::Four::splat(t, f.rho_w) * point_lanes::<R>(t, vol, j, LIVE);
         let mnw = R::Four::transpose(t, [mw * n[0], mw * n[1], mw * n[2], mw * n[3]]);
         let w = self.update(&n, acc_w, l.w, j, LIVE);
         self.remap(&mnw, &w, &mut s4[E::DIM..E::DIM + 3], LIVE);
@@ -229,18 +225,21 @@ impl<E: Element, R: Real> Kernel<E, R> {
                 dv[c] = dv[c] + *nk * ak[c];
             }
         }
-        let at = [0, 1, 2, 3].map(|q: usize| j + q.min(live - 1));
-        let mut v = [zero; 3];
-        for (c, vc) in v.iter_mut().enumerate() {
-            *vc = R::Four::load(t, &at.map(|i| vel[i][c]));
-        }
+        let mut v = point_lanes3::<R>(t, vel, j, live);
         for c in 0..E::DIM {
             v[c] = v[c] + self.dt * dv[c];
         }
-        let va: [[R; 4]; 3] = [v[0].to_array(), v[1].to_array(), v[2].to_array()];
-        for q in 0..live {
-            for c in 0..E::DIM {
-                vel[j + q][c] = va[c][q];
+        if live == 4 {
+            // Four points' velocities back one point after another, moved in registers (a
+            // section's z-components as loaded, so they keep their bits).
+            let to: &mut [V3<R>; 4] = (&mut vel[j..j + 4]).try_into().expect("four points");
+            R::Four::store_points3(v, to);
+        } else {
+            let va: [[R; 4]; 3] = [v[0].to_array(), v[1].to_array(), v[2].to_array()];
+            for q in 0..live {
+                for c in 0..E::DIM {
+                    vel[j + q][c] = va[c][q];
+                }
             }
         }
         v

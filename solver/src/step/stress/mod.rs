@@ -935,10 +935,10 @@ fn rate_sums<E: Element, R: Real, const WIDE: bool>(
                 material,
             };
             let [s0, s1] = rate_lane_sums::<E, R>(t, cx, &nodal, map, first, &points);
-            let (s0, s1) = (s0.to_array(), s1.to_array());
-            for (k, slot) in node_slots::<E, R>(two, 2).enumerate() {
-                slot.copy_from_slice(&[s0[k], s1[k]]);
-            }
+            // The four nodes' slots of two, one after another: node k's (s0, s1) is lanes k.
+            debug_assert_eq!(node_slots::<E, R>(two, 2).len(), 4);
+            let pairs: &mut [R; 8] = two.try_into().expect("a tetrahedron's four slots of two");
+            R::Four::store_pairs(s0, s1, pairs);
             return;
         }
     }
