@@ -119,6 +119,61 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
     // The chunk's points: a batch's lanes may read past the element's points (never past
     // these).
     let n = x.len();
+    // One batch in place, `$live` a constant in each copy (a count known only at run time
+    // made loops of the stores and of the guard's sums).
+    macro_rules! in_place {
+        ($live:literal) => {{
+            const LIVE: usize = $live;
+            debug_assert!(
+                element[j..j + LIVE].iter().all(|&h| h as usize == el.e),
+                "points not sorted by element"
+            );
+            let r = j..j + 4;
+            let volume4: &mut [R; 4] = (&mut volume[r.clone()]).try_into().unwrap();
+            let mut pore4 = pore
+                .as_deref_mut()
+                .map(|p| <&mut [R; 4]>::try_from(&mut p[r.clone()]).unwrap());
+            let (strain, outside) = four_points::<E, R, LIVE>(
+                &terms,
+                el.map,
+                el.first,
+                (&mut x[r.clone()]).try_into().unwrap(),
+                (&mut u[r.clone()]).try_into().unwrap(),
+                (&mut stress[r.clone()]).try_into().unwrap(),
+                volume4,
+                pore4.as_deref_mut(),
+                guard,
+                locate.is_some(),
+            );
+            let mass4 = *<&[R; 4]>::try_from(&mass[r]).unwrap();
+            if let (Some(open), Some(sums)) = (open.as_deref_mut(), &sums) {
+                let on = std::array::from_fn(|q| q < LIVE);
+                sums.add(open, on, strain, *volume4, mass4, pore4.map(|p| *p));
+            }
+            if let Some((found, offset)) = locate.as_mut().filter(|_| outside) {
+                for i in j..j + LIVE {
+                    relocate(cx.mesh, found, *offset + i, &mut element[i], &x[i]);
+                }
+            }
+            j += LIVE;
+        }};
+    }
+    // An element of exactly a tetrahedron's usual four points or a triangle's three, all
+    // taking part (the common case), outside the batch loop: its terms go into lanes where
+    // they are used, not hoisted out of the loop into lanes and spilled.
+    let whole = if E::NODES == 4 { 4 } else { 3 };
+    if end - j == whole
+        && j + 4 <= n
+        && active[j..j + whole].iter().all(|&a| a)
+        && material[j..j + whole].iter().all(|&m| m == lead)
+    {
+        if E::NODES == 4 {
+            in_place!(4);
+        } else {
+            in_place!(3);
+        }
+        return j;
+    }
     while j < end {
         // The next four points, or the element's last one to three, if all take part (the
         // common case), are updated in place: four lanes loaded from the chunk's arrays, the
@@ -129,50 +184,11 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
             active[j..j + live].iter().all(|&a| a)
                 && material[j..j + live].iter().all(|&m| m == lead)
         };
-        // One batch in place, `$live` a constant in each copy (a count known only at run time
-        // made loops of the stores and of the guard's sums).
-        macro_rules! in_place {
-            ($live:literal) => {{
-                const LIVE: usize = $live;
-                debug_assert!(
-                    element[j..j + LIVE].iter().all(|&h| h as usize == el.e),
-                    "points not sorted by element"
-                );
-                let r = j..j + 4;
-                let volume4: &mut [R; 4] = (&mut volume[r.clone()]).try_into().unwrap();
-                let mut pore4 = pore
-                    .as_deref_mut()
-                    .map(|p| <&mut [R; 4]>::try_from(&mut p[r.clone()]).unwrap());
-                let (strain, outside) = four_points::<E, R, LIVE>(
-                    &terms,
-                    el.map,
-                    el.first,
-                    (&mut x[r.clone()]).try_into().unwrap(),
-                    (&mut u[r.clone()]).try_into().unwrap(),
-                    (&mut stress[r.clone()]).try_into().unwrap(),
-                    volume4,
-                    pore4.as_deref_mut(),
-                    guard,
-                    locate.is_some(),
-                );
-                let mass4 = *<&[R; 4]>::try_from(&mass[r]).unwrap();
-                if let (Some(open), Some(sums)) = (open.as_deref_mut(), &sums) {
-                    let on = std::array::from_fn(|q| q < LIVE);
-                    sums.add(open, on, strain, *volume4, mass4, pore4.map(|p| *p));
-                }
-                if let Some((found, offset)) = locate.as_mut().filter(|_| outside) {
-                    for i in j..j + LIVE {
-                        relocate(cx.mesh, found, *offset + i, &mut element[i], &x[i]);
-                    }
-                }
-                j += LIVE;
-                continue;
-            }};
-        }
         if j + 4 <= n {
             // (Four by a constant count, the common case: one compare of each array's four.)
             if live == 4 && all_take_part(4) {
                 in_place!(4);
+                continue;
             }
             if live < 4 && all_take_part(live) {
                 match live {
@@ -180,6 +196,7 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
                     2 => in_place!(2),
                     _ => in_place!(1),
                 }
+                continue;
             }
         }
         let b = match Batch::<4>::new(j, end, takes_part) {
@@ -271,27 +288,28 @@ impl<R: Real> GuardTerms<R> {
     }
 }
 
-/// An element's terms, each formed as the point loop forms it at every point, and held in
-/// all four lanes.
+/// An element's terms, each formed as the point loop forms it at every point, and put into all
+/// four lanes where a batch uses it (formed into lanes here, the thirty-odd vectors were
+/// spilled and reloaded: docs/design.md §9).
 struct Terms<R: Real> {
     t: <R::Four as Four<R>>::Token,
     /// Nodal velocities (`[k][c]`; zero past the element's nodes).
-    vel: [[R::Four; 3]; 4],
+    vel: [[R; 3]; 4],
     /// The strain increment (xx yy zz xy yz zx).
-    de: [R::Four; 6],
+    de: [R; 6],
     /// The law's stress increment.
-    increment: [R::Four; 6],
+    increment: [R; 6],
     /// The spin increment (ω_xy, ω_yz, ω_zx), with the objective terms.
     spin: Option<[R; 3]>,
     /// tr Δε.
-    ev: R::Four,
+    ev: R,
     /// The volume factor 1 + tr Δε.
-    grow: R::Four,
-    dt: R::Four,
+    grow: R,
+    dt: R,
     /// The pore pressure's nodal rates, where the material has a liquid and the run one.
-    rate: Option<[R::Four; 4]>,
+    rate: Option<[R; 4]>,
     /// The locate tolerance, negative: a shape value below it is outside.
-    tol: R::Four,
+    tol: R,
 }
 
 impl<R: Real> Terms<R> {
@@ -305,7 +323,6 @@ impl<R: Real> Terms<R> {
     ) -> Self {
         let dt = cx.dt;
         let de = strain_increment::<E, R>(el.l, dt);
-        let s = |v: R| R::Four::splat(t, v);
         let increment = law.increment(&de);
         let rate = cx
             .pore_rate
@@ -313,26 +330,26 @@ impl<R: Real> Terms<R> {
             .filter(|r| r.fluids[lead as usize].is_some())
             .map(|r| {
                 std::array::from_fn(|k| {
-                    s(if k < E::NODES {
+                    if k < E::NODES {
                         r.nodal[el.corners[k] as usize]
                     } else {
                         R::ZERO
-                    })
+                    }
                 })
             });
         Terms {
             t,
             vel: std::array::from_fn(|k| {
-                std::array::from_fn(|c| s(if k < E::NODES { el.vel[k][c] } else { R::ZERO }))
+                std::array::from_fn(|c| if k < E::NODES { el.vel[k][c] } else { R::ZERO })
             }),
-            increment: std::array::from_fn(|c| s(increment[c])),
+            increment,
             spin: cx.objective.then(|| spin_increment(el.l, dt)),
-            ev: s(de[0] + de[1] + de[2]),
-            grow: s(R::ONE + de[0] + de[1] + de[2]),
-            de: std::array::from_fn(|c| s(de[c])),
-            dt: s(dt),
+            ev: de[0] + de[1] + de[2],
+            grow: R::ONE + de[0] + de[1] + de[2],
+            de,
+            dt,
             rate,
-            tol: s(R::of(-tolerance::<R>())),
+            tol: R::of(-tolerance::<R>()),
         }
     }
 }
@@ -360,6 +377,7 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
     const { assert!(LIVE >= 1 && LIVE <= 4) };
     let t = k.t;
     let lanes = |v: [R; 4]| R::Four::load(t, &v);
+    let sp = |v: R| R::Four::splat(t, v);
     let zero = R::Four::splat(t, R::ZERO);
     let xl = R::Four::load_points3(t, x);
     let n = E::shape_four(t, map, first, &xl);
@@ -367,35 +385,35 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
     if let (Some(p), Some(rate)) = (pore, &k.rate) {
         let mut change = zero;
         for kk in 0..E::NODES {
-            change = change + n[kk] * rate[kk];
+            change = change + n[kk] * sp(rate[kk]);
         }
-        let p1 = lanes(*p) + change * k.dt;
+        let p1 = lanes(*p) + change * sp(k.dt);
         store_live::<R, LIVE>(p1, p);
     }
     let mut dx = [zero; 3];
     for kk in 0..E::NODES {
         for c in 0..E::DIM {
-            dx[c] = dx[c] + n[kk] * k.vel[kk][c];
+            dx[c] = dx[c] + n[kk] * sp(k.vel[kk][c]);
         }
     }
     let s0 = R::Four::load_points6(t, stress);
-    let mut s1: [R::Four; 6] = std::array::from_fn(|c| s0[c] + k.increment[c]);
+    let mut s1: [R::Four; 6] = std::array::from_fn(|c| s0[c] + sp(k.increment[c]));
     if let Some(spin) = &k.spin {
         // Anura3D's objective terms, after the law's update: the co-rotation and -tr(Δε) σ
         // of the start-of-step stress.
         let h = rotation_four::<R>(t, &s0, spin);
         for c in 0..6 {
-            s1[c] = s1[c] + (h[c] - k.ev * s0[c]);
+            s1[c] = s1[c] + (h[c] - sp(k.ev) * s0[c]);
         }
     }
     let v0 = lanes(*volume);
-    let v1 = v0 * k.grow;
+    let v1 = v0 * sp(k.grow);
     let u0 = R::Four::load_points3(t, u);
     // (A section's out-of-plane components as loaded: stored back, they keep their bits.)
     let (mut x1, mut u1) = (xl, u0);
     for a in 0..E::DIM {
-        x1[a] = xl[a] + k.dt * dx[a];
-        u1[a] = u0[a] + k.dt * dx[a];
+        x1[a] = xl[a] + sp(k.dt) * dx[a];
+        u1[a] = u0[a] + sp(k.dt) * dx[a];
     }
     if LIVE == 4 {
         // Four points' values back to one point after another, moved in registers.
@@ -420,7 +438,7 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
     let outside = locate && {
         // The lanes past `LIVE` never outside: -∞ (no value is below it, NaN neither).
         let tol = if LIVE == 4 {
-            k.tol
+            sp(k.tol)
         } else {
             let below = R::of(f64::NEG_INFINITY);
             lanes(std::array::from_fn(|q| {
@@ -447,7 +465,7 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
     let mut w = zero;
     for c in 0..if E::DIM == 2 { 4 } else { 6 } {
         let twice = R::Four::splat(t, if c < 3 { R::ONE } else { R::of(2.0) });
-        w = w + twice * (s0[c] + s1[c]) * k.de[c];
+        w = w + twice * (s0[c] + s1[c]) * sp(k.de[c]);
     }
     let finite = zero * (x1[0] + x1[1] + x1[2] + v1);
     ((w * v0 + finite).to_array(), outside)
