@@ -83,16 +83,39 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
     let (active, material) = (&p.active[..count], &p.material[..count]);
     let k = Kernel::<E, R> {
         t,
-        dt: R::Four::splat(t, dt),
-        acc: nodal::<E, R>(t, p.acc),
-        acc_w: p.liquid.as_ref().map(|l| nodal::<E, R>(t, l.acc)),
+        dt,
+        acc: p.acc,
+        acc_w: p.liquid.as_ref().map(|l| l.acc),
         _element: std::marker::PhantomData,
     };
     let mut s4 = [R::Four::splat(t, R::ZERO); 6];
     for (v, sum) in s4.iter_mut().zip(sums.iter()) {
         *v = R::Four::load(t, sum);
     }
+    // The liquid's fluid of material `lead`, where it has one.
+    let fluids = p.liquid.as_ref().filter(|_| WITH_LIQUID).map(|l| l.fluids);
+    let fluid_of = |lead: u32| fluids.and_then(|f| f[lead as usize]);
     let mut j = 0;
+    // An element of exactly a tetrahedron's usual four points or a triangle's three, all
+    // taking part (the common case), outside the batch loop: the nodal values go into lanes
+    // where they are used, not hoisted out of the loop into lanes and spilled.
+    let whole = if E::NODES == 4 { 4 } else { 3 };
+    let lead = material.first().copied().unwrap_or(0);
+    let all_of_lead = count == whole
+        && if whole == 4 {
+            four_of(active, material, 0, lead)
+        } else {
+            (0..whole).all(|i| active[i] && material[i] == lead)
+        };
+    if all_of_lead && maps(body, lead) {
+        let fluid = fluid_of(lead);
+        if E::NODES == 4 {
+            k.batch::<4, WANT>(&mut p, 0, fluid, &mut s4, kinetic, kinetic_w);
+        } else {
+            k.batch::<3, WANT>(&mut p, 0, fluid, &mut s4, kinetic, kinetic_w);
+        }
+        j = count;
+    }
     while j < count {
         let live = (count - j).min(4);
         let lead = material[j];
@@ -106,12 +129,7 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
         if !(all_of_lead && maps(body, lead)) {
             break;
         }
-        // The liquid's fluid, where the material has one.
-        let fluid = p
-            .liquid
-            .as_ref()
-            .filter(|_| WITH_LIQUID)
-            .and_then(|l| l.fluids[lead as usize]);
+        let fluid = fluid_of(lead);
         macro_rules! run {
             ($live:literal) => {
                 k.batch::<$live, WANT>(&mut p, j, fluid, &mut s4, kinetic, kinetic_w)
@@ -148,18 +166,19 @@ pub(super) fn stores_sums<E: Element>(taken: usize, count: usize) -> bool {
     E::NODES == 4 && taken == count
 }
 
-/// An element's values in all four lanes.
-struct Kernel<E: Element, R: Real> {
+/// An element's values, put into all four lanes where a batch uses them (formed into lanes
+/// once per element, they were spilled and reloaded: docs/design.md §9).
+struct Kernel<'a, E: Element, R: Real> {
     t: <R::Four as Four<R>>::Token,
-    dt: R::Four,
-    /// Nodal accelerations (`[k][c]`; zero past the element's nodes).
-    acc: [[R::Four; 3]; 4],
+    dt: R,
+    /// Nodal accelerations (`[k][c]`, the element's nodes).
+    acc: &'a [V3<R>],
     /// The liquid's, in a two-phase pass.
-    acc_w: Option<[[R::Four; 3]; 4]>,
+    acc_w: Option<&'a [V3<R>]>,
     _element: std::marker::PhantomData<E>,
 }
 
-impl<E: Element, R: Real> Kernel<E, R> {
+impl<E: Element, R: Real> Kernel<'_, E, R> {
     /// Points `j..j + LIVE` of the element (which all take part, of one material whose fluid
     /// is `fluid`): lane q reads point j + q, the lanes past `LIVE` the last of them again
     /// (computed, never stored or summed).
@@ -180,7 +199,7 @@ impl<E: Element, R: Real> Kernel<E, R> {
         let m = point_lanes::<R>(t, p.mass, j, LIVE);
         // The shape values times the mass, one lane per node for each point.
         let mn = R::Four::transpose(t, [m * n[0], m * n[1], m * n[2], m * n[3]]);
-        let v = self.update(&n, &self.acc, p.vel, j, LIVE);
+        let v = self.update(&n, self.acc, p.vel, j, LIVE);
         self.remap(&mn, &v, &mut s4[..3], LIVE);
         if WANT {
             let e = (m * dot::<E, R>(t, &v)).to_array();
@@ -212,7 +231,7 @@ impl<E: Element, R: Real> Kernel<E, R> {
     fn update(
         &self,
         n: &[R::Four; 4],
-        acc: &[[R::Four; 3]; 4],
+        acc: &[V3<R>],
         vel: &mut [V3<R>],
         j: usize,
         live: usize,
@@ -222,12 +241,13 @@ impl<E: Element, R: Real> Kernel<E, R> {
         let mut dv = [zero; 3];
         for (nk, ak) in n.iter().zip(acc).take(E::NODES) {
             for c in 0..E::DIM {
-                dv[c] = dv[c] + *nk * ak[c];
+                dv[c] = dv[c] + *nk * R::Four::splat(t, ak[c]);
             }
         }
         let mut v = point_lanes3::<R>(t, vel, j, live);
+        let dt = R::Four::splat(t, self.dt);
         for c in 0..E::DIM {
-            v[c] = v[c] + self.dt * dv[c];
+            v[c] = v[c] + dt * dv[c];
         }
         if live == 4 {
             // Four points' velocities back one point after another, moved in registers (a
@@ -256,19 +276,6 @@ impl<E: Element, R: Real> Kernel<E, R> {
             }
         }
     }
-}
-
-/// An element's nodal vectors in all four lanes (`[k][c]`), zero past its nodes.
-#[inline(always)]
-fn nodal<E: Element, R: Real>(t: <R::Four as Four<R>>::Token, a: &[V3<R>]) -> [[R::Four; 3]; 4] {
-    let zero = R::Four::splat(t, R::ZERO);
-    let mut out = [[zero; 3]; 4];
-    for (k, ak) in a.iter().enumerate().take(E::NODES) {
-        for c in 0..3 {
-            out[k][c] = R::Four::splat(t, ak[c]);
-        }
-    }
-    out
 }
 
 /// v · v of each lane over the element's dimensions, as the point loop sums it (from zero).
