@@ -734,20 +734,61 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     // A triangle's shape values point by point (in four lanes and transposed, as below, the
     // 2D dry column ran 30 instructions per particle-step more).
     if E::DIM == 2 {
-        for (i, xi) in x.iter().enumerate() {
-            if !points.active[i] || !maps(cx.body, points.material[i]) {
-                continue;
-            }
+        let shape = |xi: &V3<R>| {
             let nl = E::shape_lanes::<R, 1>(map, first, &xi.map(|c| [c]));
-            let n = R::Four::load(t, &std::array::from_fn(|k| nl[k][0]));
-            let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
-            point_sums::<E, R, WITH_LIQUID, false>(t, cx, points, i, n, full, s, w, sum);
+            R::Four::load(t, &std::array::from_fn(|k| nl[k][0]))
+        };
+        // A triangle of exactly its usual three points, all taking part and of the lead
+        // material (the common case), by a loop of a constant count, which the compiler
+        // unrolls: as the tetrahedra's below, the element's values are not hoisted and spilled.
+        if count == 3
+            && (0..3).all(|i| points.active[i] && points.material[i] == lead)
+            && maps(cx.body, lead)
+        {
+            for i in 0..3 {
+                let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
+                let n = shape(&x[i]);
+                point_sums::<E, R, WITH_LIQUID, true>(t, cx, points, i, n, full, s, w, sum);
+            }
+        } else {
+            for (i, xi) in x.iter().enumerate() {
+                if !points.active[i] || !maps(cx.body, points.material[i]) {
+                    continue;
+                }
+                let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
+                point_sums::<E, R, WITH_LIQUID, false>(
+                    t,
+                    cx,
+                    points,
+                    i,
+                    shape(xi),
+                    full,
+                    s,
+                    w,
+                    sum,
+                );
+            }
         }
     }
     // A tetrahedron's four points' shape values at a time, one lane per point, turned into one
     // lane per node for each point by a transpose (the same bits as each point's own: the 3D
     // dry column 13 instructions per particle-step fewer than point by point).
     let mut j = if E::DIM == 2 { count } else { 0 };
+    // A tetrahedron of exactly its usual four points, all taking part and of the lead
+    // material (the common case), outside the batch loop: the map's values go into lanes
+    // where they are used, not hoisted out of the loop into lanes and spilled.
+    if E::DIM == 3
+        && count == 4
+        && four_of(points.active, points.material, 0, lead)
+        && maps(cx.body, lead)
+    {
+        let per_point = node_lane_shapes::<E, R>(t, map, first, x, 0, 4);
+        for (i, &n) in per_point.iter().enumerate() {
+            let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
+            point_sums::<E, R, WITH_LIQUID, true>(t, cx, points, i, n, full, s, w, sum);
+        }
+        j = count;
+    }
     while j < count {
         let live = (count - j).min(4);
         let per_point = node_lane_shapes::<E, R>(t, map, first, x, j, live);
