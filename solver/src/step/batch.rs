@@ -136,6 +136,37 @@ pub fn interpolate<E: Element, R: Real, const W: usize>(
     out
 }
 
+/// The points an element usually holds (Anura3D's usual placements): a tetrahedron's four, a
+/// triangle's three. The point passes take an element of exactly this count, all taking part,
+/// in straight code outside their batch loops (docs/design.md §9).
+pub const fn usual_count<E: Element>() -> usize {
+    if E::NODES == 4 {
+        4
+    } else {
+        3
+    }
+}
+
+/// Whether the points `j..end` are an element's [`usual_count`], all active and of material
+/// `lead` (four by [`four_of`]).
+#[inline(always)]
+pub fn usual_of<E: Element>(
+    active: &[bool],
+    material: &[u32],
+    j: usize,
+    end: usize,
+    lead: u32,
+) -> bool {
+    if end - j != usual_count::<E>() {
+        return false;
+    }
+    if usual_count::<E>() == 4 {
+        four_of(active, material, j, lead)
+    } else {
+        active[j..end].iter().all(|&a| a) && material[j..end].iter().all(|&m| m == lead)
+    }
+}
+
 /// Whether the four points `j..j + 4` are all active and of material `lead`: one compare of
 /// each array's four (checked point by point, the point passes ran 13 instructions per point
 /// for it).

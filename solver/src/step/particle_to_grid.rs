@@ -14,7 +14,8 @@ use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 use crate::step::batch::{
-    four_of, lanes, node_lane_shapes, store, store_tetrahedron, Lanes, LANES, TETRAHEDRA,
+    four_of, lanes, node_lane_shapes, store, store_tetrahedron, usual_count, usual_of, Lanes,
+    LANES, TETRAHEDRA,
 };
 use crate::step::contact::{maps, OneBody};
 use crate::step::mixed::Mixed;
@@ -741,11 +742,8 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         // A triangle of exactly its usual three points, all taking part and of the lead
         // material (the common case), by a loop of a constant count, which the compiler
         // unrolls: as the tetrahedra's below, the element's values are not hoisted and spilled.
-        if count == 3
-            && (0..3).all(|i| points.active[i] && points.material[i] == lead)
-            && maps(cx.body, lead)
-        {
-            for i in 0..3 {
+        if usual_of::<E>(points.active, points.material, 0, count, lead) && maps(cx.body, lead) {
+            for i in 0..usual_count::<E>() {
                 let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
                 let n = shape(&x[i]);
                 point_sums::<E, R, WITH_LIQUID, true>(t, cx, points, i, n, full, s, w, sum);
@@ -778,10 +776,10 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     // material (the common case), outside the batch loop: the map's values go into lanes
     // where they are used, not hoisted out of the loop into lanes and spilled.
     if E::DIM == 3
-        && count == 4
-        && four_of(points.active, points.material, 0, lead)
+        && usual_of::<E>(points.active, points.material, 0, count, lead)
         && maps(cx.body, lead)
     {
+        debug_assert_eq!(count, 4, "a tetrahedron's usual count");
         let per_point = node_lane_shapes::<E, R>(t, map, first, x, 0, 4);
         for (i, &n) in per_point.iter().enumerate() {
             let (s, w, sum) = (&mut s4, &mut w4, &mut totals);

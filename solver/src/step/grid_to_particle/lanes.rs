@@ -14,7 +14,9 @@ use crate::element::Element;
 use crate::four::Four;
 use crate::material::liquid::Fluid;
 use crate::real::{Real, V3};
-use crate::step::batch::{four_of, node_rows, point_lanes, point_lanes3, Lanes};
+use crate::step::batch::{
+    four_of, node_rows, point_lanes, point_lanes3, usual_count, usual_of, Lanes,
+};
 use crate::step::contact::{maps, OneBody};
 
 /// An element's points, each array sliced to them (one length), and what grid to particle
@@ -99,17 +101,10 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
     // An element of exactly a tetrahedron's usual four points or a triangle's three, all
     // taking part (the common case), outside the batch loop: the nodal values go into lanes
     // where they are used, not hoisted out of the loop into lanes and spilled.
-    let whole = if E::NODES == 4 { 4 } else { 3 };
     let lead = material.first().copied().unwrap_or(0);
-    let all_of_lead = count == whole
-        && if whole == 4 {
-            four_of(active, material, 0, lead)
-        } else {
-            (0..whole).all(|i| active[i] && material[i] == lead)
-        };
-    if all_of_lead && maps(body, lead) {
+    if usual_of::<E>(active, material, 0, count, lead) && maps(body, lead) {
         let fluid = fluid_of(lead);
-        if E::NODES == 4 {
+        if usual_count::<E>() == 4 {
             k.batch::<4, WANT>(&mut p, 0, fluid, &mut s4, kinetic, kinetic_w);
         } else {
             k.batch::<3, WANT>(&mut p, 0, fluid, &mut s4, kinetic, kinetic_w);

@@ -19,7 +19,7 @@ use crate::element::Element;
 use crate::four::Four;
 use crate::material::law::Law;
 use crate::real::{Real, V3};
-use crate::step::batch::Batch;
+use crate::step::batch::{usual_count, usual_of, Batch};
 use crate::step::contact::maps;
 
 use super::{spin_increment, strain_increment, Open, Pass};
@@ -161,13 +161,8 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
     // An element of exactly a tetrahedron's usual four points or a triangle's three, all
     // taking part (the common case), outside the batch loop: its terms go into lanes where
     // they are used, not hoisted out of the loop into lanes and spilled.
-    let whole = if E::NODES == 4 { 4 } else { 3 };
-    if end - j == whole
-        && j + 4 <= n
-        && active[j..j + whole].iter().all(|&a| a)
-        && material[j..j + whole].iter().all(|&m| m == lead)
-    {
-        if E::NODES == 4 {
+    if j + 4 <= n && usual_of::<E>(active, material, j, end, lead) {
+        if usual_count::<E>() == 4 {
             in_place!(4);
         } else {
             in_place!(3);
