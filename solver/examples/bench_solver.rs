@@ -6,7 +6,12 @@
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
 //!  --order morton|random|none --precision f64|f32 --guards on|off
-//!  --law linear|mc-elastic|mc-plastic|mc-flowing --surface on|off --dim 3|2 --shear RATE`
+//!  --law linear|mc-elastic|mc-plastic|mc-flowing --surface on|off --dim 3|2 --shear RATE
+//!  --points N`
+//!
+//! `--points N` places N material points per element instead of the usual 4 per tetrahedron
+//! and 3 per triangle (any count the element supports: 1, 4 or 10 for tetrahedra, 1 or 3 for
+//! triangles), to split a step's cost into what each element and each point takes.
 //!
 //! `--dim 2` runs the plane-strain twin: a rectangle of `--cells NX NY` square cells of 1 cm
 //! (the 3D column's cell size at NY = 100, so the time step and the motion per step compare),
@@ -161,7 +166,7 @@ fn main() {
         .unwrap();
         MaterialSpec::with_law("soil", 2000.0, law).unwrap()
     };
-    let points = if plane { 3 } else { 4 };
+    let points = arg(&a, "--points").map_or(if plane { 3 } else { 4 }, |s| s.parse().unwrap());
     let mut case = Case::single_material("bench", model, soil, points, fixed);
     if !saturated {
         // Every law starts from the same stress, σv = 200, σh = 100 kPa (compression): inside

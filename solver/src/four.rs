@@ -33,6 +33,11 @@ pub trait Four<R: Copy>:
     /// Whether some lane is less than the same lane of `o` (an ordered comparison: false
     /// where either is NaN, as `<` on the scalars).
     fn any_lt(self, o: Self) -> bool;
+    /// Lanes `0..live` of `self` and the others of `old` (values moved, not computed): four
+    /// points' new values where only the first `live` are the element's, the rest stored back
+    /// as they were loaded, so that one whole-vector store leaves them unchanged. `live` is a
+    /// constant at every call (1 to 4), which folds the choice away.
+    fn first_of(self, old: Self, live: usize) -> Self;
     /// The four vectors' lanes transposed: lane k of vector q of the result is lane q of
     /// vector k (values moved, not computed).
     #[inline(always)]
@@ -123,6 +128,16 @@ where
     fn any_lt(self, o: Self) -> bool {
         (0..4).any(|k| self.0[k] < o.0[k])
     }
+    #[inline(always)]
+    fn first_of(self, old: Self, live: usize) -> Self {
+        Lanes4(std::array::from_fn(|k| {
+            if k < live {
+                self.0[k]
+            } else {
+                old.0[k]
+            }
+        }))
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -137,9 +152,9 @@ mod x86 {
         _mm256_loadu_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_permute2f128_pd,
         _mm256_permute_pd, _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm256_unpackhi_pd,
         _mm256_unpacklo_pd, _mm_add_ps, _mm_castpd_ps, _mm_castps_pd, _mm_cmplt_ps, _mm_load_sd,
-        _mm_loadu_pd, _mm_loadu_ps, _mm_movehl_ps, _mm_movelh_ps, _mm_movemask_ps, _mm_mul_ps,
-        _mm_set1_ps, _mm_shuffle_ps, _mm_store_sd, _mm_storeu_pd, _mm_storeu_ps, _mm_sub_ps,
-        _mm_unpackhi_ps, _mm_unpacklo_ps, _CMP_LT_OQ,
+        _mm_loadu_pd, _mm_loadu_ps, _mm_move_ss, _mm_movehl_ps, _mm_movelh_ps, _mm_movemask_ps,
+        _mm_mul_ps, _mm_set1_ps, _mm_shuffle_ps, _mm_store_sd, _mm_storeu_pd, _mm_storeu_ps,
+        _mm_sub_ps, _mm_unpackhi_ps, _mm_unpacklo_ps, _CMP_LT_OQ,
     };
 
     /// `_mm_shuffle_ps`'s selector: lanes 0 and 1 from the first operand's lanes `a0`, `a1`,
@@ -216,6 +231,25 @@ mod x86 {
         fn any_lt(self, o: Self) -> bool {
             // SAFETY: SSE is part of x86-64. (`cmplt` is ordered: false with a NaN.)
             unsafe { _mm_movemask_ps(_mm_cmplt_ps(self.0, o.0)) != 0 }
+        }
+        #[inline(always)]
+        fn first_of(self, old: Self, live: usize) -> Self {
+            let (n, o) = (self.0, old.0);
+            // SAFETY: SSE is part of x86-64.
+            F32x4(unsafe {
+                match live {
+                    // (n0 o1 o2 o3): lane 0 moved in.
+                    1 => _mm_move_ss(o, n),
+                    // (n0 n1 o2 o3).
+                    2 => _mm_shuffle_ps::<{ pick(0, 1, 2, 3) }>(n, o),
+                    // (n2 n2 o3 o3), then (n0 n1 n2 o3).
+                    3 => {
+                        let t = _mm_shuffle_ps::<{ pick(2, 2, 3, 3) }>(n, o);
+                        _mm_shuffle_ps::<{ pick(0, 1, 0, 2) }>(n, t)
+                    }
+                    _ => n,
+                }
+            })
         }
         #[inline(always)]
         fn transpose(_: Sse, v: [Self; 4]) -> [Self; 4] {
@@ -357,6 +391,20 @@ mod x86 {
             // SAFETY: an F64x4 exists only where the processor runs AVX. (Ordered, quiet:
             // false with a NaN, as `<`.)
             unsafe { _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0, o.0)) != 0 }
+        }
+        #[inline(always)]
+        fn first_of(self, old: Self, live: usize) -> Self {
+            let (n, o) = (self.0, old.0);
+            // SAFETY: an F64x4 exists only where the processor runs AVX. (The selector's bit k
+            // takes lane k from the second operand.)
+            F64x4(unsafe {
+                match live {
+                    1 => _mm256_blend_pd::<0b0001>(o, n),
+                    2 => _mm256_blend_pd::<0b0011>(o, n),
+                    3 => _mm256_blend_pd::<0b0111>(o, n),
+                    _ => n,
+                }
+            })
         }
         #[inline(always)]
         fn transpose(_: Avx, v: [Self; 4]) -> [Self; 4] {
@@ -522,6 +570,14 @@ mod tests {
                     for c in 0..6 {
                         assert_eq!(v6[c].to_array()[q].to_bits(), p6[q][c].to_bits());
                         assert_eq!(back6[q][c].to_bits(), p6[q][c].to_bits());
+                    }
+                }
+                // The first lanes of one vector, the others of another.
+                for live in 1..=4 {
+                    let got = <$four>::load(t, &a).first_of(<$four>::load(t, &d), live);
+                    for (k, g) in got.to_array().iter().enumerate() {
+                        let want = if k < live { a[k] } else { d[k] };
+                        assert_eq!(g.to_bits(), want.to_bits(), "first {live} of lane {k}");
                     }
                 }
                 // Two vectors' lanes interleaved.

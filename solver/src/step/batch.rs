@@ -193,36 +193,54 @@ pub fn lanes<E: Element, R: Real>(per_node: impl Fn(usize) -> R) -> [R; LANES] {
     std::array::from_fn(|k| if k < E::NODES { per_node(k) } else { R::ZERO })
 }
 
-/// [`store`] of a tetrahedron's sums held as four-lane vectors (`sums[c]`: value c of each
-/// node): the `W` values of each node's `stride` from `offset` on, four values at a time turned
-/// from value lanes into node lanes by a transpose and stored whole, the last one to three
-/// value by value (values moved, not computed: the same bits).
+/// [`store`] of an element's sums held as four-lane vectors (`sums[c]`: value c of each node,
+/// lane k node k; a triangle's fourth lane never stored): the `W` values of each node's
+/// `stride` from `offset` on, four values at a time turned from value lanes into node lanes by
+/// a transpose and stored whole, the last one to three value by value (values moved, not
+/// computed: the same bits). Callers pass the pass's width and offset as constants of the
+/// element and phases (not a field read at run time), so that the buffer's node rows are
+/// found without a division (`chunks_exact` of a width known at run time divided per element)
+/// and the checks fold away.
+///
+/// # Panics
+/// If `four` does not hold exactly [`Element::NODES`] rows of `stride` values, or the `W`
+/// values from `offset` do not fit in a row.
 #[inline(always)]
-pub fn store_tetrahedron<R: Real, const W: usize>(
+pub fn store_nodes<E: Element, R: Real, const W: usize>(
     t: <R::Four as Four<R>>::Token,
     sums: &[R::Four; W],
     four: &mut [R],
     stride: usize,
     offset: usize,
 ) {
+    const { assert!(E::NODES == 3 || E::NODES == 4) };
+    assert!(
+        four.len() == E::NODES * stride && offset + W <= stride,
+        "a slot width other than the scatter's"
+    );
     // (Indexed, not `array::from_fn` or an array's iterator: the AVX2 copies must not call
-    // the library's array helpers, `scripts/check-avx2-copies`.)
-    let mut nodes = node_slots::<crate::element::tet4::Tet4, R>(four, stride);
-    let mut next = || &mut nodes.next().expect("four nodes")[offset..offset + W];
-    let slots: [&mut [R]; 4] = [next(), next(), next(), next()];
+    // the library's array helpers, `scripts/check-avx2-copies`.) With the width and offset
+    // constants, every index below is one and its check folds away.
     let mut c = 0;
     while c + 4 <= W {
         let lanes = R::Four::transpose(t, [sums[c], sums[c + 1], sums[c + 2], sums[c + 3]]);
-        for k in 0..4 {
-            let to: &mut [R; 4] = (&mut slots[k][c..c + 4]).try_into().expect("four values");
-            *to = lanes[k].to_array();
+        for (k, node) in lanes.iter().enumerate() {
+            if k == E::NODES {
+                break;
+            }
+            let at = k * stride + offset + c;
+            let to: &mut [R; 4] = (&mut four[at..at + 4]).try_into().expect("four values");
+            *to = node.to_array();
         }
         c += 4;
     }
     while c < W {
         let lanes = sums[c].to_array();
-        for k in 0..4 {
-            slots[k][c] = lanes[k];
+        for (k, &v) in lanes.iter().enumerate() {
+            if k == E::NODES {
+                break;
+            }
+            four[k * stride + offset + c] = v;
         }
         c += 1;
     }
@@ -284,41 +302,51 @@ mod tests {
         assert!(wrong.is_err());
     }
 
-    /// [`store_tetrahedron`] writes the values [`store`] writes, where `store` writes them,
-    /// and leaves the rest of the buffer alone: the solid's 10 values and the liquid's 12
-    /// after them, of a 22-value pass, in both precisions.
-    fn stores_as_store<R: Real>() {
+    /// [`store_nodes`] writes the values [`store`] writes, where `store` writes them, and
+    /// leaves the rest of the buffer alone: the solid's values and the liquid's after them, of
+    /// a two-phase pass (a tetrahedron's 10 + 12, a triangle's 7 + 9), in both precisions.
+    fn stores_as_store<E: Element, R: Real, const S: usize, const L: usize>() {
         let Some(t) = R::Four::token() else {
             eprintln!("skipped: this processor lacks the four-lane type's instructions");
             return;
         };
+        let width = S + L;
         let mut rng = crate::test_rng::uniform(5);
         let mut value = || R::of(rng() * 2e3 - 1e3);
-        let solid: Lanes<R, 10> = std::array::from_fn(|_| std::array::from_fn(|_| value()));
-        let liquid: Lanes<R, 12> = std::array::from_fn(|_| std::array::from_fn(|_| value()));
+        let solid: Lanes<R, S> = std::array::from_fn(|_| std::array::from_fn(|_| value()));
+        let liquid: Lanes<R, L> = std::array::from_fn(|_| std::array::from_fn(|_| value()));
         let marker = R::of(-7.5);
-        let (mut want, mut got) = (vec![marker; 4 * 22], vec![marker; 4 * 22]);
-        store::<Tet4, R, 10>(&solid, &mut want, 22, 0, 10);
-        store::<Tet4, R, 12>(&liquid, &mut want, 22, 10, 12);
-        let vectors =
-            |l: &[[R; 4]]| -> Vec<R::Four> { l.iter().map(|c| R::Four::load(t, c)).collect() };
-        let (s4, w4) = (vectors(&solid), vectors(&liquid));
-        store_tetrahedron::<R, 10>(t, s4.as_slice().try_into().unwrap(), &mut got, 22, 0);
-        store_tetrahedron::<R, 12>(t, w4.as_slice().try_into().unwrap(), &mut got, 22, 10);
+        let nodes = E::NODES;
+        let (mut want, mut got) = (vec![marker; nodes * width], vec![marker; nodes * width]);
+        store::<E, R, S>(&solid, &mut want, width, 0, S);
+        store::<E, R, L>(&liquid, &mut want, width, S, L);
+        let s4: [R::Four; S] = std::array::from_fn(|c| R::Four::load(t, &solid[c]));
+        let w4: [R::Four; L] = std::array::from_fn(|c| R::Four::load(t, &liquid[c]));
+        store_nodes::<E, R, S>(t, &s4, &mut got, width, 0);
+        store_nodes::<E, R, L>(t, &w4, &mut got, width, S);
         let bits = |v: &[R]| v.iter().map(|x| x.f64().to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&got), bits(&want));
         // Only the solid's: the liquid's places keep their marker.
-        let mut dry = vec![marker; 4 * 22];
-        store_tetrahedron::<R, 10>(t, s4.as_slice().try_into().unwrap(), &mut dry, 22, 0);
-        for (k, node) in dry.chunks_exact(22).enumerate() {
-            assert!(node[10..].iter().all(|&x| x == marker), "node {k}");
-            assert_eq!(bits(&node[..10]), bits(&want[22 * k..22 * k + 10]));
+        let mut dry = vec![marker; nodes * width];
+        store_nodes::<E, R, S>(t, &s4, &mut dry, width, 0);
+        for (k, node) in dry.chunks_exact(width).enumerate() {
+            assert!(node[S..].iter().all(|&x| x == marker), "node {k}");
+            assert_eq!(bits(&node[..S]), bits(&want[width * k..width * k + S]));
         }
+        // A buffer of another width is refused.
+        let refused = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut short = vec![marker; nodes * width - 1];
+            store_nodes::<E, R, S>(t, &s4, &mut short, width, 0);
+        }));
+        assert!(refused.is_err());
     }
 
     #[test]
-    fn a_tetrahedron_s_vectors_store_as_its_lanes() {
-        stores_as_store::<f64>();
-        stores_as_store::<f32>();
+    fn an_element_s_vectors_store_as_its_lanes() {
+        use crate::element::tri3::Tri3;
+        stores_as_store::<Tet4, f64, 10, 12>();
+        stores_as_store::<Tet4, f32, 10, 12>();
+        stores_as_store::<Tri3, f64, 7, 9>();
+        stores_as_store::<Tri3, f32, 7, 9>();
     }
 }

@@ -14,8 +14,8 @@ use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
 use crate::step::batch::{
-    four_of, lanes, node_lane_shapes, store, store_tetrahedron, usual_count, usual_of, Lanes,
-    LANES, TETRAHEDRA,
+    four_of, lanes, node_lane_shapes, store, store_nodes, usual_count, usual_of, Lanes, LANES,
+    TETRAHEDRA,
 };
 use crate::step::contact::{maps, OneBody};
 use crate::step::mixed::Mixed;
@@ -411,10 +411,8 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
                 (four, cx.stride),
             )
         };
-        // A tetrahedron's sums went into the buffer straight from their vectors.
-        if E::NODES == 4 {
-            return;
-        }
+        // The sums went into the buffer straight from their vectors.
+        return;
     } else {
         let mut j = 0;
         // (Not `Batch`, which the stress and grid-to-particle passes share: the batch
@@ -810,20 +808,23 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     let liquid_gravity = points.liquid.map(|(loads, _, _)| loads.gravity);
     let gravity = (cx.gravity[lead as usize], liquid_gravity);
     totals.close::<E, WITH_LIQUID>(t, &g, gravity, &mut s4, &mut w4);
+    // The pass's values per node as a constant of the element and phases (the same as
+    // `stride`, a field read at run time), so that the stores below index by constants.
+    let (sw, lw) = (solid_width::<E>(), liquid_width::<E>());
+    let width = if WITH_LIQUID { sw + lw } else { sw };
+    debug_assert_eq!(width, stride, "the pass's width");
     if E::NODES == 4 {
         const { assert!(solid_width::<Tet4>() == 10 && liquid_width::<Tet4>() == 12) };
-        store_tetrahedron::<R, 10>(t, &s4, four, stride, 0);
+        store_nodes::<E, R, 10>(t, &s4, four, width, 0);
         if WITH_LIQUID {
-            store_tetrahedron::<R, 12>(t, &w4, four, stride, 10);
+            store_nodes::<E, R, 12>(t, &w4, four, width, 10);
         }
-        return;
-    }
-    for (sum, v) in sums.iter_mut().zip(s4) {
-        *sum = v.to_array();
-    }
-    if WITH_LIQUID {
-        for (sum, v) in wet.iter_mut().zip(w4) {
-            *sum = v.to_array();
+    } else {
+        const { assert!(solid_width::<Tri3>() == 7 && liquid_width::<Tri3>() == 9) };
+        let (solid, liquid) = (&s4[..7], &w4[..9]);
+        store_nodes::<E, R, 7>(t, solid.try_into().expect("seven"), four, width, 0);
+        if WITH_LIQUID {
+            store_nodes::<E, R, 9>(t, liquid.try_into().expect("nine"), four, width, 7);
         }
     }
 }

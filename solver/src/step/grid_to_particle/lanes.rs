@@ -15,7 +15,7 @@ use crate::four::Four;
 use crate::material::liquid::Fluid;
 use crate::real::{Real, V3};
 use crate::step::batch::{
-    four_of, node_rows, point_lanes, point_lanes3, usual_count, usual_of, Lanes,
+    four_of, node_rows, point_lanes, point_lanes3, store_nodes, usual_count, usual_of, Lanes,
 };
 use crate::step::contact::{maps, OneBody};
 
@@ -63,8 +63,8 @@ pub(super) struct LiquidPoints<'a, R: Real> {
 /// 0..DIM, the liquid's after them), and with `WANT` its m |v|² to `kinetic` (and n ρw V_w |w|²
 /// to `kinetic_w`), point by point in order. Returns the first point it did not take (the
 /// element's point count when it took them all), which the point loop goes on from. A
-/// tetrahedron whose points it took all has its sums stored into the scatter's buffer `four`
-/// from their vectors, node by node, where [`store`] puts them (values moved: the same bits;
+/// tetrahedron or triangle whose points it took all has its sums stored into the scatter's
+/// buffer `four` from their vectors, node by node, where [`store`] puts them (values moved: the same bits;
 /// value by value, the store ran 7.5 instructions per particle-step); `sums` are then left as
 /// they were.
 ///
@@ -139,12 +139,18 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
         j += live;
     }
     if stores_sums::<E>(j, count) {
-        // The scatter's slots of a tetrahedron's nodes: the solid's three values of each node,
-        // and with the liquid its three after them.
-        if WITH_LIQUID {
-            R::Four::store_points6(s4, node_rows::<R, 6>(four));
+        // The scatter's slots of the element's nodes: the solid's DIM values of each node, and
+        // with the liquid its DIM after them.
+        if E::NODES == 4 {
+            if WITH_LIQUID {
+                R::Four::store_points6(s4, node_rows::<R, 6>(four));
+            } else {
+                R::Four::store_points3([s4[0], s4[1], s4[2]], node_rows::<R, 3>(four));
+            }
+        } else if WITH_LIQUID {
+            store_nodes::<E, R, 4>(t, &[s4[0], s4[1], s4[2], s4[3]], four, 4, 0);
         } else {
-            R::Four::store_points3([s4[0], s4[1], s4[2]], node_rows::<R, 3>(four));
+            store_nodes::<E, R, 2>(t, &[s4[0], s4[1]], four, 2, 0);
         }
         return j;
     }
@@ -155,10 +161,11 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
 }
 
 /// Whether [`element_lanes`], having taken `taken` of the element's `count` points, stored
-/// the element's sums into the scatter's buffer itself: a tetrahedron's, all points taken.
+/// the element's sums into the scatter's buffer itself: a tetrahedron's or a triangle's, all
+/// points taken.
 #[inline(always)]
 pub(super) fn stores_sums<E: Element>(taken: usize, count: usize) -> bool {
-    E::NODES == 4 && taken == count
+    (E::NODES == 4 || E::NODES == 3) && taken == count
 }
 
 /// An element's values, put into all four lanes where a batch uses them (formed into lanes

@@ -383,7 +383,7 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
             change = change + n[kk] * sp(rate[kk]);
         }
         let p1 = lanes(*p) + change * sp(k.dt);
-        store_live::<R, LIVE>(p1, p);
+        store_live::<R, LIVE>(t, p1, p);
     }
     let mut dx = [zero; 3];
     for kk in 0..E::NODES {
@@ -429,7 +429,7 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
             stress[q] = std::array::from_fn(|c| s1a[c][q]);
         }
     }
-    store_live::<R, LIVE>(v1, volume);
+    store_live::<R, LIVE>(t, v1, volume);
     let outside = locate && {
         // The lanes past `LIVE` never outside: -∞ (no value is below it, NaN neither).
         let tol = if LIVE == 4 {
@@ -466,16 +466,15 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
     ((w * v0 + finite).to_array(), outside)
 }
 
-/// Stores the first `LIVE` lanes of `v` into `to`, leaving the others (all four: one vector
-/// store).
+/// Stores the first `LIVE` lanes of `v` into `to`, leaving the others: one vector store, of the
+/// others' values as they are past `LIVE`.
 #[inline(always)]
-fn store_live<R: Real, const LIVE: usize>(v: R::Four, to: &mut [R; 4]) {
-    if LIVE == 4 {
-        *to = v.to_array();
-    } else {
-        let a = v.to_array();
-        to[..LIVE].copy_from_slice(&a[..LIVE]);
-    }
+fn store_live<R: Real, const LIVE: usize>(
+    t: <R::Four as Four<R>>::Token,
+    v: R::Four,
+    to: &mut [R; 4],
+) {
+    *to = v.first_of(R::Four::load(t, to), LIVE).to_array();
 }
 
 /// [`super::rotation_lanes`] of four points' stresses (`s[c]`: component c, lane q: point q)
