@@ -136,6 +136,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
         mixed: mixed_sums,
         liquid,
         body,
+        arrays: PointArrays::new(p, liquid.is_some()),
         stride: stride(liquid.is_some()),
         four: if wide || cfg!(target_feature = "avx2") {
             R::Four::token()
@@ -219,6 +220,111 @@ pub fn particle_to_grid<E: Element, R: Real>(
     }
 }
 
+/// The per-point arrays particle to grid reads, all of one length (checked once, when they are
+/// taken), so that an element's points are sliced out of every one of them with one check of
+/// their range ([`PointArrays::element`]) rather than one per array: per element, those checks
+/// were about a tenth of a triangle's instructions in this pass.
+#[derive(Clone, Copy)]
+struct PointArrays<'a, R: Real> {
+    len: usize,
+    active: &'a [bool],
+    material: &'a [u32],
+    x: &'a [V3<R>],
+    mass: &'a [R],
+    vel: &'a [V3<R>],
+    volume: &'a [R],
+    stress: &'a [[R; 6]],
+    pore: Option<&'a [R]>,
+    w: Option<&'a [V3<R>]>,
+    volume0: Option<&'a [R]>,
+}
+
+/// One element's points of every [`PointArrays`] array.
+struct ElementArrays<'a, R: Real> {
+    active: &'a [bool],
+    material: &'a [u32],
+    x: &'a [V3<R>],
+    mass: &'a [R],
+    vel: &'a [V3<R>],
+    volume: &'a [R],
+    stress: &'a [[R; 6]],
+    pore: Option<&'a [R]>,
+    w: Option<&'a [V3<R>]>,
+    volume0: Option<&'a [R]>,
+}
+
+impl<'a, R: Real> PointArrays<'a, R> {
+    /// The arrays of `p` (its liquid's with `liquid`).
+    ///
+    /// # Panics
+    /// If they are not all of one length (a [`Particles`] whose arrays were resized apart).
+    fn new(p: &'a Particles<R>, liquid: bool) -> Self {
+        let len = p.x.len();
+        let lp = p.liquid.as_ref();
+        let a = PointArrays {
+            len,
+            active: &p.active,
+            material: &p.material,
+            x: &p.x,
+            mass: &p.mass,
+            vel: &p.v,
+            volume: &p.volume,
+            stress: &p.stress,
+            pore: lp.map(|l| &l.p[..]),
+            w: lp.filter(|_| liquid).map(|l| &l.w[..]),
+            volume0: lp.filter(|_| liquid).and_then(|l| l.volume0.as_deref()),
+        };
+        let lens = [
+            a.active.len(),
+            a.material.len(),
+            a.mass.len(),
+            a.vel.len(),
+            a.volume.len(),
+            a.stress.len(),
+            a.pore.map_or(len, <[R]>::len),
+            a.w.map_or(len, <[V3<R>]>::len),
+            a.volume0.map_or(len, <[R]>::len),
+        ];
+        assert!(
+            lens.iter().all(|&l| l == len),
+            "particle arrays of different lengths"
+        );
+        a
+    }
+
+    /// The points `r` of every array.
+    ///
+    /// # Panics
+    /// If `r` is not a range within the arrays (one check for all of them).
+    #[inline(always)]
+    fn element(&self, r: std::ops::Range<usize>) -> ElementArrays<'a, R> {
+        assert!(
+            r.start <= r.end && r.end <= self.len,
+            "points past the arrays"
+        );
+        /// `a[r]`.
+        #[inline(always)]
+        fn sub<T>(a: &[T], r: std::ops::Range<usize>) -> &[T] {
+            debug_assert!(r.start <= r.end && r.end <= a.len());
+            // SAFETY: every array is `len` long (checked in `new`, and the fields are this
+            // type's own), and `r` lies within `len` (checked above).
+            unsafe { a.get_unchecked(r) }
+        }
+        ElementArrays {
+            active: sub(self.active, r.clone()),
+            material: sub(self.material, r.clone()),
+            x: sub(self.x, r.clone()),
+            mass: sub(self.mass, r.clone()),
+            vel: sub(self.vel, r.clone()),
+            volume: sub(self.volume, r.clone()),
+            stress: sub(self.stress, r.clone()),
+            pore: self.pore.map(|a| sub(a, r.clone())),
+            w: self.w.map(|a| sub(a, r.clone())),
+            volume0: self.volume0.map(|a| sub(a, r.clone())),
+        }
+    }
+}
+
 /// The mixed rule's per-element outputs and inputs: mean stresses, full flags, the filling
 /// degree, mean pore pressures, and the rule with its boundary points.
 type MixedSums<'a, R> = (
@@ -240,6 +346,8 @@ struct Pass<'a, E: Element, R: Real> {
         &'a crate::state::particles::LiquidPoints<R>,
     )>,
     body: Option<OneBody>,
+    /// The points' arrays, of one length.
+    arrays: PointArrays<'a, R>,
     /// Values per node of the pass.
     stride: usize,
     /// Where the pass runs its AVX2 copy: the token of [`Real::Four`]'s instructions.
@@ -350,27 +458,24 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
             }
         }
     }
-    // The element's points, every array sliced to them once (one length), so that the loop
-    // indexes without bounds checks.
-    let active = &cx.p.active[range.clone()][..count];
-    let (x, mass, vel) = (
-        &cx.p.x[range.clone()][..count],
-        &cx.p.mass[range.clone()][..count],
-        &cx.p.v[range.clone()][..count],
-    );
-    let (material, volume, stress) = (
-        &cx.p.material[range.clone()][..count],
-        &cx.p.volume[range.clone()][..count],
-        &cx.p.stress[range.clone()][..count],
-    );
-    let pore = cx.p.liquid.as_ref().map(|l| &l.p[range.clone()][..count]);
-    let liquid_points = cx.liquid.filter(|_| WITH_LIQUID).map(|(loads, lp)| {
-        (
-            loads,
-            &lp.w[range.clone()][..count],
-            lp.volume0.as_ref().map(|v0| &v0[range.clone()][..count]),
-        )
-    });
+    // The element's points, every array sliced to them once (one length, one check), so that
+    // the loop indexes without bounds checks.
+    let ElementArrays {
+        active,
+        material,
+        x,
+        mass,
+        vel,
+        volume,
+        stress,
+        pore,
+        w,
+        volume0,
+    } = cx.arrays.element(range.clone());
+    let liquid_points = cx
+        .liquid
+        .filter(|_| WITH_LIQUID)
+        .and_then(|(loads, _)| w.map(|w| (loads, w, volume0)));
     // The element's shape values in batches of `W` points, each held across the
     // batch (the same bits as point by point); each point's sums then follow in
     // point order.
@@ -1055,6 +1160,34 @@ mod tests {
             out.extend((0..3).map(|a| v3(field, a)));
         }
         out
+    }
+
+    /// An element's points of every array are the arrays' runs over its range, liquid ones
+    /// included; a range past the arrays and arrays of different lengths are refused.
+    #[test]
+    fn point_arrays_slice_every_array_alike_and_refuse_what_does_not_fit() {
+        let mesh = TetMesh::<f64>::new(&generate::box_mesh([2, 2, 2], [1.0; 3], ElementType::Tet4))
+            .unwrap();
+        let mut p = points(&mesh);
+        let n = p.len();
+        let arrays = PointArrays::new(&p, true);
+        for r in [0..0, 0..n, 3..7, n - 1..n] {
+            let e = arrays.element(r.clone());
+            assert_eq!(e.x, &p.x[r.clone()]);
+            assert_eq!(e.stress, &p.stress[r.clone()]);
+            assert_eq!(e.material, &p.material[r.clone()]);
+            let l = p.liquid.as_ref().unwrap();
+            assert_eq!(e.pore.unwrap(), &l.p[r.clone()]);
+            assert_eq!(e.w.unwrap(), &l.w[r.clone()]);
+        }
+        // Without the liquid's pass, no liquid velocities.
+        assert!(PointArrays::new(&p, false).element(0..n).w.is_none());
+        let past =
+            std::panic::catch_unwind(|| PointArrays::new(&p, true).element(n - 1..n + 1).x.len());
+        assert!(past.is_err());
+        p.volume.pop();
+        let uneven = std::panic::catch_unwind(|| PointArrays::new(&p, true).len);
+        assert!(uneven.is_err());
     }
 
     /// The element totals (the stress, pore-pressure and mass sums formed once per element)

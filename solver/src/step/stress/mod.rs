@@ -302,6 +302,11 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
                 let locate = located.is_some().then_some((&mut found, r.start));
                 j = lanes::elastic_batches(cx, t, &el, points, j, end, open, locate);
                 located_from = j;
+                // The lanes took every point and located those that left (the common case):
+                // nothing of the general loop below is left to do.
+                if j == end {
+                    continue;
+                }
             }
         }
         // The batch loop, expanded once per batch width (one is used per element type
