@@ -239,20 +239,6 @@ struct PointArrays<'a, R: Real> {
     volume0: Option<&'a [R]>,
 }
 
-/// One element's points of every [`PointArrays`] array.
-struct ElementArrays<'a, R: Real> {
-    active: &'a [bool],
-    material: &'a [u32],
-    x: &'a [V3<R>],
-    mass: &'a [R],
-    vel: &'a [V3<R>],
-    volume: &'a [R],
-    stress: &'a [[R; 6]],
-    pore: Option<&'a [R]>,
-    w: Option<&'a [V3<R>]>,
-    volume0: Option<&'a [R]>,
-}
-
 impl<'a, R: Real> PointArrays<'a, R> {
     /// The arrays of `p` (its liquid's with `liquid`).
     ///
@@ -292,12 +278,33 @@ impl<'a, R: Real> PointArrays<'a, R> {
         a
     }
 
-    /// The points `r` of every array.
+    /// Every array cut to the first `len` values (all of them: a no-op on the values), by
+    /// slicing the compiler sees, so that the loops over an element's points index without
+    /// bounds checks.
+    #[inline(always)]
+    fn cut(&self) -> Self {
+        let n = self.len;
+        PointArrays {
+            len: n,
+            active: &self.active[..n],
+            material: &self.material[..n],
+            x: &self.x[..n],
+            mass: &self.mass[..n],
+            vel: &self.vel[..n],
+            volume: &self.volume[..n],
+            stress: &self.stress[..n],
+            pore: self.pore.map(|a| &a[..n]),
+            w: self.w.map(|a| &a[..n]),
+            volume0: self.volume0.map(|a| &a[..n]),
+        }
+    }
+
+    /// The points `r` of every array (arrays of `r`'s length).
     ///
     /// # Panics
     /// If `r` is not a range within the arrays (one check for all of them).
     #[inline(always)]
-    fn element(&self, r: std::ops::Range<usize>) -> ElementArrays<'a, R> {
+    fn element(&self, r: std::ops::Range<usize>) -> Self {
         assert!(
             r.start <= r.end && r.end <= self.len,
             "points past the arrays"
@@ -310,7 +317,8 @@ impl<'a, R: Real> PointArrays<'a, R> {
             // type's own), and `r` lies within `len` (checked above).
             unsafe { a.get_unchecked(r) }
         }
-        ElementArrays {
+        PointArrays {
+            len: r.len(),
             active: sub(self.active, r.clone()),
             material: sub(self.material, r.clone()),
             x: sub(self.x, r.clone()),
@@ -460,7 +468,8 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
     }
     // The element's points, every array sliced to them once (one length, one check), so that
     // the loop indexes without bounds checks.
-    let ElementArrays {
+    let arrays = cx.arrays.element(range.clone());
+    let PointArrays {
         active,
         material,
         x,
@@ -471,7 +480,8 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
         pore,
         w,
         volume0,
-    } = cx.arrays.element(range.clone());
+        ..
+    } = arrays;
     let liquid_points = cx
         .liquid
         .filter(|_| WITH_LIQUID)
@@ -490,14 +500,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
     // compiler made of that loop (docs/design.md §9).
     if let Some(t) = cx.four.filter(|_| WIDE || cfg!(target_feature = "avx2")) {
         let points = Points {
-            active,
-            material,
-            x,
-            mass,
-            vel,
-            volume,
-            stress,
-            pore,
+            arrays,
             liquid: liquid_points,
             map,
             first,
@@ -760,16 +763,11 @@ fn liquid_volume_mass_pressure<R: Real>(
 /// held fixed) initial volumes.
 type LiquidSlices<'a, R> = (LiquidLoads<'a, R>, &'a [V3<R>], Option<&'a [R]>);
 
-/// An element's points, each array sliced to them (one length), for [`node_lane_sums`].
+/// An element's points ([`PointArrays::element`]), and what [`node_lane_sums`] reads beside
+/// them: in the liquid's pass the liquid's loads with the points' liquid arrays (one value, so
+/// that a point asks once whether there is a liquid), and the element's map and first corner.
 struct Points<'a, E: Element, R: Real> {
-    active: &'a [bool],
-    material: &'a [u32],
-    x: &'a [V3<R>],
-    mass: &'a [R],
-    vel: &'a [V3<R>],
-    volume: &'a [R],
-    stress: &'a [[R; 6]],
-    pore: Option<&'a [R]>,
+    arrays: PointArrays<'a, R>,
     liquid: Option<LiquidSlices<'a, R>>,
     map: &'a E::Map<R>,
     first: &'a V3<R>,
@@ -814,23 +812,19 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     (sums, wet): (&mut Lanes<R, 10>, &mut Lanes<R, 12>),
     (four, stride): (&mut [R], usize),
 ) {
-    let (x, map, first) = (points.x, points.map, points.first);
-    let count = x.len();
-    // Every array sliced to the element's points again (one length, `count`), so that
+    let (map, first) = (points.map, points.first);
+    // Every array cut to the element's points again (one length, `count`), so that
     // `point_sums` indexes them without bounds checks.
+    let arrays = points.arrays.cut();
+    let count = arrays.len;
     let points = &Points {
-        active: &points.active[..count],
-        material: &points.material[..count],
-        mass: &points.mass[..count],
-        vel: &points.vel[..count],
-        volume: &points.volume[..count],
-        stress: &points.stress[..count],
-        pore: points.pore.map(|p| &p[..count]),
+        arrays,
         liquid: points
             .liquid
             .map(|(l, w, v0)| (l, &w[..count], v0.map(|v| &v[..count]))),
         ..*points
     };
+    let x = points.arrays.x;
     let g: [R::Four; 3] = std::array::from_fn(|b| R::Four::load(t, &by_component[b]));
     let mut s4: [R::Four; 10] = std::array::from_fn(|c| R::Four::load(t, &sums[c]));
     let mut w4: [R::Four; 12] = std::array::from_fn(|c| R::Four::load(t, &wet[c]));
@@ -845,7 +839,9 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         // A triangle of exactly its usual three points, all taking part and of the lead
         // material (the common case), by a loop of a constant count, which the compiler
         // unrolls: as the tetrahedra's below, the element's values are not hoisted and spilled.
-        if usual_of::<E>(points.active, points.material, 0, count, lead) && maps(cx.body, lead) {
+        if usual_of::<E>(points.arrays.active, points.arrays.material, 0, count, lead)
+            && maps(cx.body, lead)
+        {
             for i in 0..usual_count::<E>() {
                 let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
                 let n = shape(&x[i]);
@@ -853,7 +849,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
             }
         } else {
             for (i, xi) in x.iter().enumerate() {
-                if !points.active[i] || !maps(cx.body, points.material[i]) {
+                if !points.arrays.active[i] || !maps(cx.body, points.arrays.material[i]) {
                     continue;
                 }
                 let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
@@ -879,7 +875,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     // material (the common case), outside the batch loop: the map's values go into lanes
     // where they are used, not hoisted out of the loop into lanes and spilled.
     if E::DIM == 3
-        && usual_of::<E>(points.active, points.material, 0, count, lead)
+        && usual_of::<E>(points.arrays.active, points.arrays.material, 0, count, lead)
         && maps(cx.body, lead)
     {
         debug_assert_eq!(count, 4, "a tetrahedron's usual count");
@@ -895,8 +891,9 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         let per_point = node_lane_shapes::<E, R>(t, map, first, x, j, live);
         // Four points that all take part, of the lead material (the common case), skip each
         // point's checks.
-        let of_lead =
-            live == 4 && four_of(points.active, points.material, j, lead) && maps(cx.body, lead);
+        let of_lead = live == 4
+            && four_of(points.arrays.active, points.arrays.material, j, lead)
+            && maps(cx.body, lead);
         if of_lead {
             for (i, &n) in (j..j + 4).zip(per_point.iter()) {
                 let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
@@ -952,27 +949,18 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool, const OF_LEAD: bool>
     w4: &mut [R::Four; 12],
     totals: &mut Totals<R, R::Four>,
 ) {
-    let Points {
-        active,
-        material,
-        x,
-        mass,
-        vel,
-        volume,
-        stress,
-        pore,
-        liquid,
-        ..
-    } = *points;
+    // (The arrays by field: `pa.x[i]` is point i's position.)
+    let pa = &points.arrays;
+    let (liquid, pore) = (points.liquid, pa.pore);
     let splat = |v: R| R::Four::splat(t, v);
-    if !OF_LEAD && (!active[i] || !maps(cx.body, material[i])) {
+    if !OF_LEAD && (!pa.active[i] || !maps(cx.body, pa.material[i])) {
         return;
     }
-    debug_assert!(!OF_LEAD || (active[i] && material[i] == totals.lead));
-    let material_i = if OF_LEAD { totals.lead } else { material[i] };
-    let (m, v) = (mass[i], vel[i]);
+    debug_assert!(!OF_LEAD || (pa.active[i] && pa.material[i] == totals.lead));
+    let material_i = if OF_LEAD { totals.lead } else { pa.material[i] };
+    let (m, v) = (pa.mass[i], pa.vel[i]);
     let gravity = &cx.gravity[material_i as usize];
-    let s = volume_stress(full, volume[i], &stress[i], pore.map(|p| p[i]));
+    let s = volume_stress(full, pa.volume[i], &pa.stress[i], pore.map(|p| p[i]));
     totals.add_stress(&s);
     let w = splat(m) * n;
     s4[0] = s4[0] + w;
@@ -989,7 +977,7 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool, const OF_LEAD: bool>
     if E::AXISYMMETRIC {
         // An axisymmetric section's hoop stress pulls each node towards the axis:
         // f_r -= V σ_θθ N / r (x the radius; V per radian), after the point's traction.
-        let hoop = s[2] / x[i][0];
+        let hoop = s[2] / pa.x[i][0];
         s4[1 + E::DIM] = s4[1 + E::DIM] - splat(hoop) * n;
     }
     if !WITH_LIQUID {
@@ -1002,7 +990,7 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool, const OF_LEAD: bool>
         return;
     };
     let (vw, mw, pw) =
-        liquid_volume_mass_pressure(&f, full, volume[i], volume0.map(|v0| v0[i]), pore[i]);
+        liquid_volume_mass_pressure(&f, full, pa.volume[i], volume0.map(|v0| v0[i]), pore[i]);
     let wv = w_all[i];
     totals.pore += pw;
     let mn = splat(mw) * n;
@@ -1014,7 +1002,7 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool, const OF_LEAD: bool>
     }
     if E::AXISYMMETRIC {
         // The pore pressure's hoop force, as the solid's.
-        let hoop = pw / x[i][0];
+        let hoop = pw / pa.x[i][0];
         w4[3 + E::DIM] = w4[3 + E::DIM] - splat(hoop) * n;
     }
 }
