@@ -515,8 +515,8 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
                 &points,
                 (full, lead),
                 &by_component,
-                (&mut sums, &mut wet),
-                (four, cx.stride),
+                (&sums, &wet),
+                four,
             )
         };
         // The sums went into the buffer straight from their vectors.
@@ -787,20 +787,20 @@ unsafe fn node_lane_sums_avx2<E: Element, R: Real, const WITH_LIQUID: bool>(
     points: &Points<'_, E, R>,
     element: (bool, u32),
     by_component: &[[R; LANES]; 3],
-    sums: (&mut Lanes<R, 10>, &mut Lanes<R, 12>),
-    buffer: (&mut [R], usize),
+    sums: (&Lanes<R, 10>, &Lanes<R, 12>),
+    four: &mut [R],
 ) {
-    node_lane_sums::<E, R, WITH_LIQUID>(t, cx, points, element, by_component, sums, buffer);
+    node_lane_sums::<E, R, WITH_LIQUID>(t, cx, points, element, by_component, sums, four);
 }
 
-/// An element's sums over its points ([`element_sums`]), added to `sums` (the solid's) and,
-/// with `WITH_LIQUID`, `wet` (the liquid's): each point's contribution as four-lane vectors,
-/// one lane per node (a triangle's fourth lane carries zeros and is never stored), with the
-/// operations of the point loop of [`element_sums`] in its order (the same bits). `element`:
-/// whether the element is full (mixed integration), and the material whose points' weight is
-/// formed once ([`Totals`]). A tetrahedron's sums are stored from their vectors into the
-/// scatter's buffer (`buffer`: the buffer and the pass's values per node), a triangle's
-/// returned in `sums` (the solid's and the liquid's) for [`store`].
+/// An element's sums over its points ([`element_sums`]), from `sums` (the solid's) and, with
+/// `WITH_LIQUID`, `wet` (the liquid's; both zero, or a full element's Gauss-point terms under
+/// mixed integration): each point's contribution as four-lane vectors, one lane per node (a
+/// triangle's fourth lane carries zeros and is never stored), with the operations of the point
+/// loop of [`element_sums`] in its order (the same bits). `element`: whether the element is
+/// full (mixed integration), and the material whose points' weight is formed once
+/// ([`Totals`]). The sums are stored from their vectors into the scatter's buffer `four`
+/// ([`store_nodes`]).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
@@ -809,8 +809,8 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     points: &Points<'_, E, R>,
     (full, lead): (bool, u32),
     by_component: &[[R; LANES]; 3],
-    (sums, wet): (&mut Lanes<R, 10>, &mut Lanes<R, 12>),
-    (four, stride): (&mut [R], usize),
+    (sums, wet): (&Lanes<R, 10>, &Lanes<R, 12>),
+    four: &mut [R],
 ) {
     let (map, first) = (points.map, points.first);
     // Every array cut to the element's points again (one length, `count`), so that
@@ -910,11 +910,11 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     let liquid_gravity = points.liquid.map(|(loads, _, _)| loads.gravity);
     let gravity = (cx.gravity[lead as usize], liquid_gravity);
     totals.close::<E, WITH_LIQUID>(t, &g, gravity, &mut s4, &mut w4);
-    // The pass's values per node as a constant of the element and phases (the same as
-    // `stride`, a field read at run time), so that the stores below index by constants.
+    // The pass's values per node as a constant of the element and phases (the pass's
+    // `stride`, a field read at run time, is the same), so that the stores index by
+    // constants; `store_nodes` checks it against the buffer.
     let (sw, lw) = (solid_width::<E>(), liquid_width::<E>());
     let width = if WITH_LIQUID { sw + lw } else { sw };
-    debug_assert_eq!(width, stride, "the pass's width");
     if E::NODES == 4 {
         const { assert!(solid_width::<Tet4>() == 10 && liquid_width::<Tet4>() == 12) };
         store_nodes::<E, R, 10>(t, &s4, four, width, 0);

@@ -63,10 +63,10 @@ pub(super) struct LiquidPoints<'a, R: Real> {
 /// 0..DIM, the liquid's after them), and with `WANT` its m |v|² to `kinetic` (and n ρw V_w |w|²
 /// to `kinetic_w`), point by point in order. Returns the first point it did not take (the
 /// element's point count when it took them all), which the point loop goes on from. A
-/// tetrahedron or triangle whose points it took all has its sums stored into the scatter's
-/// buffer `four` from their vectors, node by node, where [`store`] puts them (values moved: the same bits;
-/// value by value, the store ran 7.5 instructions per particle-step); `sums` are then left as
-/// they were.
+/// element whose points it took all has its sums stored into the scatter's buffer `four` from
+/// their vectors, node by node, where [`store`] puts them (values moved: the same bits; value
+/// by value, a tetrahedron's store ran 7.5 instructions per particle-step); `sums` are then
+/// left as they were.
 ///
 /// [`store`]: crate::step::batch::store
 #[inline(always)]
@@ -138,7 +138,7 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
         }
         j += live;
     }
-    if stores_sums::<E>(j, count) {
+    if stores_sums(j, count) {
         // The scatter's slots of the element's nodes: the solid's DIM values of each node, and
         // with the liquid its DIM after them.
         if E::NODES == 4 {
@@ -161,11 +161,10 @@ pub(super) fn element_lanes<E: Element, R: Real, const WANT: bool, const WITH_LI
 }
 
 /// Whether [`element_lanes`], having taken `taken` of the element's `count` points, stored
-/// the element's sums into the scatter's buffer itself: a tetrahedron's or a triangle's, all
-/// points taken.
+/// the element's sums into the scatter's buffer itself: when it took them all.
 #[inline(always)]
-pub(super) fn stores_sums<E: Element>(taken: usize, count: usize) -> bool {
-    (E::NODES == 4 || E::NODES == 3) && taken == count
+pub(super) fn stores_sums(taken: usize, count: usize) -> bool {
+    taken == count
 }
 
 /// An element's values, put into all four lanes where a batch uses them (formed into lanes

@@ -185,7 +185,7 @@ pub fn grid_to_particle<E: Element, R: Real>(
                         )
                     };
                 }
-                let stored = lanes::stores_sums::<E>(j, count);
+                let stored = lanes::stores_sums(j, count);
                 while j < count {
                     let b =
                         match Batch::<W>::new(j, count, |i| active[i] && maps(body, material[i])) {
