@@ -218,6 +218,9 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub point_loads: Vec<(u32, V3<R>)>,
     /// Per-element sums for mixed integration (empty under material-point integration).
     pub mixed: Option<crate::step::mixed::Mixed<R>>,
+    /// Per element, the smoothed pore-pressure rate's weights that particle to grid leaves for
+    /// the rate's pass (two-phase cases with the rate smoothed through the nodes).
+    pore_weights: Option<crate::state::pore_weights::PoreWeights<R>>,
     /// |free out-of-balance force| / |free external force| of the last step (0 when there
     /// is no external force).
     pub force_error: f64,
@@ -586,6 +589,8 @@ impl<R: Real, E: Element> Engine<R, E> {
             .iter()
             .map(|m| R::of(m.as_ref().map_or(0.0, |s| s.density)))
             .collect();
+        let pore_weights = (two_phase && case.smooth_pressure && !case.strain_smoothing)
+            .then(|| crate::state::pore_weights::PoreWeights::new(mesh.elements()));
         let mut engine = Engine {
             input_node,
             guards: case.guards,
@@ -634,6 +639,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             drop_lost,
             point_loads,
             mixed,
+            pore_weights,
             force_error: 0.0,
             liquid_force_error: 0.0,
             nodal_kinetic: 0.0,
@@ -772,6 +778,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             laws: _,
             drop_lost: _,
             mixed: _,
+            pore_weights: _,
             team: _,
             // How the threads spent their time: this run's, like the team.
             phase_load: _,
@@ -1005,6 +1012,8 @@ impl<R: Real, E: Element> Engine<R, E> {
                 grid,
                 body,
                 liquid.take(),
+                // (Asked of the liquid's pass only, the first.)
+                self.pore_weights.as_mut(),
             );
         }
         particle_to_grid::add_point_loads(
@@ -1206,6 +1215,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             &self.fluids,
             case.smooth_pressure,
             self.smoothing.as_ref(),
+            self.pore_weights.as_mut(),
             R::of(dt),
         );
         let fused_locate = self.locates_in_stress_pass();
@@ -2161,6 +2171,17 @@ mod tests {
         steps: usize,
         portable: bool,
     ) -> Vec<u64> {
+        state_bits_with::<R, E>(scene, steps, portable, true).concat()
+    }
+
+    /// [`state_bits`] field by field (the elements last), with the pore-pressure rate's
+    /// weights from particle to grid (`weights`) or the rate's pass point by point.
+    fn state_bits_with<R: crate::real::Real, E: crate::element::Element>(
+        scene: &str,
+        steps: usize,
+        portable: bool,
+        weights: bool,
+    ) -> Vec<Vec<u64>> {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../testdata");
         // `NAME+objective`: the scene with Anura3D's objective stress terms on, started
         // shearing; `+ten`: with ten points per element (a tetrahedron's batches of four,
@@ -2180,6 +2201,9 @@ mod tests {
         }
         crate::parallel::avx2::with_portable(portable, || {
             let mut engine = super::Engine::<R, E>::new(&case, false).unwrap();
+            if !weights {
+                engine.pore_weights = None;
+            }
             if objective {
                 // A shearing start (v_x growing with y), so that the spin, and with it the
                 // co-rotation, is not zero.
@@ -2192,8 +2216,8 @@ mod tests {
                 engine.step(engine.dt, None).unwrap();
             }
             let p = &engine.particles;
-            let mut bits: Vec<u64> = Vec::new();
-            let mut add = |v: &[R]| bits.extend(v.iter().map(|x| x.f64().to_bits()));
+            let mut bits: Vec<Vec<u64>> = Vec::new();
+            let mut add = |v: &[R]| bits.push(v.iter().map(|x| x.f64().to_bits()).collect());
             add(p.x.as_flattened());
             add(p.v.as_flattened());
             add(p.stress.as_flattened());
@@ -2203,9 +2227,62 @@ mod tests {
                 add(&l.p);
                 add(l.w.as_flattened());
             }
-            bits.extend(p.element.iter().map(|&e| e as u64));
+            bits.push(p.element.iter().map(|&e| e as u64).collect());
             bits
         })
+    }
+
+    /// The smoothed pore-pressure rate formed from particle to grid's weights (an element's
+    /// saturated points of one material summed once, `state::pore_weights`) gives the state of
+    /// the rate taken point by point: the same bits with one point per element, round-off with
+    /// three, four and ten (the products summed in another order), in both precisions and in the
+    /// portable copies as in the AVX2 ones.
+    #[test]
+    fn the_pore_rate_s_weights_give_the_point_by_point_rate() {
+        use crate::element::{tet4::Tet4, tri3::Tri3};
+        type Fields = Vec<Vec<u64>>;
+        fn compare(scene: &str, with: &Fields, without: &Fields, exact: bool, tolerance: f64) {
+            assert_eq!(with.len(), without.len(), "{scene}");
+            if exact {
+                assert!(with == without, "{scene}: not the same bits");
+                return;
+            }
+            assert!(with != without, "{scene}: the weights were not taken");
+            let (elements, values) = with.split_last().unwrap();
+            assert_eq!(elements, without.last().unwrap(), "{scene}: elements");
+            // Each field's values (as f64 bits) against its largest.
+            for (field, (w, wo)) in values.iter().zip(without).enumerate() {
+                let largest = wo
+                    .iter()
+                    .map(|&b| f64::from_bits(b).abs())
+                    .fold(0.0f64, f64::max);
+                for (i, (&a, &b)) in w.iter().zip(wo).enumerate() {
+                    let (x, y) = (f64::from_bits(a), f64::from_bits(b));
+                    assert!(
+                        a == b || (x - y).abs() <= tolerance * largest,
+                        "{scene}: field {field} value {i}: {x} against {y}"
+                    );
+                }
+            }
+        }
+        for portable in [false, true] {
+            for (scene, steps, exact) in [
+                ("golden/column_saturated.toml", 60, true),
+                ("oedometer.toml", 40, false),
+                ("oedometer.toml+ten", 30, false),
+            ] {
+                let with = state_bits_with::<f64, Tet4>(scene, steps, portable, true);
+                let without = state_bits_with::<f64, Tet4>(scene, steps, portable, false);
+                compare(scene, &with, &without, exact, 1e-12);
+                let with = state_bits_with::<f32, Tet4>(scene, steps, portable, true);
+                let without = state_bits_with::<f32, Tet4>(scene, steps, portable, false);
+                compare(scene, &with, &without, exact, 1e-4);
+            }
+            let scene = "oedometer_2d.toml";
+            let with = state_bits_with::<f64, Tri3>(scene, 60, portable, true);
+            let without = state_bits_with::<f64, Tri3>(scene, 60, portable, false);
+            compare(scene, &with, &without, false, 1e-12);
+        }
     }
 
     /// The AVX2 copies of particle to grid, grid to particle and the stress pass give the bits

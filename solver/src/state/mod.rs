@@ -1,4 +1,6 @@
-//! The state of a run: material points and nodal arrays.
+//! The state of a run: material points, nodal arrays and per-element sums one pass leaves for
+//! a later one.
 
 pub mod grid;
 pub mod particles;
+pub mod pore_weights;

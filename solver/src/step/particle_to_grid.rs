@@ -13,6 +13,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::state::pore_weights::{self, PoreWeights};
 use crate::step::batch::{
     four_of, lanes, node_lane_shapes, store, store_nodes, usual_count, usual_of, Lanes, LANES,
     TETRAHEDRA,
@@ -76,6 +77,9 @@ pub struct LiquidLoads<'a, R: Real> {
 /// Maps every active particle to the nodes of its element: mass, momentum, internal force
 /// -Σ V (σ' + p I) ∇N and gravity. `gravity[m]` is the acceleration (multiplier applied) that
 /// gives the weight of material m's points from their mass.
+/// With `pore_weights` (a two-phase case whose pore-pressure rate is smoothed), the liquid's
+/// pass also leaves each element's Σ_p V_p N_k over its saturated points and their material
+/// for that rate ([`crate::state::pore_weights`]).
 /// Under mixed integration the effective-stress force of full elements comes from their Gauss
 /// point instead of their points (the element sums are formed here too, over all the element's
 /// points). Only the points of `body` are mapped (all for `None`; one body of a contact pair,
@@ -102,6 +106,7 @@ pub fn particle_to_grid<E: Element, R: Real>(
     g: &mut Grid<R>,
     body: Option<OneBody>,
     liquid: Option<LiquidLoads<'_, R>>,
+    pore_weights: Option<&mut PoreWeights<R>>,
 ) {
     let wide = use_avx2();
     let liquid = match (liquid, &p.liquid) {
@@ -129,11 +134,18 @@ pub fn particle_to_grid<E: Element, R: Real>(
     // liquid's code, and each variant is a closure of its own with one caller, which the
     // compiler inlines into its scatter (one closure called from two variants was left a call,
     // at 6 % more instructions per point-step).
+    // The rate's weights come with the liquid's pass only.
+    let pore_weights = pore_weights.filter(|_| liquid.is_some()).map(|w| {
+        w.fit(mesh.elements());
+        w.fresh = true;
+        (Shared::new(&mut w.weights), Shared::new(&mut w.material))
+    });
     let pass = Pass {
         mesh,
         p,
         gravity,
         mixed: mixed_sums,
+        pore_weights,
         liquid,
         body,
         arrays: PointArrays::new(p, liquid.is_some()),
@@ -349,6 +361,9 @@ struct Pass<'a, E: Element, R: Real> {
     p: &'a Particles<R>,
     gravity: &'a [V3<R>],
     mixed: Option<MixedSums<'a, R>>,
+    /// Where the liquid's pass leaves each element's weights of the pore-pressure rate, and
+    /// the material of its saturated points.
+    pore_weights: Option<(Shared<'a, [R; 4]>, Shared<'a, u32>)>,
     liquid: Option<(
         LiquidLoads<'a, R>,
         &'a crate::state::particles::LiquidPoints<R>,
@@ -381,6 +396,13 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
     // point.)
     // (The scatter checks in debug builds that the buffer stays zero.)
     if std::hint::black_box(count) == 0 {
+        if let Some((weights, material)) = &cx.pore_weights {
+            // SAFETY: element e is this thread's only.
+            unsafe {
+                weights.write(e, [R::ZERO; 4]);
+                material.write(e, pore_weights::NO_POINTS);
+            }
+        }
         if let Some((stress, flags, _, pressure, _)) = &cx.mixed {
             // SAFETY: element e is this thread's only.
             unsafe {
@@ -508,7 +530,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
         debug_assert!(crate::parallel::avx2::present());
         // SAFETY: `WIDE` only in the scatter's AVX2 copy, which asserts that the processor
         // has AVX2; a build that assumes AVX2 (x86-64-v3) runs only where it has it.
-        unsafe {
+        let rate = unsafe {
             node_lane_sums_avx2::<E, R, WITH_LIQUID>(
                 t,
                 cx,
@@ -520,6 +542,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
             )
         };
         // The sums went into the buffer straight from their vectors.
+        leave_pore_weights(cx, e, rate);
         return;
     } else {
         let mut j = 0;
@@ -593,6 +616,10 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
                 );
                 let w = w_all[i];
                 totals.pore += pw;
+                if cx.pore_weights.is_some() {
+                    let vn = lanes::<E, R>(|k| volume[i] * n[k]);
+                    totals.add_saturated(Lanes4::load((), &vn), material[i]);
+                }
                 // The pore pressure's hoop force, as the solid's (axisymmetric sections).
                 let hoop = if E::AXISYMMETRIC {
                     pw / x[i][0]
@@ -633,6 +660,7 @@ fn element_sums<E: Element, R: Real, const WITH_LIQUID: bool, const W: usize, co
         totals.close::<E, WITH_LIQUID>((), &g, gravity, &mut s4, &mut w4);
         sums = s4.map(Lanes4::to_array);
         wet = w4.map(Lanes4::to_array);
+        leave_pore_weights(cx, e, (totals.volume_n.to_array(), totals.saturated));
     }
     store::<E, R, 10>(&sums, four, cx.stride, 0, solid_width::<E>());
     if WITH_LIQUID {
@@ -667,6 +695,12 @@ struct Totals<R, F> {
     lead: u32,
     /// Σ m N_k over the points of `lead` that take part, one lane per node, in point order.
     lead_mass: F,
+    /// Σ V N_k over the saturated points, one lane per node, in point order (formed where
+    /// the pore-pressure rate's weights are wanted: [`crate::state::pore_weights`]).
+    volume_n: F,
+    /// The material of the saturated points added to `volume_n`
+    /// ([`pore_weights::with_point`]).
+    saturated: u32,
 }
 
 impl<R: Real, F: Four<R>> Totals<R, F> {
@@ -676,7 +710,16 @@ impl<R: Real, F: Four<R>> Totals<R, F> {
             pore: R::ZERO,
             lead,
             lead_mass: F::splat(t, R::ZERO),
+            volume_n: F::splat(t, R::ZERO),
+            saturated: pore_weights::NO_POINTS,
         }
+    }
+
+    /// Adds a saturated point's V N_k (`vn`, one lane per node) of `material`.
+    #[inline(always)]
+    fn add_saturated(&mut self, vn: F, material: u32) {
+        self.volume_n = self.volume_n + vn;
+        self.saturated = pore_weights::with_point(self.saturated, material);
     }
 
     /// Adds a point's V (σ' + p I).
@@ -789,8 +832,8 @@ unsafe fn node_lane_sums_avx2<E: Element, R: Real, const WITH_LIQUID: bool>(
     by_component: &[[R; LANES]; 3],
     sums: (&Lanes<R, 10>, &Lanes<R, 12>),
     four: &mut [R],
-) {
-    node_lane_sums::<E, R, WITH_LIQUID>(t, cx, points, element, by_component, sums, four);
+) -> ([R; 4], u32) {
+    node_lane_sums::<E, R, WITH_LIQUID>(t, cx, points, element, by_component, sums, four)
 }
 
 /// An element's sums over its points ([`element_sums`]), from `sums` (the solid's) and, with
@@ -800,7 +843,8 @@ unsafe fn node_lane_sums_avx2<E: Element, R: Real, const WITH_LIQUID: bool>(
 /// loop of [`element_sums`] in its order (the same bits). `element`: whether the element is
 /// full (mixed integration), and the material whose points' weight is formed once
 /// ([`Totals`]). The sums are stored from their vectors into the scatter's buffer `four`
-/// ([`store_nodes`]).
+/// ([`store_nodes`]). Returns the saturated points' Σ V N_k and their material (formed where
+/// the pass leaves the pore-pressure rate's weights, [`leave_pore_weights`]).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
@@ -811,7 +855,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     by_component: &[[R; LANES]; 3],
     (sums, wet): (&Lanes<R, 10>, &Lanes<R, 12>),
     four: &mut [R],
-) {
+) -> ([R; 4], u32) {
     let (map, first) = (points.map, points.first);
     // Every array cut to the element's points again (one length, `count`), so that
     // `point_sums` indexes them without bounds checks.
@@ -829,6 +873,9 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
     let mut s4: [R::Four; 10] = std::array::from_fn(|c| R::Four::load(t, &sums[c]));
     let mut w4: [R::Four; 12] = std::array::from_fn(|c| R::Four::load(t, &wet[c]));
     let mut totals = Totals::<R, R::Four>::new(t, lead);
+    // Whether points of the lead material took part through the paths that skip each point's
+    // checks (`OF_LEAD`), whose material the totals then take once, below.
+    let mut lead_took_part = false;
     // A triangle's shape values point by point (in four lanes and transposed, as below, the
     // 2D dry column ran 30 instructions per particle-step more).
     if E::DIM == 2 {
@@ -842,6 +889,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         if usual_of::<E>(points.arrays.active, points.arrays.material, 0, count, lead)
             && maps(cx.body, lead)
         {
+            lead_took_part = true;
             for i in 0..usual_count::<E>() {
                 let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
                 let n = shape(&x[i]);
@@ -879,6 +927,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         && maps(cx.body, lead)
     {
         debug_assert_eq!(count, 4, "a tetrahedron's usual count");
+        lead_took_part = true;
         let per_point = node_lane_shapes::<E, R>(t, map, first, x, 0, 4);
         for (i, &n) in per_point.iter().enumerate() {
             let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
@@ -895,6 +944,7 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
             && four_of(points.arrays.active, points.arrays.material, j, lead)
             && maps(cx.body, lead);
         if of_lead {
+            lead_took_part = true;
             for (i, &n) in (j..j + 4).zip(per_point.iter()) {
                 let (s, w, sum) = (&mut s4, &mut w4, &mut totals);
                 point_sums::<E, R, WITH_LIQUID, true>(t, cx, points, i, n, full, s, w, sum);
@@ -927,6 +977,26 @@ fn node_lane_sums<E: Element, R: Real, const WITH_LIQUID: bool>(
         store_nodes::<E, R, 7>(t, solid.try_into().expect("seven"), four, width, 0);
         if WITH_LIQUID {
             store_nodes::<E, R, 9>(t, liquid.try_into().expect("nine"), four, width, 7);
+        }
+    }
+    let saturated = match points.liquid {
+        Some((loads, _, _)) if lead_took_part && loads.fluids[lead as usize].is_some() => {
+            pore_weights::with_point(totals.saturated, lead)
+        }
+        _ => totals.saturated,
+    };
+    (totals.volume_n.to_array(), saturated)
+}
+
+/// Leaves element `e`'s weights of the pore-pressure rate, `(Σ V N_k, material)` of its
+/// saturated points, where the pass was asked for them.
+#[inline(always)]
+fn leave_pore_weights<E: Element, R: Real>(cx: &Pass<'_, E, R>, e: usize, rate: ([R; 4], u32)) {
+    if let Some((weights, material)) = &cx.pore_weights {
+        // SAFETY: element e is this thread's only.
+        unsafe {
+            weights.write(e, rate.0);
+            material.write(e, rate.1);
         }
     }
 }
@@ -993,6 +1063,11 @@ fn point_sums<E: Element, R: Real, const WITH_LIQUID: bool, const OF_LEAD: bool>
         liquid_volume_mass_pressure(&f, full, pa.volume[i], volume0.map(|v0| v0[i]), pore[i]);
     let wv = w_all[i];
     totals.pore += pw;
+    // (A point of the lead material is counted once per element, by the caller.)
+    totals.volume_n = totals.volume_n + splat(pa.volume[i]) * n;
+    if !OF_LEAD {
+        totals.saturated = pore_weights::with_point(totals.saturated, material_i);
+    }
     let mn = splat(mw) * n;
     w4[0] = w4[0] + mn;
     w4[1] = w4[1] + splat(f.n * mw) * n;
@@ -1216,6 +1291,7 @@ mod tests {
                     &mut g,
                     None,
                     Some(loads),
+                    None,
                 )
             });
             let got = of_grid(&g);

@@ -16,6 +16,7 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::state::pore_weights::{self, PoreWeights};
 use crate::step::batch::{interpolate, node_lane_shapes, Batch, TETRAHEDRA};
 use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
@@ -736,6 +737,11 @@ pub struct Guard<'a, R: Real> {
 /// Anura3D's strain smoothing does for the volumetric strain (`smooth`; without it each point
 /// takes its element's rate, as Anura3D without `STRAIN_SMOOTHING`). With Anura3D's strain
 /// `smoothing` both increments are its smoothed ones instead.
+///
+/// With `weights` that particle to grid left this step ([`PoreWeights`]), an element whose
+/// saturated points share one material adds r_e W_ek and W_ek to its nodes without reading its
+/// points (the same W_ek, the rate's products summed once instead of point by point: the
+/// bits of before with one point per element); the others go point by point.
 #[allow(clippy::too_many_arguments)]
 pub fn update_pore_pressure<E: Element, R: Real>(
     team: &Team,
@@ -747,11 +753,20 @@ pub fn update_pore_pressure<E: Element, R: Real>(
     fluids: &[Option<Fluid<R>>],
     smooth: bool,
     smoothing: Option<&StrainSmoothing<R>>,
+    weights: Option<&mut PoreWeights<R>>,
     dt: R,
 ) -> bool {
     let (Some(lp), Some(gl)) = (&mut p.liquid, &mut g.liquid) else {
         return false;
     };
+    // This step's weights, taken once; a section's rate differs from point to point (its hoop
+    // rate), so it always goes point by point.
+    let weights = weights
+        .filter(|w| w.fresh && w.weights.len() == mesh.elements() && !E::AXISYMMETRIC)
+        .map(|w| {
+            w.fresh = false;
+            &*w
+        });
     if let Some(sm) = smoothing {
         let pressure = Shared::new(&mut lp.p);
         let (active, material, element) = (&p.active, &p.material, &p.element);
@@ -801,6 +816,7 @@ pub fn update_pore_pressure<E: Element, R: Real>(
         fluids,
         vel,
         wvel,
+        weights,
         four: if wide || cfg!(target_feature = "avx2") {
             R::Four::token()
         } else {
@@ -894,6 +910,8 @@ struct RatePass<'a, E: Element, R: Real> {
     fluids: &'a [Option<Fluid<R>>],
     vel: &'a [V3<R>],
     wvel: &'a [V3<R>],
+    /// The weights particle to grid left this step, where it did.
+    weights: Option<&'a PoreWeights<R>>,
     /// Where the pass runs its AVX2 copy (or a build for AVX2): the token of [`Real::Four`]'s
     /// instructions.
     four: Option<<R::Four as Four<R>>::Token>,
@@ -920,6 +938,28 @@ fn rate_sums<E: Element, R: Real, const WIDE: bool>(
     }
     let mesh = cx.mesh;
     let nodal = NodalVelocities::of(mesh, cx.vel, cx.wvel, e);
+    if let Some(w) = cx.weights {
+        let fluid = |m: u32| cx.fluids[m as usize].as_ref();
+        match w.material[e] {
+            pore_weights::NO_POINTS => {
+                two.fill(R::ZERO);
+                return;
+            }
+            m if m != pore_weights::MIXED && fluid(m).is_some() => {
+                let f = fluid(m).expect("a saturated material");
+                let rate = nodal.rate(f, |_| R::ZERO, R::ONE);
+                // (0 + W r: from zero as the point-by-point sum, so that one point gives its
+                // bits, the sign of a zero included.)
+                for (slot, &wk) in node_slots::<E, R>(two, 2).zip(&w.weights[e]) {
+                    slot[0] = R::ZERO + wk * rate;
+                    slot[1] = wk;
+                }
+                return;
+            }
+            // Points of several materials: each its own rate, below.
+            _ => {}
+        }
+    }
     let corners = mesh.corners[e].as_ref();
     let first = &mesh.x[corners[0] as usize];
     let map = &mesh.map[e];
