@@ -589,8 +589,11 @@ impl<R: Real, E: Element> Engine<R, E> {
             .iter()
             .map(|m| R::of(m.as_ref().map_or(0.0, |s| s.density)))
             .collect();
-        let pore_weights = (two_phase && case.smooth_pressure && !case.strain_smoothing)
-            .then(|| crate::state::pore_weights::PoreWeights::new(mesh.elements()));
+        // (Not in an axisymmetric section, whose points' hoop rates differ: the rate's pass goes
+        // point by point there.)
+        let pore_weights =
+            (two_phase && case.smooth_pressure && !case.strain_smoothing && !E::AXISYMMETRIC)
+                .then(|| crate::state::pore_weights::PoreWeights::new(mesh.elements()));
         let mut engine = Engine {
             input_node,
             guards: case.guards,

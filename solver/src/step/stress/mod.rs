@@ -937,27 +937,25 @@ fn rate_sums<E: Element, R: Real, const WIDE: bool>(
         return;
     }
     let mesh = cx.mesh;
+    let weights = cx.weights.map(|w| (w.material[e], &w.weights[e]));
+    // No saturated point: nothing to add, and no nodes to read.
+    if let Some((pore_weights::NO_POINTS, _)) = weights {
+        two.fill(R::ZERO);
+        return;
+    }
     let nodal = NodalVelocities::of(mesh, cx.vel, cx.wvel, e);
-    if let Some(w) = cx.weights {
-        let fluid = |m: u32| cx.fluids[m as usize].as_ref();
-        match w.material[e] {
-            pore_weights::NO_POINTS => {
-                two.fill(R::ZERO);
-                return;
+    // Saturated points of one material (`MIXED` names none, and goes point by point below):
+    // the element's rate once, none of its points read.
+    if let Some((m, w)) = weights {
+        if let Some(f) = cx.fluids.get(m as usize).and_then(Option::as_ref) {
+            let rate = nodal.rate(f, |_| R::ZERO, R::ONE);
+            // (0 + W r: from zero as the point-by-point sum, so that one point gives its bits,
+            // the sign of a zero included.)
+            for (slot, &wk) in node_slots::<E, R>(two, 2).zip(w) {
+                slot[0] = R::ZERO + wk * rate;
+                slot[1] = wk;
             }
-            m if m != pore_weights::MIXED && fluid(m).is_some() => {
-                let f = fluid(m).expect("a saturated material");
-                let rate = nodal.rate(f, |_| R::ZERO, R::ONE);
-                // (0 + W r: from zero as the point-by-point sum, so that one point gives its
-                // bits, the sign of a zero included.)
-                for (slot, &wk) in node_slots::<E, R>(two, 2).zip(&w.weights[e]) {
-                    slot[0] = R::ZERO + wk * rate;
-                    slot[1] = wk;
-                }
-                return;
-            }
-            // Points of several materials: each its own rate, below.
-            _ => {}
+            return;
         }
     }
     let corners = mesh.corners[e].as_ref();
