@@ -323,7 +323,24 @@ fn main() -> ExitCode {
                         Some(mpm_solve::driver::run::RunError::Diverged(_))
                     )
             });
-            if diverged {
+            // A calibration's divergence (`--check`) wrote no outputs.
+            let calibrating = e.chain().any(|c| {
+                c.downcast_ref::<mpm_solve::driver::calibrate::CalibrationError>()
+                    .is_some()
+            });
+            let diverged = diverged
+                || e.chain().any(|c| {
+                    matches!(
+                        c.downcast_ref::<mpm_solve::driver::calibrate::CalibrationError>(),
+                        Some(mpm_solve::driver::calibrate::CalibrationError::Step {
+                            source: mpm_solve::driver::engine::StepError::Diverged(_),
+                            ..
+                        })
+                    )
+                });
+            if diverged && calibrating {
+                ExitCode::from(EXIT_DIVERGED)
+            } else if diverged {
                 eprintln!(
                     "mpm-solve: the outputs stop at the last good state (run.pvd); run.json has \"status\": \"diverged\" and the diagnosis"
                 );
@@ -575,33 +592,45 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         max_steps: args.max_steps,
     };
     let Some(out) = out else {
-        println!("{plan}");
-        let cheaper = mpm_solve::input::preflight::cheaper_settings(&case);
-        if !cheaper.is_empty() {
-            println!("  cheaper at similar error on the accuracy map (docs/accuracy.md):");
-            for line in cheaper {
-                println!("    - {line}");
+        let print = |plan: &mpm_solve::input::preflight::Plan| {
+            println!("{plan}");
+            let cheaper = mpm_solve::input::preflight::cheaper_settings(&case);
+            if !cheaper.is_empty() {
+                println!("  cheaper at similar error on the accuracy map (docs/accuracy.md):");
+                for line in cheaper {
+                    println!("    - {line}");
+                }
+            }
+        };
+        if let Err(e) = plan.check(&limits, None) {
+            print(&plan);
+            return Err(e.into());
+        }
+        // The engine a run would build (its threads, pinning, first touch), which checks the
+        // probes against the points it places and times a few steps of the case.
+        struct Calibrate<'a>(&'a mpm_solve::input::case::Case, u64);
+        impl Generic for Calibrate<'_> {
+            type Output = anyhow::Result<Option<mpm_solve::input::preflight::Calibration>>;
+            fn call<R: Real, E: Element>(self) -> Self::Output {
+                use mpm_solve::driver::calibrate;
+                let mut engine = mpm_solve::driver::engine::Engine::<R, E>::new(self.0, false)?;
+                mpm_solve::driver::run::check_probes(self.0, &engine)?;
+                Ok(calibrate::calibrate(
+                    &mut engine,
+                    self.1,
+                    calibrate::BUDGET,
+                )?)
             }
         }
-        plan.check(&limits, None)?;
-        // Probes are checked against the points the run would place.
-        struct Probes<'a>(&'a mpm_solve::input::case::Case);
-        impl Generic for Probes<'_> {
-            type Output = anyhow::Result<()>;
-            fn call<R: Real, E: Element>(self) -> anyhow::Result<()> {
-                let engine = mpm_solve::driver::engine::Engine::<R, E>::with_options(
-                    self.0,
-                    false,
-                    mpm_solve::driver::engine::Options {
-                        threads: 1,
-                        pin: mpm_solve::parallel::team::Pin::None,
-                        first_touch: false,
-                    },
-                )?;
-                Ok(mpm_solve::driver::run::check_probes(self.0, &engine)?)
+        let run_steps = plan.steps.min(u64::MAX as f64) as u64;
+        match dispatch(&case, Calibrate(&case, run_steps))? {
+            Ok(Some(c)) => print(&plan.calibrated(c)),
+            Ok(None) => print(&plan),
+            Err(e) => {
+                print(&plan);
+                return Err(e);
             }
         }
-        dispatch(&case, Probes(&case))??;
         return Ok(());
     };
     plan.check(&limits, Some(out))?;

@@ -181,7 +181,10 @@ fn check_prints_what_a_run_would_cost() {
         "steps to 20.00 ms",
         "outputs: 2 (0 probes), about ",
         "memory: about ",
-        "wall time: roughly ",
+        "wall time: about ",
+        // Timed here: the steps of this case on the engine a run would build.
+        "for the steps (measured here: ",
+        " steps of this case at ",
     ] {
         assert!(
             text.contains(what),
@@ -217,6 +220,100 @@ fn check_prints_what_a_run_would_cost() {
         (0.95..1.05).contains(&ratio),
         "predicted {predicted} B, wrote {written} B"
     );
+}
+
+/// The calibrated wall time is the run's steps at the measured time per step: the printed
+/// figures agree with each other, and a job that runs its workshop twin counts its steps twice.
+#[test]
+fn check_times_steps_of_the_case_and_counts_a_job_s_twin() {
+    let text = |scene: &Path, extra: &[&str]| -> String {
+        let out = solve()
+            .arg(scene)
+            .arg("--check")
+            .args(extra)
+            .assert()
+            .success();
+        String::from_utf8(out.get_output().stdout.clone()).unwrap()
+    };
+    // "about 12,780 steps", "at 269.1 µs each", "about 6.878 s on": numbers in words.
+    let number_before = |text: &str, suffix: &str| -> f64 {
+        let at = text
+            .find(suffix)
+            .unwrap_or_else(|| panic!("no {suffix:?} in\n{text}"));
+        let word = text[..at].rsplit(' ').next().unwrap();
+        word.replace(',', "").parse().unwrap()
+    };
+    // A duration in words before `suffix`, after `prefix`: "269.1 µs", "6.878 s", "1 min 18 s"
+    // (floored to the second: `tolerance` covers it).
+    let seconds = |text: &str, prefix: &str, suffix: &str| -> (f64, f64) {
+        let at = text
+            .find(suffix)
+            .unwrap_or_else(|| panic!("no {suffix:?} in\n{text}"));
+        let from = text[..at].rfind(prefix).expect("the prefix") + prefix.len();
+        let words: Vec<&str> = text[from..at].split(' ').collect();
+        let mut total = 0.0;
+        for pair in words.chunks(2) {
+            let v: f64 = pair[0].parse().unwrap();
+            total += v * match pair[1] {
+                "s" => 1.0,
+                "ms" => 1e-3,
+                "µs" => 1e-6,
+                "min" => 60.0,
+                "h" => 3600.0,
+                other => panic!("unexpected unit {other}"),
+            };
+        }
+        let floored = words.len() > 2;
+        (total, if floored { 1.0 / total } else { 1e-3 })
+    };
+    for (scene, twice) in [
+        (testdata("oedometer.toml"), true),
+        (testdata("column_gravity.toml"), false),
+    ] {
+        let t = text(&scene, &["--threads", "1"]);
+        assert_eq!(
+            t.contains("twice: the job's run and its workshop twin"),
+            twice,
+            "{t}"
+        );
+        let steps = number_before(&t, " steps to ");
+        let (per_step, _) = seconds(&t, " at ", " each, ");
+        let (wall, floored) = seconds(&t, "wall time: about ", " on 1 thread(s)");
+        let runs = if twice { 2.0 } else { 1.0 };
+        let expected = runs * steps * per_step;
+        // (Each figure printed to four significant digits, or to the second.)
+        assert!(
+            (wall / expected - 1.0).abs() < 2e-3 + floored,
+            "{wall} s against {runs} × {steps} × {per_step} s:\n{t}"
+        );
+        assert!(number_before(&t, " steps of this case") >= 2.0, "{t}");
+    }
+}
+
+/// A case whose first steps already fail is caught by `--check`: the plan is printed, the
+/// failing step named, and the exit code is a diverged run's (3).
+#[test]
+fn check_catches_a_case_that_fails_in_its_first_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = common::golden_scene(dir.path(), "column_dry", "soft", &|t| {
+        t.replace("young = 10000.0", "young = 1.0")
+            .replace("end = 0.01", "end = 2.0")
+            .replace("output_interval = 0.005", "output_interval = 0.1")
+    });
+    let out = solve().arg(&s).arg("--check").assert().code(3);
+    let o = out.get_output();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(stdout.contains("material points: 461"), "{stdout}");
+    assert!(
+        stderr.contains("of its calibration failed") && stderr.contains("check volume tripped"),
+        "{stderr}"
+    );
+    // No hint about outputs: a check writes none.
+    assert!(!stderr.contains("run.pvd"), "{stderr}");
+    assert!(!dir.path().join("o").exists());
 }
 
 #[test]

@@ -1,5 +1,6 @@
-//! Running a case: the engine (state and buffers, one step), the loop over output times with its observers, the output files, and numbers in words for people.
+//! Running a case: the engine (state and buffers, one step), a short calibration of its step, the loop over output times with its observers, the output files, and numbers in words for people.
 
+pub mod calibrate;
 pub mod checkpoint;
 pub mod dispatch;
 pub mod engine;

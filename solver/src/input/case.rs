@@ -708,6 +708,18 @@ pub struct ConsolidationSpec {
     pub compare_rest: bool,
 }
 
+impl ConsolidationSpec {
+    /// The runs the job makes: its own and, with `compare_rest` from another start, the
+    /// workshop-style twin's (from rest), as many steps again.
+    pub fn runs(&self) -> usize {
+        if self.compare_rest && self.start != Start::Rest {
+            2
+        } else {
+            1
+        }
+    }
+}
+
 /// The undrained state of a 1D compression under a top load, which Terzaghi assumes at t = 0+:
 /// every saturated point starts with vertical strain ε = -q / (E_oed + K_w/n), the effective
 /// stress of that strain and pore pressure (K_w/n) ε.

@@ -72,8 +72,11 @@ pub struct Plan {
     /// Simulated time (s).
     pub end_time: f64,
     /// Time steps to the end (an upper bound for quasi-static load steps, which may converge
-    /// earlier).
+    /// earlier), of each run.
     pub steps: f64,
+    /// Runs of the case: 2 for a consolidation job with its workshop twin
+    /// ([`crate::input::case::ConsolidationSpec::runs`]), each with as many steps and outputs.
+    pub runs: usize,
     /// Output times.
     pub outputs: usize,
     /// Probes written to `history.csv`.
@@ -86,8 +89,28 @@ pub struct Plan {
     pub threads: usize,
     /// Precision the estimate assumes.
     pub precision: Precision,
-    /// Wall time the time steps will take, roughly (s).
+    /// Wall time the time steps will take (s): from the benchmarks' rates, or from steps of
+    /// the case timed here once [`Plan::calibrated`].
     pub wall_seconds: f64,
+    /// The steps timed on this machine, where the plan was calibrated.
+    pub calibration: Option<Calibration>,
+}
+
+/// Steps of the case timed on this machine (`mpm_solve::driver::calibrate`), with the threads,
+/// pinning and precision the run would have.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Calibration {
+    /// Steps timed.
+    pub steps: u64,
+    /// Their wall time (s).
+    pub seconds: f64,
+}
+
+impl Calibration {
+    /// Seconds per step.
+    pub fn per_step(&self) -> f64 {
+        self.seconds / self.steps.max(1) as f64
+    }
 }
 
 /// A limit the run would exceed, with the numbers that show why.
@@ -204,7 +227,8 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
     let mesh_file = nodes as f64 * 24.0
         + case.model.element_count() as f64 * (corners * 8.0 + 9.0)
         + VTU_FILE_BYTES;
-    let output_bytes = outputs as f64 * per_output + mesh_file;
+    let runs = case.consolidation.map_or(1, |s| s.runs());
+    let output_bytes = runs as f64 * (outputs as f64 * per_output + mesh_file);
     let real = case.precision.bytes() as f64;
     let point_bytes = if two_phase { 24.0 } else { 17.0 } * real + 13.0;
     let node_bytes = if two_phase { 32.0 } else { 16.0 } * real + 24.0 + 6.0;
@@ -214,7 +238,7 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
         + altitude.len() as f64 * element_bytes;
     let threads = threads.max(1);
     let rate = rate(threads, two_phase, case.precision);
-    let wall_seconds = steps * (points as f64 / rate + STEP_OVERHEAD);
+    let wall_seconds = runs as f64 * steps * (points as f64 / rate + STEP_OVERHEAD);
     Ok(Plan {
         points,
         elements: case.model.element_count(),
@@ -223,6 +247,7 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
         dt,
         end_time: case.end_time,
         steps,
+        runs,
         outputs,
         probes: case.probes.len(),
         output_bytes,
@@ -230,6 +255,7 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
         threads,
         precision: case.precision,
         wall_seconds,
+        calibration: None,
     })
 }
 
@@ -248,9 +274,20 @@ fn rate(threads: usize, two_phase: bool, precision: Precision) -> f64 {
 }
 
 impl Plan {
-    /// The assumed speed, point-steps per second.
+    /// The speed the wall time assumes, point-steps per second: measured, where calibrated.
     fn rate(&self) -> f64 {
-        rate(self.threads, self.two_phase, self.precision)
+        match self.calibration {
+            Some(c) if c.seconds > 0.0 => self.points as f64 / c.per_step(),
+            _ => rate(self.threads, self.two_phase, self.precision),
+        }
+    }
+
+    /// The plan with its wall time from steps of the case timed here: the run's steps at the
+    /// measured seconds per step (the time the outputs take to write not included).
+    pub fn calibrated(mut self, c: Calibration) -> Self {
+        self.wall_seconds = self.runs as f64 * self.steps * c.per_step();
+        self.calibration = Some(c);
+        self
     }
 
     /// Checks the plan against `limits` and, when `out` is given, the free space where the
@@ -353,10 +390,15 @@ impl fmt::Display for Plan {
         )?;
         writeln!(
             f,
-            "  time step: {} (critical); about {} steps to {}",
+            "  time step: {} (critical); about {} steps to {}{}",
             units::duration(self.dt),
             units::count(self.steps),
-            units::duration(self.end_time)
+            units::duration(self.end_time),
+            if self.runs == 2 {
+                ", twice: the job's run and its workshop twin from rest"
+            } else {
+                ""
+            }
         )?;
         writeln!(
             f,
@@ -371,13 +413,27 @@ impl fmt::Display for Plan {
             units::bytes(self.memory_bytes),
             self.precision.name()
         )?;
-        write!(
-            f,
-            "  wall time: roughly {} on {} thread(s) in {} (at about {})",
-            units::duration(self.wall_seconds),
-            self.threads,
-            self.precision.name(),
-            units::rate_of(self.rate(), "point-steps")
-        )
+        match self.calibration {
+            Some(c) => write!(
+                f,
+                "  wall time: about {} on {} thread(s) in {} for the steps (measured here: {} \
+                 steps of this case at {} each, {}), plus writing the outputs",
+                units::duration(self.wall_seconds),
+                self.threads,
+                self.precision.name(),
+                c.steps,
+                units::duration(c.per_step()),
+                units::rate_of(self.rate(), "point-steps")
+            ),
+            None => write!(
+                f,
+                "  wall time: roughly {} on {} thread(s) in {} (at about {}, the benchmarks' \
+                 rate)",
+                units::duration(self.wall_seconds),
+                self.threads,
+                self.precision.name(),
+                units::rate_of(self.rate(), "point-steps")
+            ),
+        }
     }
 }

@@ -415,7 +415,7 @@ pub fn run_job_with<R: Real, E: Element>(
         .consolidation
         .ok_or_else(|| RunError::Job(Box::new(LayerError::NoTable)))?;
     let (engine, tracker) = run_tracked_with::<R, E>(case, dir, options, watch)?;
-    let workshop = if spec.compare_rest && spec.start != Start::Rest {
+    let workshop = if spec.runs() == 2 {
         let mut twin = case.clone();
         twin.consolidation = Some(ConsolidationSpec {
             start: Start::Rest,
