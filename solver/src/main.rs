@@ -56,7 +56,8 @@ struct Args {
     #[arg(long, default_value = "1e8", value_name = "N", value_parser = positive)]
     max_steps: f64,
     /// Read and check the input, print what a run would cost (material points, time step,
-    /// steps, output volume, memory, a rough wall time) and exit without running.
+    /// steps, output volume, memory, and the wall time from a few of its steps timed here:
+    /// at most about 0.3 s after the set-up) and exit without running.
     #[arg(long)]
     check: bool,
     /// No progress on standard error.

@@ -1,5 +1,6 @@
 //! What a run will cost, predicted before any work: material points, time steps, output volume,
-//! memory and a rough wall time, checked against the user's limits. A mistyped output interval or
+//! memory and a rough wall time (which a few of the case's own steps, timed by `--check`, make
+//! this machine's: [`Plan::calibrated`]), checked against the user's limits. A mistyped output interval or
 //! stiffness is refused here with the numbers that show the mistake, instead of filling the disk
 //! or promising an ETA of centuries.
 
