@@ -1507,7 +1507,7 @@ impl<R: Real, E: Element> Engine<R, E> {
     }
 
     /// The modelled bytes per particle-step of each step phase (`driver::traffic`), for the
-    /// way this run locates its points.
+    /// way this run locates its points and takes its pore-pressure rate's weights.
     pub fn modelled_bytes(&self) -> [f64; 5] {
         let bytes = crate::driver::traffic::modelled_bytes::<R, E>(
             &self.particles,
@@ -1515,6 +1515,15 @@ impl<R: Real, E: Element> Engine<R, E> {
             self.mesh.nodes(),
             self.layout.slot_share(),
         );
+        let bytes = if self.pore_weights.is_some() {
+            crate::driver::traffic::with_pore_weights::<R>(
+                bytes,
+                self.mesh.elements(),
+                self.particles.len(),
+            )
+        } else {
+            bytes
+        };
         if self.locates_in_stress_pass() {
             crate::driver::traffic::locating_in_stress(bytes)
         } else {

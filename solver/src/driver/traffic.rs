@@ -154,6 +154,18 @@ pub fn locating_in_stress(mut bytes: [f64; 5]) -> [f64; 5] {
     bytes
 }
 
+/// [`modelled_bytes`] of a two-phase run whose pore-pressure rate takes its weights from
+/// particle to grid ([`crate::state::pore_weights`]), for `elements` elements and `points`
+/// points: particle to grid writes each element's Σ V N_k (four reals) and material (a u32),
+/// and the rate's pass (in the stress phase) reads them back.
+pub fn with_pore_weights<R: Real>(mut bytes: [f64; 5], elements: usize, points: usize) -> [f64; 5] {
+    let per_element = 4 * std::mem::size_of::<R>() + std::mem::size_of::<u32>();
+    let per_point = (per_element * elements) as f64 / points.max(1) as f64;
+    bytes[0] += per_point;
+    bytes[3] += per_point;
+    bytes
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -206,5 +218,18 @@ mod tests {
         assert_eq!(fused[3], dry[3] + 4.0);
         assert_eq!(fused[4], 0.0);
         assert_eq!(fused[..3], dry[..3]);
+        // The pore-pressure rate's weights: 20 elements' 4 reals and a u32 (36 bytes) over 80
+        // points, written by particle to grid and read by the stress phase's rate pass.
+        let weighted = with_pore_weights::<f64>(wet, 20, 80);
+        assert_eq!(weighted[0], wet[0] + 36.0 * 20.0 / 80.0);
+        assert_eq!(weighted[3], wet[3] + 36.0 * 20.0 / 80.0);
+        assert_eq!(
+            [weighted[1], weighted[2], weighted[4]],
+            [wet[1], wet[2], wet[4]]
+        );
+        assert_eq!(
+            with_pore_weights::<f32>(wet, 20, 80)[0],
+            wet[0] + 20.0 * 20.0 / 80.0
+        );
     }
 }
