@@ -325,20 +325,11 @@ fn main() -> ExitCode {
                     )
             });
             // A calibration's divergence (`--check`) wrote no outputs.
-            let calibrating = e.chain().any(|c| {
-                c.downcast_ref::<mpm_solve::driver::calibrate::CalibrationError>()
-                    .is_some()
-            });
-            let diverged = diverged
-                || e.chain().any(|c| {
-                    matches!(
-                        c.downcast_ref::<mpm_solve::driver::calibrate::CalibrationError>(),
-                        Some(mpm_solve::driver::calibrate::CalibrationError::Step {
-                            source: mpm_solve::driver::engine::StepError::Diverged(_),
-                            ..
-                        })
-                    )
-                });
+            let calibration = e
+                .chain()
+                .find_map(|c| c.downcast_ref::<mpm_solve::driver::calibrate::CalibrationError>());
+            let calibrating = calibration.is_some();
+            let diverged = diverged || calibration.is_some_and(|c| c.diverged());
             if diverged && calibrating {
                 ExitCode::from(EXIT_DIVERGED)
             } else if diverged {
@@ -623,7 +614,8 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
                 )?)
             }
         }
-        let run_steps = plan.steps.min(u64::MAX as f64) as u64;
+        // (A float beyond u64 saturates.)
+        let run_steps = plan.steps as u64;
         match dispatch(&case, Calibrate(&case, run_steps))? {
             Ok(Some(c)) => print(&plan.calibrated(c)),
             Ok(None) => print(&plan),

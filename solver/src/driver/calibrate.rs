@@ -1,6 +1,6 @@
 //! A short calibration for `--check`: a few time steps of the case itself, on the engine a run
 //! would build (its threads, pinning and first touch), timed, so that the predicted wall time
-//! is this machine's and this case's rather than the benchmarks' (docs/design.md §4.16). The
+//! is this machine's and this case's rather than the benchmarks' (docs/design.md §7.6). The
 //! first step is left out of the timing: it faults in the pages first touch did not and warms
 //! the caches, which a run pays once.
 
@@ -29,6 +29,19 @@ pub enum CalibrationError {
         #[source]
         source: StepError,
     },
+}
+
+impl CalibrationError {
+    /// Whether a guard rail tripped (a run would end as diverged).
+    pub fn diverged(&self) -> bool {
+        matches!(
+            self,
+            CalibrationError::Step {
+                source: StepError::Diverged(_),
+                ..
+            }
+        )
+    }
 }
 
 /// Steps `engine` at its time step: one untimed step, then timed steps until `budget` has
