@@ -2206,10 +2206,28 @@ mod tests {
             Some(s) => (s, true),
             None => (scene, false),
         };
+        // `+shear`: started moving down fast enough (a half sine over the height: a column's
+        // walls hold v_x) that the middle points cross some two elements in the steps, so
+        // that the passes' locate paths walk.
+        let (scene, shear) = match scene.strip_suffix("+shear") {
+            Some(s) => (s, true),
+            None => (scene, false),
+        };
+        // `+dry`: the scene's materials without their liquid.
+        let (scene, dry) = match scene.strip_suffix("+dry") {
+            Some(s) => (s, true),
+            None => (scene, false),
+        };
         let mut case = crate::input::scene::load(&dir.join(scene)).unwrap();
         case.objective_stress |= objective;
         if ten {
             case.points_per_element.iter_mut().for_each(|n| *n = 10);
+        }
+        if dry {
+            case.materials
+                .iter_mut()
+                .flatten()
+                .for_each(|m| m.liquid = None);
         }
         crate::parallel::avx2::with_portable(portable, || {
             let mut engine = super::Engine::<R, E>::new(&case, false).unwrap();
@@ -2224,10 +2242,36 @@ mod tests {
                     v[0] += x[1] * R::of(0.05);
                 }
             }
+            if shear {
+                // The element size from the mesh's extent and element count (a square
+                // element's side; a triangle's area is half its square's).
+                let (lo, hi) = engine.mesh.x.iter().fold(
+                    ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+                    |(lo, hi), x| {
+                        let (a, b) = (x[0].f64(), x[1].f64());
+                        ([lo[0].min(a), lo[1].min(b)], [hi[0].max(a), hi[1].max(b)])
+                    },
+                );
+                let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
+                let h = (2.0 * area / engine.mesh.elements() as f64).sqrt();
+                // Fastest at mid-height, still at the top and the bottom (a faster top
+                // surface left the mesh).
+                let fastest = 2.0 * h / (steps as f64 * engine.dt);
+                let p = &mut engine.particles;
+                for (v, x) in p.v.iter_mut().zip(&p.x) {
+                    let y = (x[1].f64() - lo[1]) / (hi[1] - lo[1]);
+                    v[1] -= R::of(fastest * (std::f64::consts::PI * y).sin());
+                }
+            }
+            let start = engine.particles.element.clone();
             for _ in 0..steps {
                 engine.step(engine.dt, None).unwrap();
             }
             let p = &engine.particles;
+            assert!(
+                !shear || p.element != start,
+                "{scene}: no point left its element"
+            );
             let mut bits: Vec<Vec<u64>> = Vec::new();
             let mut add = |v: &[R]| bits.push(v.iter().map(|x| x.f64().to_bits()).collect());
             add(p.x.as_flattened());
@@ -2338,8 +2382,15 @@ mod tests {
             );
         }
         // Plane strain, three points per element: the stress pass's lanes take each
-        // element's three in four lanes.
-        for scene in ["oedometer_2d.toml", "oedometer_2d.toml+objective"] {
+        // element's three in four lanes, or four elements' in one lane each.
+        // (Groups of four triangles take a lane each, [`crate::step::stress`]'s `quads`; with
+        // `+shear` points leave their elements and are walked.)
+        for scene in [
+            "oedometer_2d.toml",
+            "oedometer_2d.toml+objective",
+            "oedometer_2d.toml+shear",
+            "oedometer_2d.toml+dry+shear",
+        ] {
             let portable = state_bits::<f64, Tri3>(scene, 60, true);
             assert!(
                 portable == state_bits::<f64, Tri3>(scene, 60, false),
