@@ -9,6 +9,11 @@ use crate::error::{Error, Location, Result};
 use crate::model::LineEnding;
 use crate::text::{self, Lines, Tokens};
 
+/// The most load steps a CPS may ask for: each writes an output, and a count past this (a typo,
+/// or a corrupted file) would only reach the output checks after its list of output times
+/// had exhausted the memory.
+const MAX_LOAD_STEPS: f64 = 1e7;
+
 /// One `$$KEYWORD` entry with its value lines.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Entry {
@@ -495,13 +500,14 @@ impl Cps {
     /// The typed settings of docs/design.md §2.2, with Anura3D's defaults for missing keys.
     pub fn settings(&self) -> Result<Settings> {
         let load_steps = self.real("NUMBER_OF_LOADSTEPS", 1.0)?;
-        if load_steps < 1.0 || load_steps.fract() != 0.0 {
+        if load_steps < 1.0 || load_steps.fract() != 0.0 || load_steps > MAX_LOAD_STEPS {
             let e = self
                 .get("NUMBER_OF_LOADSTEPS")
                 .expect("present when not default");
             return Err(Error::invalid(
                 self.at(e, 1),
-                "expected a positive whole number of load steps",
+                "expected a positive whole number of load steps, at most 10,000,000 (each \
+                 writes an output)",
             ));
         }
         let method = match self.get("COMPUTATION_METHOD") {
@@ -693,6 +699,38 @@ mod tests {
     use super::*;
 
     const SRC: &str = "### Anura3D_2024 ###\n$$NUMBER_OF_LOADSTEPS\n50\n$$TIME_PER_LOADSTEP\n0.05\n$$COURANT_NUMBER\n0.5\n$$COMPUTATION_METHOD\nMPM-MP\n$$GRAVITY_LOAD\noff 0.0 1.0\n$$SOLID_TRACTION\nstep 1.0 1.0\n$$PRESCRIBED_VELOCITY\nlinear 0.0 2.0\n$$HOMOGENEOUS_LOCAL_DAMPING\n1 0.05\n$$MASS_SCALING\n0 1.0\n$$SOMETHING_NEW\n1\n$$SOMETHING_NEW\n2\n$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n2\n$$OUTPUT_MATERIAL_POINTS\n3\n5\n$$END\n";
+
+    #[test]
+    fn refuses_load_step_counts_that_are_not_whole_or_past_the_limit() {
+        for (count, ok) in [
+            ("10000000", true),
+            ("10000001", false),
+            ("4294967295", false),
+            ("1e30", false),
+            ("0", false),
+            ("2.5", false),
+        ] {
+            let src = SRC.replace(
+                "$$NUMBER_OF_LOADSTEPS\n50\n",
+                &format!("$$NUMBER_OF_LOADSTEPS\n{count}\n"),
+            );
+            let (cps, _) = Cps::read(src.as_bytes(), "a.CPS_001").unwrap();
+            match cps.settings() {
+                Ok(s) => {
+                    assert!(ok, "{count} taken");
+                    assert_eq!(s.load_steps as f64, count.parse::<f64>().unwrap());
+                }
+                Err(e) => {
+                    assert!(!ok, "{count}: {e}");
+                    let e = e.to_string();
+                    assert!(
+                        e.contains("a.CPS_001:3") && e.contains("at most 10,000,000"),
+                        "{e}"
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn types_the_design_keys_and_warns_once() {

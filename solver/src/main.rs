@@ -10,7 +10,9 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context};
 use clap::Parser;
+mod console;
 mod progress;
+use console::say;
 
 use mpm_solve::driver::dispatch::{dispatch, Generic};
 use mpm_solve::driver::units;
@@ -71,8 +73,8 @@ struct Args {
     /// file's stem), and exit without running; what Anura3D cannot reproduce is refused by name.
     #[arg(long, value_name = "DIR")]
     export_anura3d: Option<PathBuf>,
-    /// Worker threads [default: one per core available to the process that no other process
-    /// keeps busy at the start]. Results are byte-identical for any count.
+    /// Worker threads, 1 to 1024 [default: one per core available to the process that no
+    /// other process keeps busy at the start]. Results are byte-identical for any count.
     #[arg(long)]
     threads: Option<usize>,
     /// Thread placement: `auto` pins one thread per free core when each thread has one and
@@ -302,6 +304,9 @@ fn main() -> ExitCode {
     // Only fails when a logger is already set, which nothing else does.
     let _ = log::set_logger(&MESSAGES).map(|()| log::set_max_level(log::LevelFilter::Warn));
     match run(Args::parse()) {
+        // (A report that could not be written to standard output, other than to a reader
+        // that went away, fails the command: `console`.)
+        Ok(()) if console::failed() => ExitCode::FAILURE,
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             if let Some(mpm_solve::driver::run::RunError::Interrupted { signal, dir, .. }) = e
@@ -438,9 +443,17 @@ fn input_kind(path: &std::path::Path) -> anyhow::Result<Input> {
     }
 }
 
+/// The most worker threads a run may ask for: each is started before the input is read, and a
+/// mistyped count (`--threads 99999`) would start them for minutes before any message.
+const MAX_THREADS: usize = 1024;
+
 fn run(args: Args) -> anyhow::Result<()> {
     if args.threads == Some(0) {
         bail!("--threads must be at least 1");
+    }
+    if let Some(n) = args.threads.filter(|&n| n > MAX_THREADS) {
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        bail!("--threads {n}: at most {MAX_THREADS} (this machine has {cores} cores)");
     }
     // Before the input is read: the large arrays are allocated from here on.
     mpm_solve::parallel::huge_pages::set_enabled(matches!(args.huge_pages, OnOff::On));
@@ -464,12 +477,12 @@ fn run(args: Args) -> anyhow::Result<()> {
         for n in &done.notes {
             eprintln!("mpm-solve: warning: {n}");
         }
-        println!("wrote {} and {}", done.gom.display(), done.cps.display());
+        say!("wrote {} and {}", done.gom.display(), done.cps.display());
         return Ok(());
     }
     let case = if is_scene {
         let case = mpm_solve::input::scene::load(&args.input)?;
-        println!(
+        say!(
             "{}: {} elements, {} nodes; {} simulated in {} output(s)",
             args.input.display(),
             units::count(case.model.element_count() as f64),
@@ -495,7 +508,7 @@ fn run(args: Args) -> anyhow::Result<()> {
             }
         };
         let (case, settings) = mpm_solve::input::anura3d::load(&args.input, &cps_path)?;
-        println!(
+        say!(
             "{}: {} {} elements, {} nodes, {} materials; {} load step(s) of {} s, Courant {}",
             mpm_shared::display_name(&args.input),
             case.model.element_count(),
@@ -585,12 +598,12 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
     };
     let Some(out) = out else {
         let print = |plan: &mpm_solve::input::preflight::Plan| {
-            println!("{plan}");
+            say!("{plan}");
             let cheaper = mpm_solve::input::preflight::cheaper_settings(&case);
             if !cheaper.is_empty() {
-                println!("  cheaper at similar error on the accuracy map (docs/accuracy.md):");
+                say!("  cheaper at similar error on the accuracy map (docs/accuracy.md):");
                 for line in cheaper {
-                    println!("    - {line}");
+                    say!("    - {line}");
                 }
             }
         };
@@ -821,12 +834,12 @@ fn execute<R: Real, E: Element>(
             std::iter::once(("default", &t)).chain(w.as_ref().map(|w| ("workshop", w)))
         {
             let last = tr.records.last().expect("at least one output");
-            println!(
+            say!(
                 "{name}: T_v {:.3}, settlement {:.4e} m (Terzaghi {:.4e}), RMS pore-pressure error {:.4} of u0",
                 last.tv, last.settlement, last.terzaghi, last.rms
             );
         }
-        println!(
+        say!(
             "consolidation report: {}",
             out.join("consolidation.csv").display()
         );
@@ -874,7 +887,7 @@ fn done<R: Real, E: Element>(
     } else {
         String::new()
     };
-    println!(
+    say!(
         "done: {} simulated in {} step{} of {}, {} material points{lost}; outputs in {}",
         units::duration(engine.time),
         units::count(engine.steps as f64),

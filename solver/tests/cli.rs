@@ -194,6 +194,18 @@ fn bad_scenes_fail_with_a_clear_message_and_write_nothing() {
         .failure()
         .stderr(predicate::str::contains("--threads must be at least 1"));
     assert!(!out.exists());
+    // A mistyped count is refused at once, before its threads are started (there were minutes
+    // of them before the message).
+    let started = std::time::Instant::now();
+    Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(&s)
+        .args(["--out", out.to_str().unwrap(), "--threads", "99999"])
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("--threads 99999: at most 1024"));
+    assert!(started.elapsed().as_secs() < 20);
+    assert!(!out.exists());
     // Unknown keys are refused with their line.
     let s = scene(dir.path(), &|t| t.replace("[time]", "[time]\nspeed = 3"));
     fails(&s, &dir.path().join("o")).stderr(
@@ -253,4 +265,48 @@ fn bad_anura3d_cases_name_the_item() {
         .assert()
         .failure()
         .stderr(predicate::str::contains("--cps"));
+}
+
+/// A report on standard output whose reader goes away (`| head -1`) ends the printing, not the
+/// command (no panic, exit 0); one that cannot be written (a full device) fails the command with
+/// a message, not a panic.
+#[cfg(unix)]
+#[test]
+fn standard_output_that_closes_or_fills_is_not_a_panic() {
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene(dir.path(), &|t| t);
+    let bin = assert_cmd::cargo::cargo_bin("mpm-solve");
+    // A reader that takes nothing: the pipe is closed before the plan is printed.
+    let mut child = std::process::Command::new(&bin)
+        .arg(&s)
+        .arg("--check")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    if std::path::Path::new("/dev/full").exists() {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let out = std::process::Command::new(&bin)
+            .arg(&s)
+            .arg("--check")
+            .stdout(full)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(
+            stderr.contains("cannot write to standard output"),
+            "{stderr}"
+        );
+    }
 }

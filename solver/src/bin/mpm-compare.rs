@@ -100,14 +100,22 @@ fn run(args: Args) -> anyhow::Result<bool> {
     let r = compare::compare(&args.golden, &args.candidate, &tol)?;
     let json_to_stdout = args.json.as_deref().is_some_and(mpm_shared::io::is_stdio);
     if !json_to_stdout {
-        print!(
-            "{}",
-            if args.summary {
-                report::summary(&r)
-            } else {
-                report::table(&r)
+        let text = if args.summary {
+            report::summary(&r)
+        } else {
+            report::table(&r)
+        };
+        // A reader that went away (`| head`) ends the table, not the comparison, whose verdict
+        // goes to standard error and the exit status; any other write error fails it.
+        use std::io::Write;
+        match std::io::stdout().lock().write_all(text.as_bytes()) {
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                return Err(
+                    anyhow::Error::new(e).context("cannot write the report to standard output")
+                );
             }
-        );
+            _ => {}
+        }
     }
     if let Some(path) = &args.json {
         mpm_shared::io::write_output(path, report::json(&r).as_bytes())?;

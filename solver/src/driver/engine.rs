@@ -945,6 +945,21 @@ impl<R: Real, E: Element> Engine<R, E> {
                 saved.corrupt("points not sorted by element, or an element beyond the mesh".into())
             );
         }
+        // Every per-material table is indexed by it (a file re-signed after an edit passes
+        // the checksum).
+        let materials = self.laws.len();
+        if let Some((i, &m)) = self
+            .particles
+            .material
+            .iter()
+            .enumerate()
+            .find(|(_, &m)| m as usize >= materials)
+        {
+            return Err(saved.corrupt(format!(
+                "material point {} of material {m}; the case has {materials}",
+                self.particles.id[i]
+            )));
+        }
         self.layout.set_particle_elements(&self.particles.element);
         self.time = f(1);
         self.steps = v(2);
@@ -2338,6 +2353,52 @@ mod tests {
             let with = state_bits_with::<f64, Tri3>(scene, 60, portable, true);
             let without = state_bits_with::<f64, Tri3>(scene, 60, portable, false);
             compare(scene, &with, &without, false, 1e-12);
+        }
+    }
+
+    /// A checkpoint whose points name a material the case does not have (an edited file,
+    /// re-signed so that its checksum holds) is refused as corrupt, not indexed with.
+    #[test]
+    fn a_checkpoint_with_a_material_past_the_case_s_is_refused() {
+        use crate::driver::checkpoint::{
+            self, CheckpointError, Driver, Fingerprint, Series, State,
+        };
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../testdata");
+        let case = crate::input::scene::load(&dir.join("golden/column_dry.toml")).unwrap();
+        let mut engine =
+            super::Engine::<f64, crate::element::tet4::Tet4>::new(&case, false).unwrap();
+        let out = tempfile::tempdir().unwrap();
+        let scalars = engine.checkpoint_scalars();
+        let series = Series {
+            pvd: vec![],
+            history: String::new(),
+            energy: String::new(),
+            reaction: String::new(),
+        };
+        let save = |p: &crate::state::particles::Particles<f64>| {
+            let state = State {
+                fingerprint: &Fingerprint(vec![]),
+                driver: Driver::default(),
+                scalars: &scalars,
+                particles: p,
+                series: &series,
+                observer: b"",
+            };
+            checkpoint::write(out.path(), &state).unwrap();
+            checkpoint::read(out.path()).unwrap().unwrap()
+        };
+        // As saved, it restores.
+        let saved = save(&engine.particles);
+        engine.restore(&saved).unwrap();
+        let mut edited = engine.particles.clone();
+        let last = edited.material.len() - 1;
+        edited.material[last] = engine.laws.len() as u32;
+        let saved = save(&edited);
+        match engine.restore(&saved) {
+            Err(CheckpointError::Corrupt { what, .. }) => {
+                assert!(what.contains("of material"), "{what}")
+            }
+            other => panic!("restored: {:?}", other.err()),
         }
     }
 
