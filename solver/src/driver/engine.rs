@@ -2443,9 +2443,8 @@ mod tests {
             );
         }
         // Plane strain, three points per element: the stress pass's lanes take each
-        // element's three in four lanes, or four elements' in one lane each.
-        // (Groups of four triangles take a lane each, [`crate::step::stress`]'s `quads`; with
-        // `+shear` points leave their elements and are walked.)
+        // element's three in four lanes; dry and saturated, and with `+shear` points leave
+        // their elements and are walked.
         for scene in [
             "oedometer_2d.toml",
             "oedometer_2d.toml+objective",

@@ -88,10 +88,6 @@ pub trait Element: Copy + Debug + Default + Send + Sync + 'static {
         first: &V3<R>,
         x: &[[R; W]; 3],
     ) -> [[R; W]; 4];
-    /// Entry (`row`, `col`) of an element's map from global to local coordinates (the
-    /// matrix [`Element::shape`] applies to the offset from the first corner), for passes that
-    /// hold several elements' maps side by side.
-    fn map_entry<R: Real>(map: &Self::Map<R>, row: usize, col: usize) -> R;
     /// [`Element::shape_lanes`] of four points as explicit four-lane vectors (`x[a]`: coordinate
     /// a, lane q: point q; `[k]`: node k's values, zero past [`Element::NODES`]), for the passes
     /// written with [`crate::four`]: the same operations in the same order, so the same bits.

@@ -120,11 +120,6 @@ impl Element for Tet4 {
     }
 
     #[inline(always)]
-    fn map_entry<R: Real>(map: &Self::Map<R>, row: usize, col: usize) -> R {
-        map[row][col]
-    }
-
-    #[inline(always)]
     fn shape_four<R: Real>(
         t: <R::Four as Four<R>>::Token,
         m: &[V3<R>; 3],

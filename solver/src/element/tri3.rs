@@ -133,11 +133,6 @@ impl<const AXI: bool> Element for Triangle<AXI> {
     }
 
     #[inline(always)]
-    fn map_entry<R: Real>(map: &Self::Map<R>, row: usize, col: usize) -> R {
-        map[row][col]
-    }
-
-    #[inline(always)]
     fn shape_four<R: Real>(
         t: <R::Four as Four<R>>::Token,
         m: &[[R; 2]; 2],

@@ -245,13 +245,10 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
 }
 
 /// What the guard's sums take of a batch besides its points' values (for one material).
-pub(super) struct GuardTerms<R: Real> {
-    /// The material's initial density ρ0.
-    pub rho0: R,
-    /// The guard's smallest volume ratio.
-    pub min_ratio: R,
-    /// The material's n / K_w (0 for a dry one).
-    pub n_over_kw: R,
+struct GuardTerms<R: Real> {
+    rho0: R,
+    min_ratio: R,
+    n_over_kw: R,
 }
 
 impl<R: Real> GuardTerms<R> {
@@ -259,7 +256,7 @@ impl<R: Real> GuardTerms<R> {
     /// point in order, as the point loop adds them: the strain-energy term, the liquid's
     /// energy, and the volume check's margin (V ρ0 - r m).
     #[inline(always)]
-    pub(super) fn add(
+    fn add(
         &self,
         open: &mut Open,
         on: [bool; 4],
@@ -399,7 +396,7 @@ fn four_points<E: Element, R: Real, const LIVE: usize>(
     if let Some(spin) = &k.spin {
         // Anura3D's objective terms, after the law's update: the co-rotation and -tr(Δε) σ
         // of the start-of-step stress.
-        let h = rotation_four::<R>(&s0, std::array::from_fn(|a| sp(spin[a])), sp(R::of(2.0)));
+        let h = rotation_four::<R>(t, &s0, spin);
         for c in 0..6 {
             s1[c] = s1[c] + (h[c] - sp(k.ev) * s0[c]);
         }
@@ -480,17 +477,17 @@ fn store_live<R: Real, const LIVE: usize>(
     *to = v.first_of(R::Four::load(t, to), LIVE).to_array();
 }
 
-/// [`super::rotation_lanes`] of four stresses (`s[c]`: component c, lane q: point q) for the
-/// spin increment `w` (ω_xy, ω_yz, ω_zx, each the same in every lane or one element's per lane;
-/// `two` is 2 in every lane): the same operations.
+/// [`super::rotation_lanes`] of four points' stresses (`s[c]`: component c, lane q: point q)
+/// for the spin increment `w` (ω_xy, ω_yz, ω_zx): the same operations.
 #[inline(always)]
-pub(super) fn rotation_four<R: Real>(
+fn rotation_four<R: Real>(
+    t: <R::Four as Four<R>>::Token,
     s: &[R::Four; 6],
-    w: [R::Four; 3],
-    two: R::Four,
+    w: &[R; 3],
 ) -> [R::Four; 6] {
     let [xx, yy, zz, xy, yz, zx] = *s;
-    let [wxy, wyz, wzx] = w;
+    let sp = |v: R| R::Four::splat(t, v);
+    let (wxy, wyz, wzx, two) = (sp(w[0]), sp(w[1]), sp(w[2]), sp(R::of(2.0)));
     [
         two * (wxy * xy - wzx * zx),
         two * (wyz * yz - wxy * xy),

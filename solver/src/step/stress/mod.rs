@@ -22,7 +22,6 @@ use crate::step::contact::{maps, OneBody};
 use crate::step::smoothing::StrainSmoothing;
 
 mod lanes;
-mod quads;
 
 /// Points per batch of the elements of a Mohr-Coulomb material, whatever the element type and
 /// precision (docs/design.md §5.3); [`update_stress_and_move`] expands widths 1 and 4 only.
@@ -236,13 +235,7 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
     // Element by element (the points are sorted by element): a linear element's velocity
     // gradient is the same at all its points, so it is formed once per element, from its
     // nodes' velocities gathered once.
-    let elements = cx.layout.chunk_elements(c);
-    // The elements before this one were updated by a group of four triangles ([`quads`]).
-    let mut grouped_to = elements.start;
-    for e in elements.clone() {
-        if e < grouped_to {
-            continue;
-        }
+    for e in cx.layout.chunk_elements(c) {
         let points = cx.layout.particles_of(e);
         if points.is_empty() {
             continue;
@@ -253,38 +246,6 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
             if b != open.block {
                 open.close(&mut sums[open.block - blocks.start..]);
                 open = Open::new(b);
-            }
-        }
-        // Plane-strain triangles four at a time, one lane per element, where this one and the
-        // next three lie in the chunk and in one block and hold three points each (the
-        // common case): the group's own checks decide the rest.
-        if E::DIM == 2 && E::NODES == 3 && !E::AXISYMMETRIC && cx.smoothing.is_none() {
-            let group = quads::GROUP;
-            if let Some(t) = cx.four.filter(|_| WIDE || cfg!(target_feature = "avx2")) {
-                if e + group <= elements.end
-                    && e / ELEMENT_BLOCK == (e + group - 1) / ELEMENT_BLOCK
-                    && (0..group).all(|i| cx.layout.particles_of(e + i).len() == 3)
-                {
-                    let group_points = lanes::Points {
-                        x: &mut *x,
-                        u: &mut *u,
-                        stress: &mut *stress,
-                        volume: &mut *volume,
-                        pore: pore.as_deref_mut(),
-                        active,
-                        material,
-                        mass,
-                        element: &mut *element,
-                    };
-                    let open = sums.is_some().then_some(&mut open);
-                    let locate = located.is_some().then_some((&mut found, r.start));
-                    let j = points.start - r.start;
-                    if quads::four_triangles::<E, R, WIDE>(cx, t, e, group_points, j, open, locate)
-                    {
-                        grouped_to = e + group;
-                        continue;
-                    }
-                }
             }
         }
         let grad = mesh.grad[e].as_ref();
