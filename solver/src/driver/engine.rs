@@ -2210,29 +2210,26 @@ mod tests {
         weights: bool,
     ) -> Vec<Vec<u64>> {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../testdata");
+        // A suffix of the scene's name, taken off: whether it was there.
+        let flag = |scene: &mut &str, suffix: &str| match scene.strip_suffix(suffix) {
+            Some(s) => {
+                *scene = s;
+                true
+            }
+            None => false,
+        };
+        let mut scene = scene;
         // `NAME+objective`: the scene with Anura3D's objective stress terms on, started
         // shearing; `+ten`: with ten points per element (a tetrahedron's batches of four,
         // four and two).
-        let (scene, objective) = match scene.strip_suffix("+objective") {
-            Some(s) => (s, true),
-            None => (scene, false),
-        };
-        let (scene, ten) = match scene.strip_suffix("+ten") {
-            Some(s) => (s, true),
-            None => (scene, false),
-        };
+        let objective = flag(&mut scene, "+objective");
+        let ten = flag(&mut scene, "+ten");
         // `+shear`: started moving down fast enough (a half sine over the height: a column's
         // walls hold v_x) that the middle points cross some two elements in the steps, so
         // that the passes' locate paths walk.
-        let (scene, shear) = match scene.strip_suffix("+shear") {
-            Some(s) => (s, true),
-            None => (scene, false),
-        };
+        let shear = flag(&mut scene, "+shear");
         // `+dry`: the scene's materials without their liquid.
-        let (scene, dry) = match scene.strip_suffix("+dry") {
-            Some(s) => (s, true),
-            None => (scene, false),
-        };
+        let dry = flag(&mut scene, "+dry");
         let mut case = crate::input::scene::load(&dir.join(scene)).unwrap();
         case.objective_stress |= objective;
         if ten {
