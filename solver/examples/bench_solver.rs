@@ -40,6 +40,7 @@
 //! `--order random` renumbers elements and nodes by a fixed pseudo-random permutation (the
 //! locality a mesh generator's worst case gives); `morton` applies the solver's curve ordering.
 
+use std::io::Write;
 use std::time::Instant;
 
 /// Large arrays on huge pages with `--huge-pages on`, as `mpm-solve`.
@@ -299,7 +300,9 @@ fn main() {
         .iter()
         .map(|c| c.map_or("null".to_string(), |c| c.to_string()))
         .collect();
-    println!(
+    // One line of JSON; a reader that closed the pipe early (`| head`) ends the run quietly,
+    // any other failure to write is reported, neither as a panic.
+    let line = format!(
         "{{\"case\": \"{}\", \"dim\": {}, \"law\": \"{}\", \"particles\": {}, \"elements\": {}, \"nodes\": {}, \"threads\": {}, \"pinned\": [{}], \"pin\": \"{}\", \"first_touch\": {}, \"huge_pages\": {}, \"huge_page_bytes\": {}, \"instruction_set\": \"{}\", \"avx2_copies\": {}, \"order\": \"{}\", \"steps\": {}, \"precision\": \"{}\", \"guards\": {}, \"bytes_per_point\": {}, \"modelled_bytes_per_particle_step\": {{{}}}, \"reps\": {:?}, \"median\": {:.6e}, \"phase_seconds_per_step\": {{{}}}, \"phase_team_per_step\": {{{}}}, \"thread_busy_per_step\": {:?}{}}}",
         if saturated { "saturated" } else { "dry" },
         if plane { 2 } else { 3 },
@@ -328,6 +331,12 @@ fn main() {
         thread_busy[k],
         surface
     );
+    if let Err(e) = writeln!(std::io::stdout().lock(), "{line}") {
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            eprintln!("bench_solver: writing the result: {e}");
+            std::process::exit(1);
+        }
+    }
 }
 
 /// What the repetitions measured.
