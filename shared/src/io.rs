@@ -62,6 +62,38 @@ pub fn read_input(path: &Path) -> Result<Vec<u8>> {
     }
 }
 
+/// The most bytes a parameter file (a TOML scene, an Anura3D CPS, a tolerance file) may hold:
+/// thousands of times any real one, so that a device or a stream without end (`/dev/zero`, a
+/// pipe that never closes with data) is refused at once instead of read until memory runs out.
+pub const PARAMETER_FILE_LIMIT: u64 = 64 << 20;
+
+/// Reads a parameter file, or standard input for `-`, of at most `limit` bytes; a longer input
+/// is refused naming the file and the limit (meshes, which may be of any size, are read with
+/// [`read_input`] or [`map_input`]).
+pub fn read_parameters(path: &Path, limit: u64) -> Result<Vec<u8>> {
+    let mut buf = Vec::new();
+    let (shown, read) = if is_stdio(path) {
+        let n = std::io::stdin()
+            .lock()
+            .take(limit + 1)
+            .read_to_end(&mut buf);
+        (Path::new("<stdin>"), n)
+    } else {
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        (path, file.take(limit + 1).read_to_end(&mut buf))
+    };
+    read.map_err(|e| Error::io(shown, e))?;
+    if buf.len() as u64 > limit {
+        let why = format!(
+            "longer than {} MiB, more than any parameter file holds (a device or an endless \
+             stream?)",
+            limit >> 20
+        );
+        return Err(Error::io(shown, std::io::Error::other(why)));
+    }
+    Ok(buf)
+}
+
 /// Writes `bytes` to `path` atomically, or to standard output for `-`.
 pub fn write_output(path: &Path, bytes: &[u8]) -> Result<()> {
     write_output_with(path, |w| w.write_all(bytes))
@@ -123,5 +155,28 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
         write_output(&p, b"whole").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"whole");
+    }
+
+    #[test]
+    fn a_parameter_file_past_the_limit_is_refused_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("scene.toml");
+        std::fs::write(&p, b"0123456789").unwrap();
+        assert_eq!(read_parameters(&p, 10).unwrap(), b"0123456789");
+        let e = read_parameters(&p, 9).unwrap_err().to_string();
+        assert!(e.contains("scene.toml") && e.contains("longer than"), "{e}");
+        // A device without end is refused, not read until memory runs out.
+        #[cfg(unix)]
+        {
+            let e = read_parameters(Path::new("/dev/zero"), 1 << 20)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("/dev/zero") && e.contains("longer than 1 MiB"),
+                "{e}"
+            );
+        }
+        let e = read_parameters(&dir.path().join("none.toml"), 9).unwrap_err();
+        assert!(e.to_string().contains("none.toml"), "{e}");
     }
 }

@@ -267,6 +267,28 @@ fn bad_anura3d_cases_name_the_item() {
         .stderr(predicate::str::contains("--cps"));
 }
 
+/// A scene or a CPS that never ends (a link to `/dev/zero`) is refused at once, naming the
+/// file, instead of being read until memory runs out.
+#[cfg(unix)]
+#[test]
+fn parameter_files_without_end_are_refused() {
+    use mpm_shared::{generate, ElementType};
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("endless.toml");
+    std::os::unix::fs::symlink("/dev/zero", &scene).unwrap();
+    fails(&scene, &dir.path().join("o")).stderr(
+        predicate::str::contains("endless.toml").and(predicate::str::contains("longer than")),
+    );
+    let model = generate::box_mesh([1, 1, 1], [1.0; 3], ElementType::Tet10);
+    let gom = dir.path().join("box.GOM");
+    mpm_shared::write_gom_file(&model, &gom).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.path().join("box.CPS_001")).unwrap();
+    fails(&gom, &dir.path().join("o")).stderr(
+        predicate::str::contains("box.CPS_001").and(predicate::str::contains("longer than")),
+    );
+    assert!(!dir.path().join("o").exists());
+}
+
 /// A report on standard output whose reader goes away (`| head -1`) ends the printing, not the
 /// command (no panic, exit 0); one that cannot be written (a full device) fails the command with
 /// a message, not a panic.

@@ -379,6 +379,22 @@ fn folders_that_cannot_be_compared_exit_2_with_one_line() {
         .args(["--rtol", "x=1"])
         .assert()
         .code(2);
+    // A tolerance file without end is refused at once, not read until memory runs out.
+    #[cfg(unix)]
+    {
+        let out = compare_bin()
+            .arg(&a)
+            .arg(&a)
+            .args(["--tolerances", "/dev/zero"])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            e.contains("/dev/zero: cannot read: longer than 64 MiB") && e.lines().count() == 1,
+            "{e}"
+        );
+    }
 }
 
 /// A dry column exported for Anura3D, run by Anura3D and by us on the same files, compared with
