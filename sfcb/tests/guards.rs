@@ -191,3 +191,21 @@ fn report_is_strict_json_with_a_schema_version() {
     assert_eq!(v["schema_version"], 1);
     assert_eq!(v["dimension"], 2);
 }
+
+/// An output named through a symbolic link is written to the link's target, and the link stays
+/// (devices are written in place: `mpm_shared::io`'s tests).
+#[cfg(unix)]
+#[test]
+fn outputs_are_written_through_links() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = testdata("cube_tet4.GOM");
+    let (target, link) = (dir.path().join("ordered.GOM"), dir.path().join("link.GOM"));
+    std::os::unix::fs::symlink("ordered.GOM", &link).unwrap();
+    sfcb().arg(&input).arg(&link).assert().success();
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    let ordered = std::fs::read(&target).unwrap();
+    assert!(gom::read(&ordered, "ordered.GOM").is_ok());
+}

@@ -101,7 +101,9 @@ pub fn write_output(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// Calls `fill` with a writer for `path` (standard output for `-`); for a file, the data goes to a
 /// temporary file beside it that replaces `path` only after `fill` succeeded and the data is
-/// flushed.
+/// flushed. A symbolic link is written through (its target is replaced, the link stays), and a
+/// device, FIFO or socket is written in place, as a shell's `>` would: renaming a file over
+/// `/dev/null` would replace the device itself.
 pub fn write_output_with<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
@@ -113,6 +115,20 @@ where
         return lock
             .flush()
             .map_err(|e| Error::io(Path::new("<stdout>"), e));
+    }
+    let shown = path;
+    let target = through_links(path);
+    let path = target.as_path();
+    if let Ok(meta) = std::fs::metadata(path) {
+        if !meta.is_file() && !meta.is_dir() {
+            let file = std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(|e| Error::io(shown, e))?;
+            let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
+            fill(&mut w).map_err(|e| Error::io(shown, e))?;
+            return w.flush().map_err(|e| Error::io(shown, e));
+        }
     }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
@@ -138,6 +154,23 @@ where
     Ok(())
 }
 
+/// `path` with its symbolic links followed (up to 40, as the kernel allows), to the name the
+/// last one points at whether or not that exists yet; `path` itself when it is not a link.
+fn through_links(path: &Path) -> std::path::PathBuf {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        let is_link = std::fs::symlink_metadata(&p).is_ok_and(|m| m.file_type().is_symlink());
+        let Some(to) = is_link.then(|| std::fs::read_link(&p).ok()).flatten() else {
+            break;
+        };
+        p = match p.parent() {
+            Some(dir) if to.is_relative() => dir.join(to),
+            _ => to,
+        };
+    }
+    p
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -155,6 +188,52 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
         write_output(&p, b"whole").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"whole");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn links_are_written_through_and_devices_in_place() {
+        let dir = tempfile::tempdir().unwrap();
+        let (real, link) = (dir.path().join("real.txt"), dir.path().join("link.txt"));
+        std::fs::write(&real, b"old").unwrap();
+        std::os::unix::fs::symlink("real.txt", &link).unwrap();
+        write_output(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        // A link whose target does not exist yet: the target is made, the link kept.
+        let (later, dangling) = (dir.path().join("later.txt"), dir.path().join("d.txt"));
+        std::os::unix::fs::symlink(&later, &dangling).unwrap();
+        write_output(&dangling, b"made").unwrap();
+        assert_eq!(std::fs::read(&later).unwrap(), b"made");
+        assert!(std::fs::symlink_metadata(&dangling)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        // A failed write through a link leaves the target as it was.
+        assert!(write_output_with(&link, |w| {
+            w.write_all(b"half")?;
+            Err(std::io::Error::other("boom"))
+        })
+        .is_err());
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        // A device stays a device (as root, a rename would have replaced it).
+        write_output(Path::new("/dev/null"), b"gone").unwrap();
+        let meta = std::fs::metadata("/dev/null").unwrap();
+        assert!(!meta.is_file());
+        // A full device is an error naming the path given.
+        if Path::new("/dev/full").exists() {
+            let e = write_output(Path::new("/dev/full"), b"x").unwrap_err();
+            assert!(e.to_string().contains("/dev/full"), "{e}");
+        }
+        // Only temporary files of our own were made, and none is left.
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert!(names.iter().all(|n| !n.starts_with(".tmp-")), "{names:?}");
     }
 
     #[test]
