@@ -95,6 +95,15 @@ impl Error {
         }
     }
 
+    /// What went wrong without the file's name, for a caller whose own error names it: an I/O
+    /// error's reason, or the whole message of any other.
+    pub fn reason(&self) -> String {
+        match self {
+            Error::Io { cause, .. } => cause.to_string(),
+            e => e.to_string(),
+        }
+    }
+
     /// A format error at `at`.
     pub fn format(at: Location, message: impl Into<String>) -> Self {
         Error::Format {

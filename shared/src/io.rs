@@ -94,6 +94,20 @@ pub fn read_parameters(path: &Path, limit: u64) -> Result<Vec<u8>> {
     Ok(buf)
 }
 
+/// [`read_parameters`] of a text file (a TOML scene, a tolerance file) at the usual limit,
+/// [`PARAMETER_FILE_LIMIT`]; bytes that are not UTF-8 are refused as such.
+pub fn read_parameter_text(path: &Path) -> Result<String> {
+    let bytes = read_parameters(path, PARAMETER_FILE_LIMIT)?;
+    String::from_utf8(bytes).map_err(|_| {
+        let shown = if is_stdio(path) {
+            Path::new("<stdin>")
+        } else {
+            path
+        };
+        Error::io(shown, std::io::Error::other("not UTF-8 text"))
+    })
+}
+
 /// Writes `bytes` to `path` atomically, or to standard output for `-`.
 pub fn write_output(path: &Path, bytes: &[u8]) -> Result<()> {
     write_output_with(path, |w| w.write_all(bytes))
@@ -257,5 +271,12 @@ mod tests {
         }
         let e = read_parameters(&dir.path().join("none.toml"), 9).unwrap_err();
         assert!(e.to_string().contains("none.toml"), "{e}");
+        // Text that is not UTF-8: refused as such, the reason apart from the name.
+        std::fs::write(&p, [b'a', 0xff, 0xfe]).unwrap();
+        let e = read_parameter_text(&p).unwrap_err();
+        assert!(e.to_string().contains("scene.toml"), "{e}");
+        assert_eq!(e.reason(), "not UTF-8 text");
+        std::fs::write(&p, "x = 1\n").unwrap();
+        assert_eq!(read_parameter_text(&p).unwrap(), "x = 1\n");
     }
 }

@@ -113,15 +113,10 @@ fn check(v: f64, what: &str, origin: &str) -> Result<f64, CompareError> {
 impl Tolerances {
     /// Reads a tolerance file (see the module notes); errors name the file and the key.
     pub fn from_file(path: &Path) -> Result<Self, CompareError> {
-        let cannot = |why: String| {
+        let text = mpm_shared::io::read_parameter_text(path).map_err(|e| {
+            let why = e.reason();
             CompareError::Tolerance(format!("{}: cannot read: {why}", path.display()))
-        };
-        let bytes = mpm_shared::io::read_parameters(path, mpm_shared::io::PARAMETER_FILE_LIMIT)
-            .map_err(|e| match e {
-                mpm_shared::Error::Io { cause, .. } => cannot(cause.to_string()),
-                e => cannot(e.to_string()),
-            })?;
-        let text = String::from_utf8(bytes).map_err(|_| cannot("not UTF-8 text".into()))?;
+        })?;
         Self::from_toml(&text, &path.display().to_string())
     }
 

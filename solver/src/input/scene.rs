@@ -637,17 +637,11 @@ pub fn load(path: &Path) -> Result<Case, SceneError> {
 /// Reads a scene file into the case it describes and the scene values behind it.
 pub fn resolve(path: &Path) -> Result<Resolved, SceneError> {
     let file = path.display().to_string();
-    let parse = |message: String| SceneError::Parse {
+    // (The error names the file itself: only the reason goes in its message.)
+    let text = mpm_shared::io::read_parameter_text(path).map_err(|e| SceneError::Parse {
         file: file.clone(),
-        message,
-    };
-    // (The error names the file itself: only its reason goes in the message.)
-    let bytes = mpm_shared::io::read_parameters(path, mpm_shared::io::PARAMETER_FILE_LIMIT)
-        .map_err(|e| match e {
-            mpm_shared::Error::Io { cause, .. } => parse(cause.to_string()),
-            e => parse(e.to_string()),
-        })?;
-    let text = String::from_utf8(bytes).map_err(|_| parse("not UTF-8 text".into()))?;
+        message: e.reason(),
+    })?;
     let scene: Scene = toml::from_str(&text).map_err(|e| SceneError::Parse {
         file: file.clone(),
         message: e.to_string(),
