@@ -67,21 +67,42 @@ pub fn read_input(path: &Path) -> Result<Vec<u8>> {
 /// pipe that never closes with data) is refused at once instead of read until memory runs out.
 pub const PARAMETER_FILE_LIMIT: u64 = 64 << 20;
 
-/// Reads a parameter file, or standard input for `-`, of at most `limit` bytes; a longer input
-/// is refused naming the file and the limit (meshes, which may be of any size, are read with
-/// [`read_input`] or [`map_input`]).
-pub fn read_parameters(path: &Path, limit: u64) -> Result<Vec<u8>> {
+/// Reads a parameter file, or standard input for `-`, of at most [`PARAMETER_FILE_LIMIT`] bytes;
+/// a longer input is refused naming the file and the limit (meshes, which may be of any size,
+/// are read with [`read_input`] or [`map_input`]).
+pub fn read_parameters(path: &Path) -> Result<Vec<u8>> {
+    read_at_most(path, PARAMETER_FILE_LIMIT)
+}
+
+/// [`read_parameters`] of a text file (a TOML scene, a tolerance file); bytes that are not
+/// UTF-8 are refused as such.
+pub fn read_parameter_text(path: &Path) -> Result<String> {
+    String::from_utf8(read_parameters(path)?)
+        .map_err(|_| Error::io(shown(path), std::io::Error::other("not UTF-8 text")))
+}
+
+/// The name messages give `path`: `<stdin>` for `-`.
+fn shown(path: &Path) -> &Path {
+    if is_stdio(path) {
+        Path::new("<stdin>")
+    } else {
+        path
+    }
+}
+
+/// [`read_parameters`] with the limit given.
+fn read_at_most(path: &Path, limit: u64) -> Result<Vec<u8>> {
     let mut buf = Vec::new();
-    let (shown, read) = if is_stdio(path) {
-        let n = std::io::stdin()
+    let read = if is_stdio(path) {
+        std::io::stdin()
             .lock()
             .take(limit + 1)
-            .read_to_end(&mut buf);
-        (Path::new("<stdin>"), n)
+            .read_to_end(&mut buf)
     } else {
         let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-        (path, file.take(limit + 1).read_to_end(&mut buf))
+        file.take(limit + 1).read_to_end(&mut buf)
     };
+    let shown = shown(path);
     read.map_err(|e| Error::io(shown, e))?;
     if buf.len() as u64 > limit {
         let why = format!(
@@ -92,20 +113,6 @@ pub fn read_parameters(path: &Path, limit: u64) -> Result<Vec<u8>> {
         return Err(Error::io(shown, std::io::Error::other(why)));
     }
     Ok(buf)
-}
-
-/// [`read_parameters`] of a text file (a TOML scene, a tolerance file) at the usual limit,
-/// [`PARAMETER_FILE_LIMIT`]; bytes that are not UTF-8 are refused as such.
-pub fn read_parameter_text(path: &Path) -> Result<String> {
-    let bytes = read_parameters(path, PARAMETER_FILE_LIMIT)?;
-    String::from_utf8(bytes).map_err(|_| {
-        let shown = if is_stdio(path) {
-            Path::new("<stdin>")
-        } else {
-            path
-        };
-        Error::io(shown, std::io::Error::other("not UTF-8 text"))
-    })
 }
 
 /// Writes `bytes` to `path` atomically, or to standard output for `-`.
@@ -173,8 +180,8 @@ where
 fn through_links(path: &Path) -> std::path::PathBuf {
     let mut p = path.to_path_buf();
     for _ in 0..40 {
-        let is_link = std::fs::symlink_metadata(&p).is_ok_and(|m| m.file_type().is_symlink());
-        let Some(to) = is_link.then(|| std::fs::read_link(&p).ok()).flatten() else {
+        // (`read_link` fails on anything that is not a link, or does not exist.)
+        let Ok(to) = std::fs::read_link(&p) else {
             break;
         };
         p = match p.parent() {
@@ -255,13 +262,13 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("scene.toml");
         std::fs::write(&p, b"0123456789").unwrap();
-        assert_eq!(read_parameters(&p, 10).unwrap(), b"0123456789");
-        let e = read_parameters(&p, 9).unwrap_err().to_string();
+        assert_eq!(read_at_most(&p, 10).unwrap(), b"0123456789");
+        let e = read_at_most(&p, 9).unwrap_err().to_string();
         assert!(e.contains("scene.toml") && e.contains("longer than"), "{e}");
         // A device without end is refused, not read until memory runs out.
         #[cfg(unix)]
         {
-            let e = read_parameters(Path::new("/dev/zero"), 1 << 20)
+            let e = read_at_most(Path::new("/dev/zero"), 1 << 20)
                 .unwrap_err()
                 .to_string();
             assert!(
@@ -269,7 +276,7 @@ mod tests {
                 "{e}"
             );
         }
-        let e = read_parameters(&dir.path().join("none.toml"), 9).unwrap_err();
+        let e = read_at_most(&dir.path().join("none.toml"), 9).unwrap_err();
         assert!(e.to_string().contains("none.toml"), "{e}");
         // Text that is not UTF-8: refused as such, the reason apart from the name.
         std::fs::write(&p, [b'a', 0xff, 0xfe]).unwrap();

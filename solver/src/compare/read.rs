@@ -159,7 +159,7 @@ impl Folder {
             .file_stem()
             .map(|s| s.to_string_lossy().to_string())
             .unwrap_or_default();
-        let data = mpm_shared::io::read_parameters(&cps, mpm_shared::io::PARAMETER_FILE_LIMIT)?;
+        let data = mpm_shared::io::read_parameters(&cps)?;
         let (parsed, _) = mpm_shared::cps::Cps::read(&data, &cps.display().to_string())?;
         let dt = parsed.settings()?.time_per_load_step;
         let prefix = format!("{project}_MPScalar_");

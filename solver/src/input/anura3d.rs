@@ -129,7 +129,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     {
         log::warn!("{w}");
     }
-    let data = mpm_shared::io::read_parameters(cps_path, mpm_shared::io::PARAMETER_FILE_LIMIT)?;
+    let data = mpm_shared::io::read_parameters(cps_path)?;
     let (cps, warnings) = Cps::read(&data, &cfile)?;
     for w in warnings {
         log::warn!("{w}");
