@@ -6,7 +6,8 @@
 //! puts its idle workers to sleep and its caller too, so every pass paid two or three
 //! wake-ups of the operating system: on the README's default job (4,104 points, about a
 //! millisecond of work per step) that was 45 % of a one-thread run. Here the workers wait for
-//! the next pass spinning for a short while (50 µs) before they sleep; between the passes of a
+//! the next pass spinning for a short while (50 µs; 5 ms where every thread has a core of its
+//! own, [`SPIN_OWN_CORES`]) before they sleep; between the passes of a
 //! step nobody sleeps, and a run that stops stepping (output, the end) leaves its workers
 //! asleep after that.
 //!
@@ -32,9 +33,18 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-/// How long a waiting thread spins before it sleeps: longer than the gap between two passes
-/// of a step (a reduction, a few node loops), far shorter than a time slice.
-const SPIN: Duration = Duration::from_micros(50);
+/// How long a waiting thread spins before it sleeps, by default: longer than the gap between
+/// two passes of a step (a reduction, a few node loops), far shorter than a time slice.
+pub const SPIN: Duration = Duration::from_micros(50);
+
+/// How long a waiting thread spins before it sleeps in a team whose every thread has a core
+/// of its own ([`Pool::set_spin`]): longer than a pass's imbalance on a large model (a thread
+/// done first waits for the last chunks of the others, a few hundred microseconds on the
+/// 1M-point columns), so that it does not sleep through the end of the pass and start the next
+/// one late. Measured on the 2-core VM, 2 pinned threads, 1M-point dry column, the two limits
+/// alternated rep by rep: 1.05–1.06× the particle-steps/s of [`SPIN`], near the noise
+/// (docs/design.md §5.1).
+pub const SPIN_OWN_CORES: Duration = Duration::from_millis(5);
 
 /// A pass: the closure every worker runs with its index, its lifetime erased (see
 /// [`Pool::run`]).
@@ -61,6 +71,8 @@ struct Shared {
     caller_sleeps: AtomicBool,
     done_lock: Mutex<()>,
     done: Condvar,
+    /// How long a waiting thread spins before it sleeps (nanoseconds).
+    spin_ns: AtomicU64,
 }
 
 /// The job pointer, sent to the workers.
@@ -104,6 +116,7 @@ impl Pool {
             caller_sleeps: AtomicBool::new(false),
             done_lock: Mutex::new(()),
             done: Condvar::new(),
+            spin_ns: AtomicU64::new(SPIN.as_nanos() as u64),
         });
         let start = Arc::new(start);
         let mut pool = Pool {
@@ -122,6 +135,19 @@ impl Pool {
             pool.handles.push(handle);
         }
         Ok(pool)
+    }
+
+    /// How long a waiting thread (a worker between passes, the caller at a pass's end) spins
+    /// before it sleeps: [`SPIN`] unless set here. Spinning longer is for threads with a core
+    /// each; where cores are shared, a spinning thread keeps a core another needs.
+    pub fn set_spin(&self, spin: Duration) {
+        let ns = u64::try_from(spin.as_nanos()).unwrap_or(u64::MAX);
+        self.shared.spin_ns.store(ns, SeqCst);
+    }
+
+    /// The spin limit in force ([`Pool::set_spin`]).
+    pub fn spin(&self) -> Duration {
+        Duration::from_nanos(self.shared.spin_ns.load(SeqCst))
     }
 
     /// Runs `f(0)` on the caller and `f(k)` on every worker k, and returns when all have
@@ -156,6 +182,7 @@ impl Pool {
         // The caller's own share: a panic is held until the workers are done with the closure.
         let mine = catch_unwind(AssertUnwindSafe(|| f(0)));
         wait_until(
+            s.spin(),
             || s.remaining.load(SeqCst) == 0,
             || {
                 let mut g = s.done_lock.lock().expect("not poisoned");
@@ -193,8 +220,15 @@ impl Drop for Pool {
     }
 }
 
-/// Spins on `ready` for [`SPIN`], then calls `sleep` (which returns once ready).
-fn wait_until(ready: impl Fn() -> bool, sleep: impl FnOnce()) {
+impl Shared {
+    /// The spin limit in force.
+    fn spin(&self) -> Duration {
+        Duration::from_nanos(self.spin_ns.load(SeqCst))
+    }
+}
+
+/// Spins on `ready` for `spin`, then calls `sleep` (which returns once ready).
+fn wait_until(spin: Duration, ready: impl Fn() -> bool, sleep: impl FnOnce()) {
     if ready() {
         return;
     }
@@ -205,7 +239,7 @@ fn wait_until(ready: impl Fn() -> bool, sleep: impl FnOnce()) {
         spins += 1;
         // The clock only now and then: spinning is for the next few microseconds.
         if spins % 64 == 0 {
-            if t.elapsed() > SPIN {
+            if t.elapsed() > spin {
                 sleep();
                 return;
             }
@@ -222,6 +256,7 @@ fn worker(s: &Shared, k: usize) {
     let mut seen = 0u64;
     loop {
         wait_until(
+            s.spin(),
             || s.epoch.load(SeqCst) != seen || s.stop.load(SeqCst),
             || {
                 let mut g = s.wake_lock.lock().expect("not poisoned");
@@ -273,6 +308,28 @@ mod tests {
             }
         }
         assert!(count.iter().all(|c| c.load(SeqCst) == 2000));
+    }
+
+    #[test]
+    fn passes_complete_whatever_the_spin_and_the_limit_is_the_one_set() {
+        let pool = Pool::new(3, |_| ()).unwrap();
+        assert_eq!(pool.spin(), SPIN);
+        let count: Vec<AtomicUsize> = (0..3).map(|_| AtomicUsize::new(0)).collect();
+        // No spin at all (every wait sleeps), then the long one (pauses shorter and longer
+        // than it between passes).
+        for (limit, pause) in [(Duration::ZERO, 1), (SPIN_OWN_CORES, 7)] {
+            pool.set_spin(limit);
+            assert_eq!(pool.spin(), limit);
+            for pass in 0..200 {
+                pool.run(&|k| {
+                    count[k].fetch_add(1, SeqCst);
+                });
+                if pass % 50 == 0 {
+                    std::thread::sleep(Duration::from_millis(pause));
+                }
+            }
+        }
+        assert!(count.iter().all(|c| c.load(SeqCst) == 400));
     }
 
     #[test]

@@ -30,6 +30,14 @@ pub enum Pin {
     Auto,
 }
 
+/// Whether every thread was pinned, each to a core no other thread of the team has.
+fn own_cores(pinned: &[Option<usize>]) -> bool {
+    pinned
+        .iter()
+        .enumerate()
+        .all(|(k, c)| c.is_some() && !pinned[..k].contains(c))
+}
+
 /// A team of `threads`: the calling thread and `threads - 1` workers.
 pub struct Team {
     pool: crate::parallel::pool::Pool,
@@ -228,6 +236,12 @@ impl Team {
             .iter()
             .map(|m| *m.lock().expect("not poisoned"))
             .collect();
+        // Threads with a core each wait through a pass's imbalance spinning, not asleep
+        // (`pool::SPIN_OWN_CORES`); where any shares its core, or the OS places them, a
+        // spinning waiter would keep a core that another thread needs.
+        if threads > 1 && own_cores(&pinned) {
+            pool.set_spin(crate::parallel::pool::SPIN_OWN_CORES);
+        }
         let watching = pin == Pin::Auto && pinned.iter().any(Option::is_some);
         Ok(Team {
             pool,
@@ -318,6 +332,13 @@ impl Team {
         l.busiest.fetch_add(busiest, Ordering::Relaxed);
         l.busy.fetch_add(busy, Ordering::Relaxed);
         l.runs.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// How long the team's waiting threads spin before they sleep: longer where every thread
+    /// has a core of its own ([`crate::parallel::pool::SPIN_OWN_CORES`]) than elsewhere
+    /// ([`crate::parallel::pool::SPIN`]).
+    pub fn spin(&self) -> std::time::Duration {
+        self.pool.spin()
     }
 
     /// Each thread's time inside the runs' closures since the last call (seconds; the
@@ -627,6 +648,13 @@ mod tests {
             });
             assert_eq!(*caller.lock().unwrap(), Some(0));
             assert_eq!(ids(core_affinity::get_core_ids().unwrap()), [zero]);
+            // Threads with a core each spin through the passes' ends.
+            let spin = if own_cores(&team.pinned) {
+                crate::parallel::pool::SPIN_OWN_CORES
+            } else {
+                crate::parallel::pool::SPIN
+            };
+            assert_eq!(team.spin(), spin, "pinned {:?}", team.pinned);
             // A replacement sees every core, pins the caller in turn, and keeps its pin when
             // the old team ends.
             let next = team.replacement(None, &[]).unwrap();
@@ -636,6 +664,7 @@ mod tests {
                 "unpinned: {:?}",
                 next.pinned
             );
+            assert_eq!(next.spin(), crate::parallel::pool::SPIN);
             assert_eq!(ids(core_affinity::get_core_ids().unwrap()), before);
             drop(next);
             let pinned_again = Team::new(2, Pin::Cores).unwrap();
@@ -652,6 +681,18 @@ mod tests {
         })
         .join()
         .unwrap();
+    }
+
+    #[test]
+    fn only_threads_with_a_core_each_spin_long() {
+        assert!(own_cores(&[Some(0), Some(1)]));
+        assert!(own_cores(&[Some(3)]));
+        assert!(!own_cores(&[Some(0), Some(0)]), "two threads on one core");
+        assert!(!own_cores(&[Some(0), None]), "one left to the OS");
+        let team = Team::new(2, Pin::None).unwrap();
+        assert_eq!(team.spin(), crate::parallel::pool::SPIN);
+        let one = Team::new(1, Pin::None).unwrap();
+        assert_eq!(one.spin(), crate::parallel::pool::SPIN);
     }
 
     #[test]
