@@ -4,7 +4,7 @@
 //! repetitions (particle-steps/s overall and seconds per phase).
 //!
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
-//!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores --first-touch on|off
+//!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores|auto --first-touch on|off
 //!  --order morton|random|none --precision f64|f32 --guards on|off
 //!  --law linear|mc-elastic|mc-plastic|mc-flowing --surface on|off --dim 3|2 --shear RATE
 //!  --points N`
@@ -113,9 +113,16 @@ fn main() {
     let steps: usize = arg(&a, "--steps").map_or(20, |s| s.parse().unwrap());
     let reps: usize = arg(&a, "--reps").map_or(3, |s| s.parse().unwrap());
     let threads: usize = arg(&a, "--threads").map_or(0, |s| s.parse().unwrap());
+    // `auto` as mpm-solve's default (pinned only where every thread has a free core); an
+    // unknown value is refused, not taken for `cores`.
     let pin = match arg(&a, "--pin") {
         Some("none") => Pin::None,
-        _ => Pin::Cores,
+        Some("auto") => Pin::Auto,
+        None | Some("cores") => Pin::Cores,
+        Some(other) => {
+            eprintln!("bench_solver: --pin {other}: expected none, cores or auto");
+            std::process::exit(2);
+        }
     };
     let first_touch = arg(&a, "--first-touch") != Some("off");
     let huge_pages = arg(&a, "--huge-pages") == Some("on");
@@ -312,7 +319,11 @@ fn main() {
         case.model.node_count(),
         info.1,
         pinned.join(", "),
-        if pin == Pin::Cores { "cores" } else { "none" },
+        match pin {
+            Pin::Cores => "cores",
+            Pin::Auto => "auto",
+            Pin::None => "none",
+        },
         first_touch,
         mpm_solve::parallel::huge_pages::enabled(),
         huge_page_bytes.map_or("null".to_string(), |b| b.to_string()),
