@@ -147,7 +147,7 @@ impl Pool {
 
     /// The spin limit in force ([`Pool::set_spin`]).
     pub fn spin(&self) -> Duration {
-        Duration::from_nanos(self.shared.spin_ns.load(SeqCst))
+        self.shared.spin()
     }
 
     /// Runs `f(0)` on the caller and `f(k)` on every worker k, and returns when all have
