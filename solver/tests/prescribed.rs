@@ -5,7 +5,7 @@ use mpm_shared::{generate, ElementType, Model};
 use mpm_solve::driver::engine::Engine;
 use mpm_solve::element::tet4::Tet4;
 use mpm_solve::input::case::{Case, LoadCurve, MaterialSpec, Reorder};
-use mpm_solve::step::prescribed::{PrescribedElement, PrescribedVelocity};
+use mpm_solve::step::prescribed::{Prescribed, PrescribedElement, PrescribedVelocity};
 
 /// A GOM of a 1 × 4 × 1 column of 24 dry linear elastic elements (4 points each) with the
 /// sections `extra` inserted before the materials.
@@ -215,7 +215,11 @@ fn pushed_points_and_nodes_move_exactly_with_the_prescribed_velocity() {
         .collect();
     assert_eq!(marked.len(), 4 * listed.len());
     assert_eq!(
-        start.prescribed.as_ref().unwrap().marked_points(),
+        start
+            .constraints
+            .find::<Prescribed<f64>>()
+            .unwrap()
+            .marked_points(),
         marked.len()
     );
     let (engine, frames) = run(&case);
@@ -234,7 +238,7 @@ fn pushed_points_and_nodes_move_exactly_with_the_prescribed_velocity() {
         }
     }
     // The nodes of the listed elements moved at exactly the prescribed speed in the last step.
-    let pr = engine.prescribed.as_ref().unwrap();
+    let pr = engine.constraints.find::<Prescribed<f64>>().unwrap();
     assert_eq!(pr.masked_nodes().len(), 18);
     for &n in pr.masked_nodes() {
         assert_eq!(engine.grid.vel[n as usize][1], -speed, "node {n}");

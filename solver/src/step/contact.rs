@@ -42,7 +42,10 @@ use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
-use crate::step::grid_update::{DampingRule, NODE_BLOCK};
+use crate::step::constraint::{Constraint, Hook};
+use crate::step::grid_update::NODE_BLOCK;
+use crate::step::moment::Moment;
+use crate::step::prescribed::Prescribed;
 
 /// One body of a contact pair: the points of the structure's material, or all the others.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -237,15 +240,96 @@ pub fn read(
 /// (x₂ - x₁) × (x₃ - x₁) in this order points into the element.
 const SIDES: [[usize; 3]; 4] = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
 
-/// The contact of a run, resolved on its mesh.
+/// The structure's own nodal arrays in a run with contact: the second body the point passes
+/// map, the soil's being the engine's grid.
 #[derive(Debug, Clone)]
-pub struct Contact<R: Real> {
+pub struct Structure<R: Real> {
     /// Which points are the structure.
-    pub structure: OneBody,
-    /// The structure's nodal arrays (the soil's are the engine's grid).
+    pub body: OneBody,
+    /// The structure's nodal arrays.
     pub grid: Grid<R>,
     /// The grid update's scratch for the structure's arrays.
     pub scratch: crate::step::grid_update::GridScratch<R>,
+    /// The force sums' blocks of nodes (scratch).
+    blocks: Vec<()>,
+}
+
+impl<R: Real> Structure<R> {
+    /// The points of `material` as a body of their own, on a mesh of `nodes` nodes.
+    pub fn new(material: u32, nodes: usize) -> Self {
+        Structure {
+            body: OneBody {
+                structure_material: material,
+                structure: true,
+            },
+            grid: Grid::new(nodes),
+            scratch: crate::step::grid_update::GridScratch::new(nodes),
+            blocks: vec![(); nodes.div_ceil(NODE_BLOCK)],
+        }
+    }
+
+    /// The soil's body (every point not of the structure's material).
+    pub fn soil(&self) -> OneBody {
+        OneBody {
+            structure: false,
+            ..self.body
+        }
+    }
+
+    /// The per-node force sums of Anura3D's convergence check over both bodies: |f₁ + f₂| and
+    /// |f_ext,1 + f_ext,2| over the free components of every node (written to `sums`, as the
+    /// grid update writes its own), on the team in the grid update's blocks of nodes.
+    pub fn force_sums(
+        &mut self,
+        team: &Team,
+        soil: &Grid<R>,
+        fixed: &[[bool; 3]],
+        sums: &mut [[f64; 4]],
+    ) {
+        let structure = &self.grid;
+        let out = Shared::new(sums);
+        team.for_blocks(soil.mass.len(), NODE_BLOCK, &mut self.blocks, |r| {
+            // SAFETY: the nodes of this block are this call's only.
+            let sums = unsafe { out.range(r.clone()) };
+            for (n, sum) in r.zip(sums) {
+                let (mut out2, mut ext2) = (0.0, 0.0);
+                let any = [soil, structure].iter().any(|g| g.mass[n] > g.empty_below);
+                if !any {
+                    *sum = [0.0; 4];
+                    continue;
+                }
+                for d in 0..3 {
+                    if fixed[n][d] {
+                        continue;
+                    }
+                    let ext = soil.f_ext[n][d].f64() + structure.f_ext[n][d].f64();
+                    let f = soil.f_int[n][d].f64() + structure.f_int[n][d].f64() + ext;
+                    out2 += f * f;
+                    ext2 += ext * ext;
+                }
+                *sum = [out2.sqrt(), ext2.sqrt(), 0.0, 0.0];
+            }
+        });
+    }
+}
+
+/// What the contact correction reads besides the two bodies' nodes.
+struct Within<'a, R: Real, E: Element> {
+    layout: &'a Layout<R, E>,
+    particles: &'a Particles<R>,
+    fixed: &'a [[bool; 3]],
+    at: &'a Moment<R>,
+}
+
+/// The contact of a run, resolved on its mesh: the interface between the structure
+/// ([`Structure`]) and the soil, and the correction of their nodes' accelerations there.
+#[derive(Debug, Clone)]
+pub struct Contact<R: Real> {
+    /// Which points are the structure.
+    structure: OneBody,
+    /// The velocity prescribed on the structure's points, when the case drives it (a pile
+    /// pushed at a given speed): its overrides run around the correction, in Anura3D's order.
+    driven: Option<Prescribed<R>>,
     /// Interface nodes (computational), ascending.
     nodes: Vec<u32>,
     /// Per interface node: the structure's outward unit normal.
@@ -259,17 +343,17 @@ pub struct Contact<R: Real> {
     start: Vec<u32>,
     /// Per interface node, the start-of-step velocity of each body (scratch).
     before: Vec<[V3<R>; 2]>,
-    /// The force sums' blocks of nodes (scratch).
-    blocks: Vec<()>,
 }
 
 impl<R: Real> Contact<R> {
     /// Resolves `spec` on `mesh` (the whole mesh, the case's element order; 3D):
-    /// `element_material` says which elements are filled (material 0: empty).
+    /// `element_material` says which elements are filled (material 0: empty); `driven`: the
+    /// velocity prescribed on the structure's points, if any.
     pub fn new<E: Element>(
         spec: &ContactSpec,
         mesh: &Mesh<E, R>,
         element_material: &[u32],
+        driven: Option<Prescribed<R>>,
     ) -> Self {
         debug_assert_eq!(E::NODES, 4, "contact is modelled for tetrahedra");
         let x = |n: u32| -> [f64; 3] { mesh.x[n as usize].map(|c| c.f64()) };
@@ -356,16 +440,13 @@ impl<R: Real> Contact<R> {
         for k in 0..nodes.len() {
             start[k + 1] += start[k];
         }
-        let n = mesh.nodes();
         Contact {
             structure: OneBody {
                 structure_material: spec.material,
                 structure: true,
             },
-            grid: Grid::new(n),
-            scratch: crate::step::grid_update::GridScratch::new(n),
+            driven,
             before: vec![[[R::ZERO; 3]; 2]; nodes.len()],
-            blocks: vec![(); n.div_ceil(NODE_BLOCK)],
             nodes,
             normal,
             area,
@@ -375,36 +456,30 @@ impl<R: Real> Contact<R> {
         }
     }
 
-    /// The soil's body (every point not of the structure's material).
-    pub fn soil(&self) -> OneBody {
-        OneBody {
-            structure: false,
-            ..self.structure
-        }
-    }
-
     /// Number of interface nodes.
     pub fn interface_nodes(&self) -> usize {
         self.nodes.len()
     }
 
-    /// The contact correction after the grid update of both bodies (the soil's arrays `soil`,
-    /// the structure's [`Contact::grid`]) and the first override of prescribed velocities
-    /// (`prescribed(node)`: the structure's prescribed velocity there and its components, for a
-    /// masked node). Corrects the bodies' accelerations at the interface nodes (see the module's
-    /// description). `alpha`, `rule`: the local damping; `dt`: the step.
-    #[allow(clippy::too_many_arguments)]
-    pub fn correct<E: Element>(
+    /// The contact correction after the grid update of both bodies (`soil`, `structure`) and
+    /// the first override of prescribed velocities (`prescribed(node)`: the structure's
+    /// prescribed velocity there and its components, for a masked node). Corrects the bodies'
+    /// accelerations at the interface nodes (see the module's description), with the local
+    /// damping of the step `at`.
+    fn correct<E: Element>(
         &mut self,
         soil: &mut Grid<R>,
-        layout: &Layout<R, E>,
-        p: &Particles<R>,
-        fixed: &[[bool; 3]],
+        structure_grid: &mut Grid<R>,
+        cx: Within<'_, R, E>,
         prescribed: &dyn Fn(u32) -> Option<([bool; 3], V3<R>)>,
-        alpha: R,
-        rule: DampingRule,
-        dt: f64,
     ) {
+        let Within {
+            layout,
+            particles: p,
+            fixed,
+            at,
+        } = cx;
+        let (alpha, rule, dt) = (at.damping, at.damping_rule, at.dt);
         let structure = self.structure;
         let dtr = R::of(dt);
         for (k, &node) in self.nodes.iter().enumerate() {
@@ -431,9 +506,9 @@ impl<R: Real> Contact<R> {
             let mut v = [[R::ZERO; 3]; 2];
             let mut force = [[R::ZERO; 3]; 2];
             let (mut mass, mut momentum) = (R::ZERO, [R::ZERO; 3]);
-            let masses = [soil.mass[n], self.grid.mass[n]];
+            let masses = [soil.mass[n], structure_grid.mass[n]];
             for b in 0..2 {
-                let g: &Grid<R> = if b == 0 { soil } else { &self.grid };
+                let g: &Grid<R> = if b == 0 { soil } else { structure_grid };
                 let m = g.mass[n];
                 mass += m;
                 for d in 0..3 {
@@ -512,7 +587,7 @@ impl<R: Real> Contact<R> {
                     normal[2] * omega[0] - normal[0] * omega[2],
                     normal[0] * omega[1] - normal[1] * omega[0],
                 ];
-                let g: &mut Grid<R> = if b == 0 { soil } else { &mut self.grid };
+                let g: &mut Grid<R> = if b == 0 { soil } else { structure_grid };
                 for d in 0..3 {
                     let corrected = v[b][d].f64() - approach * (normal[d] + slip * t[d]);
                     g.acc[n][d] = R::of((corrected - self.before[k][b][d].f64()) / dt);
@@ -520,40 +595,68 @@ impl<R: Real> Contact<R> {
             }
         }
     }
+}
 
-    /// The per-node force sums of Anura3D's convergence check over both bodies: |f₁ + f₂| and
-    /// |f_ext,1 + f_ext,2| over the free components of every node (written to `sums`, as the
-    /// grid update writes its own), on the team in the grid update's blocks of nodes.
-    pub fn force_sums(
-        &mut self,
-        team: &Team,
-        soil: &Grid<R>,
-        fixed: &[[bool; 3]],
-        sums: &mut [[f64; 4]],
-    ) {
-        let structure = &self.grid;
-        let out = Shared::new(sums);
-        team.for_blocks(soil.mass.len(), NODE_BLOCK, &mut self.blocks, |r| {
-            // SAFETY: the nodes of this block are this call's only.
-            let sums = unsafe { out.range(r.clone()) };
-            for (n, sum) in r.zip(sums) {
-                let (mut out2, mut ext2) = (0.0, 0.0);
-                let any = [soil, structure].iter().any(|g| g.mass[n] > g.empty_below);
-                if !any {
-                    *sum = [0.0; 4];
-                    continue;
-                }
-                for d in 0..3 {
-                    if fixed[n][d] {
-                        continue;
-                    }
-                    let ext = soil.f_ext[n][d].f64() + structure.f_ext[n][d].f64();
-                    let f = soil.f_int[n][d].f64() + structure.f_int[n][d].f64() + ext;
-                    out2 += f * f;
-                    ext2 += ext * ext;
-                }
-                *sum = [out2.sqrt(), ext2.sqrt(), 0.0, 0.0];
-            }
+impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
+    fn name(&self) -> &'static str {
+        "contact"
+    }
+
+    /// The driven structure's first override and reaction, the correction, and the driven
+    /// structure's second override (Anura3D's order), on the structure's nodes.
+    fn after_grid_update(&mut self, cx: &mut Hook<'_, R, E>) {
+        let structure = cx
+            .structure
+            .as_deref_mut()
+            .expect("a run with contact maps the structure to nodes of its own");
+        let pm = self
+            .driven
+            .as_ref()
+            .map_or(R::ZERO, |pr| R::of(pr.multiplier(cx.at.end())));
+        if let Some(pr) = &mut self.driven {
+            pr.override_accelerations(structure, cx.particles, pm);
+            cx.reactions[0].force = pr.reaction(structure, cx.traction, cx.at.traction);
+            pr.mean_of_marked(cx.mesh, cx.particles);
+        }
+        // Out of `self` while the correction reads its masked nodes.
+        let driven = self.driven.take();
+        let within = Within {
+            layout: cx.layout,
+            particles: cx.particles,
+            fixed: cx.fixed,
+            at: cx.at,
+        };
+        self.correct(cx.soil, structure, within, &|n| {
+            driven.as_ref().and_then(|pr| pr.masked(n))
         });
+        if let Some(pr) = &driven {
+            pr.override_accelerations(structure, cx.particles, pm);
+        }
+        self.driven = driven;
+    }
+
+    fn after_remap(&mut self, cx: &mut Hook<'_, R, E>) {
+        if let Some(pr) = &mut self.driven {
+            let structure = cx
+                .structure
+                .as_deref_mut()
+                .expect("a run with contact maps the structure to nodes of its own");
+            let pm = R::of(pr.multiplier(cx.at.end()));
+            pr.override_velocities(cx.mesh, structure, cx.particles, pm);
+        }
+    }
+
+    fn holds_points(&self) -> bool {
+        self.driven.is_some()
+    }
+
+    fn follow(&mut self, new_of_old: &[u32]) {
+        if let Some(pr) = &mut self.driven {
+            pr.follow(new_of_old);
+        }
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }

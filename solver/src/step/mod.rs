@@ -1,11 +1,13 @@
 //! The phases of one explicit MUSL step, in the order they run, and what they read from the configuration (load curves, damping rule, drag, prescribed velocities).
 
 pub mod batch;
+pub mod constraint;
 pub mod contact;
 pub mod grid_to_particle;
 pub mod grid_update;
 pub mod load_curve;
 pub mod mixed;
+pub mod moment;
 pub mod moving_mesh;
 pub mod nodal_energy;
 pub mod nodal_velocity;

@@ -38,6 +38,7 @@ use mpm_shared::Model;
 use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::real::{Real, V3};
+use crate::step::constraint::{Constraint, Hook};
 
 /// The GOM sections read here.
 pub const SECTIONS: [&str; 5] = [
@@ -500,6 +501,37 @@ impl MovingMesh {
             .iter()
             .chain(self.storage.iter().flat_map(|s| &s.nodes))
             .copied()
+    }
+}
+
+impl<R: Real, E: Element> Constraint<R, E> for MovingMesh {
+    /// As a checkpoint names its state.
+    fn name(&self) -> &'static str {
+        "moving_mesh"
+    }
+
+    /// After the stresses and the points' move (with the shape functions of the mesh before it
+    /// moves), before the points are located in the moved mesh: Anura3D's order. With contact
+    /// the mesh follows the structure's nodes.
+    fn after_move(&mut self, cx: &mut Hook<'_, R, E>) -> Result<(), usize> {
+        let vel = cx.structure.as_deref().map_or(&cx.soil.vel, |g| &g.vel);
+        self.advance(cx.mesh, vel, cx.at.dt)
+    }
+
+    fn moves_mesh(&self) -> bool {
+        true
+    }
+
+    fn saved(&self) -> Vec<f64> {
+        self.state()
+    }
+
+    fn restore(&mut self, mesh: &mut Mesh<E, R>, state: &[f64]) -> bool {
+        MovingMesh::restore(self, mesh, state)
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }
 

@@ -20,9 +20,12 @@
 use mpm_shared::model::Body;
 use mpm_shared::Model;
 
+use crate::element::Element;
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
+use crate::step::constraint::{Constraint, Hook};
 use crate::step::load_curve::LoadCurve;
+use crate::step::moment::Moment;
 use crate::step::reaction::Reaction;
 
 /// One prescribed node.
@@ -217,20 +220,18 @@ impl<R: Real> NodalVelocity<R> {
         }
     }
 
-    /// After the grid update of a step of length `dt` from `t`: the prescribed components take
-    /// their acceleration,
-    /// and each set's reaction becomes Σ (m a - f) over its components (`traction` × `tm`: the
-    /// face loads; empty nodes add nothing).
-    #[allow(clippy::too_many_arguments)]
-    pub fn after_grid_update(
+    /// After the grid update of the step `at` on the nodes `g`: the prescribed components
+    /// take their acceleration, and each set's reaction becomes Σ (m a - f) over its
+    /// components (`traction` × the step's multiplier: the face loads; empty nodes add
+    /// nothing).
+    pub fn set_accelerations(
         &mut self,
         g: &mut Grid<R>,
         traction: &[V3<R>],
-        tm: R,
         reactions: &mut [Reaction],
-        t: f64,
-        dt: f64,
+        at: &Moment<R>,
     ) {
+        let (tm, t, dt) = (at.traction, at.time, at.dt);
         for (k, r) in reactions[self.first..self.first + self.now.len()]
             .iter_mut()
             .enumerate()
@@ -255,16 +256,47 @@ impl<R: Real> NodalVelocity<R> {
     }
 
     /// After the MUSL re-mapping: the prescribed components take their velocity.
-    pub fn after_remap(&self, g: &mut Grid<R>) {
+    pub fn set_velocities(&self, g: &mut Grid<R>) {
         for e in &self.entries {
             g.vel[e.node as usize][e.component as usize] = e.value * self.now[e.set as usize];
         }
     }
 }
 
+impl<R: Real, E: Element> Constraint<R, E> for NodalVelocity<R> {
+    fn name(&self) -> &'static str {
+        "nodal velocity"
+    }
+
+    fn after_grid_update(&mut self, cx: &mut Hook<'_, R, E>) {
+        self.set_accelerations(cx.soil, cx.traction, cx.reactions, cx.at);
+    }
+
+    fn after_remap(&mut self, cx: &mut Hook<'_, R, E>) {
+        self.set_velocities(cx.soil);
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A step of `dt` from `t` with face loads at multiplier `tm`.
+    fn moment(tm: f64, t: f64, dt: f64) -> Moment<f64> {
+        Moment {
+            time: t,
+            dt,
+            gravity: [0.0; 3],
+            traction: tm,
+            liquid: 0.0,
+            damping: 0.0,
+            damping_rule: crate::step::grid_update::DampingRule::Anura3d,
+        }
+    }
 
     fn set(name: &str, rows: &[(u32, [bool; 3], [f64; 3])], curve: LoadCurve) -> NodalVelocitySet {
         NodalVelocitySet {
@@ -324,7 +356,7 @@ mod tests {
         reactions.extend(sets.iter().map(|s| s.reaction()));
         // 0.5 s from t = 0: set a is at full speed from the start (no acceleration), set b
         // ramps to half.
-        nv.after_grid_update(&mut g, &traction, 2.0, &mut reactions, 0.0, 0.5);
+        nv.set_accelerations(&mut g, &traction, &mut reactions, &moment(2.0, 0.0, 0.5));
         assert_eq!(g.acc[0], [0.0, 5.0, 0.0]);
         assert_eq!(g.acc[2], [0.0, 0.0, 0.0]);
         assert_eq!(g.acc[1], [0.0; 3]);
@@ -332,13 +364,13 @@ mod tests {
         assert_eq!(reactions[1].force, [-1.0, 0.0, -1.5]);
         assert_eq!(reactions[2].force, [0.0, 2.0 * 5.0 - 0.5, 0.0]);
         assert_eq!(reactions[0].force, [0.0; 3]);
-        nv.after_remap(&mut g);
+        nv.set_velocities(&mut g);
         assert_eq!(g.vel[0], [1.0, 2.5, 3.0]);
         assert_eq!(g.vel[2], [0.0, -1.0, 0.0]);
         // Past the ramp's end, 0.5 s to 1.5 s: set b reaches full speed at 1 s.
-        nv.after_grid_update(&mut g, &traction, 2.0, &mut reactions, 0.5, 1.0);
+        nv.set_accelerations(&mut g, &traction, &mut reactions, &moment(2.0, 0.5, 1.0));
         assert_eq!(g.acc[0], [0.0, 2.5, 0.0]);
-        nv.after_remap(&mut g);
+        nv.set_velocities(&mut g);
         assert_eq!(g.vel[0], [1.0, 5.0, 3.0]);
     }
 }

@@ -29,6 +29,7 @@ use crate::parallel::partition::Partition;
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::step::constraint::{Constraint, Hook};
 use crate::step::load_curve::LoadCurve;
 
 /// One row `entity fx fy fz vx vy vz` of an Anura3D prescribed-velocity section (material
@@ -312,7 +313,7 @@ impl<R: Real> Prescribed<R> {
 
     /// After the grid update: the marked points take the prescribed velocity (`scale`: the
     /// multiplier now) and the masked components have zero acceleration.
-    pub fn after_grid_update(&self, g: &mut Grid<R>, p: &mut Particles<R>, scale: R) {
+    pub fn override_accelerations(&self, g: &mut Grid<R>, p: &mut Particles<R>, scale: R) {
         self.impose_on_points(p, scale);
         for &n in &self.nodes {
             for d in 0..3 {
@@ -347,7 +348,7 @@ impl<R: Real> Prescribed<R> {
     /// masked nodal velocities become the mass-weighted mean of the marked points in the listed
     /// elements (zero where none contributes). The mean is taken relative to the first
     /// contributing point's velocity, so that a uniform prescribed velocity is reproduced exactly.
-    pub fn after_remap<E: Element>(
+    pub fn override_velocities<E: Element>(
         &mut self,
         mesh: &Mesh<E, R>,
         g: &mut Grid<R>,
@@ -424,5 +425,36 @@ impl<R: Real> Prescribed<R> {
             pt.0 = new_of_old[pt.0 as usize];
         }
         self.points.sort_unstable_by_key(|pt| pt.0);
+    }
+}
+
+impl<R: Real, E: Element> Constraint<R, E> for Prescribed<R> {
+    fn name(&self) -> &'static str {
+        "prescribed velocity"
+    }
+
+    /// The marked points take the prescribed velocity, the masked components no acceleration,
+    /// and the first reaction is their force.
+    fn after_grid_update(&mut self, cx: &mut Hook<'_, R, E>) {
+        let pm = R::of(self.multiplier(cx.at.end()));
+        self.override_accelerations(cx.soil, cx.particles, pm);
+        cx.reactions[0].force = self.reaction(cx.soil, cx.traction, cx.at.traction);
+    }
+
+    fn after_remap(&mut self, cx: &mut Hook<'_, R, E>) {
+        let pm = R::of(self.multiplier(cx.at.end()));
+        self.override_velocities(cx.mesh, cx.soil, cx.particles, pm);
+    }
+
+    fn holds_points(&self) -> bool {
+        true
+    }
+
+    fn follow(&mut self, new_of_old: &[u32]) {
+        Prescribed::follow(self, new_of_old);
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }

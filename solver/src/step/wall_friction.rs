@@ -19,8 +19,10 @@
 //! Coulomb's rule. The work is over the walls' nodes in node order, on the calling thread (a
 //! wall is a surface: few nodes), so it is the same for any thread count.
 
+use crate::element::Element;
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
+use crate::step::constraint::{Constraint, Hook};
 
 /// A wall normal to one axis at a node: which side of it the body lies on, and its friction.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -128,6 +130,36 @@ pub fn hold_remapped<R: Real>(walls: &[WallNode<R>], vel: &mut [V3<R>]) {
                 v[axis] = R::ZERO;
             }
         }
+    }
+}
+
+/// The rigid walls of a run as a constraint: friction on the accelerations after the grid
+/// update, no re-mapped velocity into a wall, on each body's nodes.
+#[derive(Debug, Clone, Default)]
+pub struct Walls<R>(pub Vec<WallNode<R>>);
+
+impl<R: Real, E: Element> Constraint<R, E> for Walls<R> {
+    fn name(&self) -> &'static str {
+        "walls"
+    }
+
+    fn after_grid_update(&mut self, cx: &mut Hook<'_, R, E>) {
+        let dt = R::of(cx.at.dt);
+        apply_walls(&self.0, cx.soil, cx.fixed, dt);
+        if let Some(structure) = cx.structure.as_deref_mut() {
+            apply_walls(&self.0, structure, cx.fixed, dt);
+        }
+    }
+
+    fn after_remap(&mut self, cx: &mut Hook<'_, R, E>) {
+        hold_remapped(&self.0, &mut cx.soil.vel);
+        if let Some(structure) = cx.structure.as_deref_mut() {
+            hold_remapped(&self.0, &mut structure.vel);
+        }
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }
 
