@@ -61,6 +61,7 @@ fn a_normal_run_completes_and_reports_its_energy_balance() {
     solve(&testdata("golden/column_dry.toml"), &out, &[]).success();
     let j = run_json(&out);
     assert_eq!(j["status"], "completed");
+    assert_eq!(j["reason"], "reached the last output time");
     assert!(j["diagnosis"].is_null());
     let e = &j["energy"];
     for k in [
@@ -128,6 +129,40 @@ fn a_courant_number_above_one_is_refused_without_force() {
         .arg("--check")
         .assert()
         .code(1);
+}
+
+/// Courant 3 under --force: the unstable step flings a point out of the mesh within a few
+/// steps. That is the instability, not a body leaving its mesh: the run stops as diverged
+/// (exit 3), naming the step, the point and the Courant number, with `run.json`.
+#[test]
+fn a_point_flung_out_by_a_forced_courant_number_is_an_instability() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = column(dir.path(), "c3", &|t| {
+        t.replace("courant = 0.5", "courant = 3.0")
+    });
+    let out = dir.path().join("o");
+    let a = solve(&scene, &out, &["--force"]).code(3);
+    let err = stderr_of(&a);
+    let j = run_json(&out);
+    assert_eq!(j["status"], "diverged", "{j}");
+    let d = &j["diagnosis"];
+    assert_eq!(d["check"], "escaped", "{d}");
+    assert_eq!(d["field"], "step_displacement", "{d}");
+    assert!(d["value"].as_f64().unwrap() > 0.0, "{d}");
+    assert!(d["step"].as_u64().unwrap() >= 1, "{d}");
+    assert!(
+        d["point"].as_u64().is_some() && d["element"].as_u64().is_some(),
+        "{d}"
+    );
+    let cause = d["cause"].as_str().unwrap();
+    assert!(
+        cause.contains("forced past Courant 1 (Courant number 3)")
+            && cause.contains("left the mesh"),
+        "{cause}"
+    );
+    assert_eq!(j["reason"], d["message"], "{j}");
+    assert!(err.contains("check escaped tripped"), "{err}");
+    assert!(!err.contains("--drop-lost"), "{err}");
 }
 
 /// Courant 5, undamped, under --force: points collapse or the kinetic energy outgrows the work

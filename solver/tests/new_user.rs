@@ -126,6 +126,19 @@ fn drop_lost_stops_when_the_body_leaves_the_mesh() {
         .stderr(
             predicate::str::contains("left the mesh").and(predicate::str::contains("--drop-lost")),
         );
+    // Either way run.json says the run failed, and why: a body leaving a mesh too small for
+    // it at the speed it has is no instability.
+    for (folder, says) in [("out", "have left the mesh"), ("strict", "left the mesh")] {
+        let text = std::fs::read_to_string(dir.path().join(folder).join("run.json")).unwrap();
+        let j: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(j["status"], "failed", "{folder}: {j}");
+        assert!(
+            j["reason"].as_str().unwrap().contains(says),
+            "{folder}: {j}"
+        );
+        assert!(j["diagnosis"].is_null(), "{folder}: {j}");
+        assert!(j["steps"].as_u64().unwrap() > 0, "{folder}: {j}");
+    }
 }
 
 #[test]

@@ -19,6 +19,10 @@ pub enum Check {
     BlowUp,
     /// The energy balance off by more than the tolerance.
     EnergyBalance,
+    /// A point flung out of the mesh by an unstable step (a run forced past Courant 1, or a
+    /// point that moved more than its element's size in one step), found by the locate pass
+    /// whether or not the guard rails are on.
+    Escaped,
 }
 
 impl Check {
@@ -29,6 +33,7 @@ impl Check {
             Check::Volume => "volume",
             Check::BlowUp => "blow_up",
             Check::EnergyBalance => "energy_balance",
+            Check::Escaped => "escaped",
         }
     }
 }
@@ -232,6 +237,8 @@ pub fn diagnose<R: Real>(check: Check, v: &View<'_, R>) -> Divergence {
         Check::EnergyBalance => {
             (out.field, out.value) = ("energy_balance", v.balance_error);
         }
+        // Diagnosed where the point is found outside (the engine's locate), not here.
+        Check::Escaped => out.field = "step_displacement",
     }
     let (c, el) = (short(v.courant), v.critical_element);
     // Under a forced Courant number above 1, whatever trips first (a collapsing point, a
@@ -252,6 +259,9 @@ pub fn diagnose<R: Real>(check: Check, v: &View<'_, R>) -> Divergence {
             Check::EnergyBalance => format!(
                 "energy not conserved within the tolerance {}: the time step ({c}× the critical step of element {el}) may be too close to the limit, or one point per element too few for a sudden load (docs/stability.md); lower the Courant number, add points or damping, or loosen --energy-tolerance",
                 v.tolerance.map_or("off".into(), |t| t.to_string())
+            ),
+            Check::Escaped => format!(
+                "a point flung out of the mesh by an unstable step ({c}× the critical step of element {el})"
             ),
         }
     };

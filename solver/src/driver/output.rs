@@ -277,23 +277,69 @@ pub fn peak_rss_bytes() -> u64 {
 /// Version of the layout of `run.json`: raised whenever a key is renamed or changes meaning.
 pub const RUN_JSON_SCHEMA: u32 = 1;
 
+/// How a run stopped, as `run.json` reports it.
+#[derive(Debug, Clone, Copy)]
+pub enum Stop<'a> {
+    /// It reached its last output time.
+    Completed,
+    /// A guard rail tripped, or an unstable step flung a point out of the mesh.
+    Diverged(&'a crate::driver::guard::Divergence),
+    /// A signal stopped it after a step (the message says where).
+    Interrupted(&'a str),
+    /// An error stopped it (the message).
+    Failed(&'a str),
+}
+
+impl Stop<'_> {
+    /// `run.json`'s `status`.
+    pub fn status(&self) -> &'static str {
+        match self {
+            Stop::Completed => "completed",
+            Stop::Diverged(_) => "diverged",
+            Stop::Interrupted(_) => "interrupted",
+            Stop::Failed(_) => "failed",
+        }
+    }
+
+    /// `run.json`'s `reason`: why it stopped, in words.
+    pub fn reason(&self) -> String {
+        match self {
+            Stop::Completed => "reached the last output time".into(),
+            Stop::Diverged(d) => d.to_string(),
+            Stop::Interrupted(m) | Stop::Failed(m) => m.to_string(),
+        }
+    }
+}
+
+/// What `run.json` says of a run besides the engine's state.
+pub struct Summary<'a> {
+    /// The output folder.
+    pub dir: &'a Path,
+    /// The case.
+    pub case: &'a Case,
+    /// Wall seconds of the run so far (over resumed runs).
+    pub wall: f64,
+    /// Wall seconds spent stepping.
+    pub stepping: f64,
+    /// How it stopped.
+    pub stop: Stop<'a>,
+    /// Per rank, over MPI ranks (`Engine::rank_report`).
+    pub ranks: Option<Vec<serde_json::Value>>,
+}
+
 /// Writes `run.json` (strict JSON: a non-finite number is written as null).
-#[allow(clippy::too_many_arguments)]
 pub fn write_summary<R: Real, E: Element>(
-    dir: &Path,
-    case: &Case,
+    summary: Summary<'_>,
     engine: &Engine<R, E>,
-    wall: f64,
-    stepping: f64,
-    diverged: Option<&crate::driver::guard::Divergence>,
-    interrupted: bool,
-    ranks: Option<Vec<serde_json::Value>>,
 ) -> mpm_shared::Result<()> {
-    let phases: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
-        .iter()
-        .zip(engine.phase_seconds)
-        .map(|(k, v)| (k.to_string(), serde_json::json!(v)))
-        .collect();
+    let Summary {
+        dir,
+        case,
+        wall,
+        stepping,
+        stop,
+        ranks,
+    } = summary;
     let n = engine.particles.len();
     let ps = if stepping > 0.0 {
         (n as f64) * engine.steps as f64 / stepping
@@ -301,51 +347,13 @@ pub fn write_summary<R: Real, E: Element>(
         0.0
     };
     let grid_bytes = engine.grid.bytes() as f64 / n.max(1) as f64;
-    // Nanoseconds per particle-step of each phase, and the bytes each must move at least.
-    let particle_steps = (n as f64) * engine.steps as f64;
-    let phase_ns: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
-        .iter()
-        .zip(engine.phase_seconds)
-        .map(|(k, v)| {
-            let ns = if particle_steps > 0.0 {
-                v * 1e9 / particle_steps
-            } else {
-                0.0
-            };
-            (k.to_string(), serde_json::json!(ns))
-        })
-        .collect();
-    // Where the threads' time went in each step phase, in ns per particle-step: the mean
-    // thread's work, the wait for the busiest thread, the pool's start and join.
-    let per_ps = |v: f64| {
-        if particle_steps > 0.0 {
-            v * 1e9 / particle_steps
-        } else {
-            0.0
-        }
+    let phases = PhaseTables::of(engine);
+    let diverged = match stop {
+        Stop::Diverged(d) => Some(d),
+        _ => None,
     };
-    let threads_ns: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES[..5]
-        .iter()
-        .zip(engine.phase_load)
-        .map(|(k, l)| {
-            (
-                k.to_string(),
-                serde_json::json!({
-                    "work": per_ps(l.mean),
-                    "imbalance": per_ps(l.busiest - l.mean),
-                    "pool": per_ps(l.wall - l.busiest),
-                }),
-            )
-        })
-        .collect();
-    let modelled = engine.modelled_bytes();
-    let bytes: serde_json::Map<String, serde_json::Value> = crate::driver::engine::PHASES
-        .iter()
-        .zip(modelled)
-        .map(|(k, b)| (k.to_string(), serde_json::json!(b)))
-        .collect();
     // serde_json writes a non-finite number as null, so the file stays strict JSON.
-    let json = serde_json::json!({
+    let mut json = serde_json::json!({
         "schema_version": RUN_JSON_SCHEMA,
         "case": case.name,
         "inputs": case.inputs,
@@ -370,62 +378,129 @@ pub fn write_summary<R: Real, E: Element>(
         "simulated_time": engine.time,
         "wall_seconds": wall,
         "particle_steps_per_second": ps,
-        "phase_seconds": phases,
-        "phase_ns_per_particle_step": phase_ns,
-        "phase_threads_ns_per_particle_step": threads_ns,
-        "modelled_bytes_per_particle_step": bytes,
+        "phase_seconds": phases.seconds,
+        "phase_ns_per_particle_step": phases.ns,
+        "phase_threads_ns_per_particle_step": phases.threads_ns,
+        "modelled_bytes_per_particle_step": phases.bytes,
         "bytes_per_particle": engine.particles.bytes_per_point() as f64 + grid_bytes,
         "peak_rss_bytes": peak_rss_bytes(),
         "lost_particles": engine.lost,
-        "status": if diverged.is_some() {
-            "diverged"
-        } else if interrupted {
-            "interrupted"
-        } else {
-            "completed"
-        },
-        "energy": {
-            "kinetic": engine.total_kinetic_energy(),
-            "strain": engine.internal_energy(),
-            "liquid_compression": engine.internal_energy() - engine.strain_energy,
-            "dissipated": engine.dissipated,
-            "external_work": engine.external_work,
-            "balance_work": engine.balance_work,
-            "balance_error": engine.balance_error(),
-            "energy_tolerance": engine.guards.energy_tolerance,
-            "guards": engine.guards.enabled,
-        },
-        "diagnosis": diverged.map(|d| serde_json::json!({
-            "check": d.check.name(),
-            "step": d.step,
-            "time": d.time,
-            "point": d.point,
-            "element": d.element,
-            "node": d.node,
-            "field": d.field,
-            "value": d.value,
-            "cause": d.cause,
-            "message": d.to_string(),
-        })),
+        "status": stop.status(),
+        "reason": stop.reason(),
+        "energy": energy_json(engine),
+        "diagnosis": diverged.map(diagnosis_json),
     });
-    let mut json = json;
     // Whether the point passes ran their AVX2 copies (docs/design.md §9); outside the literal
     // above, which is at the macro's recursion limit (the keys are written sorted either way).
     json["avx2_copies"] = serde_json::json!(crate::parallel::avx2::detected());
     if let Some(ranks) = ranks {
-        // A run over MPI ranks: the mesh is the whole one, and each rank reports its share.
-        let elements: u64 = ranks.iter().filter_map(|r| r["elements"].as_u64()).sum();
-        json["elements"] = serde_json::json!(elements);
-        json["nodes"] = serde_json::Value::Null;
-        json["ranks"] = serde_json::json!(ranks);
-        let b = &engine.balance;
-        json["balance"] = serde_json::json!({
-            "imbalance": b.imbalance,
-            "worst_imbalance": b.worst,
-            "repartitions": b.repartitions,
-        });
+        add_ranks(&mut json, ranks, &engine.balance);
     }
     let mut text = serde_json::to_string_pretty(&json).expect("plain JSON");
     text.push('\n');
     mpm_shared::io::write_output(&dir.join("run.json"), text.as_bytes())
+}
+
+/// `run.json`'s tables by reported phase: seconds, nanoseconds per particle-step, where the
+/// threads' time went, and the modelled bytes.
+struct PhaseTables {
+    seconds: serde_json::Map<String, serde_json::Value>,
+    ns: serde_json::Map<String, serde_json::Value>,
+    threads_ns: serde_json::Map<String, serde_json::Value>,
+    bytes: serde_json::Map<String, serde_json::Value>,
+}
+
+impl PhaseTables {
+    fn of<R: Real, E: Element>(engine: &Engine<R, E>) -> Self {
+        use crate::driver::engine::PHASES;
+        let particle_steps = (engine.particles.len() as f64) * engine.steps as f64;
+        // Nanoseconds per particle-step (0 before any step).
+        let per_ps = |v: f64| {
+            if particle_steps > 0.0 {
+                v * 1e9 / particle_steps
+            } else {
+                0.0
+            }
+        };
+        let table = |values: &mut dyn Iterator<Item = serde_json::Value>| {
+            PHASES
+                .iter()
+                .zip(values)
+                .map(|(k, v)| (k.to_string(), v))
+                .collect()
+        };
+        PhaseTables {
+            seconds: table(&mut engine.phase_seconds.iter().map(|&v| serde_json::json!(v))),
+            ns: table(
+                &mut engine
+                    .phase_seconds
+                    .iter()
+                    .map(|&v| serde_json::json!(per_ps(v))),
+            ),
+            // Where the threads' time went in each step phase, in ns per particle-step: the
+            // mean thread's work, the wait for the busiest thread, the pool's start and join
+            // (the output phase is the caller's).
+            threads_ns: table(&mut engine.phase_load[..5].iter().map(|l| {
+                serde_json::json!({
+                    "work": per_ps(l.mean),
+                    "imbalance": per_ps(l.busiest - l.mean),
+                    "pool": per_ps(l.wall - l.busiest),
+                })
+            })),
+            bytes: table(
+                &mut engine
+                    .modelled_bytes()
+                    .into_iter()
+                    .map(|b| serde_json::json!(b)),
+            ),
+        }
+    }
+}
+
+/// `run.json`'s energy terms.
+fn energy_json<R: Real, E: Element>(engine: &Engine<R, E>) -> serde_json::Value {
+    serde_json::json!({
+        "kinetic": engine.total_kinetic_energy(),
+        "strain": engine.internal_energy(),
+        "liquid_compression": engine.internal_energy() - engine.strain_energy,
+        "dissipated": engine.dissipated,
+        "external_work": engine.external_work,
+        "balance_work": engine.balance_work,
+        "balance_error": engine.balance_error(),
+        "energy_tolerance": engine.guards.energy_tolerance,
+        "guards": engine.guards.enabled,
+    })
+}
+
+/// `run.json`'s diagnosis of a diverged run.
+fn diagnosis_json(d: &crate::driver::guard::Divergence) -> serde_json::Value {
+    serde_json::json!({
+        "check": d.check.name(),
+        "step": d.step,
+        "time": d.time,
+        "point": d.point,
+        "element": d.element,
+        "node": d.node,
+        "field": d.field,
+        "value": d.value,
+        "cause": d.cause,
+        "message": d.to_string(),
+    })
+}
+
+/// A run over MPI ranks: the mesh is the whole one, and each rank reports its share.
+fn add_ranks(
+    json: &mut serde_json::Value,
+    ranks: Vec<serde_json::Value>,
+    b: &crate::driver::engine::Balance,
+) {
+    let elements: u64 = ranks.iter().filter_map(|r| r["elements"].as_u64()).sum();
+    json["elements"] = serde_json::json!(elements);
+    json["nodes"] = serde_json::Value::Null;
+    json["ranks"] = serde_json::json!(ranks);
+    json["balance"] = serde_json::json!({
+        "imbalance": b.imbalance,
+        "worst_imbalance": b.worst,
+        "repartitions": b.repartitions,
+    });
 }

@@ -8,7 +8,8 @@ use std::time::Instant;
 
 use crate::driver::checkpoint::{self, CheckpointError, Driver, Every, Fingerprint};
 use crate::driver::engine::Engine;
-use crate::driver::output::{self, Output};
+use crate::driver::guard::Check;
+use crate::driver::output::{self, Output, Stop, Summary};
 use crate::driver::units;
 use crate::element::Element;
 use crate::input::case::Case;
@@ -79,6 +80,17 @@ pub enum RunError {
         /// The largest id of the case.
         last: u32,
     },
+}
+
+impl RunError {
+    /// Whether every rank of a run over MPI ranks stops with this error at the same step (the
+    /// step's own failures, signals, limits), rather than one rank alone (its files).
+    pub fn is_collective(&self) -> bool {
+        !matches!(
+            self,
+            RunError::Job(_) | RunError::Output(_) | RunError::Checkpoint(_)
+        )
+    }
 }
 
 impl From<crate::driver::engine::StepError> for RunError {
@@ -273,21 +285,68 @@ fn drive<R: Real, E: Element>(
     let wall = Instant::now();
     case.check_courant(options.force)?;
     let fingerprint = Fingerprint::of(case, options.drop_lost);
-    let saved = if options.resume {
-        checkpoint::read(dir)?
-    } else {
-        None
+    let saved = saved_checkpoint(dir, options, &fingerprint)?;
+    let mut engine = set_up::<R, E>(case, options)?;
+    observer.on_start(&engine)?;
+    // Rank 0 writes the files, from every rank's points (one process: itself).
+    let out = engine.on_root(|e| -> Result<Output, RunError> {
+        check_probes(case, e)?;
+        Ok(Output::new(dir, case, e)?)
+    });
+    let mut run = Run {
+        case,
+        dir,
+        options,
+        fingerprint,
+        out: out.transpose()?,
+        d: Driver::default(),
+        wall,
+        wall_before: 0.0,
+        last_checkpoint: Instant::now(),
     };
-    if let Some(s) = &saved {
-        if let Some(what) = s.fingerprint.difference(&fingerprint) {
-            return Err(CheckpointError::Mismatch {
-                dir: dir.to_path_buf(),
-                what,
-            }
-            .into());
+    run.start(&mut engine, observer, saved)?;
+    match run.outputs(&mut engine, observer) {
+        Ok(()) => {
+            observer.on_end(&engine);
+            run.summary(&mut engine, Stop::Completed)?;
+            Ok(engine)
+        }
+        Err(e) => {
+            run.stopped(&mut engine, &e);
+            Err(e)
         }
     }
-    let mut engine = match &options.comm {
+}
+
+/// The folder's checkpoint when the run resumes, checked against the case and options now.
+fn saved_checkpoint(
+    dir: &Path,
+    options: &RunOptions,
+    fingerprint: &Fingerprint,
+) -> Result<Option<checkpoint::Saved>, RunError> {
+    if !options.resume {
+        return Ok(None);
+    }
+    let saved = checkpoint::read(dir)?;
+    if let Some(what) = saved
+        .as_ref()
+        .and_then(|s| s.fingerprint.difference(fingerprint))
+    {
+        return Err(CheckpointError::Mismatch {
+            dir: dir.to_path_buf(),
+            what,
+        }
+        .into());
+    }
+    Ok(saved)
+}
+
+/// The engine of a run: over MPI ranks with the run's communicator, else on this process.
+fn set_up<R: Real, E: Element>(
+    case: &Case,
+    options: &RunOptions,
+) -> Result<Engine<R, E>, RunError> {
+    let engine = match &options.comm {
         Some(comm) => {
             // A rank the launcher bound to cores of its own (`mpirun --bind-to socket`) pins
             // its threads there as one process does; an unbound one would pin onto the same
@@ -317,92 +376,268 @@ fn drive<R: Real, E: Element>(
         }
         .into());
     }
-    observer.on_start(&engine)?;
-    // Rank 0 writes the files, from every rank's points (one process: itself).
-    let out = engine.on_root(|e| -> Result<Output, RunError> {
-        check_probes(case, e)?;
-        Ok(Output::new(dir, case, e)?)
-    });
-    let mut out = out.transpose()?;
-    let mut d = Driver::default();
-    if let Some(s) = saved {
-        checkpoint::tidy(dir, &s.series, s.finished(case.output_times.len()))?;
-        engine.restore(&s)?;
-        observer
-            .restore(&s.observer)
-            .map_err(|what| s.corrupt(format!("job state: {what}")))?;
-        out.as_mut()
-            .expect("checkpoints run on one process")
-            .resume(s.series.clone())?;
-        d = s.driver;
+    Ok(engine)
+}
+
+/// A run under way: what it writes to, its bookkeeping between outputs, and its wall clock.
+struct Run<'a> {
+    case: &'a Case,
+    dir: &'a Path,
+    options: &'a RunOptions,
+    fingerprint: Fingerprint,
+    /// The outputs (rank 0's; `None` on the other ranks).
+    out: Option<Output>,
+    /// Output times done, steps of the load step, wall seconds (what a checkpoint keeps).
+    d: Driver,
+    /// When this process started the run.
+    wall: Instant,
+    /// Wall seconds of the run before this process (a resumed run's earlier ones).
+    wall_before: f64,
+    last_checkpoint: Instant,
+}
+
+impl Run<'_> {
+    /// Wall seconds of the run so far.
+    fn elapsed(&self) -> f64 {
+        self.wall_before + self.wall.elapsed().as_secs_f64()
     }
-    // Wall seconds before this process, for run.json.
-    let wall_before = d.wall;
-    let elapsed = || wall_before + wall.elapsed().as_secs_f64();
-    // run.json, written at the end, where a guard rail stops the run, or at a signal.
-    let summary = |engine: &mut Engine<R, E>,
-                   d: &Driver,
-                   diverged: Option<&crate::driver::guard::Divergence>,
-                   interrupted|
-     -> Result<(), RunError> {
-        let ranks = engine.rank_report().filter(|_| engine.is_distributed());
-        engine
-            .on_root(|e| {
-                output::write_summary(
-                    dir,
-                    case,
-                    e,
-                    elapsed(),
-                    d.stepping,
-                    diverged,
-                    interrupted,
-                    ranks,
-                )
-            })
-            .transpose()?;
+
+    /// Resumes from `saved` (the engine, the observer, the outputs, the bookkeeping), or, for a
+    /// run that takes checkpoints, writes the first one now: a run killed before its first
+    /// output resumes from here, not from nothing.
+    fn start<R: Real, E: Element>(
+        &mut self,
+        engine: &mut Engine<R, E>,
+        observer: &mut dyn Observer<R, E>,
+        saved: Option<checkpoint::Saved>,
+    ) -> Result<(), RunError> {
+        if let Some(s) = saved {
+            let outputs = self.case.output_times.len();
+            checkpoint::tidy(self.dir, &s.series, s.finished(outputs))?;
+            engine.restore(&s)?;
+            observer
+                .restore(&s.observer)
+                .map_err(|what| s.corrupt(format!("job state: {what}")))?;
+            self.out
+                .as_mut()
+                .expect("checkpoints run on one process")
+                .resume(s.series.clone())?;
+            self.d = s.driver;
+        }
+        self.wall_before = self.d.wall;
+        if self.options.checkpoint.is_some() && engine.steps == 0 && self.d.next_output == 0 {
+            self.save(engine, &*observer)?;
+        }
         Ok(())
-    };
-    // Every output is written by rank 0 from every rank's points (one process: itself).
-    let write = |engine: &mut Engine<R, E>, out: &mut Option<Output>| -> Result<(), RunError> {
+    }
+
+    /// Steps to each output time left and writes its outputs.
+    fn outputs<R: Real, E: Element>(
+        &mut self,
+        engine: &mut Engine<R, E>,
+        observer: &mut dyn Observer<R, E>,
+    ) -> Result<(), RunError> {
+        let times = &self.case.output_times;
+        for (k, &t_out) in times.iter().enumerate().skip(self.d.next_output) {
+            self.load_step(engine, observer, t_out)?;
+            self.output(engine, observer, k)?;
+        }
+        Ok(())
+    }
+
+    /// Steps until the load step that ends at `t_out` is done.
+    fn load_step<R: Real, E: Element>(
+        &mut self,
+        engine: &mut Engine<R, E>,
+        observer: &mut dyn Observer<R, E>,
+        t_out: f64,
+    ) -> Result<(), RunError> {
+        let t0 = Instant::now();
+        let t_start = self.d.stepping;
+        while !self.load_step_done(engine, t_out) {
+            if self.case.max_steps.is_some_and(|m| engine.steps >= m) {
+                return Err(RunError::MaxSteps(engine.steps, engine.time));
+            }
+            let (dt, snap) = self.next_step(engine, t_out);
+            let stepped = engine.step(dt, snap);
+            self.d.stepping = t_start + t0.elapsed().as_secs_f64();
+            stepped?;
+            self.d.taken += 1;
+            self.after_step(engine, observer)?;
+        }
+        self.d.load_step_start = t_out;
+        self.d.stepping = t_start + t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Whether the load step ending at `t_out` is done: at its time, or, quasi-static, as
+    /// Anura3D ends one.
+    fn load_step_done<R: Real, E: Element>(&self, engine: &Engine<R, E>, t_out: f64) -> bool {
+        let d = &self.d;
+        let Some(qs) = &self.case.quasi_static else {
+            return engine.time >= t_out * (1.0 - 1e-12);
+        };
+        // Anura3D ends a quasi-static load step once converged or when its step counter, which
+        // starts at 1, exceeds the limit: after `limit + 1` steps, the first of the
+        // calculation being its tiny initial step. Without a limit, at the load step's
+        // duration.
+        if d.taken == 0 {
+            false
+        } else if engine.converged(qs) {
+            true
+        } else if let Some(m) = qs.max_steps {
+            d.taken > m
+        } else {
+            engine.time - d.begun >= (t_out - d.load_step_start) * (1.0 - 1e-12)
+        }
+    }
+
+    /// The next step's length, and the output time it ends on exactly, if it does.
+    fn next_step<R: Real, E: Element>(
+        &self,
+        engine: &Engine<R, E>,
+        t_out: f64,
+    ) -> (f64, Option<f64>) {
+        let left = t_out - engine.time;
+        let step = match self.case.initial_step {
+            Some(h) if engine.steps == 0 => h.min(engine.dt),
+            _ => engine.dt,
+        };
+        if self.case.quasi_static.is_some() || step < left {
+            (step, None)
+        } else {
+            (left, Some(t_out))
+        }
+    }
+
+    /// Between steps: a new team where cores were taken, a new cut of the curve where the ranks'
+    /// shares drifted apart, the lost points' limit, the observer, and a checkpoint when due or
+    /// when a signal asks to stop (then the run stops, `Interrupted`).
+    fn after_step<R: Real, E: Element>(
+        &mut self,
+        engine: &mut Engine<R, E>,
+        observer: &mut dyn Observer<R, E>,
+    ) -> Result<(), RunError> {
+        self.rethread(engine)?;
+        engine.rebalance(self.case, self.options.rebalance)?;
+        if self.options.drop_lost && engine.lost > 0 {
+            check_lost(engine, self.options.max_lost)?;
+        }
+        observer.on_step(engine);
+        if let Some(n) = self.options.abort_after_step {
+            if PROCESS_STEPS.fetch_add(1, Ordering::SeqCst) + 1 >= n {
+                std::process::abort();
+            }
+        }
+        let interrupted = self.interrupted(engine);
+        let due = match self.options.checkpoint {
+            None => false,
+            Some(Every::Steps(n)) => engine.steps % n.max(1) == 0,
+            Some(Every::Wall(s) | Every::Outputs { max_wall: s }) => {
+                self.last_checkpoint.elapsed().as_secs_f64() >= s
+            }
+        };
+        if due || interrupted.is_some() {
+            self.save(engine, &*observer)?;
+        }
+        interrupted.map_or(Ok(()), Err)
+    }
+
+    /// A new team when other processes took cores where worker threads were pinned, or when a
+    /// test asks for one after a given step (the results do not change).
+    fn rethread<R: Real, E: Element>(&self, engine: &mut Engine<R, E>) -> Result<(), RunError> {
+        if let Some(taken) = engine.team.recheck() {
+            let before = engine.team.threads;
+            let team = engine.team.replacement(None, &taken);
+            engine.rethread(team.map_err(crate::driver::engine::SetupError::from)?);
+            log::warn!(
+                "step {}: other processes took cores {taken:?}, where worker threads were pinned; {before} threads pinned became {} {} (the results do not change)",
+                engine.steps,
+                engine.team.threads,
+                if engine.team.pinned.iter().any(Option::is_some) { "on the free cores" } else { "unpinned" }
+            );
+        }
+        if let Some((at, threads)) = self.options.rethread_after_step {
+            if engine.steps == at {
+                let team = engine.team.replacement(Some(threads), &[]);
+                engine.rethread(team.map_err(crate::driver::engine::SetupError::from)?);
+            }
+        }
+        Ok(())
+    }
+
+    /// The outputs of output time `k` (the load step done), and a checkpoint where the run
+    /// takes one at outputs, at its last, or at a signal (which then stops it, unless it came
+    /// during the last output).
+    fn output<R: Real, E: Element>(
+        &mut self,
+        engine: &mut Engine<R, E>,
+        observer: &mut dyn Observer<R, E>,
+        k: usize,
+    ) -> Result<(), RunError> {
+        let t1 = Instant::now();
+        self.write(engine)?;
+        observer.on_output(engine);
+        // The next load step starts here.
+        (self.d.next_output, self.d.taken, self.d.begun) = (k + 1, 0, engine.time);
+        let last = k + 1 == self.case.output_times.len();
+        let interrupted = self.interrupted(engine).filter(|_| !last);
+        let at_outputs = matches!(self.options.checkpoint, Some(Every::Outputs { .. }));
+        if self.options.checkpoint.is_some() && (last || interrupted.is_some() || at_outputs) {
+            self.save(engine, &*observer)?;
+        }
+        engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
+        interrupted.map_or(Ok(()), Err)
+    }
+
+    /// Writes the outputs of the engine's state, by rank 0 from every rank's points (one
+    /// process: itself).
+    fn write<R: Real, E: Element>(&mut self, engine: &mut Engine<R, E>) -> Result<(), RunError> {
+        let out = &mut self.out;
         engine
             .on_root(|e| out.as_mut().expect("rank 0 has the output").write(e))
             .transpose()?;
         Ok(())
-    };
-    let save = |engine: &Engine<R, E>,
-                out: &Option<Output>,
-                d: &mut Driver,
-                observer: &dyn Observer<R, E>| {
-        d.wall = elapsed();
+    }
+
+    /// Writes the checkpoint of the run's state now.
+    fn save<R: Real, E: Element>(
+        &mut self,
+        engine: &Engine<R, E>,
+        observer: &dyn Observer<R, E>,
+    ) -> Result<(), RunError> {
+        self.d.wall = self.elapsed();
         let scalars = engine.checkpoint_scalars();
         let observed = observer.save();
+        let series = self
+            .out
+            .as_ref()
+            .expect("checkpoints run on one process")
+            .series();
         checkpoint::write(
-            dir,
+            self.dir,
             &checkpoint::State {
-                fingerprint: &fingerprint,
-                driver: *d,
+                fingerprint: &self.fingerprint,
+                driver: self.d,
                 scalars: &scalars,
                 particles: &engine.particles,
-                series: out
-                    .as_ref()
-                    .expect("checkpoints run on one process")
-                    .series(),
+                series,
                 observer: &observed,
             },
-        )
-    };
-    let mut last_checkpoint = Instant::now();
-    if options.checkpoint.is_some() && engine.steps == 0 && d.next_output == 0 {
-        // A run killed before its first output resumes from here, not from nothing.
-        save(&engine, &out, &mut d, &*observer)?;
+        )?;
+        self.last_checkpoint = Instant::now();
+        Ok(())
     }
-    let stopped = |engine: &Engine<R, E>| {
-        let seen = options
+
+    /// The stop a signal asks for, if any. Over MPI ranks every rank stops at the same step,
+    /// the outputs being collective: at the signal any rank has seen (the launcher delivers it
+    /// to each at its own moment).
+    fn interrupted<R: Real, E: Element>(&self, engine: &Engine<R, E>) -> Option<RunError> {
+        let seen = self
+            .options
             .stop
             .as_ref()
             .map_or(0, |s| s.load(Ordering::SeqCst));
-        // Over MPI ranks every rank stops at the same step, the outputs being collective: at
-        // the signal any rank has seen (the launcher delivers it to each at its own moment).
         let seen = if engine.is_distributed() {
             engine.communicator().max(seen as f64) as usize
         } else {
@@ -414,131 +649,61 @@ fn drive<R: Real, E: Element>(
                 signal,
                 step: engine.steps,
                 time: engine.time,
-                dir: dir.to_path_buf(),
+                dir: self.dir.to_path_buf(),
             })
-    };
-    for (k, &t_out) in case.output_times.iter().enumerate().skip(d.next_output) {
-        let t0 = Instant::now();
-        let t_start = d.stepping;
-        loop {
-            if let Some(qs) = &case.quasi_static {
-                // Anura3D ends a quasi-static load step once converged or when its step counter,
-                // which starts at 1, exceeds the limit: after `limit + 1` steps, the first of
-                // the calculation being its tiny initial step. Without a limit, at the load
-                // step's duration.
-                let done = if d.taken == 0 {
-                    false
-                } else if engine.converged(qs) {
-                    true
-                } else if let Some(m) = qs.max_steps {
-                    d.taken > m
-                } else {
-                    engine.time - d.begun >= (t_out - d.load_step_start) * (1.0 - 1e-12)
+    }
+
+    /// Writes `run.json` for a run stopped as `stop` (collective).
+    fn summary<R: Real, E: Element>(
+        &self,
+        engine: &mut Engine<R, E>,
+        stop: Stop<'_>,
+    ) -> Result<(), RunError> {
+        let ranks = engine.rank_report().filter(|_| engine.is_distributed());
+        let (dir, case, wall, stepping) = (self.dir, self.case, self.elapsed(), self.d.stepping);
+        engine
+            .on_root(|e| {
+                let summary = Summary {
+                    dir,
+                    case,
+                    wall,
+                    stepping,
+                    stop,
+                    ranks,
                 };
-                if done {
-                    break;
-                }
-            } else if engine.time >= t_out * (1.0 - 1e-12) {
-                break;
-            }
-            if case.max_steps.is_some_and(|m| engine.steps >= m) {
-                return Err(RunError::MaxSteps(engine.steps, engine.time));
-            }
-            let left = t_out - engine.time;
-            let step = match case.initial_step {
-                Some(h) if engine.steps == 0 => h.min(engine.dt),
-                _ => engine.dt,
-            };
-            let (dt, snap) = if case.quasi_static.is_some() || step < left {
-                (step, None)
-            } else {
-                (left, Some(t_out))
-            };
-            if let Err(e) = engine.step(dt, snap) {
-                if let crate::driver::engine::StepError::Diverged(dv) = &e {
-                    // The state at the failing step, when still finite, is the most useful
-                    // last output (where it went wrong); otherwise the outputs so far stand.
-                    if dv.check != crate::driver::guard::Check::NonFinite {
-                        write(&mut engine, &mut out)?;
+                output::write_summary(summary, e)
+            })
+            .transpose()?;
+        Ok(())
+    }
+
+    /// After an error stopped the run mid-way: the state of a diverged step as the last
+    /// output where it is still finite (where it went wrong; otherwise the outputs so far
+    /// stand), and `run.json` saying how the run stopped and why. Over MPI ranks only for the
+    /// errors every rank stops with (the rest may be one rank's, and the summary is
+    /// collective). A failure to write these is reported, and the run's own error returned.
+    fn stopped<R: Real, E: Element>(&mut self, engine: &mut Engine<R, E>, e: &RunError) {
+        if engine.is_distributed() && !e.is_collective() {
+            return;
+        }
+        let message = e.to_string();
+        let stop = match e {
+            RunError::Diverged(dv) => {
+                let finite = !matches!(dv.check, Check::NonFinite | Check::Escaped);
+                if finite {
+                    if let Err(w) = self.write(engine) {
+                        log::warn!("the diverged step's state could not be written: {w}");
                     }
-                    d.stepping = t_start + t0.elapsed().as_secs_f64();
-                    summary(&mut engine, &d, Some(dv), false)?;
                 }
-                return Err(e.into());
+                Stop::Diverged(dv)
             }
-            d.taken += 1;
-            if let Some(taken) = engine.team.recheck() {
-                let before = engine.team.threads;
-                let team = engine.team.replacement(None, &taken);
-                engine.rethread(team.map_err(crate::driver::engine::SetupError::from)?);
-                log::warn!(
-                    "step {}: other processes took cores {taken:?}, where worker threads were pinned; {before} threads pinned became {} {} (the results do not change)",
-                    engine.steps,
-                    engine.team.threads,
-                    if engine.team.pinned.iter().any(Option::is_some) { "on the free cores" } else { "unpinned" }
-                );
-            }
-            if let Some((at, threads)) = options.rethread_after_step {
-                if engine.steps == at {
-                    let team = engine.team.replacement(Some(threads), &[]);
-                    engine.rethread(team.map_err(crate::driver::engine::SetupError::from)?);
-                }
-            }
-            engine.rebalance(case, options.rebalance)?;
-            if options.drop_lost && engine.lost > 0 {
-                check_lost(&engine, options.max_lost)?;
-            }
-            observer.on_step(&engine);
-            if let Some(n) = options.abort_after_step {
-                if PROCESS_STEPS.fetch_add(1, Ordering::SeqCst) + 1 >= n {
-                    std::process::abort();
-                }
-            }
-            let interrupted = stopped(&engine);
-            let due = match options.checkpoint {
-                None => false,
-                Some(Every::Steps(n)) => engine.steps % n.max(1) == 0,
-                Some(Every::Wall(s) | Every::Outputs { max_wall: s }) => {
-                    last_checkpoint.elapsed().as_secs_f64() >= s
-                }
-            };
-            if due || interrupted.is_some() {
-                d.stepping = t_start + t0.elapsed().as_secs_f64();
-                save(&engine, &out, &mut d, &*observer)?;
-                last_checkpoint = Instant::now();
-            }
-            if let Some(e) = interrupted {
-                summary(&mut engine, &d, None, true)?;
-                return Err(e);
-            }
-        }
-        d.load_step_start = t_out;
-        d.stepping = t_start + t0.elapsed().as_secs_f64();
-        let t1 = Instant::now();
-        write(&mut engine, &mut out)?;
-        observer.on_output(&engine);
-        // The next load step starts here.
-        (d.next_output, d.taken, d.begun) = (k + 1, 0, engine.time);
-        let last = k + 1 == case.output_times.len();
-        // A signal during the last output lets the run complete.
-        let interrupted = stopped(&engine).filter(|_| !last);
-        if options.checkpoint.is_some()
-            && (last
-                || interrupted.is_some()
-                || matches!(options.checkpoint, Some(Every::Outputs { .. })))
-        {
-            save(&engine, &out, &mut d, &*observer)?;
-            last_checkpoint = Instant::now();
-        }
-        engine.phase_seconds[5] += t1.elapsed().as_secs_f64();
-        if let Some(e) = interrupted {
-            summary(&mut engine, &d, None, true)?;
-            return Err(e);
+            RunError::Interrupted { .. } => Stop::Interrupted(&message),
+            _ => Stop::Failed(&message),
+        };
+        if let Err(w) = self.summary(engine, stop) {
+            log::warn!("run.json could not be written: {w}");
         }
     }
-    observer.on_end(&engine);
-    summary(&mut engine, &d, None, false)?;
-    Ok(engine)
 }
 
 /// Refuses probe ids that name no material point of the case (before any step is taken).

@@ -5,7 +5,7 @@ use crate::element::Element;
 use crate::parallel::team::Shared;
 use crate::real::Real;
 
-use super::{Engine, Lost};
+use super::{Check, Divergence, Engine, Lost, StepError};
 
 impl<R: Real, E: Element> Engine<R, E> {
     /// Whether the points are located in the stress pass as they move (docs/design.md §4.10):
@@ -19,9 +19,9 @@ impl<R: Real, E: Element> Engine<R, E> {
     /// Finds every point's element (each thread walks its own points), stops at the first
     /// point (by index) that left the mesh unless such points are dropped, and keeps the points
     /// sorted by element.
-    pub(super) fn locate(&mut self) -> Result<(), Lost> {
+    pub(super) fn locate(&mut self, dt: f64) -> Result<(), StepError> {
         self.walk_points();
-        self.settle_located()
+        self.settle_located(dt)
     }
 
     /// Walks every active point from its element to the one holding it now, in chunks,
@@ -89,41 +89,12 @@ impl<R: Real, E: Element> Engine<R, E> {
     /// After the walk (its own pass, or fused into the stress pass): stops the run on a point
     /// that left the mesh (unless lost points are dropped), exchanges the points that crossed
     /// to other ranks, and re-sorts the points by element where any moved.
-    pub(super) fn settle_located(&mut self) -> Result<(), Lost> {
-        let mesh = &self.mesh;
-        let p = &mut self.particles;
+    pub(super) fn settle_located(&mut self, dt: f64) -> Result<(), StepError> {
         let drop_lost = self.drop_lost;
         let outside = self.locate_outcome.iter().map(|o| o.1).sum::<u64>();
         let outside_anywhere = self.comm.sum_count(outside);
         if !drop_lost && outside_anywhere > 0 {
-            // Every rank stops, naming the first rank's first lost point.
-            let mine = self
-                .locate_outcome
-                .iter()
-                .filter(|o| o.1 > 0)
-                .min()
-                .map(|&((i, e), _, _)| {
-                    let g = mesh.global(&p.x[i]);
-                    vec![
-                        f64::from(p.id[i]),
-                        g[0],
-                        g[1],
-                        g[2],
-                        f64::from(self.input_element[e as usize] + 1),
-                    ]
-                })
-                .unwrap_or_default();
-            let mut all = Vec::new();
-            self.comm.all_gather(&mine, &mut all);
-            return Err(Lost {
-                id: all[0] as u32,
-                step: self.steps,
-                time: self.time,
-                x: all[1],
-                y: all[2],
-                z: all[3],
-                element: all[4] as u32,
-            });
+            return Err(self.lost_point(dt));
         }
         self.lost += outside_anywhere;
         let mut moved = self.locate_outcome.iter().any(|o| o.2);
@@ -153,5 +124,73 @@ impl<R: Real, E: Element> Engine<R, E> {
             }
         }
         Ok(())
+    }
+
+    /// The first rank's first point that left the mesh in a step of `dt`, as the error every
+    /// rank stops with: a lost point, or the instability it shows, where the run was forced
+    /// past Courant 1 or the point moved more than its element's size in the step (an
+    /// explicit step that blew up flings points out of the mesh; a body that leaves a mesh too
+    /// small for it crosses its boundary at the speed it has). Collective.
+    fn lost_point(&self, dt: f64) -> StepError {
+        let (mesh, p) = (&self.mesh, &self.particles);
+        let mine = self
+            .locate_outcome
+            .iter()
+            .filter(|o| o.1 > 0)
+            .min()
+            .map(|&((i, e), _, _)| {
+                let g = mesh.global(&p.x[i]);
+                let speed = p.v[i].iter().map(|v| v.f64() * v.f64()).sum::<f64>().sqrt();
+                vec![
+                    f64::from(p.id[i]),
+                    g[0],
+                    g[1],
+                    g[2],
+                    f64::from(self.input_element[e as usize] + 1),
+                    speed * dt,
+                    mesh.min_altitude[e as usize].f64(),
+                ]
+            })
+            .unwrap_or_default();
+        let mut all = Vec::new();
+        self.comm.all_gather(&mine, &mut all);
+        let lost = Lost {
+            id: all[0] as u32,
+            step: self.steps,
+            time: self.time,
+            x: all[1],
+            y: all[2],
+            z: all[3],
+            element: all[4] as u32,
+        };
+        let (moved, size) = (all[5], all[6]);
+        let courant = self.courant.0;
+        if courant <= 1.0 && moved <= size {
+            return lost.into();
+        }
+        let why = if courant > 1.0 {
+            format!(
+                "the run was forced past Courant 1 (Courant number {courant}): the explicit step is unstable"
+            )
+        } else {
+            format!(
+                "the point moved {:.3} times its element's size in one step (Courant number {courant}): the velocities blew up",
+                moved / size
+            )
+        };
+        StepError::Diverged(Box::new(Divergence {
+            check: Check::Escaped,
+            step: lost.step,
+            time: lost.time,
+            point: Some(lost.id),
+            element: Some(lost.element),
+            node: None,
+            field: "step_displacement",
+            value: moved,
+            cause: format!(
+                "{why}; material point {} left the mesh at ({}, {}, {}) having moved {moved} m in its last step (its element's smallest height: {size} m)",
+                lost.id, lost.x, lost.y, lost.z
+            ),
+        }))
     }
 }

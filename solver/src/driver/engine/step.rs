@@ -440,9 +440,9 @@ impl<R: Real, E: Element> Engine<R, E> {
             .into());
         }
         if located {
-            self.settle_located()?;
+            self.settle_located(at.dt)?;
         } else {
-            self.locate()?;
+            self.locate(at.dt)?;
         }
         if let Some(m) = &self.mixed {
             m.after_locate(&self.team, &self.layout, &mut self.particles);
