@@ -90,6 +90,7 @@ fn main() -> ExitCode {
     }
 }
 
+/// Reads the mesh, orders it, writes it (and the remapped CPS and the report).
 fn run(args: Args) -> anyhow::Result<()> {
     check_options(&args)?;
     let t_start = Instant::now();

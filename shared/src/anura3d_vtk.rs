@@ -83,6 +83,7 @@ enum Type {
 }
 
 impl Type {
+    /// The type named `word` (any case).
     fn parse(word: &str) -> Option<Type> {
         Some(match word.to_ascii_lowercase().as_str() {
             "double" => Type::F64,
@@ -99,6 +100,7 @@ impl Type {
         })
     }
 
+    /// Bytes per value.
     fn size(self) -> usize {
         match self {
             Type::F64 | Type::I64 | Type::U64 => 8,
@@ -138,6 +140,7 @@ struct Reader<'a> {
 }
 
 impl<'a> Reader<'a> {
+    /// An error at byte `at`.
     fn err(&self, at: usize, message: impl Into<String>) -> Error {
         Error::format(
             Location::new(self.file, 0, None),
@@ -211,12 +214,14 @@ impl<'a> Reader<'a> {
     }
 }
 
+/// Word `i` of the header line `w` (at byte `at`) as a count.
 fn count(r: &Reader<'_>, at: usize, w: &[String], i: usize) -> Result<usize> {
     w.get(i)
         .and_then(|s| s.parse::<usize>().ok())
         .ok_or_else(|| r.err(at, format!("expected a count in '{}'", w.join(" "))))
 }
 
+/// Word `i` of the header line `w` (at byte `at`) as a data type.
 fn ty(r: &Reader<'_>, at: usize, w: &[String], i: usize) -> Result<Type> {
     let word = w.get(i).map(String::as_str).unwrap_or("");
     Type::parse(word).ok_or_else(|| {
@@ -227,6 +232,7 @@ fn ty(r: &Reader<'_>, at: usize, w: &[String], i: usize) -> Result<Type> {
     })
 }
 
+/// The name (second word) of the header line `w` (at byte `at`).
 fn name(r: &Reader<'_>, at: usize, w: &[String]) -> Result<String> {
     w.get(1)
         .cloned()

@@ -332,6 +332,7 @@ fn line_terminator_len(data: &[u8], offset: usize) -> usize {
     }
 }
 
+/// `body`, noting that section `s` was seen; a geometry section that appears twice is refused.
 fn once(seen: &mut bool, s: &RawSection, file: &str, body: Body) -> Result<Body> {
     if *seen {
         return Err(Error::format(
@@ -356,6 +357,7 @@ fn single_value(s: &RawSection, file: &str) -> Result<String> {
         })
 }
 
+/// Reads `$$STARTCOUNTERS`: the element and node counts.
 fn read_counters(s: &RawSection, file: &str) -> Result<(usize, usize)> {
     let at = |n| Location::new(file, n, Some("$$STARTCOUNTERS"));
     let (n, l) = Lines::new(s.body, s.body_line)
@@ -405,6 +407,7 @@ fn count_line<'a>(s: &RawSection<'a>, file: &str) -> Result<(usize, usize, &'a [
     ))
 }
 
+/// The non-blank lines of `body`, without trailing blanks.
 fn text_lines(body: &[u8]) -> Vec<String> {
     Lines::new(body, 1)
         .filter(|(_, l)| !text::is_blank(l))
@@ -601,6 +604,7 @@ fn read_rows(
     }
 }
 
+/// Checks that the columns of `row` that `refs` names hold node or element ids in range.
 fn check_ids(row: &[Token], refs: Refs, n_el: usize, n_nodes: usize) -> Result<(), String> {
     let cols = refs.columns();
     let need = cols.iter().map(|c| c.0 + 1).max().unwrap_or(0);
@@ -631,6 +635,7 @@ fn check_ids(row: &[Token], refs: Refs, n_el: usize, n_nodes: usize) -> Result<(
     Ok(())
 }
 
+/// `t` as it reads in a message.
 fn token_text(t: &Token) -> String {
     let mut v = Vec::new();
     t.push_to(&mut v);
@@ -660,6 +665,7 @@ struct Sink<'w> {
 }
 
 impl Sink<'_> {
+    /// Buffers `bytes`, writing the buffer out once it is large.
     fn put(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.buf.extend_from_slice(bytes);
         if self.buf.len() >= FLUSH_BYTES {
@@ -668,6 +674,7 @@ impl Sink<'_> {
         Ok(())
     }
 
+    /// Writes the buffer out.
     fn flush(&mut self) -> io::Result<()> {
         self.w.write_all(&self.buf)?;
         self.buf.clear();
@@ -790,6 +797,7 @@ pub fn write_to(model: &Model, w: &mut dyn Write) -> io::Result<()> {
     out.flush()
 }
 
+/// Writes the rows of a table, values separated by one blank, each row ended by `eol`.
 fn write_rows(out: &mut Sink, rows: &Table, eol: &[u8]) -> io::Result<()> {
     out.rows(rows.len(), |r, b| {
         for i in r {

@@ -119,6 +119,7 @@ struct Reader<'a> {
 }
 
 impl<'a> Reader<'a> {
+    /// Location of line `line` in the current section.
     fn at(&self, line: usize) -> Location {
         Location::new(self.file, line, Some(self.section))
     }
@@ -136,6 +137,7 @@ impl<'a> Reader<'a> {
         ))
     }
 
+    /// The next non-blank line as `N` integers (`what` names them in messages), with its number.
     fn numbers<const N: usize>(&mut self, what: &str) -> Result<(usize, [i64; N])> {
         let (n, l) = self.line(what)?;
         let mut out = [0i64; N];
@@ -163,6 +165,7 @@ impl<'a> Reader<'a> {
             .map_err(|_| Error::format(self.at(n), format!("{what} is {v}, must not be negative")))
     }
 
+    /// Reads the end marker `end` of the current section.
     fn expect_end(&mut self, end: &str) -> Result<()> {
         let (n, l) = self.line(end)?;
         if text::trim(l) != end.as_bytes() {
@@ -174,6 +177,7 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
+    /// Skips lines up to and including the end marker `end`.
     fn skip_to(&mut self, end: &str) -> Result<()> {
         loop {
             let (_, l) = self.line(end)?;
@@ -678,6 +682,7 @@ impl Sections<'_> {
     }
 }
 
+/// Node tags (positive integers) of an element line `l`.
 fn parse_tags(toks: &[&[u8]], l: &[u8], at: &Location) -> Result<Vec<u64>> {
     toks.iter()
         .map(|t| {
@@ -694,11 +699,13 @@ fn parse_tags(toks: &[&[u8]], l: &[u8], at: &Location) -> Result<Vec<u64>> {
         .collect()
 }
 
+/// Appends the three coordinates on line `l` to `coords`.
 fn push_xyz(coords: &mut Vec<f64>, l: &[u8], at: &Location) -> Result<()> {
     let toks: Vec<&[u8]> = Tokens::new(l).collect();
     push_xyz_tokens(coords, &toks, l, at)
 }
 
+/// Appends three coordinates, the tokens `toks` of line `l`, to `coords`.
 fn push_xyz_tokens(coords: &mut Vec<f64>, toks: &[&[u8]], l: &[u8], at: &Location) -> Result<()> {
     if toks.len() != 3 {
         return Err(Error::format(

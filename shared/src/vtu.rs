@@ -41,6 +41,7 @@ pub enum Values<'a> {
 }
 
 impl Values<'_> {
+    /// Number of values.
     fn len(&self) -> usize {
         match self {
             Values::F64(v) => v.len(),
@@ -51,6 +52,7 @@ impl Values<'_> {
         }
     }
 
+    /// VTK's name of the value type.
     fn type_name(&self) -> &'static str {
         match self {
             Values::F64(_) => "Float64",
@@ -61,6 +63,7 @@ impl Values<'_> {
         }
     }
 
+    /// Bytes of the values in binary.
     fn byte_len(&self) -> usize {
         match self {
             Values::F64(v) => v.len() * 8,
@@ -71,8 +74,10 @@ impl Values<'_> {
         }
     }
 
+    /// Writes the values in binary, little-endian.
     fn write_le(&self, w: &mut dyn Write) -> io::Result<()> {
         // Little-endian hosts can write the slices as they are; others convert per value.
+        /// Writes `v` converted by `f`, a chunk at a time.
         fn put<T: Copy, const N: usize>(
             w: &mut dyn Write,
             v: &[T],
@@ -97,6 +102,7 @@ impl Values<'_> {
         }
     }
 
+    /// Appends the values as text, `components` to a line.
     fn write_ascii(&self, out: &mut Vec<u8>, components: usize) {
         let n = self.len();
         for i in 0..n {
@@ -224,6 +230,7 @@ pub struct Piece<'a> {
     pub cell_data: Vec<DataArray<'a>>,
 }
 
+/// `s` with the five XML special characters escaped.
 fn escape(s: &str) -> String {
     let mut o = String::with_capacity(s.len());
     for c in s.chars() {

@@ -41,6 +41,7 @@ pub enum ScalarType {
 }
 
 impl ScalarType {
+    /// The type named `s` in a `type` attribute.
     fn parse(s: &str) -> Option<Self> {
         Some(match s {
             "Float64" => ScalarType::F64,
