@@ -2,12 +2,13 @@
 //! elements along a Morton or Hilbert curve of their centroids, renumbers vertices in order of
 //! first use, and writes it back (GOM, or VTU for viewing). `--curve none` makes it a converter.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, Context};
 use clap::{Parser, ValueEnum};
 use mpm_shared::cps::Cps;
+use mpm_shared::Model;
 use sfcb::{metrics, order};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -89,7 +90,56 @@ fn main() -> ExitCode {
     }
 }
 
+/// Reads the mesh, orders it, writes it (and the remapped CPS and the report).
 fn run(args: Args) -> anyhow::Result<()> {
+    check_options(&args)?;
+    let t_start = Instant::now();
+    let model = mpm_shared::read_model(&args.input)?;
+    let t_read = t_start.elapsed().as_secs_f64();
+    warn_duplicates(&args, &model);
+    check_levels_for(&args, &model)?;
+    let cps_in = read_cps(&args, &model)?;
+    let dim = model.dimension.coords();
+    let levels = args.levels.unwrap_or(if dim == 3 { 21 } else { 31 });
+    let mut facts = Facts {
+        elements: model.element_count(),
+        nodes: model.node_count(),
+        levels,
+        shared_keys: 0,
+        seconds: BTreeMap::from([("read", t_read)]),
+        before: args.report.is_some().then(|| metrics::locality(&model)),
+    };
+    let model = reorder(&args, model, &mut facts)?;
+    let (partition, neighbours) = partition(&args, &model);
+    let mut cps_out = None;
+    if let (Some((mut cps, ids)), Some(paths)) = (cps_in, &args.cps) {
+        // File ids of the written GOM, so that Anura3D picks the same points, marked so that
+        // mpm-solve still reports them by their input ids.
+        mpm_shared::points::remap_cps(&mut cps, &ids, &model)?;
+        cps_out = Some((paths[1].clone(), cps.write()));
+    }
+    let t = Instant::now();
+    mpm_shared::write_model(&model, &args.output, partition.as_deref())?;
+    facts.seconds.insert("write", t.elapsed().as_secs_f64());
+    if let Some((path, bytes)) = cps_out {
+        mpm_shared::io::write_output(&path, &bytes)?;
+    }
+    facts
+        .seconds
+        .insert("total", t_start.elapsed().as_secs_f64());
+    if let Some(report_path) = &args.report {
+        let outcome = Outcome {
+            model: &model,
+            partition: partition.as_deref(),
+            neighbours,
+        };
+        write_report(report_path, &args, &facts, outcome)?;
+    }
+    Ok(())
+}
+
+/// Checks the options that need no input, and starts the thread pool of `--threads`.
+fn check_options(args: &Args) -> anyhow::Result<()> {
     if let Some(t) = args.threads {
         if t == 0 {
             bail!("--threads must be at least 1");
@@ -112,16 +162,22 @@ fn run(args: Args) -> anyhow::Result<()> {
     {
         bail!("the mesh and the report cannot both go to standard output");
     }
-    let t_start = Instant::now();
-    let model = mpm_shared::read_model(&args.input)?;
-    let t_read = t_start.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// Warns about coincident nodes of the input mesh.
+fn warn_duplicates(args: &Args, model: &Model) {
     // Duplicates do not stop the ordering, but they disconnect the elements around them.
-    let duplicates = mpm_shared::coincident::pairs(&model);
+    let duplicates = mpm_shared::coincident::pairs(model);
     if let Some(w) =
         mpm_shared::coincident::warning(&mpm_shared::display_name(&args.input), &duplicates)
     {
         eprintln!("sfcb: warning: {w}");
     }
+}
+
+/// Checks `--levels` against the maximum for the mesh's dimension.
+fn check_levels_for(args: &Args, model: &Model) -> anyhow::Result<()> {
     if let Some(l) = args.levels {
         let max = if model.dimension.coords() == 3 {
             21
@@ -135,120 +191,139 @@ fn run(args: Args) -> anyhow::Result<()> {
             );
         }
     }
-    let cps_in = match &args.cps {
-        Some(p) => {
-            let data = mpm_shared::io::read_input(&p[0])?;
-            let (cps, warnings) = Cps::read(&data, &mpm_shared::display_name(&p[0]))?;
-            for w in warnings {
-                eprintln!("sfcb: warning: {w}");
-            }
-            // Points are named by their input ids from here on, whatever order the input
-            // GOM's elements are in (see mpm_shared::points).
-            let ids = mpm_shared::points::cps_input_ids(&cps, &model)?;
-            Some((cps, ids))
-        }
-        None => None,
+    Ok(())
+}
+
+/// Reads the CPS of `--cps`, if given, with the input id of each of its material points.
+fn read_cps(args: &Args, model: &Model) -> anyhow::Result<Option<(Cps, Vec<u32>)>> {
+    let Some(p) = &args.cps else {
+        return Ok(None);
     };
-    let dim = model.dimension.coords();
-    let levels = args.levels.unwrap_or(if dim == 3 { 21 } else { 31 });
-    let want_report = args.report.is_some();
-    let before = want_report.then(|| metrics::locality(&model));
-    let (n_el, n_nodes) = (model.element_count(), model.node_count());
-    let mut seconds = BTreeMap::new();
-    seconds.insert("read", t_read);
-    let mut shared_keys = 0;
-    let model = match args.curve {
-        Curve::None => model,
-        _ => {
-            let curve = if args.curve == Curve::Hilbert {
-                order::Curve::Hilbert
-            } else {
-                order::Curve::Morton
-            };
-            let ord = order::order(
-                &model,
-                order::Options {
-                    curve,
-                    levels,
-                    cubic: !args.no_cubic,
-                },
-            )
-            .with_context(|| {
-                format!(
-                    "{}: cannot order the elements along the curve",
-                    mpm_shared::display_name(&args.input)
-                )
-            })?;
-            seconds.insert("keys", ord.seconds[0]);
-            seconds.insert("sort", ord.seconds[1]);
-            seconds.insert("renumber", ord.seconds[2]);
-            shared_keys = ord.shared_keys;
-            let t = Instant::now();
-            let reordered = model.reordered(&ord.order, &ord.node_new)?;
-            seconds.insert("remap", t.elapsed().as_secs_f64());
-            reordered
-        }
+    let data = mpm_shared::io::read_input(&p[0])?;
+    let (cps, warnings) = Cps::read(&data, &mpm_shared::display_name(&p[0]))?;
+    for w in warnings {
+        eprintln!("sfcb: warning: {w}");
+    }
+    // Points are named by their input ids from here on, whatever order the input
+    // GOM's elements are in (see mpm_shared::points).
+    let ids = mpm_shared::points::cps_input_ids(&cps, model)?;
+    Ok(Some((cps, ids)))
+}
+
+/// What the report tells beside the final mesh, gathered on the way.
+struct Facts {
+    /// Elements of the input.
+    elements: usize,
+    /// Nodes of the input.
+    nodes: usize,
+    /// Curve refinement levels.
+    levels: u32,
+    /// Elements whose curve key another element also has.
+    shared_keys: usize,
+    /// Seconds per phase.
+    seconds: BTreeMap<&'static str, f64>,
+    /// Locality of the input order (with `--report`).
+    before: Option<metrics::Locality>,
+}
+
+/// Orders the elements of `model` along the curve of `--curve` (none: keeps them), noting the
+/// timings and the elements that share a key in `facts`.
+fn reorder(args: &Args, model: Model, facts: &mut Facts) -> anyhow::Result<Model> {
+    let curve = match args.curve {
+        Curve::None => return Ok(model),
+        Curve::Hilbert => order::Curve::Hilbert,
+        Curve::Morton => order::Curve::Morton,
     };
+    let ord = order::order(
+        &model,
+        order::Options {
+            curve,
+            levels: facts.levels,
+            cubic: !args.no_cubic,
+        },
+    )
+    .with_context(|| {
+        format!(
+            "{}: cannot order the elements along the curve",
+            mpm_shared::display_name(&args.input)
+        )
+    })?;
+    let seconds = &mut facts.seconds;
+    seconds.insert("keys", ord.seconds[0]);
+    seconds.insert("sort", ord.seconds[1]);
+    seconds.insert("renumber", ord.seconds[2]);
+    facts.shared_keys = ord.shared_keys;
+    let t = Instant::now();
+    let reordered = model.reordered(&ord.order, &ord.node_new)?;
+    seconds.insert("remap", t.elapsed().as_secs_f64());
+    Ok(reordered)
+}
+
+/// Pairs of elements that share a face (see [`metrics::face_neighbours`]).
+type Neighbours = Vec<(u32, u32)>;
+
+/// The part of each element with `--partitions` (merged into connected pieces with
+/// `--merge-pieces`, which also returns the face neighbours it found).
+fn partition(args: &Args, model: &Model) -> (Option<Vec<i32>>, Option<Neighbours>) {
     let mut neighbours = None;
-    let partition: Option<Vec<i32>> = args.partitions.map(|p| {
-        let w = order::weights(&model);
+    let partition = args.partitions.map(|p| {
+        let w = order::weights(model);
         let mut part = order::partitions(&w, p);
         if args.merge_pieces {
-            let nb = metrics::face_neighbours(&model);
+            let nb = metrics::face_neighbours(model);
             metrics::merge_pieces(model.element_count(), &nb, &mut part, &w, 20);
             neighbours = Some(nb);
         }
         part.into_iter().map(|v| v as i32).collect()
     });
-    let mut cps_out = None;
-    if let (Some((mut cps, ids)), Some(paths)) = (cps_in, &args.cps) {
-        // File ids of the written GOM, so that Anura3D picks the same points, marked so that
-        // mpm-solve still reports them by their input ids.
-        mpm_shared::points::remap_cps(&mut cps, &ids, &model)?;
-        cps_out = Some((paths[1].clone(), cps.write()));
-    }
-    let t = Instant::now();
-    mpm_shared::write_model(&model, &args.output, partition.as_deref())?;
-    seconds.insert("write", t.elapsed().as_secs_f64());
-    if let Some((path, bytes)) = cps_out {
-        mpm_shared::io::write_output(&path, &bytes)?;
-    }
-    seconds.insert("total", t_start.elapsed().as_secs_f64());
-    if let Some(report_path) = &args.report {
-        let partitions = args.partitions.map(|p| {
-            let part: Vec<u32> = partition
-                .as_ref()
-                .expect("computed with --partitions")
-                .iter()
-                .map(|&v| v as u32)
-                .collect();
-            let nb = neighbours
-                .take()
-                .unwrap_or_else(|| metrics::face_neighbours(&model));
-            metrics::partition_quality(&model, &nb, &part, &order::weights(&model), p)
-        });
-        // serde_json writes a NaN or infinite f64 as null, so the report is strict JSON
-        // whatever the numbers (metrics::tests::non_finite_numbers_become_null checks it).
-        let report = serde_json::json!({
-            "schema_version": REPORT_SCHEMA_VERSION,
-            "input": mpm_shared::display_name(&args.input),
-            "output": mpm_shared::display_name(&args.output),
-            "dimension": model.dimension.coords(),
-            "element_type": model.element_type.keyword(),
-            "elements": n_el,
-            "nodes": n_nodes,
-            "curve": format!("{:?}", args.curve).to_lowercase(),
-            "levels": levels,
-            "cubic": !args.no_cubic,
-            "threads": rayon::current_num_threads(),
-            "elements_sharing_a_key": shared_keys,
-            "seconds": seconds,
-            "locality": { "before": before, "after": metrics::locality(&model) },
-            "partitions": partitions,
-        });
-        let mut text = serde_json::to_string_pretty(&report)?;
-        text.push('\n');
-        mpm_shared::io::write_output(report_path, text.as_bytes())?;
-    }
+    (partition, neighbours)
+}
+
+/// The mesh as written, for the report.
+struct Outcome<'m> {
+    model: &'m Model,
+    /// The part of each element (with `--partitions`).
+    partition: Option<&'m [i32]>,
+    /// Face neighbours, where partitioning found them already.
+    neighbours: Option<Neighbours>,
+}
+
+/// Writes the JSON report to `path`.
+fn write_report(path: &Path, args: &Args, facts: &Facts, outcome: Outcome) -> anyhow::Result<()> {
+    let model = outcome.model;
+    let partitions = args.partitions.map(|p| {
+        let part: Vec<u32> = outcome
+            .partition
+            .expect("computed with --partitions")
+            .iter()
+            .map(|&v| v as u32)
+            .collect();
+        let nb = outcome
+            .neighbours
+            .unwrap_or_else(|| metrics::face_neighbours(model));
+        metrics::partition_quality(model, &nb, &part, &order::weights(model), p)
+    });
+    // serde_json writes a NaN or infinite f64 as null, so the report is strict JSON
+    // whatever the numbers (metrics::tests::non_finite_numbers_become_null checks it).
+    let report = serde_json::json!({
+        "schema_version": REPORT_SCHEMA_VERSION,
+        "input": mpm_shared::display_name(&args.input),
+        "output": mpm_shared::display_name(&args.output),
+        "dimension": model.dimension.coords(),
+        "element_type": model.element_type.keyword(),
+        "elements": facts.elements,
+        "nodes": facts.nodes,
+        "curve": format!("{:?}", args.curve).to_lowercase(),
+        "levels": facts.levels,
+        "cubic": !args.no_cubic,
+        "threads": rayon::current_num_threads(),
+        "elements_sharing_a_key": facts.shared_keys,
+        "seconds": facts.seconds,
+        "locality": { "before": facts.before, "after": metrics::locality(model) },
+        "partitions": partitions,
+    });
+    let mut text = serde_json::to_string_pretty(&report)?;
+    text.push('\n');
+    mpm_shared::io::write_output(path, text.as_bytes())?;
     Ok(())
 }

@@ -83,6 +83,7 @@ enum Type {
 }
 
 impl Type {
+    /// The type named `word` (any case).
     fn parse(word: &str) -> Option<Type> {
         Some(match word.to_ascii_lowercase().as_str() {
             "double" => Type::F64,
@@ -99,6 +100,7 @@ impl Type {
         })
     }
 
+    /// Bytes per value.
     fn size(self) -> usize {
         match self {
             Type::F64 | Type::I64 | Type::U64 => 8,
@@ -138,6 +140,7 @@ struct Reader<'a> {
 }
 
 impl<'a> Reader<'a> {
+    /// An error at byte `at`.
     fn err(&self, at: usize, message: impl Into<String>) -> Error {
         Error::format(
             Location::new(self.file, 0, None),
@@ -200,14 +203,25 @@ impl<'a> Reader<'a> {
             .map(|c| ty.decode(c))
             .collect())
     }
+
+    /// `count` big-endian 32-bit integers (the `CELLS` and `CELL_TYPES` data).
+    fn integers(&mut self, at: usize, count: usize) -> Result<Vec<i64>> {
+        Ok(self
+            .values(at, count, 1, Type::I32)?
+            .into_iter()
+            .map(|v| v as i64)
+            .collect())
+    }
 }
 
+/// Word `i` of the header line `w` (at byte `at`) as a count.
 fn count(r: &Reader<'_>, at: usize, w: &[String], i: usize) -> Result<usize> {
     w.get(i)
         .and_then(|s| s.parse::<usize>().ok())
         .ok_or_else(|| r.err(at, format!("expected a count in '{}'", w.join(" "))))
 }
 
+/// Word `i` of the header line `w` (at byte `at`) as a data type.
 fn ty(r: &Reader<'_>, at: usize, w: &[String], i: usize) -> Result<Type> {
     let word = w.get(i).map(String::as_str).unwrap_or("");
     Type::parse(word).ok_or_else(|| {
@@ -218,6 +232,7 @@ fn ty(r: &Reader<'_>, at: usize, w: &[String], i: usize) -> Result<Type> {
     })
 }
 
+/// The name (second word) of the header line `w` (at byte `at`).
 fn name(r: &Reader<'_>, at: usize, w: &[String]) -> Result<String> {
     w.get(1)
         .cloned()
@@ -232,53 +247,164 @@ enum Section {
     Cells(usize),
 }
 
+/// One field as read, before it is filed under its name.
+type NamedField = (String, Field);
+
+impl Reader<'_> {
+    /// Reads the three header lines (`# vtk DataFile Version ...`, the title, `BINARY`) and
+    /// returns the title.
+    fn header(&mut self) -> Result<String> {
+        let (at, magic) = self
+            .line()
+            .ok_or_else(|| self.err(0, "empty file: expected '# vtk DataFile Version 3.0'"))?;
+        if !magic.starts_with(b"# vtk DataFile") {
+            return Err(self.err(
+                at,
+                format!(
+                    "expected '# vtk DataFile Version ...', found {}",
+                    text::show(magic)
+                ),
+            ));
+        }
+        let (_, title) = self
+            .line()
+            .ok_or_else(|| self.err(self.pos, "file ends after its first line"))?;
+        let title = String::from_utf8_lossy(title).trim().to_string();
+        let (at, enc) = self
+            .line()
+            .ok_or_else(|| self.err(self.pos, "file ends before 'BINARY'"))?;
+        match text::trim(enc) {
+            b"BINARY" => Ok(title),
+            b"ASCII" => Err(Error::Unsupported {
+                at: Location::new(self.file, 3, None),
+                message: "ASCII legacy VTK (Anura3D's material-point files are BINARY)".into(),
+            }),
+            other => Err(self.err(
+                at,
+                format!("expected BINARY or ASCII, found {}", text::show(other)),
+            )),
+        }
+    }
+
+    /// Reads the data of `SCALARS name type [components]` (header words `w` at byte `at`) and
+    /// its `LOOKUP_TABLE` line, for `n` tuples.
+    fn scalars(&mut self, at: usize, n: usize, w: &[String]) -> Result<NamedField> {
+        let nm = name(self, at, w)?;
+        let t = ty(self, at, w, 2)?;
+        let comps = match w.get(3) {
+            None => 1,
+            Some(_) => count(self, at, w, 3)?,
+        };
+        if !(1..=4).contains(&comps) {
+            return Err(self.err(at, format!("{comps} components (1 to 4 allowed)")));
+        }
+        let (lat, lt) = self
+            .words()
+            .ok_or_else(|| self.err(self.pos, "file ends before LOOKUP_TABLE"))?;
+        if lt.first().map(String::as_str) != Some("LOOKUP_TABLE") {
+            return Err(self.err(
+                lat,
+                format!("expected 'LOOKUP_TABLE name', found '{}'", lt.join(" ")),
+            ));
+        }
+        let values = self.values(at, n, comps, t)?;
+        Ok((
+            nm,
+            Field {
+                components: comps,
+                values,
+            },
+        ))
+    }
+
+    /// Reads the data of `VECTORS`, `NORMALS` (3 components) or `TENSORS` (9) `name type`, for
+    /// `n` tuples.
+    fn vectors(&mut self, at: usize, n: usize, w: &[String], tensors: bool) -> Result<NamedField> {
+        let nm = name(self, at, w)?;
+        let t = ty(self, at, w, 2)?;
+        let comps = if tensors { 9 } else { 3 };
+        let values = self.values(at, n, comps, t)?;
+        Ok((
+            nm,
+            Field {
+                components: comps,
+                values,
+            },
+        ))
+    }
+
+    /// Reads the arrays of `FIELD name arrays`, each `name components tuples type` then its data.
+    fn field_arrays(&mut self, at: usize, w: &[String]) -> Result<Vec<NamedField>> {
+        let arrays = count(self, at, w, 2)?;
+        let mut fields = Vec::new();
+        for _ in 0..arrays {
+            let (aat, aw) = self
+                .words()
+                .ok_or_else(|| self.err(self.pos, "file ends inside a FIELD"))?;
+            let an = aw.first().cloned().unwrap_or_default();
+            let comps = count(self, aat, &aw, 1)?;
+            let tuples = count(self, aat, &aw, 2)?;
+            let t = ty(self, aat, &aw, 3)?;
+            let values = self.values(aat, tuples, comps, t)?;
+            fields.push((
+                an,
+                Field {
+                    components: comps,
+                    values,
+                },
+            ));
+        }
+        Ok(fields)
+    }
+
+    /// Skips VTK 5 metadata: text lines up to a blank line.
+    fn skip_metadata(&mut self) {
+        while let Some((_, l)) = self.line() {
+            if text::is_blank(l) {
+                break;
+            }
+        }
+    }
+}
+
+/// The keyword lines after the header, read one by one into the grid.
+struct Grid<'a> {
+    r: Reader<'a>,
+    out: LegacyVtk,
+    section: Section,
+    have_points: bool,
+}
+
 /// Reads one Anura3D legacy VTK file (binary, big-endian) from memory.
 pub fn read(data: &[u8], file: &str) -> Result<LegacyVtk> {
     let mut r = Reader { data, pos: 0, file };
-    let mut out = LegacyVtk::default();
-    let (at, magic) = r
-        .line()
-        .ok_or_else(|| r.err(0, "empty file: expected '# vtk DataFile Version 3.0'"))?;
-    if !magic.starts_with(b"# vtk DataFile") {
-        return Err(r.err(
-            at,
-            format!(
-                "expected '# vtk DataFile Version ...', found {}",
-                text::show(magic)
-            ),
-        ));
-    }
-    let (_, title) = r
-        .line()
-        .ok_or_else(|| r.err(r.pos, "file ends after its first line"))?;
-    out.title = String::from_utf8_lossy(title).trim().to_string();
-    let (at, enc) = r
-        .line()
-        .ok_or_else(|| r.err(r.pos, "file ends before 'BINARY'"))?;
-    match text::trim(enc) {
-        b"BINARY" => {}
-        b"ASCII" => {
-            return Err(Error::Unsupported {
-                at: Location::new(file, 3, None),
-                message: "ASCII legacy VTK (Anura3D's material-point files are BINARY)".into(),
-            })
-        }
-        other => {
-            return Err(r.err(
-                at,
-                format!("expected BINARY or ASCII, found {}", text::show(other)),
-            ))
-        }
-    }
-    let mut section = Section::None;
-    let mut have_points = false;
-    while let Some((at, w)) = r.words() {
+    let title = r.header()?;
+    let mut g = Grid {
+        r,
+        out: LegacyVtk {
+            title,
+            ..Default::default()
+        },
+        section: Section::None,
+        have_points: false,
+    };
+    while let Some((at, w)) = g.r.words() {
         let Some(key) = w.first() else { continue };
-        match key.to_ascii_uppercase().as_str() {
+        let key = key.to_ascii_uppercase();
+        g.keyword(at, &key, &w)?;
+    }
+    Ok(g.out)
+}
+
+impl Grid<'_> {
+    /// Reads the keyword line `w` (at byte `at`, its keyword `key` in upper case) and its data.
+    fn keyword(&mut self, at: usize, key: &str, w: &[String]) -> Result<()> {
+        let r = &mut self.r;
+        match key {
             "DATASET" => {
                 if w.get(1).map(String::as_str) != Some("UNSTRUCTURED_GRID") {
                     return Err(Error::Unsupported {
-                        at: Location::new(file, 0, None),
+                        at: Location::new(r.file, 0, None),
                         message: format!(
                             "at byte {at}: '{}' (only UNSTRUCTURED_GRID is read)",
                             w.join(" ")
@@ -287,144 +413,41 @@ pub fn read(data: &[u8], file: &str) -> Result<LegacyVtk> {
                 }
             }
             "POINTS" => {
-                let n = count(&r, at, &w, 1)?;
-                let t = ty(&r, at, &w, 2)?;
+                let n = count(r, at, w, 1)?;
+                let t = ty(r, at, w, 2)?;
                 let v = r.values(at, n, 3, t)?;
-                out.points = v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-                have_points = true;
+                self.out.points = v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                self.have_points = true;
             }
             "CELLS" => {
-                count(&r, at, &w, 1)?;
-                let size = count(&r, at, &w, 2)?;
-                out.cells = r
-                    .values(at, size, 1, Type::I32)?
-                    .into_iter()
-                    .map(|v| v as i64)
-                    .collect();
+                count(r, at, w, 1)?;
+                let size = count(r, at, w, 2)?;
+                self.out.cells = r.integers(at, size)?;
             }
             "CELL_TYPES" => {
-                let n = count(&r, at, &w, 1)?;
-                out.cell_types = r
-                    .values(at, n, 1, Type::I32)?
-                    .into_iter()
-                    .map(|v| v as i64)
-                    .collect();
+                let n = count(r, at, w, 1)?;
+                self.out.cell_types = r.integers(at, n)?;
             }
             "POINT_DATA" => {
-                let n = count(&r, at, &w, 1)?;
-                if have_points && n != out.points.len() {
+                let n = count(r, at, w, 1)?;
+                if self.have_points && n != self.out.points.len() {
                     return Err(r.err(
                         at,
-                        format!("POINT_DATA {n} but {} points", out.points.len()),
+                        format!("POINT_DATA {n} but {} points", self.out.points.len()),
                     ));
                 }
-                section = Section::Points(n);
+                self.section = Section::Points(n);
             }
-            "CELL_DATA" => section = Section::Cells(count(&r, at, &w, 1)?),
+            "CELL_DATA" => self.section = Section::Cells(count(r, at, w, 1)?),
             "LOOKUP_TABLE" => {
                 // A colour table of `size` RGBA entries (4 unsigned chars each), not data.
-                let n = count(&r, at, &w, 2)?;
+                let n = count(r, at, w, 2)?;
                 r.values(at, n, 4, Type::U8)?;
             }
             "SCALARS" | "VECTORS" | "NORMALS" | "TENSORS" | "FIELD" => {
-                let n = match section {
-                    Section::Points(n) | Section::Cells(n) => n,
-                    Section::None => {
-                        return Err(r.err(
-                            at,
-                            format!("'{}' before POINT_DATA or CELL_DATA", w.join(" ")),
-                        ))
-                    }
-                };
-                let mut fields: Vec<(String, Field)> = Vec::new();
-                match key.to_ascii_uppercase().as_str() {
-                    "SCALARS" => {
-                        let nm = name(&r, at, &w)?;
-                        let t = ty(&r, at, &w, 2)?;
-                        let comps = match w.get(3) {
-                            None => 1,
-                            Some(_) => count(&r, at, &w, 3)?,
-                        };
-                        if !(1..=4).contains(&comps) {
-                            return Err(r.err(at, format!("{comps} components (1 to 4 allowed)")));
-                        }
-                        let (lat, lt) = r
-                            .words()
-                            .ok_or_else(|| r.err(r.pos, "file ends before LOOKUP_TABLE"))?;
-                        if lt.first().map(String::as_str) != Some("LOOKUP_TABLE") {
-                            return Err(r.err(
-                                lat,
-                                format!("expected 'LOOKUP_TABLE name', found '{}'", lt.join(" ")),
-                            ));
-                        }
-                        let values = r.values(at, n, comps, t)?;
-                        fields.push((
-                            nm,
-                            Field {
-                                components: comps,
-                                values,
-                            },
-                        ));
-                    }
-                    "VECTORS" | "NORMALS" | "TENSORS" => {
-                        let nm = name(&r, at, &w)?;
-                        let t = ty(&r, at, &w, 2)?;
-                        let comps = if key.eq_ignore_ascii_case("TENSORS") {
-                            9
-                        } else {
-                            3
-                        };
-                        let values = r.values(at, n, comps, t)?;
-                        fields.push((
-                            nm,
-                            Field {
-                                components: comps,
-                                values,
-                            },
-                        ));
-                    }
-                    _ => {
-                        let arrays = count(&r, at, &w, 2)?;
-                        for _ in 0..arrays {
-                            let (aat, aw) = r
-                                .words()
-                                .ok_or_else(|| r.err(r.pos, "file ends inside a FIELD"))?;
-                            let an = aw.first().cloned().unwrap_or_default();
-                            let comps = count(&r, aat, &aw, 1)?;
-                            let tuples = count(&r, aat, &aw, 2)?;
-                            let t = ty(&r, aat, &aw, 3)?;
-                            let values = r.values(aat, tuples, comps, t)?;
-                            fields.push((
-                                an,
-                                Field {
-                                    components: comps,
-                                    values,
-                                },
-                            ));
-                        }
-                    }
-                }
-                let map = match section {
-                    Section::Cells(_) => &mut out.cell_data,
-                    _ => &mut out.point_data,
-                };
-                for (nm, f) in fields {
-                    match map.entry(nm) {
-                        Entry::Occupied(e) => out.duplicates.push(e.key().clone()),
-                        Entry::Vacant(e) => {
-                            e.insert(f);
-                        }
-                    }
-                }
+                self.fields(at, key, w)?;
             }
-            "METADATA" => {
-                // VTK 5 metadata: text lines up to a blank line.
-                while let Some((_, l)) = r.line() {
-                    if text::is_blank(l) {
-                        break;
-                    }
-                }
-            }
+            "METADATA" => r.skip_metadata(),
             _ => {
                 return Err(r.err(
                     at,
@@ -432,8 +455,42 @@ pub fn read(data: &[u8], file: &str) -> Result<LegacyVtk> {
                 ))
             }
         }
+        Ok(())
     }
-    Ok(out)
+
+    /// Reads the fields of a `SCALARS`, `VECTORS`, `NORMALS`, `TENSORS` or `FIELD` line into the
+    /// current section; a name seen before in it keeps its first field and is noted.
+    fn fields(&mut self, at: usize, key: &str, w: &[String]) -> Result<()> {
+        let n = match self.section {
+            Section::Points(n) | Section::Cells(n) => n,
+            Section::None => {
+                return Err(self.r.err(
+                    at,
+                    format!("'{}' before POINT_DATA or CELL_DATA", w.join(" ")),
+                ))
+            }
+        };
+        let fields = match key {
+            "SCALARS" => vec![self.r.scalars(at, n, w)?],
+            "VECTORS" | "NORMALS" | "TENSORS" => {
+                vec![self.r.vectors(at, n, w, key == "TENSORS")?]
+            }
+            _ => self.r.field_arrays(at, w)?,
+        };
+        let map = match self.section {
+            Section::Cells(_) => &mut self.out.cell_data,
+            _ => &mut self.out.point_data,
+        };
+        for (nm, f) in fields {
+            match map.entry(nm) {
+                Entry::Occupied(e) => self.out.duplicates.push(e.key().clone()),
+                Entry::Vacant(e) => {
+                    e.insert(f);
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Reads one file from disk.

@@ -35,14 +35,45 @@ const PARALLEL_BYTES: usize = 1 << 20;
 
 /// Reads a GOM from memory. `file` names the input in error messages.
 pub fn read(data: &[u8], file: &str) -> Result<Model> {
-    let at = |line: usize, section: Option<&str>| Location::new(file, line, section);
     let mut lines = Lines::new(data, 1);
+    let (version, line_ending) = version_line(&mut lines, data, file)?;
+    let raw = split_sections(&mut lines, data, file)?;
+    // Geometry header first: it decides how the other sections are read.
+    let header = read_header(&raw, file)?;
+    let mut bodies = Bodies {
+        file,
+        header,
+        coords: Vec::new(),
+        connectivity: Vec::new(),
+        seen_geometry: [false; 5],
+    };
+    let mut sections = Vec::with_capacity(raw.len());
+    for s in &raw {
+        let body = bodies.read(s)?;
+        sections.push(Section {
+            keyword: s.keyword.to_string(),
+            body,
+        });
+    }
+    bodies.check_geometry()?;
+    Ok(Model {
+        version,
+        line_ending,
+        dimension: header.dimension,
+        element_type: header.element_type,
+        coords: bodies.coords,
+        connectivity: bodies.connectivity,
+        sections,
+    })
+}
 
-    // Version line.
-    let (version, line_ending) = loop {
+/// Reads the version line (`### Anura3D_20XX ###`, after any blank lines) and notes whether the
+/// file ends its lines with CR LF.
+fn version_line(lines: &mut Lines, data: &[u8], file: &str) -> Result<(String, LineEnding)> {
+    loop {
         let Some((n, l)) = lines.next() else {
             return Err(Error::format(
-                at(0, None),
+                Location::new(file, 0, None),
                 "empty file: expected a GOM version line such as '### Anura3D_2021 ###'",
             ));
         };
@@ -52,7 +83,7 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
         let t = text::trim(l);
         if !t.starts_with(b"###") {
             return Err(Error::format(
-                at(n, None),
+                Location::new(file, n, None),
                 format!(
                     "expected a GOM version line such as '### Anura3D_2021 ###', found {}",
                     text::show(l)
@@ -65,12 +96,19 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
         } else {
             LineEnding::Lf
         };
-        break (String::from_utf8_lossy(t).into_owned(), ending);
-    };
+        return Ok((String::from_utf8_lossy(t).into_owned(), ending));
+    }
+}
 
-    // First pass: split into sections.
+/// The first pass: splits the rest of the file into its `$$KEYWORD` sections, up to
+/// `$$FINISH`, which must be there.
+fn split_sections<'a>(
+    lines: &mut Lines<'a>,
+    data: &'a [u8],
+    file: &str,
+) -> Result<Vec<RawSection<'a>>> {
+    let at = |line: usize| Location::new(file, line, None);
     let mut raw: Vec<RawSection> = Vec::new();
-    let mut finished = false;
     loop {
         if !raw.is_empty() {
             lines.skip_to_keyword();
@@ -79,18 +117,17 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
         let t = text::trim(l);
         if let Some(kw) = t.strip_prefix(b"$$") {
             let keyword = std::str::from_utf8(kw)
-                .map_err(|_| Error::format(at(n, None), "keyword is not valid UTF-8 text"))?;
+                .map_err(|_| Error::format(at(n), "keyword is not valid UTF-8 text"))?;
             if let Some(prev) = raw.last_mut() {
                 let start = prev.body.as_ptr() as usize - data.as_ptr() as usize;
                 let end = lines.offset() - l.len() - line_terminator_len(data, lines.offset());
                 prev.body = &data[start..end.max(start)];
             }
             if keyword == "FINISH" {
-                finished = true;
-                break;
+                return Ok(raw);
             }
             if keyword.is_empty() {
-                return Err(Error::format(at(n, None), "empty keyword '$$'"));
+                return Err(Error::format(at(n), "empty keyword '$$'"));
             }
             raw.push(RawSection {
                 keyword,
@@ -100,20 +137,33 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
             });
         } else if raw.is_empty() && !text::is_blank(l) {
             return Err(Error::format(
-                at(n, None),
+                at(n),
                 format!("expected a '$$KEYWORD' line, found {}", text::show(l)),
             ));
         }
     }
-    if !finished {
-        let section = raw.last().map(|s| format!("$${}", s.keyword));
-        return Err(Error::format(
-            at(lines.line_number(), section.as_deref()),
-            "file ends without '$$FINISH' (truncated?)",
-        ));
-    }
+    let section = raw.last().map(|s| format!("$${}", s.keyword));
+    Err(Error::format(
+        Location::new(file, lines.line_number(), section.as_deref()),
+        "file ends without '$$FINISH' (truncated?)",
+    ))
+}
 
-    // Geometry header first: it decides how the other sections are read.
+/// What the geometry header says: the dimension, the element type and the counts that the
+/// other sections are checked against.
+#[derive(Clone, Copy)]
+struct Header {
+    dimension: Dimension,
+    element_type: ElementType,
+    /// Elements, from `$$STARTCOUNTERS`.
+    n_el: usize,
+    /// Nodes, from `$$STARTCOUNTERS`.
+    n_nodes: usize,
+}
+
+/// Reads `$$DIMENSION`, `$$ELEMENTTYPE` and `$$STARTCOUNTERS`, which must be there and agree.
+fn read_header(raw: &[RawSection], file: &str) -> Result<Header> {
+    let at = |line: usize, section: Option<&str>| Location::new(file, line, section);
     let find = |k: &str| raw.iter().find(|s| s.keyword == k);
     let need = |k: &str| {
         find(k).ok_or_else(|| {
@@ -148,70 +198,53 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
     }
     let counters = need("STARTCOUNTERS")?;
     let (n_el, n_nodes) = read_counters(counters, file)?;
+    Ok(Header {
+        dimension,
+        element_type,
+        n_el,
+        n_nodes,
+    })
+}
 
-    let mut coords = Vec::new();
-    let mut connectivity = Vec::new();
-    let mut sections = Vec::with_capacity(raw.len());
-    let mut seen_geometry = [false; 5];
-    for s in &raw {
-        let kind = classify(s.keyword, element_type);
-        let sec = Some(format!("$${}", s.keyword));
-        let sec = sec.as_deref();
-        let body = match kind {
-            Kind::Dimension => once(&mut seen_geometry[0], s, file, Body::Dimension)?,
-            Kind::ElementType => once(&mut seen_geometry[1], s, file, Body::ElementType)?,
-            Kind::Counters => once(&mut seen_geometry[2], s, file, Body::Counters)?,
+/// The second pass: reads each section's body by its kind, keeping the node coordinates and
+/// the connectivity out of the section list.
+struct Bodies<'f> {
+    file: &'f str,
+    header: Header,
+    coords: Vec<f64>,
+    connectivity: Vec<u32>,
+    /// Whether `$$DIMENSION`, `$$ELEMENTTYPE`, `$$STARTCOUNTERS`, `$$STARTNODES` and
+    /// `$$STARTELEMCON` were seen.
+    seen_geometry: [bool; 5],
+}
+
+impl Bodies<'_> {
+    /// Reads the body of section `s`.
+    fn read(&mut self, s: &RawSection) -> Result<Body> {
+        let file = self.file;
+        let Header {
+            dimension,
+            element_type,
+            n_el,
+            n_nodes,
+        } = self.header;
+        let seen = &mut self.seen_geometry;
+        Ok(match classify(s.keyword, element_type) {
+            Kind::Dimension => once(&mut seen[0], s, file, Body::Dimension)?,
+            Kind::ElementType => once(&mut seen[1], s, file, Body::ElementType)?,
+            Kind::Counters => once(&mut seen[2], s, file, Body::Counters)?,
             Kind::Nodes => {
-                let b = once(&mut seen_geometry[3], s, file, Body::Nodes)?;
-                coords = read_reals(s, dimension.coords(), n_nodes, file)?;
+                let b = once(&mut seen[3], s, file, Body::Nodes)?;
+                self.coords = read_reals(s, dimension.coords(), n_nodes, file)?;
                 b
             }
             Kind::Connectivity => {
-                let b = once(&mut seen_geometry[4], s, file, Body::Connectivity)?;
-                connectivity = read_ids(s, element_type.nodes(), n_el, n_nodes, file)?;
+                let b = once(&mut seen[4], s, file, Body::Connectivity)?;
+                self.connectivity = read_ids(s, element_type.nodes(), n_el, n_nodes, file)?;
                 b
             }
-            Kind::PerElement => {
-                let rows = read_rows(s, file, None, n_el, n_nodes)?;
-                if rows.len() != n_el {
-                    return Err(Error::invalid(
-                        at(s.line, sec),
-                        format!(
-                            "expected one line per element ({n_el} from $$STARTCOUNTERS), found {}",
-                            rows.len()
-                        ),
-                    ));
-                }
-                // Point ids are derived from the input numbers: a bad map is refused here,
-                // where the file and line are known.
-                if s.keyword == crate::model::INPUT_ELEMENTS {
-                    crate::points::parse_input_elements(&rows).map_err(|(row, m)| {
-                        Error::invalid(at(s.line, sec), format!("element {row}: {m}"))
-                    })?;
-                }
-                Body::PerElement(rows)
-            }
-            Kind::Counted(refs) => {
-                let (count, count_line, rest, rest_line) = count_line(s, file)?;
-                let sub = RawSection {
-                    keyword: s.keyword,
-                    line: s.line,
-                    body: rest,
-                    body_line: rest_line,
-                };
-                let rows = read_rows(&sub, file, Some(refs), n_el, n_nodes)?;
-                if rows.len() != count {
-                    return Err(Error::invalid(
-                        at(count_line, sec),
-                        format!("count line says {count} entries, found {}", rows.len()),
-                    ));
-                }
-                Body::Table {
-                    counted: true,
-                    refs,
-                    rows,
-                }
-            }
+            Kind::PerElement => self.per_element(s)?,
+            Kind::Counted(refs) => self.counted(s, refs)?,
             Kind::Uncounted(refs) => Body::Table {
                 counted: false,
                 refs,
@@ -219,32 +252,73 @@ pub fn read(data: &[u8], file: &str) -> Result<Model> {
             },
             Kind::Text => Body::Text(text_lines(s.body)),
             Kind::Opaque => Body::Opaque(text_lines(s.body)),
-        };
-        sections.push(Section {
-            keyword: s.keyword.to_string(),
-            body,
-        });
+        })
     }
-    if !seen_geometry[3] || !seen_geometry[4] {
-        let k = if seen_geometry[3] {
-            "STARTELEMCON"
-        } else {
-            "STARTNODES"
-        };
-        return Err(Error::format(
-            at(0, None),
-            format!("required section '$${k}' is missing"),
-        ));
+
+    /// Reads a section of one line per element.
+    fn per_element(&self, s: &RawSection) -> Result<Body> {
+        let Header { n_el, n_nodes, .. } = self.header;
+        let sec = format!("$${}", s.keyword);
+        let at = |line: usize| Location::new(self.file, line, Some(&sec));
+        let rows = read_rows(s, self.file, None, n_el, n_nodes)?;
+        if rows.len() != n_el {
+            return Err(Error::invalid(
+                at(s.line),
+                format!(
+                    "expected one line per element ({n_el} from $$STARTCOUNTERS), found {}",
+                    rows.len()
+                ),
+            ));
+        }
+        // Point ids are derived from the input numbers: a bad map is refused here,
+        // where the file and line are known.
+        if s.keyword == crate::model::INPUT_ELEMENTS {
+            crate::points::parse_input_elements(&rows)
+                .map_err(|(row, m)| Error::invalid(at(s.line), format!("element {row}: {m}")))?;
+        }
+        Ok(Body::PerElement(rows))
     }
-    Ok(Model {
-        version,
-        line_ending,
-        dimension,
-        element_type,
-        coords,
-        connectivity,
-        sections,
-    })
+
+    /// Reads a section whose rows follow a line with their count.
+    fn counted(&self, s: &RawSection, refs: Refs) -> Result<Body> {
+        let Header { n_el, n_nodes, .. } = self.header;
+        let (count, count_line, rest, rest_line) = count_line(s, self.file)?;
+        let sub = RawSection {
+            keyword: s.keyword,
+            line: s.line,
+            body: rest,
+            body_line: rest_line,
+        };
+        let rows = read_rows(&sub, self.file, Some(refs), n_el, n_nodes)?;
+        if rows.len() != count {
+            return Err(Error::invalid(
+                Location::new(self.file, count_line, Some(&format!("$${}", s.keyword))),
+                format!("count line says {count} entries, found {}", rows.len()),
+            ));
+        }
+        Ok(Body::Table {
+            counted: true,
+            refs,
+            rows,
+        })
+    }
+
+    /// Checks that the file had its nodes and its connectivity.
+    fn check_geometry(&self) -> Result<()> {
+        let seen = &self.seen_geometry;
+        if !seen[3] || !seen[4] {
+            let k = if seen[3] {
+                "STARTELEMCON"
+            } else {
+                "STARTNODES"
+            };
+            return Err(Error::format(
+                Location::new(self.file, 0, None),
+                format!("required section '$${k}' is missing"),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// Length of the terminator of the line that ends right before `offset`.
@@ -258,6 +332,7 @@ fn line_terminator_len(data: &[u8], offset: usize) -> usize {
     }
 }
 
+/// `body`, noting that section `s` was seen; a geometry section that appears twice is refused.
 fn once(seen: &mut bool, s: &RawSection, file: &str, body: Body) -> Result<Body> {
     if *seen {
         return Err(Error::format(
@@ -282,6 +357,7 @@ fn single_value(s: &RawSection, file: &str) -> Result<String> {
         })
 }
 
+/// Reads `$$STARTCOUNTERS`: the element and node counts.
 fn read_counters(s: &RawSection, file: &str) -> Result<(usize, usize)> {
     let at = |n| Location::new(file, n, Some("$$STARTCOUNTERS"));
     let (n, l) = Lines::new(s.body, s.body_line)
@@ -331,6 +407,7 @@ fn count_line<'a>(s: &RawSection<'a>, file: &str) -> Result<(usize, usize, &'a [
     ))
 }
 
+/// The non-blank lines of `body`, without trailing blanks.
 fn text_lines(body: &[u8]) -> Vec<String> {
     Lines::new(body, 1)
         .filter(|(_, l)| !text::is_blank(l))
@@ -527,6 +604,7 @@ fn read_rows(
     }
 }
 
+/// Checks that the columns of `row` that `refs` names hold node or element ids in range.
 fn check_ids(row: &[Token], refs: Refs, n_el: usize, n_nodes: usize) -> Result<(), String> {
     let cols = refs.columns();
     let need = cols.iter().map(|c| c.0 + 1).max().unwrap_or(0);
@@ -557,6 +635,7 @@ fn check_ids(row: &[Token], refs: Refs, n_el: usize, n_nodes: usize) -> Result<(
     Ok(())
 }
 
+/// `t` as it reads in a message.
 fn token_text(t: &Token) -> String {
     let mut v = Vec::new();
     t.push_to(&mut v);
@@ -586,6 +665,7 @@ struct Sink<'w> {
 }
 
 impl Sink<'_> {
+    /// Buffers `bytes`, writing the buffer out once it is large.
     fn put(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.buf.extend_from_slice(bytes);
         if self.buf.len() >= FLUSH_BYTES {
@@ -594,6 +674,7 @@ impl Sink<'_> {
         Ok(())
     }
 
+    /// Writes the buffer out.
     fn flush(&mut self) -> io::Result<()> {
         self.w.write_all(&self.buf)?;
         self.buf.clear();
@@ -716,6 +797,7 @@ pub fn write_to(model: &Model, w: &mut dyn Write) -> io::Result<()> {
     out.flush()
 }
 
+/// Writes the rows of a table, values separated by one blank, each row ended by `eol`.
 fn write_rows(out: &mut Sink, rows: &Table, eol: &[u8]) -> io::Result<()> {
     out.rows(rows.len(), |r, b| {
         for i in r {

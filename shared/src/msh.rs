@@ -111,6 +111,7 @@ impl MshMesh {
     }
 }
 
+/// A line cursor over a `.msh` file that knows the section it is in, for error locations.
 struct Reader<'a> {
     lines: Lines<'a>,
     file: &'a str,
@@ -118,6 +119,7 @@ struct Reader<'a> {
 }
 
 impl<'a> Reader<'a> {
+    /// Location of line `line` in the current section.
     fn at(&self, line: usize) -> Location {
         Location::new(self.file, line, Some(self.section))
     }
@@ -135,6 +137,7 @@ impl<'a> Reader<'a> {
         ))
     }
 
+    /// The next non-blank line as `N` integers (`what` names them in messages), with its number.
     fn numbers<const N: usize>(&mut self, what: &str) -> Result<(usize, [i64; N])> {
         let (n, l) = self.line(what)?;
         let mut out = [0i64; N];
@@ -162,6 +165,7 @@ impl<'a> Reader<'a> {
             .map_err(|_| Error::format(self.at(n), format!("{what} is {v}, must not be negative")))
     }
 
+    /// Reads the end marker `end` of the current section.
     fn expect_end(&mut self, end: &str) -> Result<()> {
         let (n, l) = self.line(end)?;
         if text::trim(l) != end.as_bytes() {
@@ -173,6 +177,7 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
+    /// Skips lines up to and including the end marker `end`.
     fn skip_to(&mut self, end: &str) -> Result<()> {
         loop {
             let (_, l) = self.line(end)?;
@@ -181,6 +186,87 @@ impl<'a> Reader<'a> {
             }
         }
     }
+
+    /// Reads the `$MeshFormat` section: the format version and whether it is 4.1 (else 2.x).
+    /// Binary files and other versions are refused.
+    fn mesh_format(&mut self) -> Result<(String, bool)> {
+        let (n, l) = self.line("'$MeshFormat'")?;
+        if text::trim(l) != b"$MeshFormat" {
+            return Err(Error::format(
+                Location::new(self.file, n, None),
+                format!(
+                    "expected '$MeshFormat' (a Gmsh .msh file), found {}",
+                    text::show(l)
+                ),
+            ));
+        }
+        let (n, l) = self.line("the format line")?;
+        let toks: Vec<&[u8]> = Tokens::new(l).collect();
+        let version =
+            String::from_utf8_lossy(toks.first().copied().unwrap_or_default()).into_owned();
+        let binary = toks.get(1).and_then(|t| text::parse_int(t));
+        if binary != Some(0) {
+            if binary == Some(1) {
+                return Err(Error::Unsupported {
+                    at: self.at(n),
+                    message: "binary .msh; save it as ASCII (gmsh -save_all -format msh41 with Mesh.Binary=0)".into(),
+                });
+            }
+            return Err(Error::format(
+                self.at(n),
+                format!("expected 'version 0 8', found {}", text::show(l)),
+            ));
+        }
+        let v4 = match version.as_str() {
+            "2.2" | "2" | "2.0" | "2.1" => false,
+            "4.1" => true,
+            other => {
+                return Err(Error::Unsupported {
+                    at: self.at(n),
+                    message: format!("MSH format {other} (supported: 2.2 and 4.1)"),
+                })
+            }
+        };
+        self.expect_end("$EndMeshFormat")?;
+        Ok((version, v4))
+    }
+
+    /// Skips a section not needed here (`$Periodic`, `$NodeData`, ...) whose start marker is
+    /// `t`, up to its end marker.
+    fn skip_section(&mut self, t: &[u8]) -> Result<()> {
+        let name = String::from_utf8_lossy(&t[1..]).into_owned();
+        self.section = "(skipped section)";
+        self.skip_to(&format!("$End{name}"))
+    }
+}
+
+/// One element as read from `$Elements`, its nodes still named by tag.
+struct RawElement {
+    gmsh_type: i32,
+    physical: i32,
+    tags: Vec<u64>,
+    /// Line of the element, for errors found when its tags are resolved.
+    line: usize,
+}
+
+/// The sections after `$MeshFormat`, read one by one into a mesh whose elements still name their
+/// nodes by tag until [`Sections::into_mesh`].
+struct Sections<'a> {
+    r: Reader<'a>,
+    /// The whole input, to weigh counts in headers against the bytes left.
+    data: &'a [u8],
+    /// Format 4.1 (else 2.x).
+    v4: bool,
+    mesh: MshMesh,
+    /// Index of each node tag, where the tags are not 1..=N in order.
+    tag_index: BTreeMap<u64, u32>,
+    /// `Some(N)` where the tags are 1..=N in order: index = tag - 1.
+    dense_tags: Option<u64>,
+    /// Physical tag of each (dim, entity) in 4.1 files.
+    entity_physical: BTreeMap<(usize, i32), i32>,
+    raw_elements: Vec<RawElement>,
+    have_nodes: bool,
+    have_elements: bool,
 }
 
 /// Reads a `.msh` file from memory. `file` names the input in error messages.
@@ -190,366 +276,413 @@ pub fn read(data: &[u8], file: &str) -> Result<MshMesh> {
         file,
         section: "$MeshFormat",
     };
-    let (n, l) = r.line("'$MeshFormat'")?;
-    if text::trim(l) != b"$MeshFormat" {
-        return Err(Error::format(
-            Location::new(file, n, None),
-            format!(
-                "expected '$MeshFormat' (a Gmsh .msh file), found {}",
-                text::show(l)
-            ),
-        ));
-    }
-    let (n, l) = r.line("the format line")?;
-    let toks: Vec<&[u8]> = Tokens::new(l).collect();
-    let version = String::from_utf8_lossy(toks.first().copied().unwrap_or_default()).into_owned();
-    let binary = toks.get(1).and_then(|t| text::parse_int(t));
-    if binary != Some(0) {
-        if binary == Some(1) {
-            return Err(Error::Unsupported {
-                at: r.at(n),
-                message: "binary .msh; save it as ASCII (gmsh -save_all -format msh41 with Mesh.Binary=0)".into(),
-            });
-        }
-        return Err(Error::format(
-            r.at(n),
-            format!("expected 'version 0 8', found {}", text::show(l)),
-        ));
-    }
-    let v4 = match version.as_str() {
-        "2.2" | "2" | "2.0" | "2.1" => false,
-        "4.1" => true,
-        other => {
-            return Err(Error::Unsupported {
-                at: r.at(n),
-                message: format!("MSH format {other} (supported: 2.2 and 4.1)"),
-            })
-        }
-    };
-    r.expect_end("$EndMeshFormat")?;
-
-    let mut mesh = MshMesh {
-        version,
-        ..Default::default()
-    };
-    let mut tag_index: BTreeMap<u64, u32> = BTreeMap::new();
-    let mut dense_tags: Option<u64> = None; // tags 1..=N in order: index = tag - 1
-                                            // Physical tags per (dim, entity) in 4.1 files.
-    let mut entity_physical: BTreeMap<(usize, i32), i32> = BTreeMap::new();
-    let mut raw_elements: Vec<(i32, i32, Vec<u64>, usize)> = Vec::new(); // (type, physical, node tags, line)
-    let mut have_nodes = false;
-    let mut have_elements = false;
-
-    while let Some((n, l)) = r.lines.next() {
-        let t = text::trim(l);
-        if t.is_empty() {
-            continue;
-        }
-        match t {
-            b"$PhysicalNames" => {
-                r.section = "$PhysicalNames";
-                let (n0, [count]) = r.numbers::<1>("the number of names")?;
-                let count = r.count(n0, count, "the number of names")?;
-                for _ in 0..count {
-                    let (n, l) = r.line("a physical name")?;
-                    let toks: Vec<&[u8]> = Tokens::new(l).collect();
-                    let ok = toks.len() >= 3;
-                    let dim = toks.first().and_then(|t| text::parse_int(t));
-                    let tag = toks.get(1).and_then(|t| text::parse_int(t));
-                    match (ok, dim, tag) {
-                        (true, Some(d), Some(tag)) => {
-                            let name = String::from_utf8_lossy(toks[2])
-                                .trim_matches('"')
-                                .to_string();
-                            mesh.physical_names.push(PhysicalName {
-                                dim: d as usize,
-                                tag: tag as i32,
-                                name,
-                            });
-                        }
-                        _ => {
-                            return Err(Error::format(
-                                r.at(n),
-                                format!("expected 'dim tag \"name\"', found {}", text::show(l)),
-                            ))
-                        }
-                    }
-                }
-                r.expect_end("$EndPhysicalNames")?;
-            }
-            b"$Entities" if v4 => {
-                r.section = "$Entities";
-                let (n0, [np, nc, ns, nv]) =
-                    r.numbers::<4>("'numPoints numCurves numSurfaces numVolumes'")?;
-                let what = "an entity count";
-                let [np, nc, ns, nv] = [np, nc, ns, nv].map(|v| r.count(n0, v, what));
-                let (np, nc, ns, nv) = (np?, nc?, ns?, nv?);
-                for (dim, count) in [(0usize, np), (1, nc), (2, ns), (3, nv)] {
-                    for _ in 0..count {
-                        let (n, l) = r.line("an entity")?;
-                        let toks: Vec<&[u8]> = Tokens::new(l).collect();
-                        // point: tag x y z nphys phys...; others: tag 6 box values nphys phys...
-                        let k = if dim == 0 { 4 } else { 7 };
-                        let bad = || {
-                            Error::format(
-                                r.at(n),
-                                format!("malformed entity line {}", text::show(l)),
-                            )
-                        };
-                        let tag = toks
-                            .first()
-                            .and_then(|t| text::parse_int(t))
-                            .ok_or_else(bad)?;
-                        let nphys = toks
-                            .get(k)
-                            .and_then(|t| text::parse_int(t))
-                            .ok_or_else(bad)?;
-                        if nphys > 0 {
-                            let p = toks
-                                .get(k + 1)
-                                .and_then(|t| text::parse_int(t))
-                                .ok_or_else(bad)?;
-                            entity_physical.insert((dim, tag as i32), p as i32);
-                        }
-                    }
-                }
-                r.expect_end("$EndEntities")?;
-            }
-            b"$Nodes" => {
-                r.section = "$Nodes";
-                have_nodes = true;
-                if v4 {
-                    let (n0, [blocks, total, _min, _max]) =
-                        r.numbers::<4>("'numEntityBlocks numNodes minNodeTag maxNodeTag'")?;
-                    let blocks = r.count(n0, blocks, "the number of node blocks")?;
-                    let total = r.count(n0, total, "the number of nodes")?;
-                    // A node takes at least 8 bytes ("1\n0 0 0\n"): a header that claims more
-                    // nodes than the rest of the file can hold is refused before anything is
-                    // allocated for them.
-                    let room = data.len().saturating_sub(r.lines.offset()) / 8;
-                    if total > room {
-                        return Err(Error::format(
-                            r.at(n0),
-                            format!(
-                                "the header claims {total} nodes, but the rest of the file can hold at most {room} (truncated?)"
-                            ),
-                        ));
-                    }
-                    mesh.coords.reserve(total * 3);
-                    mesh.node_tags.reserve(total);
-                    for _ in 0..blocks {
-                        let (n, [_d, _e, parametric, count]) =
-                            r.numbers::<4>("'entityDim entityTag parametric numNodesInBlock'")?;
-                        if parametric != 0 {
-                            return Err(Error::Unsupported {
-                                at: r.at(n),
-                                message: "parametric node coordinates".into(),
-                            });
-                        }
-                        let count = r.count(n, count, "numNodesInBlock")?;
-                        let start = mesh.node_tags.len();
-                        for _ in 0..count {
-                            let (n, [tag]) = r.numbers::<1>("a node tag")?;
-                            if tag <= 0 {
-                                return Err(Error::format(
-                                    r.at(n),
-                                    format!("node tag {tag} must be positive"),
-                                ));
-                            }
-                            mesh.node_tags.push(tag as u64);
-                        }
-                        for _ in 0..count {
-                            let (n, l) = r.line("node coordinates")?;
-                            push_xyz(&mut mesh.coords, l, &r.at(n))?;
-                        }
-                        debug_assert_eq!(mesh.node_tags.len() - start, count);
-                    }
-                    if mesh.node_tags.len() != total {
-                        return Err(Error::invalid(
-                            r.at(n0),
-                            format!(
-                                "the header says {total} nodes, its blocks hold {}",
-                                mesh.node_tags.len()
-                            ),
-                        ));
-                    }
-                } else {
-                    let (n0, [count]) = r.numbers::<1>("the number of nodes")?;
-                    let count = r.count(n0, count, "the number of nodes")?;
-                    for _ in 0..count {
-                        let (n, l) = r.line("a node line 'tag x y z'")?;
-                        let mut t = Tokens::new(l);
-                        let tag = t
-                            .next()
-                            .and_then(text::parse_u32)
-                            .filter(|&v| v > 0)
-                            .ok_or_else(|| {
-                                Error::format(
-                                    r.at(n),
-                                    format!("expected 'tag x y z', found {}", text::show(l)),
-                                )
-                            })?;
-                        mesh.node_tags.push(tag as u64);
-                        let xyz: Vec<&[u8]> = t.collect();
-                        push_xyz_tokens(&mut mesh.coords, &xyz, l, &r.at(n))?;
-                    }
-                }
-                r.expect_end("$EndNodes")?;
-                let n = mesh.node_tags.len();
-                if mesh
-                    .node_tags
-                    .iter()
-                    .enumerate()
-                    .all(|(i, &t)| t == i as u64 + 1)
-                {
-                    dense_tags = Some(n as u64);
-                } else {
-                    for (i, &t) in mesh.node_tags.iter().enumerate() {
-                        if tag_index.insert(t, i as u32).is_some() {
-                            return Err(Error::invalid(
-                                r.at(0),
-                                format!("node tag {t} appears twice"),
-                            ));
-                        }
-                    }
-                }
-            }
-            b"$Elements" => {
-                r.section = "$Elements";
-                have_elements = true;
-                if v4 {
-                    let (n0, [blocks, _total, _min, _max]) = r.numbers::<4>(
-                        "'numEntityBlocks numElements minElementTag maxElementTag'",
-                    )?;
-                    let blocks = r.count(n0, blocks, "the number of element blocks")?;
-                    for _ in 0..blocks {
-                        let (n, [edim, etag, etype, count]) =
-                            r.numbers::<4>("'entityDim entityTag elementType numElementsInBlock'")?;
-                        let count = r.count(n, count, "numElementsInBlock")?;
-                        let per =
-                            nodes_of_type(etype as i32).ok_or_else(|| Error::Unsupported {
-                                at: r.at(n),
-                                message: format!("Gmsh element type {etype}"),
-                            })?;
-                        let phys = entity_physical
-                            .get(&(edim as usize, etag as i32))
-                            .copied()
-                            .unwrap_or(0);
-                        for _ in 0..count {
-                            let (n, l) = r.line("an element line")?;
-                            let toks: Vec<&[u8]> = Tokens::new(l).collect();
-                            if toks.len() != per + 1 {
-                                return Err(Error::format(
-                                    r.at(n),
-                                    format!("expected an element tag and {per} node tags, found {} values", toks.len()),
-                                ));
-                            }
-                            let nodes = parse_tags(&toks[1..], l, &r.at(n))?;
-                            raw_elements.push((etype as i32, phys, nodes, n));
-                        }
-                    }
-                } else {
-                    let (n0, [count]) = r.numbers::<1>("the number of elements")?;
-                    let count = r.count(n0, count, "the number of elements")?;
-                    for _ in 0..count {
-                        let (n, l) = r.line("an element line")?;
-                        let toks: Vec<&[u8]> = Tokens::new(l).collect();
-                        let bad = |m: String| Error::format(r.at(n), m);
-                        if toks.len() < 3 {
-                            return Err(bad(format!(
-                                "expected 'id type ntags tags... nodes...', found {}",
-                                text::show(l)
-                            )));
-                        }
-                        let etype = text::parse_int(toks[1]).ok_or_else(|| {
-                            bad(format!(
-                                "expected an element type, found {}",
-                                text::show(toks[1])
-                            ))
-                        })? as i32;
-                        let ntags = text::parse_u32(toks[2]).ok_or_else(|| {
-                            bad(format!(
-                                "expected a tag count, found {}",
-                                text::show(toks[2])
-                            ))
-                        })? as usize;
-                        let per = nodes_of_type(etype).ok_or_else(|| Error::Unsupported {
-                            at: r.at(n),
-                            message: format!("Gmsh element type {etype}"),
-                        })?;
-                        if toks.len() != 3 + ntags + per {
-                            return Err(bad(format!(
-                                "expected {} values for an element of type {etype} with {ntags} tags, found {}",
-                                3 + ntags + per,
-                                toks.len()
-                            )));
-                        }
-                        let phys = if ntags > 0 {
-                            text::parse_int(toks[3]).unwrap_or(0) as i32
-                        } else {
-                            0
-                        };
-                        let nodes = parse_tags(&toks[3 + ntags..], l, &r.at(n))?;
-                        raw_elements.push((etype, phys, nodes, n));
-                    }
-                }
-                r.expect_end("$EndElements")?;
-            }
-            _ if t.starts_with(b"$") && !t.starts_with(b"$End") => {
-                // Sections not needed here ($Periodic, $NodeData, ...): skip to their end marker.
-                let name = String::from_utf8_lossy(&t[1..]).into_owned();
-                r.section = "(skipped section)";
-                r.skip_to(&format!("$End{name}"))?;
-            }
-            _ => {
-                return Err(Error::format(
-                    Location::new(file, n, None),
-                    format!(
-                        "expected a section such as '$Nodes', found {}",
-                        text::show(l)
-                    ),
-                ))
-            }
-        }
-    }
-    if !have_nodes || !have_elements {
-        return Err(Error::format(
-            Location::new(file, 0, None),
-            if have_nodes {
-                "no $Elements section"
-            } else {
-                "no $Nodes section"
-            },
-        ));
-    }
-    // Group by type, resolving node tags.
-    let mut sets: BTreeMap<i32, ElementSet> = BTreeMap::new();
-    for (etype, phys, tags, line) in raw_elements {
-        let set = sets.entry(etype).or_insert_with(|| ElementSet {
-            gmsh_type: etype,
-            nodes_per: tags.len(),
+    let (version, v4) = r.mesh_format()?;
+    let mut s = Sections {
+        r,
+        data,
+        v4,
+        mesh: MshMesh {
+            version,
             ..Default::default()
-        });
-        for t in tags {
-            let idx = match dense_tags {
-                Some(n) if t >= 1 && t <= n => Some((t - 1) as u32),
-                Some(_) => None,
-                None => tag_index.get(&t).copied(),
-            };
-            let idx = idx.ok_or_else(|| {
-                Error::invalid(
-                    Location::new(file, line, Some("$Elements")),
-                    format!("node tag {t} is not in $Nodes"),
-                )
-            })?;
-            set.nodes.push(idx);
+        },
+        tag_index: BTreeMap::new(),
+        dense_tags: None,
+        entity_physical: BTreeMap::new(),
+        raw_elements: Vec::new(),
+        have_nodes: false,
+        have_elements: false,
+    };
+    while let Some((n, l)) = s.r.lines.next() {
+        if !text::trim(l).is_empty() {
+            s.section(n, l)?;
         }
-        set.physical.push(phys);
     }
-    mesh.sets = sets.into_values().collect();
-    Ok(mesh)
+    s.into_mesh()
 }
 
+impl Sections<'_> {
+    /// Reads the section that starts at line `n`, `l`.
+    fn section(&mut self, n: usize, l: &[u8]) -> Result<()> {
+        let t = text::trim(l);
+        match t {
+            b"$PhysicalNames" => self.physical_names(),
+            b"$Entities" if self.v4 => self.entities(),
+            b"$Nodes" => self.nodes(),
+            b"$Elements" => self.elements(),
+            _ if t.starts_with(b"$") && !t.starts_with(b"$End") => self.r.skip_section(t),
+            _ => Err(Error::format(
+                Location::new(self.r.file, n, None),
+                format!(
+                    "expected a section such as '$Nodes', found {}",
+                    text::show(l)
+                ),
+            )),
+        }
+    }
+
+    /// Reads `$PhysicalNames`: lines `dim tag "name"`.
+    fn physical_names(&mut self) -> Result<()> {
+        let r = &mut self.r;
+        r.section = "$PhysicalNames";
+        let (n0, [count]) = r.numbers::<1>("the number of names")?;
+        let count = r.count(n0, count, "the number of names")?;
+        for _ in 0..count {
+            let (n, l) = r.line("a physical name")?;
+            let toks: Vec<&[u8]> = Tokens::new(l).collect();
+            let ok = toks.len() >= 3;
+            let dim = toks.first().and_then(|t| text::parse_int(t));
+            let tag = toks.get(1).and_then(|t| text::parse_int(t));
+            match (ok, dim, tag) {
+                (true, Some(d), Some(tag)) => {
+                    let name = String::from_utf8_lossy(toks[2])
+                        .trim_matches('"')
+                        .to_string();
+                    self.mesh.physical_names.push(PhysicalName {
+                        dim: d as usize,
+                        tag: tag as i32,
+                        name,
+                    });
+                }
+                _ => {
+                    return Err(Error::format(
+                        r.at(n),
+                        format!("expected 'dim tag \"name\"', found {}", text::show(l)),
+                    ))
+                }
+            }
+        }
+        r.expect_end("$EndPhysicalNames")
+    }
+
+    /// Reads `$Entities` (4.1): the first physical tag of each point, curve, surface and volume,
+    /// which the element blocks of that entity take.
+    fn entities(&mut self) -> Result<()> {
+        let r = &mut self.r;
+        r.section = "$Entities";
+        let (n0, [np, nc, ns, nv]) =
+            r.numbers::<4>("'numPoints numCurves numSurfaces numVolumes'")?;
+        let what = "an entity count";
+        let [np, nc, ns, nv] = [np, nc, ns, nv].map(|v| r.count(n0, v, what));
+        let (np, nc, ns, nv) = (np?, nc?, ns?, nv?);
+        for (dim, count) in [(0usize, np), (1, nc), (2, ns), (3, nv)] {
+            for _ in 0..count {
+                let (n, l) = r.line("an entity")?;
+                let toks: Vec<&[u8]> = Tokens::new(l).collect();
+                // point: tag x y z nphys phys...; others: tag 6 box values nphys phys...
+                let k = if dim == 0 { 4 } else { 7 };
+                let bad =
+                    || Error::format(r.at(n), format!("malformed entity line {}", text::show(l)));
+                let tag = toks
+                    .first()
+                    .and_then(|t| text::parse_int(t))
+                    .ok_or_else(bad)?;
+                let nphys = toks
+                    .get(k)
+                    .and_then(|t| text::parse_int(t))
+                    .ok_or_else(bad)?;
+                if nphys > 0 {
+                    let p = toks
+                        .get(k + 1)
+                        .and_then(|t| text::parse_int(t))
+                        .ok_or_else(bad)?;
+                    self.entity_physical.insert((dim, tag as i32), p as i32);
+                }
+            }
+        }
+        r.expect_end("$EndEntities")
+    }
+
+    /// Reads `$Nodes` in either format, then indexes the node tags.
+    fn nodes(&mut self) -> Result<()> {
+        self.r.section = "$Nodes";
+        self.have_nodes = true;
+        if self.v4 {
+            self.nodes_v4()?;
+        } else {
+            self.nodes_v2()?;
+        }
+        self.r.expect_end("$EndNodes")?;
+        self.index_node_tags()
+    }
+
+    /// Reads the body of a 4.1 `$Nodes`: a header, then blocks of tags followed by coordinates.
+    fn nodes_v4(&mut self) -> Result<()> {
+        let (n0, [blocks, total, _min, _max]) = self
+            .r
+            .numbers::<4>("'numEntityBlocks numNodes minNodeTag maxNodeTag'")?;
+        let blocks = self.r.count(n0, blocks, "the number of node blocks")?;
+        let total = self.r.count(n0, total, "the number of nodes")?;
+        // A node takes at least 8 bytes ("1\n0 0 0\n"): a header that claims more
+        // nodes than the rest of the file can hold is refused before anything is
+        // allocated for them.
+        let room = self.data.len().saturating_sub(self.r.lines.offset()) / 8;
+        if total > room {
+            return Err(Error::format(
+                self.r.at(n0),
+                format!(
+                    "the header claims {total} nodes, but the rest of the file can hold at most {room} (truncated?)"
+                ),
+            ));
+        }
+        self.mesh.coords.reserve(total * 3);
+        self.mesh.node_tags.reserve(total);
+        for _ in 0..blocks {
+            self.node_block_v4()?;
+        }
+        if self.mesh.node_tags.len() != total {
+            return Err(Error::invalid(
+                self.r.at(n0),
+                format!(
+                    "the header says {total} nodes, its blocks hold {}",
+                    self.mesh.node_tags.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Reads one 4.1 node block: its header, its node tags, then their coordinates.
+    fn node_block_v4(&mut self) -> Result<()> {
+        let r = &mut self.r;
+        let mesh = &mut self.mesh;
+        let (n, [_d, _e, parametric, count]) =
+            r.numbers::<4>("'entityDim entityTag parametric numNodesInBlock'")?;
+        if parametric != 0 {
+            return Err(Error::Unsupported {
+                at: r.at(n),
+                message: "parametric node coordinates".into(),
+            });
+        }
+        let count = r.count(n, count, "numNodesInBlock")?;
+        let start = mesh.node_tags.len();
+        for _ in 0..count {
+            let (n, [tag]) = r.numbers::<1>("a node tag")?;
+            if tag <= 0 {
+                return Err(Error::format(
+                    r.at(n),
+                    format!("node tag {tag} must be positive"),
+                ));
+            }
+            mesh.node_tags.push(tag as u64);
+        }
+        for _ in 0..count {
+            let (n, l) = r.line("node coordinates")?;
+            push_xyz(&mut mesh.coords, l, &r.at(n))?;
+        }
+        debug_assert_eq!(mesh.node_tags.len() - start, count);
+        Ok(())
+    }
+
+    /// Reads the body of a 2.2 `$Nodes`: a count, then lines `tag x y z`.
+    fn nodes_v2(&mut self) -> Result<()> {
+        let r = &mut self.r;
+        let mesh = &mut self.mesh;
+        let (n0, [count]) = r.numbers::<1>("the number of nodes")?;
+        let count = r.count(n0, count, "the number of nodes")?;
+        for _ in 0..count {
+            let (n, l) = r.line("a node line 'tag x y z'")?;
+            let mut t = Tokens::new(l);
+            let tag = t
+                .next()
+                .and_then(text::parse_u32)
+                .filter(|&v| v > 0)
+                .ok_or_else(|| {
+                    Error::format(
+                        r.at(n),
+                        format!("expected 'tag x y z', found {}", text::show(l)),
+                    )
+                })?;
+            mesh.node_tags.push(tag as u64);
+            let xyz: Vec<&[u8]> = t.collect();
+            push_xyz_tokens(&mut mesh.coords, &xyz, l, &r.at(n))?;
+        }
+        Ok(())
+    }
+
+    /// Notes how node tags map to indices: by arithmetic where they are 1..=N in order, else
+    /// through a table, refusing a tag that appears twice.
+    fn index_node_tags(&mut self) -> Result<()> {
+        let n = self.mesh.node_tags.len();
+        if self
+            .mesh
+            .node_tags
+            .iter()
+            .enumerate()
+            .all(|(i, &t)| t == i as u64 + 1)
+        {
+            self.dense_tags = Some(n as u64);
+        } else {
+            for (i, &t) in self.mesh.node_tags.iter().enumerate() {
+                if self.tag_index.insert(t, i as u32).is_some() {
+                    return Err(Error::invalid(
+                        self.r.at(0),
+                        format!("node tag {t} appears twice"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads `$Elements` in either format.
+    fn elements(&mut self) -> Result<()> {
+        self.r.section = "$Elements";
+        self.have_elements = true;
+        if self.v4 {
+            let (n0, [blocks, _total, _min, _max]) = self
+                .r
+                .numbers::<4>("'numEntityBlocks numElements minElementTag maxElementTag'")?;
+            let blocks = self.r.count(n0, blocks, "the number of element blocks")?;
+            for _ in 0..blocks {
+                self.element_block_v4()?;
+            }
+        } else {
+            let (n0, [count]) = self.r.numbers::<1>("the number of elements")?;
+            let count = self.r.count(n0, count, "the number of elements")?;
+            for _ in 0..count {
+                let (n, l) = self.r.line("an element line")?;
+                let element = self.element_v2(n, l)?;
+                self.raw_elements.push(element);
+            }
+        }
+        self.r.expect_end("$EndElements")
+    }
+
+    /// Reads one 4.1 element block: a header naming the entity and element type, then lines
+    /// `tag node...`. The elements take the entity's physical tag.
+    fn element_block_v4(&mut self) -> Result<()> {
+        let r = &mut self.r;
+        let (n, [edim, etag, etype, count]) =
+            r.numbers::<4>("'entityDim entityTag elementType numElementsInBlock'")?;
+        let count = r.count(n, count, "numElementsInBlock")?;
+        let per = nodes_of_type(etype as i32).ok_or_else(|| Error::Unsupported {
+            at: r.at(n),
+            message: format!("Gmsh element type {etype}"),
+        })?;
+        let phys = self
+            .entity_physical
+            .get(&(edim as usize, etag as i32))
+            .copied()
+            .unwrap_or(0);
+        for _ in 0..count {
+            let (n, l) = r.line("an element line")?;
+            let toks: Vec<&[u8]> = Tokens::new(l).collect();
+            if toks.len() != per + 1 {
+                return Err(Error::format(
+                    r.at(n),
+                    format!(
+                        "expected an element tag and {per} node tags, found {} values",
+                        toks.len()
+                    ),
+                ));
+            }
+            let tags = parse_tags(&toks[1..], l, &r.at(n))?;
+            self.raw_elements.push(RawElement {
+                gmsh_type: etype as i32,
+                physical: phys,
+                tags,
+                line: n,
+            });
+        }
+        Ok(())
+    }
+
+    /// Reads one 2.2 element line `id type ntags tags... nodes...` at line `n`; its physical tag
+    /// is the first of its tags.
+    fn element_v2(&self, n: usize, l: &[u8]) -> Result<RawElement> {
+        let r = &self.r;
+        let toks: Vec<&[u8]> = Tokens::new(l).collect();
+        let bad = |m: String| Error::format(r.at(n), m);
+        if toks.len() < 3 {
+            return Err(bad(format!(
+                "expected 'id type ntags tags... nodes...', found {}",
+                text::show(l)
+            )));
+        }
+        let etype = text::parse_int(toks[1]).ok_or_else(|| {
+            bad(format!(
+                "expected an element type, found {}",
+                text::show(toks[1])
+            ))
+        })? as i32;
+        let ntags = text::parse_u32(toks[2]).ok_or_else(|| {
+            bad(format!(
+                "expected a tag count, found {}",
+                text::show(toks[2])
+            ))
+        })? as usize;
+        let per = nodes_of_type(etype).ok_or_else(|| Error::Unsupported {
+            at: r.at(n),
+            message: format!("Gmsh element type {etype}"),
+        })?;
+        if toks.len() != 3 + ntags + per {
+            return Err(bad(format!(
+                "expected {} values for an element of type {etype} with {ntags} tags, found {}",
+                3 + ntags + per,
+                toks.len()
+            )));
+        }
+        let physical = if ntags > 0 {
+            text::parse_int(toks[3]).unwrap_or(0) as i32
+        } else {
+            0
+        };
+        let tags = parse_tags(&toks[3 + ntags..], l, &r.at(n))?;
+        Ok(RawElement {
+            gmsh_type: etype,
+            physical,
+            tags,
+            line: n,
+        })
+    }
+
+    /// Checks that the file had nodes and elements, then groups the elements by type with their
+    /// node tags resolved to indices.
+    fn into_mesh(mut self) -> Result<MshMesh> {
+        let file = self.r.file;
+        if !self.have_nodes || !self.have_elements {
+            return Err(Error::format(
+                Location::new(file, 0, None),
+                if self.have_nodes {
+                    "no $Elements section"
+                } else {
+                    "no $Nodes section"
+                },
+            ));
+        }
+        let mut sets: BTreeMap<i32, ElementSet> = BTreeMap::new();
+        for e in std::mem::take(&mut self.raw_elements) {
+            let set = sets.entry(e.gmsh_type).or_insert_with(|| ElementSet {
+                gmsh_type: e.gmsh_type,
+                nodes_per: e.tags.len(),
+                ..Default::default()
+            });
+            for t in e.tags {
+                let idx = self.node_index(t).ok_or_else(|| {
+                    Error::invalid(
+                        Location::new(file, e.line, Some("$Elements")),
+                        format!("node tag {t} is not in $Nodes"),
+                    )
+                })?;
+                set.nodes.push(idx);
+            }
+            set.physical.push(e.physical);
+        }
+        self.mesh.sets = sets.into_values().collect();
+        Ok(self.mesh)
+    }
+
+    /// The index of the node tagged `t`, if there is one.
+    fn node_index(&self, t: u64) -> Option<u32> {
+        match self.dense_tags {
+            Some(n) if t >= 1 && t <= n => Some((t - 1) as u32),
+            Some(_) => None,
+            None => self.tag_index.get(&t).copied(),
+        }
+    }
+}
+
+/// Node tags (positive integers) of an element line `l`.
 fn parse_tags(toks: &[&[u8]], l: &[u8], at: &Location) -> Result<Vec<u64>> {
     toks.iter()
         .map(|t| {
@@ -566,11 +699,13 @@ fn parse_tags(toks: &[&[u8]], l: &[u8], at: &Location) -> Result<Vec<u64>> {
         .collect()
 }
 
+/// Appends the three coordinates on line `l` to `coords`.
 fn push_xyz(coords: &mut Vec<f64>, l: &[u8], at: &Location) -> Result<()> {
     let toks: Vec<&[u8]> = Tokens::new(l).collect();
     push_xyz_tokens(coords, &toks, l, at)
 }
 
+/// Appends three coordinates, the tokens `toks` of line `l`, to `coords`.
 fn push_xyz_tokens(coords: &mut Vec<f64>, toks: &[&[u8]], l: &[u8], at: &Location) -> Result<()> {
     if toks.len() != 3 {
         return Err(Error::format(
@@ -622,32 +757,63 @@ pub fn to_model(mesh: &MshMesh, file: &str) -> Result<Model> {
 /// model, or `u32::MAX` for nodes no volume element uses (so boundary groups can be mapped).
 pub fn to_model_with_map(mesh: &MshMesh, file: &str) -> Result<(Model, Vec<u32>)> {
     let at = Location::new(file, 0, None);
+    let (set, element_type) = volume_set(mesh, &at)?;
+    let dim = element_type.dim();
+    let mut conn = oriented_connectivity(mesh, set, element_type);
+    let (coords, new_id) = used_nodes(mesh, &conn, dim, at)?;
+    for c in conn.iter_mut() {
+        *c = new_id[*c as usize];
+    }
+    let (names, element_material) = materials(mesh, set, dim);
+    let dimension = if dim == 3 {
+        Dimension::Cartesian3D
+    } else {
+        Dimension::PlaneStrain
+    };
+    let model = Model::from_mesh(
+        dimension,
+        element_type,
+        coords,
+        conn,
+        &names,
+        &element_material,
+    );
+    Ok((model, new_id))
+}
+
+/// The elements to convert and their Anura3D type: the tetrahedra (of one kind), else the 3-node
+/// triangles.
+fn volume_set<'m>(mesh: &'m MshMesh, at: &Location) -> Result<(&'m ElementSet, ElementType)> {
     let tet4 = mesh.set(kind::TET4);
     let tet10 = mesh.set(kind::TET10);
     let tri3 = mesh.set(kind::TRI3);
-    let (set, element_type) = match (tet4, tet10, tri3) {
-        (Some(_), Some(_), _) => {
-            return Err(Error::Unsupported {
-                at,
-                message: "a mesh that mixes 4- and 10-node tetrahedra".into(),
-            })
-        }
-        (Some(s), None, _) => (s, ElementType::Tet4),
-        (None, Some(s), _) => (s, ElementType::Tet10),
-        (None, None, Some(s)) => (s, ElementType::Tri3),
+    match (tet4, tet10, tri3) {
+        (Some(_), Some(_), _) => Err(Error::Unsupported {
+            at: at.clone(),
+            message: "a mesh that mixes 4- and 10-node tetrahedra".into(),
+        }),
+        (Some(s), None, _) => Ok((s, ElementType::Tet4)),
+        (None, Some(s), _) => Ok((s, ElementType::Tet10)),
+        (None, None, Some(s)) => Ok((s, ElementType::Tri3)),
         _ => {
             if mesh.set(kind::TRI6).is_some() {
                 return Err(Error::Unsupported {
-                    at,
+                    at: at.clone(),
                     message: "6-node triangles (use 3-node triangles or tetrahedra)".into(),
                 });
             }
-            return Err(Error::invalid(at, "no tetrahedra or triangles to convert"));
+            Err(Error::invalid(
+                at.clone(),
+                "no tetrahedra or triangles to convert",
+            ))
         }
-    };
-    let dim = element_type.dim();
+    }
+}
+
+/// The elements' node indices (into the `.msh` nodes) in Anura3D's order, each element turned
+/// to a positive orientation.
+fn oriented_connectivity(mesh: &MshMesh, set: &ElementSet, element_type: ElementType) -> Vec<u32> {
     let per = element_type.nodes();
-    // Orient and reorder element nodes.
     let n_el = set.physical.len();
     let mut conn = Vec::with_capacity(n_el * per);
     for e in 0..n_el {
@@ -666,10 +832,20 @@ pub fn to_model_with_map(mesh: &MshMesh, file: &str) -> Result<(Model, Vec<u32>)
             _ => conn.extend(gmsh_tet_to_anura(g, &mesh.coords)),
         }
     }
-    // Keep used nodes in file order.
+    conn
+}
+
+/// The `dim` coordinates of the nodes that `conn` uses, in file order, and each `.msh` node's
+/// new index (`u32::MAX` where unused). A 2D mesh must lie in a plane z = const.
+fn used_nodes(
+    mesh: &MshMesh,
+    conn: &[u32],
+    dim: usize,
+    at: Location,
+) -> Result<(Vec<f64>, Vec<u32>)> {
     let n_nodes = mesh.node_tags.len();
     let mut new_id = vec![u32::MAX; n_nodes];
-    for &i in &conn {
+    for &i in conn {
         new_id[i as usize] = 0;
     }
     let mut coords = Vec::new();
@@ -693,10 +869,13 @@ pub fn to_model_with_map(mesh: &MshMesh, file: &str) -> Result<(Model, Vec<u32>)
             }
         }
     }
-    for c in conn.iter_mut() {
-        *c = new_id[*c as usize];
-    }
-    // Materials from physical groups of the element dimension.
+    Ok((coords, new_id))
+}
+
+/// The material names and each element's material: one per physical group of the element
+/// dimension (by ascending tag, named after the group), or a single `material_1` where the
+/// elements belong to no group.
+fn materials(mesh: &MshMesh, set: &ElementSet, dim: usize) -> (Vec<String>, Vec<i64>) {
     let mut groups: Vec<i32> = set.physical.iter().copied().filter(|&p| p != 0).collect();
     groups.sort_unstable();
     groups.dedup();
@@ -720,20 +899,7 @@ pub fn to_model_with_map(mesh: &MshMesh, file: &str) -> Result<(Model, Vec<u32>)
             })
             .collect()
     };
-    let dimension = if dim == 3 {
-        Dimension::Cartesian3D
-    } else {
-        Dimension::PlaneStrain
-    };
-    let model = Model::from_mesh(
-        dimension,
-        element_type,
-        coords,
-        conn,
-        &names,
-        &element_material,
-    );
-    Ok((model, new_id))
+    (names, element_material)
 }
 
 #[cfg(test)]

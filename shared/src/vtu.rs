@@ -41,6 +41,7 @@ pub enum Values<'a> {
 }
 
 impl Values<'_> {
+    /// Number of values.
     fn len(&self) -> usize {
         match self {
             Values::F64(v) => v.len(),
@@ -51,6 +52,7 @@ impl Values<'_> {
         }
     }
 
+    /// VTK's name of the value type.
     fn type_name(&self) -> &'static str {
         match self {
             Values::F64(_) => "Float64",
@@ -61,6 +63,7 @@ impl Values<'_> {
         }
     }
 
+    /// Bytes of the values in binary.
     fn byte_len(&self) -> usize {
         match self {
             Values::F64(v) => v.len() * 8,
@@ -71,8 +74,10 @@ impl Values<'_> {
         }
     }
 
+    /// Writes the values in binary, little-endian.
     fn write_le(&self, w: &mut dyn Write) -> io::Result<()> {
         // Little-endian hosts can write the slices as they are; others convert per value.
+        /// Writes `v` converted by `f`, a chunk at a time.
         fn put<T: Copy, const N: usize>(
             w: &mut dyn Write,
             v: &[T],
@@ -97,6 +102,7 @@ impl Values<'_> {
         }
     }
 
+    /// Appends the values as text, `components` to a line.
     fn write_ascii(&self, out: &mut Vec<u8>, components: usize) {
         let n = self.len();
         for i in 0..n {
@@ -224,6 +230,7 @@ pub struct Piece<'a> {
     pub cell_data: Vec<DataArray<'a>>,
 }
 
+/// `s` with the five XML special characters escaped.
 fn escape(s: &str) -> String {
     let mut o = String::with_capacity(s.len());
     for c in s.chars() {
@@ -239,13 +246,12 @@ fn escape(s: &str) -> String {
     o
 }
 
-/// Writes `piece` as a VTU document.
-pub fn write_vtu(w: &mut dyn Write, piece: &Piece, encoding: Encoding) -> io::Result<()> {
-    let n_points = piece.points.len() / 3;
-    let n_cells = piece.cells.types.len();
-    let check = |a: &DataArray, tuples: usize, what: &str| {
+/// Refuses an array of `arrays` whose value count is not `tuples` times its (nonzero) component
+/// count; `what` names the kind of data ("point", "cell") in the message.
+fn check_arrays(arrays: &[DataArray], tuples: usize, what: &str) -> io::Result<()> {
+    for a in arrays {
         if a.components == 0 || a.values.len() != tuples * a.components {
-            Err(io::Error::new(
+            return Err(io::Error::new(
                 io::ErrorKind::InvalidInput,
                 format!(
                     "{what} array '{}' has {} values, expected {} x {}",
@@ -254,17 +260,79 @@ pub fn write_vtu(w: &mut dyn Write, piece: &Piece, encoding: Encoding) -> io::Re
                     tuples,
                     a.components
                 ),
-            ))
-        } else {
-            Ok(())
+            ));
         }
-    };
-    for a in &piece.point_data {
-        check(a, n_points, "point")?;
     }
-    for a in &piece.cell_data {
-        check(a, n_cells, "cell")?;
+    Ok(())
+}
+
+/// The XML part of a VTU document, built in memory: with [`Encoding::Appended`] it holds each
+/// array's declaration and its offset in the appended block, otherwise the values too.
+struct XmlHead {
+    bytes: Vec<u8>,
+    encoding: Encoding,
+    /// Offset in the appended block of the next array's data.
+    offset: u64,
+}
+
+impl XmlHead {
+    /// Writes the `<DataArray>` of `a`.
+    fn array(&mut self, a: &DataArray) -> io::Result<()> {
+        let head = &mut self.bytes;
+        write!(
+            head,
+            "        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\"",
+            a.values.type_name(),
+            escape(a.name),
+            a.components
+        )?;
+        match self.encoding {
+            Encoding::Ascii => {
+                head.extend_from_slice(b" format=\"ascii\">\n");
+                a.values.write_ascii(head, a.components);
+                head.extend_from_slice(b"\n        </DataArray>\n");
+            }
+            Encoding::Base64 => {
+                head.extend_from_slice(b" format=\"binary\">\n");
+                let mut raw = Vec::with_capacity(8 + a.values.byte_len());
+                raw.extend_from_slice(&(a.values.byte_len() as u64).to_le_bytes());
+                a.values.write_le(&mut raw)?;
+                head.extend_from_slice(
+                    base64::engine::general_purpose::STANDARD
+                        .encode(&raw)
+                        .as_bytes(),
+                );
+                head.extend_from_slice(b"\n        </DataArray>\n");
+            }
+            Encoding::Appended => {
+                let offset = self.offset;
+                writeln!(head, " format=\"appended\" offset=\"{offset}\"/>")?;
+                self.offset += 8 + a.values.byte_len() as u64;
+            }
+        }
+        Ok(())
     }
+
+    /// Writes the `<PointData>` or `<CellData>` section (`tag`) holding `arrays`.
+    fn data_section(&mut self, tag: &str, arrays: &[DataArray]) -> io::Result<()> {
+        if arrays.is_empty() {
+            writeln!(self.bytes, "      <{tag}/>")?;
+            return Ok(());
+        }
+        writeln!(self.bytes, "      <{tag}>")?;
+        for a in arrays {
+            self.array(a)?;
+        }
+        writeln!(self.bytes, "      </{tag}>")
+    }
+}
+
+/// Writes `piece` as a VTU document.
+pub fn write_vtu(w: &mut dyn Write, piece: &Piece, encoding: Encoding) -> io::Result<()> {
+    let n_points = piece.points.len() / 3;
+    let n_cells = piece.cells.types.len();
+    check_arrays(&piece.point_data, n_points, "point")?;
+    check_arrays(&piece.cell_data, n_cells, "cell")?;
     let points = DataArray {
         name: "Points",
         components: 3,
@@ -286,84 +354,49 @@ pub fn write_vtu(w: &mut dyn Write, piece: &Piece, encoding: Encoding) -> io::Re
         values: Values::U8(&piece.cells.types),
     };
 
-    let mut appended: Vec<&DataArray> = Vec::new();
-    let mut offset: u64 = 0;
-    let mut head = Vec::with_capacity(4096);
-    let mut array = |head: &mut Vec<u8>, a: &'_ DataArray<'_>| -> io::Result<()> {
-        write!(
-            head,
-            "        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\"",
-            a.values.type_name(),
-            escape(a.name),
-            a.components
-        )?;
-        match encoding {
-            Encoding::Ascii => {
-                head.extend_from_slice(b" format=\"ascii\">\n");
-                a.values.write_ascii(head, a.components);
-                head.extend_from_slice(b"\n        </DataArray>\n");
-            }
-            Encoding::Base64 => {
-                head.extend_from_slice(b" format=\"binary\">\n");
-                let mut raw = Vec::with_capacity(8 + a.values.byte_len());
-                raw.extend_from_slice(&(a.values.byte_len() as u64).to_le_bytes());
-                a.values.write_le(&mut raw)?;
-                head.extend_from_slice(
-                    base64::engine::general_purpose::STANDARD
-                        .encode(&raw)
-                        .as_bytes(),
-                );
-                head.extend_from_slice(b"\n        </DataArray>\n");
-            }
-            Encoding::Appended => {
-                writeln!(head, " format=\"appended\" offset=\"{offset}\"/>")?;
-                offset += 8 + a.values.byte_len() as u64;
-            }
-        }
-        Ok(())
+    let mut head = XmlHead {
+        bytes: Vec::with_capacity(4096),
+        encoding,
+        offset: 0,
     };
-    head.extend_from_slice(
+    head.bytes.extend_from_slice(
         b"<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n",
     );
     writeln!(
-        head,
+        head.bytes,
         "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">"
     )?;
-    let sections: [(&str, &Vec<DataArray>); 2] = [
-        ("PointData", &piece.point_data),
-        ("CellData", &piece.cell_data),
-    ];
-    for (tag, arrays) in sections {
-        if arrays.is_empty() {
-            writeln!(head, "      <{tag}/>")?;
-            continue;
-        }
-        writeln!(head, "      <{tag}>")?;
-        for a in arrays.iter() {
-            array(&mut head, a)?;
-            appended.push(a);
-        }
-        writeln!(head, "      </{tag}>")?;
-    }
-    head.extend_from_slice(b"      <Points>\n");
-    array(&mut head, &points)?;
-    head.extend_from_slice(b"      </Points>\n      <Cells>\n");
-    array(&mut head, &conn)?;
-    array(&mut head, &offs)?;
-    array(&mut head, &types)?;
-    head.extend_from_slice(b"      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n");
+    head.data_section("PointData", &piece.point_data)?;
+    head.data_section("CellData", &piece.cell_data)?;
+    head.bytes.extend_from_slice(b"      <Points>\n");
+    head.array(&points)?;
+    head.bytes
+        .extend_from_slice(b"      </Points>\n      <Cells>\n");
+    head.array(&conn)?;
+    head.array(&offs)?;
+    head.array(&types)?;
+    head.bytes
+        .extend_from_slice(b"      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n");
+    let mut appended: Vec<&DataArray> = piece.point_data.iter().chain(&piece.cell_data).collect();
     appended.extend([&points, &conn, &offs, &types]);
-    if encoding == Encoding::Appended {
-        head.extend_from_slice(b"  <AppendedData encoding=\"raw\">\n   _");
-        w.write_all(&head)?;
+    finish_vtu(w, head, &appended)
+}
+
+/// Writes the XML part `head` and, with [`Encoding::Appended`], the raw block of `appended`
+/// (each array's byte length, then its values), then closes the document.
+fn finish_vtu(w: &mut dyn Write, mut head: XmlHead, appended: &[&DataArray]) -> io::Result<()> {
+    if head.encoding == Encoding::Appended {
+        head.bytes
+            .extend_from_slice(b"  <AppendedData encoding=\"raw\">\n   _");
+        w.write_all(&head.bytes)?;
         for a in appended {
             w.write_all(&(a.values.byte_len() as u64).to_le_bytes())?;
             a.values.write_le(w)?;
         }
         w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")?;
     } else {
-        head.extend_from_slice(b"</VTKFile>\n");
-        w.write_all(&head)?;
+        head.bytes.extend_from_slice(b"</VTKFile>\n");
+        w.write_all(&head.bytes)?;
     }
     Ok(())
 }

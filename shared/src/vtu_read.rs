@@ -41,6 +41,7 @@ pub enum ScalarType {
 }
 
 impl ScalarType {
+    /// The type named `s` in a `type` attribute.
     fn parse(s: &str) -> Option<Self> {
         Some(match s {
             "Float64" => ScalarType::F64,
@@ -177,13 +178,35 @@ fn unescape(s: &str) -> String {
         .replace("&amp;", "&")
 }
 
+/// An error at byte `at` of `file`.
+fn at_byte(file: &str, at: usize, m: String) -> Error {
+    Error::format(Location::new(file, 0, None), format!("at byte {at}: {m}"))
+}
+
 /// Parses a `.vtu` document held in `data`; `file` names it in messages.
 pub fn parse(data: Input, file: &str) -> Result<VtuFile> {
-    let err = |at: usize, m: String| {
-        Error::format(Location::new(file, 0, None), format!("at byte {at}: {m}"))
+    let (mark, raw) = appended_block(&data, file)?;
+    let head = xml_header(&data[..mark], file)?;
+    let mut out = VtuFile {
+        file: file.to_string(),
+        points: 0,
+        cells: 0,
+        arrays: Vec::new(),
+        data: Input::Buffer(Vec::new()),
     };
+    read_declarations(head, file, &mut out)?;
+    for a in &mut out.arrays {
+        locate_block(a, &data, raw, file)?;
+    }
+    out.data = data;
+    Ok(out)
+}
+
+/// Finds the raw appended data: the offset of its `<AppendedData>` tag, which ends the XML
+/// header, and of its first byte (after the `_`).
+fn appended_block(data: &[u8], file: &str) -> Result<(usize, usize)> {
     const MARK: &[u8] = b"<AppendedData encoding=\"raw\">";
-    let Some(mark) = memchr::memmem::find(&data, MARK) else {
+    let Some(mark) = memchr::memmem::find(data, MARK) else {
         let head = String::from_utf8_lossy(&data[..data.len().min(4096)]).into_owned();
         if head.contains("format=\"ascii\"") || head.contains("format=\"binary\"") {
             return Err(Error::Unsupported {
@@ -193,19 +216,31 @@ pub fn parse(data: Input, file: &str) -> Result<VtuFile> {
                         .into(),
             });
         }
-        return Err(err(
+        return Err(at_byte(
+            file,
             data.len(),
             "no '<AppendedData encoding=\"raw\">' block (not a particle file of mpm-solve, or truncated?)".into(),
         ));
     };
     let underscore = memchr::memchr(b'_', &data[mark + MARK.len()..])
         .map(|i| mark + MARK.len() + i)
-        .ok_or_else(|| err(mark, "no '_' opening the appended data (truncated?)".into()))?;
-    let raw = underscore + 1;
-    let head = std::str::from_utf8(&data[..mark])
-        .map_err(|e| err(e.valid_up_to(), "the XML header is not UTF-8".into()))?;
+        .ok_or_else(|| {
+            at_byte(
+                file,
+                mark,
+                "no '_' opening the appended data (truncated?)".into(),
+            )
+        })?;
+    Ok((mark, underscore + 1))
+}
+
+/// The XML header as text, checked to be an unstructured grid in the layout read here
+/// (little-endian, 64-bit block headers).
+fn xml_header<'d>(head: &'d [u8], file: &str) -> Result<&'d str> {
+    let head = std::str::from_utf8(head)
+        .map_err(|e| at_byte(file, e.valid_up_to(), "the XML header is not UTF-8".into()))?;
     if !head.contains("<VTKFile type=\"UnstructuredGrid\"") {
-        return Err(err(0, "not a VTK UnstructuredGrid file".into()));
+        return Err(at_byte(file, 0, "not a VTK UnstructuredGrid file".into()));
     }
     if !head.contains("byte_order=\"LittleEndian\"") || !head.contains("header_type=\"UInt64\"") {
         return Err(Error::Unsupported {
@@ -213,13 +248,12 @@ pub fn parse(data: Input, file: &str) -> Result<VtuFile> {
             message: "byte order or block headers other than LittleEndian with UInt64".into(),
         });
     }
-    let mut out = VtuFile {
-        file: file.to_string(),
-        points: 0,
-        cells: 0,
-        arrays: Vec::new(),
-        data: Input::Buffer(Vec::new()),
-    };
+    Ok(head)
+}
+
+/// Walks the tags of the XML header into `out`: the piece's point and cell counts and each
+/// array's declaration, its `start` still the offset in the appended data.
+fn read_declarations(head: &str, file: &str, out: &mut VtuFile) -> Result<()> {
     let mut section = None;
     let mut pieces = 0;
     let mut pos = 0;
@@ -228,25 +262,26 @@ pub fn parse(data: Input, file: &str) -> Result<VtuFile> {
         let end = head[at..]
             .find('>')
             .map(|i| at + i)
-            .ok_or_else(|| err(at, "unclosed tag".into()))?;
-        let tag = &head[at..end];
+            .ok_or_else(|| at_byte(file, at, "unclosed tag".into()))?;
+        let text = &head[at..end];
         pos = end + 1;
-        let (closing, inner) = match tag[1..].strip_prefix('/') {
+        let (closing, inner) = match text[1..].strip_prefix('/') {
             Some(rest) => (true, rest),
-            None => (false, &tag[1..]),
+            None => (false, &text[1..]),
         };
         let name = inner.split([' ', '/', '\n']).next().unwrap_or("");
-        let count = |key: &str| -> Result<usize> {
-            attr(tag, key)
-                .and_then(|v| v.parse().ok())
-                .ok_or_else(|| err(at, format!("<{name}> without a whole {key}")))
-        };
         if closing {
             if matches!(name, "PointData" | "CellData" | "Points" | "Cells") {
                 section = None;
             }
             continue;
         }
+        let tag = Tag {
+            file,
+            at,
+            text,
+            name,
+        };
         match name {
             "Piece" => {
                 pieces += 1;
@@ -256,112 +291,158 @@ pub fn parse(data: Input, file: &str) -> Result<VtuFile> {
                         message: "more than one Piece".into(),
                     });
                 }
-                out.points = count("NumberOfPoints")?;
-                out.cells = count("NumberOfCells")?;
+                out.points = tag.count("NumberOfPoints")?;
+                out.cells = tag.count("NumberOfCells")?;
             }
             "PointData" => section = Some(Section::PointData),
             "CellData" => section = Some(Section::CellData),
             "Points" => section = Some(Section::Points),
             "Cells" => section = Some(Section::Cells),
             "DataArray" => {
-                let a_name = unescape(attr(tag, "Name").unwrap_or(""));
-                let Some(sec) = section else {
-                    return Err(err(at, format!("DataArray '{a_name}' outside a section")));
-                };
-                if attr(tag, "format") != Some("appended") {
-                    return Err(Error::Unsupported {
-                        at: Location::new(file, 0, None),
-                        message: format!(
-                            "array '{a_name}' is not in the appended block (only raw appended data, the solver's default, is read)"
-                        ),
-                    });
-                }
-                let ty_name = attr(tag, "type").unwrap_or("");
-                let ty = ScalarType::parse(ty_name).ok_or_else(|| {
-                    err(
-                        at,
-                        format!("array '{a_name}': unsupported type '{ty_name}'"),
-                    )
-                })?;
-                let components = count("NumberOfComponents")?.max(1);
-                let offset = count("offset")?;
-                let tuples = match sec {
-                    Section::PointData | Section::Points => out.points,
-                    Section::CellData => out.cells,
-                    // connectivity has as many values as its block says; checked below.
-                    Section::Cells => 0,
-                };
-                out.arrays.push(ArrayInfo {
-                    name: a_name,
-                    section: sec,
-                    ty,
-                    components,
-                    tuples,
-                    start: offset,
-                });
+                let a = tag.data_array(section, out.points, out.cells)?;
+                out.arrays.push(a);
             }
             _ => {}
         }
     }
     if pieces == 0 {
-        return Err(err(0, "no <Piece>".into()));
+        return Err(at_byte(file, 0, "no <Piece>".into()));
     }
-    // Locate each block: an 8-byte length, then exactly the declared values.
-    for a in &mut out.arrays {
-        let header = raw
-            .checked_add(a.start)
-            .filter(|&h| h.checked_add(8).is_some_and(|e| e <= data.len()))
+    Ok(())
+}
+
+/// One opening tag of the XML header.
+struct Tag<'t> {
+    file: &'t str,
+    /// Byte offset of its `<`.
+    at: usize,
+    /// Its text, from `<` up to (without) `>`.
+    text: &'t str,
+    name: &'t str,
+}
+
+impl Tag<'_> {
+    /// The attribute `key` as a whole number.
+    fn count(&self, key: &str) -> Result<usize> {
+        attr(self.text, key)
+            .and_then(|v| v.parse().ok())
             .ok_or_else(|| {
-                err(
-                    raw.saturating_add(a.start),
-                    format!(
-                        "the block of array '{}' starts past the end of the file ({} bytes; truncated?)",
-                        a.name,
-                        data.len()
-                    ),
+                at_byte(
+                    self.file,
+                    self.at,
+                    format!("<{}> without a whole {key}", self.name),
                 )
-            })?;
-        let bytes = u64::from_le_bytes(data[header..header + 8].try_into().expect("8 bytes"));
-        let size = a.ty.size().checked_mul(a.components).ok_or_else(|| {
+            })
+    }
+
+    /// The declaration of a `<DataArray>` in `section` of a piece of `points` points and
+    /// `cells` cells.
+    fn data_array(
+        &self,
+        section: Option<Section>,
+        points: usize,
+        cells: usize,
+    ) -> Result<ArrayInfo> {
+        let a_name = unescape(attr(self.text, "Name").unwrap_or(""));
+        let Some(sec) = section else {
+            return Err(at_byte(
+                self.file,
+                self.at,
+                format!("DataArray '{a_name}' outside a section"),
+            ));
+        };
+        if attr(self.text, "format") != Some("appended") {
+            return Err(Error::Unsupported {
+                at: Location::new(self.file, 0, None),
+                message: format!(
+                    "array '{a_name}' is not in the appended block (only raw appended data, the solver's default, is read)"
+                ),
+            });
+        }
+        let ty_name = attr(self.text, "type").unwrap_or("");
+        let ty = ScalarType::parse(ty_name).ok_or_else(|| {
+            at_byte(
+                self.file,
+                self.at,
+                format!("array '{a_name}': unsupported type '{ty_name}'"),
+            )
+        })?;
+        let components = self.count("NumberOfComponents")?.max(1);
+        let offset = self.count("offset")?;
+        let tuples = match sec {
+            Section::PointData | Section::Points => points,
+            Section::CellData => cells,
+            // connectivity has as many values as its block says; checked below.
+            Section::Cells => 0,
+        };
+        Ok(ArrayInfo {
+            name: a_name,
+            section: sec,
+            ty,
+            components,
+            tuples,
+            start: offset,
+        })
+    }
+}
+
+/// Locates the block of array `a` in the appended data that starts at byte `raw` of `data`:
+/// an 8-byte length, then exactly the declared values. Sets `a.start` to the first value (and
+/// the tuple count of a `<Cells>` array from its length).
+fn locate_block(a: &mut ArrayInfo, data: &[u8], raw: usize, file: &str) -> Result<()> {
+    let err = |at: usize, m: String| at_byte(file, at, m);
+    let header = raw
+        .checked_add(a.start)
+        .filter(|&h| h.checked_add(8).is_some_and(|e| e <= data.len()))
+        .ok_or_else(|| {
             err(
-                header,
+                raw.saturating_add(a.start),
                 format!(
-                    "array '{}' claims {} components per tuple, far more than any file holds",
-                    a.name, a.components
+                    "the block of array '{}' starts past the end of the file ({} bytes; truncated?)",
+                    a.name,
+                    data.len()
                 ),
             )
         })?;
-        if a.section == Section::Cells {
-            a.tuples = (bytes / size as u64) as usize;
-        }
-        let want = (a.tuples as u64).checked_mul(size as u64);
-        if want != Some(bytes) {
-            return Err(err(
-                header,
-                format!(
-                    "array '{}' holds {bytes} bytes, expected {} tuples of {} x {} bytes",
-                    a.name,
-                    a.tuples,
-                    a.components,
-                    a.ty.size()
-                ),
-            ));
-        }
-        let start = header + 8;
-        let left = data.len() - start;
-        if bytes > left as u64 {
-            return Err(err(
-                start,
-                format!(
-                    "array '{}' needs {bytes} bytes, only {left} are left (truncated?)",
-                    a.name
-                ),
-            ));
-        }
-        a.start = start;
+    let bytes = u64::from_le_bytes(data[header..header + 8].try_into().expect("8 bytes"));
+    let size = a.ty.size().checked_mul(a.components).ok_or_else(|| {
+        err(
+            header,
+            format!(
+                "array '{}' claims {} components per tuple, far more than any file holds",
+                a.name, a.components
+            ),
+        )
+    })?;
+    if a.section == Section::Cells {
+        a.tuples = (bytes / size as u64) as usize;
     }
-    out.data = data;
-    Ok(out)
+    let want = (a.tuples as u64).checked_mul(size as u64);
+    if want != Some(bytes) {
+        return Err(err(
+            header,
+            format!(
+                "array '{}' holds {bytes} bytes, expected {} tuples of {} x {} bytes",
+                a.name,
+                a.tuples,
+                a.components,
+                a.ty.size()
+            ),
+        ));
+    }
+    let start = header + 8;
+    let left = data.len() - start;
+    if bytes > left as u64 {
+        return Err(err(
+            start,
+            format!(
+                "array '{}' needs {bytes} bytes, only {left} are left (truncated?)",
+                a.name
+            ),
+        ));
+    }
+    a.start = start;
+    Ok(())
 }
 
 /// One entry of a `.pvd` collection.
