@@ -1,10 +1,10 @@
 //! The explicit MPM engine: state, critical time step and one MUSL step through the phases.
 //!
-//! One file per responsibility: [`setup`] builds the engine from a case, [`step`] takes one time
-//! step through its named phases, [`locate`] finds the points' elements after they move,
-//! [`guards`] sums the energies and checks the guard rails, [`distributed`] holds what a run
+//! One file per responsibility: `setup` builds the engine from a case, `step` takes one time
+//! step through its named phases, `locate` finds the points' elements after they move,
+//! `guards` sums the energies and checks the guard rails, `distributed` holds what a run
 //! over MPI ranks adds (gathering to rank 0, migrating points, re-partitioning), and
-//! [`snapshot`] takes the engine's state into a checkpoint and back.
+//! `snapshot` takes the engine's state into a checkpoint and back.
 
 mod distributed;
 mod guards;
