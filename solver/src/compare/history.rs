@@ -80,8 +80,7 @@ pub fn compare_csv(
     }
     let (mut ra, mut rb) = (open(&pa)?, open(&pb)?);
     let (ha, hb) = (headers(&mut ra, &pa)?, headers(&mut rb, &pb)?);
-    let col = |h: &[String], c: &str| h.iter().position(|x| x == c);
-    let (ta, tb) = match (col(&ha, "time"), col(&hb, "time")) {
+    let (ta, tb) = match (column(&ha, "time"), column(&hb, "time")) {
         (Some(x), Some(y)) => (x, y),
         _ => {
             return Err(CompareError::Csv(format!(
@@ -89,34 +88,13 @@ pub fn compare_csv(
             )))
         }
     };
-    let ids = (col(&ha, "id"), col(&hb, "id"));
-    // Fields present on both sides, as column indices per side.
-    let mut fields: Vec<Group> = Vec::new();
-    for &(field, cols) in groups(name) {
-        let found: Vec<_> = cols
-            .iter()
-            .filter_map(|c| Some((*c, col(&ha, c)?, col(&hb, c)?)))
-            .collect();
-        if found.len() == cols.len() {
-            fields.push((field, found, Accumulator::default()));
-        } else if cols
-            .iter()
-            .any(|c| col(&ha, c).is_some() || col(&hb, c).is_some())
-        {
-            if tol.required(field) {
-                return Err(CompareError::Required {
-                    field: field.into(),
-                    side: if cols.iter().all(|c| col(&ha, c).is_some()) {
-                        "candidate"
-                    } else {
-                        "golden"
-                    },
-                    file: name.into(),
-                });
-            }
-            notes.push(format!("{field}: on one side of {name} only, not compared"));
-        }
-    }
+    let keys = Keys {
+        name,
+        paths: (&pa, &pb),
+        time: (ta, tb),
+        id: (column(&ha, "id"), column(&hb, "id")),
+    };
+    let mut fields = common_fields(name, (&ha, &hb), tol, notes)?;
     let (mut a, mut b) = (csv::StringRecord::new(), csv::StringRecord::new());
     let mut rows = 0u64;
     loop {
@@ -136,38 +114,7 @@ pub fn compare_csv(
             break;
         }
         rows += 1;
-        let (t, tc) = (number(&a, ta, &pa)?, number(&b, tb, &pb)?);
-        let id = match ids {
-            (Some(x), Some(y)) => {
-                let (i, j) = (number(&a, x, &pa)?, number(&b, y, &pb)?);
-                if i != j {
-                    return Err(CompareError::Csv(format!(
-                        "{name} row {rows}: probe id {i} in the golden file, {j} in the candidate's (different --probe?)"
-                    )));
-                }
-                Some(i as u64)
-            }
-            _ => None,
-        };
-        if !same_time(t, tc) {
-            return Err(CompareError::Csv(format!(
-                "{name} row {rows}: time {t} in the golden file, {tc} in the candidate's"
-            )));
-        }
-        for (_, cols, acc) in &mut fields {
-            for &(c, ia, ib) in cols.iter() {
-                let (x, y) = (number(&a, ia, &pa)?, number(&b, ib, &pb)?);
-                acc.add(x, y, || Worst {
-                    id,
-                    element: None,
-                    position: None,
-                    time: Some(t),
-                    component: c.to_string(),
-                    golden: x,
-                    candidate: y,
-                });
-            }
-        }
+        compare_row(&keys, rows, (&a, &b), &mut fields)?;
     }
     if rows == 0 || fields.is_empty() {
         return Ok(None);
@@ -182,4 +129,100 @@ pub fn compare_csv(
             .map(|(f, _, acc)| acc.finish(f, tol.of(f)))
             .collect(),
     }))
+}
+
+/// The index of column `c` in `header`.
+fn column(header: &[String], c: &str) -> Option<usize> {
+    header.iter().position(|x| x == c)
+}
+
+/// What pairs the rows of the two files: the file's name, both paths, and the index of the
+/// time column and of the probe id column (where there is one) on each side.
+struct Keys<'a> {
+    name: &'a str,
+    paths: (&'a Path, &'a Path),
+    time: (usize, usize),
+    id: (Option<usize>, Option<usize>),
+}
+
+/// The fields of `name` whose columns both headers (golden, candidate) hold. A field whose
+/// columns only one side holds, in part or whole, is an error when `tol` requires it, else a
+/// note.
+fn common_fields(
+    name: &str,
+    (ha, hb): (&[String], &[String]),
+    tol: &Tolerances,
+    notes: &mut Vec<String>,
+) -> Result<Vec<Group>, CompareError> {
+    let mut fields: Vec<Group> = Vec::new();
+    for &(field, cols) in groups(name) {
+        let found: Vec<_> = cols
+            .iter()
+            .filter_map(|c| Some((*c, column(ha, c)?, column(hb, c)?)))
+            .collect();
+        if found.len() == cols.len() {
+            fields.push((field, found, Accumulator::default()));
+        } else if cols
+            .iter()
+            .any(|c| column(ha, c).is_some() || column(hb, c).is_some())
+        {
+            if tol.required(field) {
+                return Err(CompareError::Required {
+                    field: field.into(),
+                    side: if cols.iter().all(|c| column(ha, c).is_some()) {
+                        "candidate"
+                    } else {
+                        "golden"
+                    },
+                    file: name.into(),
+                });
+            }
+            notes.push(format!("{field}: on one side of {name} only, not compared"));
+        }
+    }
+    Ok(fields)
+}
+
+/// Row `row` (1-based) of both files: checks that they agree on the probe id and the time,
+/// and adds every field's values to its statistics.
+fn compare_row(
+    keys: &Keys,
+    row: u64,
+    (a, b): (&csv::StringRecord, &csv::StringRecord),
+    fields: &mut [Group],
+) -> Result<(), CompareError> {
+    let (name, (pa, pb)) = (keys.name, keys.paths);
+    let (t, tc) = (number(a, keys.time.0, pa)?, number(b, keys.time.1, pb)?);
+    let id = match keys.id {
+        (Some(x), Some(y)) => {
+            let (i, j) = (number(a, x, pa)?, number(b, y, pb)?);
+            if i != j {
+                return Err(CompareError::Csv(format!(
+                    "{name} row {row}: probe id {i} in the golden file, {j} in the candidate's (different --probe?)"
+                )));
+            }
+            Some(i as u64)
+        }
+        _ => None,
+    };
+    if !same_time(t, tc) {
+        return Err(CompareError::Csv(format!(
+            "{name} row {row}: time {t} in the golden file, {tc} in the candidate's"
+        )));
+    }
+    for (_, cols, acc) in fields {
+        for &(c, ia, ib) in cols.iter() {
+            let (x, y) = (number(a, ia, pa)?, number(b, ib, pb)?);
+            acc.add(x, y, || Worst {
+                id,
+                element: None,
+                position: None,
+                time: Some(t),
+                component: c.to_string(),
+                golden: x,
+                candidate: y,
+            });
+        }
+    }
+    Ok(())
 }

@@ -130,6 +130,23 @@ impl std::fmt::Write for Capture {
     }
 }
 
+impl Item {
+    /// The entry `name` of `value`: the hash of its `Debug` text, and the text when short.
+    fn of(name: &str, value: &dyn std::fmt::Debug) -> Self {
+        let mut c = Capture {
+            hash: Fnv::default(),
+            text: String::new(),
+            long: false,
+        };
+        let _ = write!(c, "{value:?}");
+        Item {
+            name: name.to_string(),
+            hash: c.hash.0,
+            shown: c.text,
+        }
+    }
+}
+
 impl Fingerprint {
     /// The fingerprint of `case` run with `drop_lost`. Every field of [`Case`] is taken apart
     /// here, so a field added to it does not compile until it is placed in or out.
@@ -239,24 +256,7 @@ impl Fingerprint {
             ("precision (--precision)", precision),
             ("--drop-lost", &drop_lost),
         ];
-        Fingerprint(
-            items
-                .iter()
-                .map(|(n, v)| {
-                    let mut c = Capture {
-                        hash: Fnv::default(),
-                        text: String::new(),
-                        long: false,
-                    };
-                    let _ = write!(c, "{v:?}");
-                    Item {
-                        name: (*n).to_string(),
-                        hash: c.hash.0,
-                        shown: c.text,
-                    }
-                })
-                .collect(),
-        )
+        Fingerprint(items.iter().map(|&(n, v)| Item::of(n, v)).collect())
     }
 
     /// What differs from `now` (`self`: the checkpoint's), in words; `None` when nothing.

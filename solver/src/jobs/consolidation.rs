@@ -478,6 +478,8 @@ pub fn write_png(
     std::fs::rename(&tmp, &path).map_err(|e| mpm_shared::Error::io(&path, e))
 }
 
+/// Draws the figure of [`write_png`] into `path`: the isochrones on the left half, the
+/// settlement on the right.
 fn draw(
     path: &Path,
     name: &str,
@@ -489,31 +491,98 @@ fn draw(
     let root = BitMapBackend::new(path, (1400, 650)).into_drawing_area();
     root.fill(&WHITE)?;
     let (left, right) = root.split_horizontally(700);
-    let colours = [RED, BLUE, GREEN, MAGENTA, BLACK];
-    let l = &default.layer;
+    draw_isochrones(&left, name, default, text)?;
+    draw_settlement(&right, name, default, workshop, text)?;
+    root.present()?;
+    Ok(())
+}
 
-    // Isochrones: excess pressure / u0 (x) against depth / H (y, 0 at the drained top).
-    let mut chart = ChartBuilder::on(&left);
+/// One half of the figure.
+type Panel<'a> =
+    plotters::drawing::DrawingArea<plotters::backend::BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// A plot of one half: real numbers on both axes.
+type Chart<'a, 'b> = plotters::chart::ChartContext<
+    'a,
+    plotters::backend::BitMapBackend<'b>,
+    plotters::coord::cartesian::Cartesian2d<
+        plotters::coord::types::RangedCoordf64,
+        plotters::coord::types::RangedCoordf64,
+    >,
+>;
+
+/// The captions and axis descriptions of a plot.
+struct Words<'a> {
+    caption: String,
+    x: &'a str,
+    y: &'a str,
+}
+
+/// A plot on `area` over `x` by `y` with a mesh, and with its `words` where `text` (a font
+/// was found); without text, no labels and no mesh lines.
+fn chart<'b>(
+    area: &Panel<'b>,
+    x: std::ops::Range<f64>,
+    y: std::ops::Range<f64>,
+    words: Words,
+    text: bool,
+) -> Result<Chart<'b, 'b>, Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    let mut chart = ChartBuilder::on(area);
     chart.margin(20);
     if text {
         chart
-            .caption(
-                format!("{name}: excess pore pressure against depth"),
-                ("sans-serif", 22),
-            )
+            .caption(words.caption, ("sans-serif", 22))
             .x_label_area_size(40)
             .y_label_area_size(50);
     }
-    let mut chart = chart.build_cartesian_2d(0.0..1.1f64, 1.0..0.0f64)?;
+    let mut chart = chart.build_cartesian_2d(x, y)?;
     if text {
         chart
             .configure_mesh()
-            .x_desc("excess pore pressure u / u0 (u0: initial excess pressure)")
-            .y_desc("depth below the drained top z / H")
+            .x_desc(words.x)
+            .y_desc(words.y)
             .draw()?;
     } else {
         chart.configure_mesh().disable_mesh().draw()?;
     }
+    Ok(chart)
+}
+
+/// The legend of `chart` at `position`, where `text` (a font was found).
+fn legend<'a>(
+    chart: &mut Chart<'a, 'a>,
+    position: plotters::chart::SeriesLabelPosition,
+    text: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    if text {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(position)
+            .draw()?;
+    }
+    Ok(())
+}
+
+/// The isochrones: excess pressure / u0 (x) against depth / H (y, 0 at the drained top), of
+/// Terzaghi as lines and of `default`'s points as dots, at each of [`ISOCHRONES`].
+fn draw_isochrones(
+    area: &Panel,
+    name: &str,
+    default: &Tracker,
+    text: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    let colours = [RED, BLUE, GREEN, MAGENTA, BLACK];
+    let words = Words {
+        caption: format!("{name}: excess pore pressure against depth"),
+        x: "excess pore pressure u / u0 (u0: initial excess pressure)",
+        y: "depth below the drained top z / H",
+    };
+    let mut chart = chart(area, 0.0..1.1f64, 1.0..0.0f64, words, text)?;
     for (k, &tv) in ISOCHRONES.iter().enumerate() {
         let colour = colours[k % colours.len()];
         if let Some((_, pts)) = default.profiles.iter().find(|(t, _)| (t - tv).abs() < 1e-6) {
@@ -536,39 +605,28 @@ fn draw(
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
         }
     }
-    if text {
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerLeft)
-            .draw()?;
-    }
+    legend(&mut chart, SeriesLabelPosition::LowerLeft, text)
+}
 
-    // Settlement against time.
+/// The settlement of the top against time: Terzaghi's as a line, `default`'s records as dots
+/// and `workshop`'s (where given) as triangles.
+fn draw_settlement(
+    area: &Panel,
+    name: &str,
+    default: &Tracker,
+    workshop: Option<&Tracker>,
+    text: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    let l = &default.layer;
     let t_end = default.records.last().map_or(1.0, |r| r.time);
     let s_max = l.load * l.height / l.e_oed * 1.1;
-    let mut chart = ChartBuilder::on(&right);
-    chart.margin(20);
-    if text {
-        chart
-            .caption(
-                format!("{name}: settlement of the top against time"),
-                ("sans-serif", 22),
-            )
-            .x_label_area_size(40)
-            .y_label_area_size(50);
-    }
-    let mut chart = chart.build_cartesian_2d(0.0..t_end, 0.0..s_max * 1e3)?;
-    if text {
-        chart
-            .configure_mesh()
-            .x_desc("time t (s)")
-            .y_desc("settlement of the top (mm)")
-            .draw()?;
-    } else {
-        chart.configure_mesh().disable_mesh().draw()?;
-    }
+    let words = Words {
+        caption: format!("{name}: settlement of the top against time"),
+        x: "time t (s)",
+        y: "settlement of the top (mm)",
+    };
+    let mut chart = chart(area, 0.0..t_end, 0.0..s_max * 1e3, words, text)?;
     let terzaghi_line = chart.draw_series(LineSeries::new(
         (0..=200).map(|i| {
             let t = t_end * i as f64 / 200.0;
@@ -603,14 +661,5 @@ fn draw(
                 .legend(|(x, y)| TriangleMarker::new((x + 10, y), 5, BLUE));
         }
     }
-    if text {
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()?;
-    }
-    root.present()?;
-    Ok(())
+    legend(&mut chart, SeriesLabelPosition::LowerRight, text)
 }

@@ -120,21 +120,13 @@ pub fn resort<R: Real>(
     assert_eq!(ranges.len(), threads, "an element range per thread");
     let elements = elem_start.len() - 1;
     let n = p.len();
-    let share = |t: usize| t * n / threads..(t + 1) * n / threads;
+    let sort = Sort {
+        team,
+        ranges,
+        element: &p.element,
+    };
     // 1. Is every share in order, and each share's last point before the next share's first?
-    scratch.in_order.resize(threads, true);
-    {
-        let element = &p.element;
-        let in_order = Shared::new(&mut scratch.in_order);
-        team.run(|t| {
-            let r = share(t);
-            let upto = (r.end + 1).min(n);
-            let ok = non_decreasing(&element[r.start..upto]);
-            // SAFETY: slot t is this thread's only.
-            unsafe { in_order.write(t, ok) };
-        });
-    }
-    if scratch.in_order.iter().all(|&ok| ok) {
+    if sort.in_order(&mut scratch.in_order) {
         if moved {
             starts_of_sorted(team, ranges, elem_start, &p.element);
         }
@@ -146,46 +138,98 @@ pub fn resort<R: Real>(
     scratch.stage.resize(n, 0);
     scratch.order.resize(n, 0);
     scratch.next.resize(elements + 1, 0);
-    // The thread whose elements hold element `e`, for a point of thread `t`'s share: most
-    // points stay in the thread's own elements, so those are looked at first.
-    let destination = |t: usize, e: u32| {
-        if ranges[t].contains(&(e as usize)) {
+    sort.count(&mut scratch.counts);
+    let placed = places(&mut scratch.counts, threads);
+    debug_assert_eq!(placed as usize, n);
+    sort.stage(&mut scratch.counts, &mut scratch.stage);
+    sort.by_element(scratch, elem_start);
+    debug_assert!(
+        is_permutation(&scratch.order),
+        "the order is not a permutation"
+    );
+    // 3. Every per-point array in the new order.
+    p.visit_fields(&mut Permute {
+        team,
+        ranges,
+        elem_start,
+        order: &scratch.order,
+        spares: &mut scratch.spares,
+    });
+    true
+}
+
+/// The steps of [`resort`] over the points' elements: each thread takes a share of the points
+/// in index order, and sends each point to the thread whose elements (`ranges`) hold it.
+struct Sort<'a> {
+    team: &'a Team,
+    ranges: &'a [Range<usize>],
+    /// Each point's element.
+    element: &'a [u32],
+}
+
+impl Sort<'_> {
+    /// The points of thread `t`'s share.
+    #[inline(always)]
+    fn share(&self, t: usize) -> Range<usize> {
+        let (n, threads) = (self.element.len(), self.team.threads);
+        t * n / threads..(t + 1) * n / threads
+    }
+
+    /// The thread whose elements hold element `e`, for a point of thread `t`'s share: most
+    /// points stay in the thread's own elements, so those are looked at first.
+    #[inline(always)]
+    fn destination(&self, t: usize, e: u32) -> usize {
+        if self.ranges[t].contains(&(e as usize)) {
             t
         } else {
-            ranges.partition_point(|r| r.end <= e as usize)
+            self.ranges.partition_point(|r| r.end <= e as usize)
         }
-    };
-    {
-        let element = &p.element;
-        let counts = Shared::new(&mut scratch.counts);
-        team.run(|t| {
+    }
+
+    /// Whether every point's element is at least its predecessor's: each thread checks its
+    /// share and the first point of the next share, recording its answer in `in_order`.
+    fn in_order(&self, in_order: &mut Vec<bool>) -> bool {
+        let (element, n) = (self.element, self.element.len());
+        in_order.resize(self.team.threads, true);
+        {
+            let in_order = Shared::new(in_order);
+            self.team.run(|t| {
+                let r = self.share(t);
+                let upto = (r.end + 1).min(n);
+                let ok = non_decreasing(&element[r.start..upto]);
+                // SAFETY: slot t is this thread's only.
+                unsafe { in_order.write(t, ok) };
+            });
+        }
+        in_order.iter().all(|&ok| ok)
+    }
+
+    /// Counts each thread's points by destination into row t of `counts` (threads × threads,
+    /// zero).
+    fn count(&self, counts: &mut [u32]) {
+        let threads = self.team.threads;
+        let counts = Shared::new(counts);
+        self.team.run(|t| {
             // SAFETY: row t of the matrix is this thread's only.
             let row = unsafe { counts.range(t * threads..(t + 1) * threads) };
-            for &e in &element[share(t)] {
-                row[destination(t, e)] += 1;
+            for &e in &self.element[self.share(t)] {
+                row[self.destination(t, e)] += 1;
             }
         });
     }
-    // Destination d's points start at `first[d]`; source t's points for d at counts[t][d].
-    let mut at = 0u32;
-    for d in 0..threads {
-        for t in 0..threads {
-            let c = scratch.counts[t * threads + d];
-            scratch.counts[t * threads + d] = at;
-            at += c;
-        }
-    }
-    debug_assert_eq!(at as usize, n);
-    {
-        let element = &p.element;
-        let counts = Shared::new(&mut scratch.counts);
-        let stage = Shared::new(&mut scratch.stage);
-        team.run(|t| {
+
+    /// Each thread's point indices into `stage` at its places for each destination, in index
+    /// order: `counts` holds the places ([`places`]) and is left holding each pair's end.
+    fn stage(&self, counts: &mut [u32], stage: &mut [u32]) {
+        let threads = self.team.threads;
+        let counts = Shared::new(counts);
+        let stage = Shared::new(stage);
+        self.team.run(|t| {
             // SAFETY: row t of the matrix is this thread's only.
             let cursor = unsafe { counts.range(t * threads..(t + 1) * threads) };
-            let r = share(t);
-            for (i, &e) in r.clone().zip(&element[r]) {
-                let d = destination(t, e);
+            let r = self.share(t);
+            for (i, &e) in r.clone().zip(&self.element[r]) {
+                let d = self.destination(t, e);
                 // SAFETY: the prefix gave each (source, destination) pair its own places, and
                 // each source writes only its own pairs' places.
                 unsafe { stage.write(cursor[d] as usize, i as u32) };
@@ -193,20 +237,26 @@ pub fn resort<R: Real>(
             }
         });
     }
-    // The cursors now stand at each pair's end: destination d's points end where the last
-    // source's do, and start where d - 1's end.
-    {
-        let element = &p.element;
+
+    /// Each destination thread sorts its arrivals in `scratch.stage` by element into
+    /// `scratch.order` (stable: they arrived in index order), and writes where its elements'
+    /// points start into `elem_start`. `scratch.counts` holds each (source, destination)
+    /// pair's end ([`Sort::stage`]).
+    fn by_element(&self, scratch: &mut SortScratch, elem_start: &mut [u32]) {
+        let (threads, n) = (self.team.threads, self.element.len());
+        let elements = elem_start.len() - 1;
+        let element = self.element;
         let counts = &scratch.counts;
         let stage = &scratch.stage;
+        // Destination d's points end where the last source's do, and start where d - 1's end.
         let end_of = |d: usize| counts[(threads - 1) * threads + d] as usize;
         let starts = Shared::new(elem_start);
         let next = Shared::new(&mut scratch.next);
         let order = Shared::new(&mut scratch.order);
-        team.run(|d| {
+        self.team.run(|d| {
             let from = if d == 0 { 0 } else { end_of(d - 1) };
             let to = end_of(d);
-            let er = ranges[d].clone();
+            let er = self.ranges[d].clone();
             // SAFETY: the element range and the new point range of thread d are its only (the
             // ranges are disjoint, and the prefix makes the point ranges so).
             let (start, cursor, out) = unsafe {
@@ -238,19 +288,21 @@ pub fn resort<R: Real>(
             }
         });
     }
-    debug_assert!(
-        is_permutation(&scratch.order),
-        "the order is not a permutation"
-    );
-    // 3. Every per-point array in the new order.
-    p.visit_fields(&mut Permute {
-        team,
-        ranges,
-        elem_start,
-        order: &scratch.order,
-        spares: &mut scratch.spares,
-    });
-    true
+}
+
+/// Turns `counts` (threads × threads: points of source t going to destination d) into where
+/// each pair's points go: destination d's points start after those of d - 1, and within
+/// them, source t's after those of t - 1. Returns the number of points placed.
+fn places(counts: &mut [u32], threads: usize) -> u32 {
+    let mut at = 0u32;
+    for d in 0..threads {
+        for t in 0..threads {
+            let c = counts[t * threads + d];
+            counts[t * threads + d] = at;
+            at += c;
+        }
+    }
+    at
 }
 
 /// Where each element's points start, for points in order: each thread merges its elements

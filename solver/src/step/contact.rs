@@ -122,15 +122,60 @@ pub fn read(
     let Body::Table { rows, .. } = &section.body else {
         return Err((item, "expected a count and rows".into()));
     };
-    let text = |t: &Token| match t {
+    let (mut elements, slots) = read_rows(rows, element_material, &item)?;
+    let material = element_material[elements[0] as usize];
+    if material == 0 {
+        return Err((
+            item,
+            format!(
+                "element {} is empty: the structure must be filled",
+                elements[0] + 1
+            ),
+        ));
+    }
+    elements.sort_unstable();
+    elements.dedup();
+    check_structure(material, &elements, element_material, points)
+        .map_err(|e| (item.clone(), e))?;
+    let last = names.iter().map(|n| n.0).max().unwrap_or(0);
+    if material != last {
+        return Err((
+            item,
+            format!(
+                "the structure is material {material}; Anura3D takes it to be the last material ({last})"
+            ),
+        ));
+    }
+    let interfaces = interfaces_of(&slots, names, last).map_err(|e| (item, e))?;
+    Ok(ContactSpec {
+        material,
+        elements,
+        interfaces,
+    })
+}
+
+/// A token as the input wrote it (a text without its quotes).
+fn token_text(t: &Token) -> String {
+    match t {
         Token::Text(s) => s.trim_matches('"').to_string(),
         Token::Int(i) => i.to_string(),
         Token::Real(x) => x.to_string(),
-    };
+    }
+}
+
+/// The rows of the section `item`: each row's element (0-based, in the rows' order) and the
+/// first row's four `material friction adhesion` triples, as text, once every row was checked
+/// to name an element of the mesh (`element_material`: one per element), numbers for the
+/// frictions and adhesions and the same triples as the first row.
+fn read_rows(
+    rows: &mpm_shared::model::Table,
+    element_material: &[u32],
+    item: &str,
+) -> Result<(Vec<u32>, Vec<String>), (String, String)> {
     let mut elements = Vec::new();
     let mut first: Option<Vec<String>> = None;
     for (k, r) in rows.rows().enumerate() {
-        let bad = |what: String| (item.clone(), format!("row {}: {what}", k + 1));
+        let bad = |what: String| (item.to_string(), format!("row {}: {what}", k + 1));
         if r.len() < 14 {
             return Err(bad(
                 "expected 'element n' and four 'material friction adhesion' triples".into(),
@@ -140,12 +185,12 @@ pub fn read(
         if e < 1 || e as usize > element_material.len() {
             return Err(bad(format!(
                 "element {} is not in the mesh (1..={})",
-                text(&r[0]),
+                token_text(&r[0]),
                 element_material.len()
             )));
         }
         elements.push(e as u32 - 1);
-        let rest: Vec<String> = r[2..14].iter().map(text).collect();
+        let rest: Vec<String> = r[2..14].iter().map(token_text).collect();
         for t in [1, 2, 4, 5, 7, 8, 10, 11] {
             if rest[t].parse::<f64>().map_or(true, |v| !v.is_finite()) {
                 return Err(bad(format!(
@@ -164,56 +209,50 @@ pub fn read(
             Some(_) => {}
         }
     }
-    let Some(slots) = first else {
-        return Err((
-            item,
+    match first {
+        Some(slots) => Ok((elements, slots)),
+        None => Err((
+            item.to_string(),
             "no rows: contact needs the structure's elements".into(),
-        ));
-    };
-    let material = element_material[elements[0] as usize];
-    if material == 0 {
-        return Err((
-            item,
-            format!(
-                "element {} is empty: the structure must be filled",
-                elements[0] + 1
-            ),
-        ));
+        )),
     }
-    elements.sort_unstable();
-    elements.dedup();
+}
+
+/// Checks that the structure is one whole material: every listed element (`elements`,
+/// ascending) of `material`, and every element of `material` that holds points listed.
+fn check_structure(
+    material: u32,
+    elements: &[u32],
+    element_material: &[u32],
+    points: &[u32],
+) -> Result<(), String> {
     for e in 0..element_material.len() {
         let listed = elements.binary_search(&(e as u32)).is_ok();
         let of_it = element_material[e] == material;
         if listed && !of_it {
-            return Err((
-                item,
-                format!(
-                    "element {} is of material {}, the structure (row 1's element) of material {material}: the structure must be one material",
-                    e + 1,
-                    element_material[e]
-                ),
+            return Err(format!(
+                "element {} is of material {}, the structure (row 1's element) of material {material}: the structure must be one material",
+                e + 1,
+                element_material[e]
             ));
         }
         if of_it && !listed && points[e] > 0 {
-            return Err((
-                item,
-                format!(
-                    "element {} is of the structure's material {material} but not listed: the structure must be every element of its material",
-                    e + 1
-                ),
+            return Err(format!(
+                "element {} is of the structure's material {material} but not listed: the structure must be every element of its material",
+                e + 1
             ));
         }
     }
-    let last = names.iter().map(|n| n.0).max().unwrap_or(0);
-    if material != last {
-        return Err((
-            item,
-            format!(
-                "the structure is material {material}; Anura3D takes it to be the last material ({last})"
-            ),
-        ));
-    }
+    Ok(())
+}
+
+/// Per material index up to `last`: (friction, adhesion) with the structure, from the first
+/// row's triples `slots` (a material by its name in `names`; "NAN" for an unused triple).
+fn interfaces_of(
+    slots: &[String],
+    names: &[(u32, String)],
+    last: u32,
+) -> Result<Vec<(f64, f64)>, String> {
     let mut interfaces = vec![(0.0, 0.0); last as usize + 1];
     for k in 0..4 {
         let name = &slots[3 * k];
@@ -221,19 +260,14 @@ pub fn read(
             continue;
         }
         let Some(&(m, _)) = names.iter().find(|n| &n.1 == name) else {
-            return Err((
-                item,
-                format!("row 1 names material \"{name}\", which is not defined"),
+            return Err(format!(
+                "row 1 names material \"{name}\", which is not defined"
             ));
         };
         let number = |t: usize| slots[3 * k + t].parse::<f64>().unwrap_or(0.0);
         interfaces[m as usize] = (number(1), number(2));
     }
-    Ok(ContactSpec {
-        material,
-        elements,
-        interfaces,
-    })
+    Ok(interfaces)
 }
 
 /// Anura3D's numbering of a tetrahedron's sides by its corners (0-based): the side's normal

@@ -98,49 +98,9 @@ impl MovingMeshSpec {
 /// all are empty), else the spec, or the section and what is wrong with it. Anura3D reads
 /// `dim (dim - 1) + 2` corners per list (8 in 3D, 4 in 2D).
 pub fn read(model: &Model) -> Result<Option<MovingMeshSpec>, (String, String)> {
-    let dim = model.dimension.coords();
-    let corners = dim * (dim - 1) + 2;
-    let list = |key: &str| -> Result<Option<Vec<u32>>, (String, String)> {
-        let Some(s) = model.section(key) else {
-            return Ok(None);
-        };
-        let item = format!("$${key}");
-        let Body::Table { rows, .. } = &s.body else {
-            return Err((item, "expected one node number per line".into()));
-        };
-        let mut out = Vec::new();
-        for r in rows.rows() {
-            let node = r.first().and_then(Token::as_int).unwrap_or(0);
-            if node < 1 || node as usize > model.node_count() {
-                return Err((
-                    item,
-                    format!(
-                        "node {} is not in the mesh (1..={})",
-                        r.first()
-                            .map_or(f64::NAN, |t| t.as_f64().unwrap_or(f64::NAN)),
-                        model.node_count()
-                    ),
-                ));
-            }
-            out.push(node as u32 - 1);
-        }
-        if out.is_empty() {
-            return Ok(None);
-        }
-        if out.len() != corners {
-            return Err((
-                item,
-                format!(
-                    "{} corner nodes; a {dim}D box has {corners} (one node number per line)",
-                    out.len()
-                ),
-            ));
-        }
-        Ok(Some(out))
-    };
-    let moving = list("MOVING_MESH_CORNER_NODES")?;
-    let extending = list("EXTENDING_MESH_CORNER_NODES")?;
-    let compressing = list("COMPRESSING_MESH_CORNER_NODES")?;
+    let moving = corner_list(model, "MOVING_MESH_CORNER_NODES")?;
+    let extending = corner_list(model, "EXTENDING_MESH_CORNER_NODES")?;
+    let compressing = corner_list(model, "COMPRESSING_MESH_CORNER_NODES")?;
     if moving.is_none() && extending.is_none() && compressing.is_none() {
         return Ok(None);
     }
@@ -150,17 +110,89 @@ pub fn read(model: &Model) -> Result<Option<MovingMeshSpec>, (String, String)> {
             "missing: a moving mesh needs the corners of the box that moves".into(),
         ));
     };
-    let text = |key: &str| -> Option<String> {
-        match &model.section(key)?.body {
-            Body::Text(lines) => lines
-                .iter()
-                .map(|l| l.trim())
-                .find(|l| !l.is_empty())
-                .map(str::to_string),
-            _ => None,
-        }
+    let axis = read_axis(model)?;
+    let material = first_line(model, "MOVING_MESH_REFERENCE_MATERIAL_INDEX")
+        .and_then(|t| {
+            t.split_whitespace()
+                .next()
+                .and_then(|w| w.parse::<u32>().ok())
+        })
+        .filter(|&m| m > 0)
+        .ok_or_else(|| {
+            (
+                "$$MOVING_MESH_REFERENCE_MATERIAL_INDEX".to_string(),
+                "missing, or not a positive material index".to_string(),
+            )
+        })?;
+    let storage = storage_boxes(&moving, extending, compressing)?;
+    Ok(Some(MovingMeshSpec {
+        storage,
+        moving,
+        axis,
+        material,
+    }))
+}
+
+/// The corner nodes (0-based) of the box of section `key`: `None` when the section is missing
+/// or empty, else `dim (dim - 1) + 2` nodes of the mesh.
+fn corner_list(model: &Model, key: &str) -> Result<Option<Vec<u32>>, (String, String)> {
+    let dim = model.dimension.coords();
+    let corners = dim * (dim - 1) + 2;
+    let Some(s) = model.section(key) else {
+        return Ok(None);
     };
-    let direction = text("MOVING_MESH_DIRECTION").ok_or_else(|| {
+    let item = format!("$${key}");
+    let Body::Table { rows, .. } = &s.body else {
+        return Err((item, "expected one node number per line".into()));
+    };
+    let mut out = Vec::new();
+    for r in rows.rows() {
+        let node = r.first().and_then(Token::as_int).unwrap_or(0);
+        if node < 1 || node as usize > model.node_count() {
+            return Err((
+                item,
+                format!(
+                    "node {} is not in the mesh (1..={})",
+                    r.first()
+                        .map_or(f64::NAN, |t| t.as_f64().unwrap_or(f64::NAN)),
+                    model.node_count()
+                ),
+            ));
+        }
+        out.push(node as u32 - 1);
+    }
+    if out.is_empty() {
+        return Ok(None);
+    }
+    if out.len() != corners {
+        return Err((
+            item,
+            format!(
+                "{} corner nodes; a {dim}D box has {corners} (one node number per line)",
+                out.len()
+            ),
+        ));
+    }
+    Ok(Some(out))
+}
+
+/// The first non-blank line of the text section `key`, trimmed (`None` when the section is
+/// missing, not text, or blank).
+fn first_line(model: &Model, key: &str) -> Option<String> {
+    match &model.section(key)?.body {
+        Body::Text(lines) => lines
+            .iter()
+            .map(|l| l.trim())
+            .find(|l| !l.is_empty())
+            .map(str::to_string),
+        _ => None,
+    }
+}
+
+/// The axis of `$$MOVING_MESH_DIRECTION` (0: x, 1: y, 2: z), one of the model's.
+fn read_axis(model: &Model) -> Result<usize, (String, String)> {
+    let dim = model.dimension.coords();
+    let direction = first_line(model, "MOVING_MESH_DIRECTION").ok_or_else(|| {
         (
             "$$MOVING_MESH_DIRECTION".to_string(),
             "missing: give x-direction, y-direction or z-direction".to_string(),
@@ -183,26 +215,23 @@ pub fn read(model: &Model) -> Result<Option<MovingMeshSpec>, (String, String)> {
             format!("{direction} in a {dim}D model"),
         ));
     }
-    let material = text("MOVING_MESH_REFERENCE_MATERIAL_INDEX")
-        .and_then(|t| {
-            t.split_whitespace()
-                .next()
-                .and_then(|w| w.parse::<u32>().ok())
-        })
-        .filter(|&m| m > 0)
-        .ok_or_else(|| {
-            (
-                "$$MOVING_MESH_REFERENCE_MATERIAL_INDEX".to_string(),
-                "missing, or not a positive material index".to_string(),
-            )
-        })?;
+    Ok(axis)
+}
+
+/// The storage boxes' corners, the extending box's then the compressing one's (those given,
+/// at least one), each with its fixed end first: its first corner that is not also a corner
+/// of the moving box (`moving`).
+fn storage_boxes(
+    moving: &[u32],
+    extending: Option<Vec<u32>>,
+    compressing: Option<Vec<u32>>,
+) -> Result<Vec<Vec<u32>>, (String, String)> {
     let mut storage = Vec::new();
     for (key, box_corners) in [
         ("EXTENDING_MESH_CORNER_NODES", extending),
         ("COMPRESSING_MESH_CORNER_NODES", compressing),
     ] {
         let Some(mut c) = box_corners else { continue };
-        // The fixed end: the first corner that is not also a corner of the moving box.
         let Some(k) = c.iter().position(|n| !moving.contains(n)) else {
             return Err((
                 format!("$${key}"),
@@ -218,12 +247,7 @@ pub fn read(model: &Model) -> Result<Option<MovingMeshSpec>, (String, String)> {
             "a moving mesh needs an extending or a compressing box (or both)".into(),
         ));
     }
-    Ok(Some(MovingMeshSpec {
-        storage,
-        moving,
-        axis,
-        material,
-    }))
+    Ok(storage)
 }
 
 /// A step of the moving mesh turned an element inside out.
