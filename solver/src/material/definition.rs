@@ -3,7 +3,7 @@
 //! point), and [`ConstitutiveLaw`], the law built in the run's precision that updates a point's
 //! stress. Each law is one file of `material/` implementing both, registered by one line in
 //! [`crate::material::law`], which generates the enums the solver dispatches on; the
-//! conformance suite (`material::conformance`) checks any implementation, inside the
+//! conformance suite ([`crate::material::conformance`]) checks any implementation, inside the
 //! crate or out.
 
 use std::fmt::Debug;

@@ -1,5 +1,6 @@
 //! Constitutive laws of the solid and the pore liquid's constants.
 
+pub mod conformance;
 pub mod definition;
 pub mod error;
 pub mod law;
