@@ -1,6 +1,101 @@
-//! Incremental small-strain linear elasticity.
+//! Incremental small-strain linear elasticity (Anura3D's `linear_elasticity`).
 
+use crate::material::definition::{
+    Bound, ConstitutiveLaw, LawDefinition, Parameter, ParameterError,
+};
 use crate::real::Real;
+
+/// Linear elasticity's parameters, checked: E > 0, -1 < ν < 0.5.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearElasticSpec {
+    /// Young's modulus (kPa).
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+}
+
+/// Young's modulus and Poisson's ratio, the elastic part of every law.
+pub const ELASTIC_PARAMETERS: [Parameter; 2] = [
+    Parameter::new("YOUNG_MODULUS", "kPa", "Young's modulus E")
+        .range(Bound::Open(0.0), Bound::Open(f64::INFINITY)),
+    Parameter::new("POISSON_RATIO", "", "Poisson's ratio ν")
+        .range(Bound::Open(-1.0), Bound::Open(0.5)),
+];
+
+impl LinearElasticSpec {
+    /// Checked: E > 0 and finite, -1 < ν < 0.5.
+    pub fn new(young: f64, poisson: f64) -> Result<Self, ParameterError> {
+        if !(young > 0.0 && young.is_finite()) {
+            return Err(ParameterError(format!(
+                "Young's modulus must be positive, got {young}"
+            )));
+        }
+        if !(poisson > -1.0 && poisson < 0.5) {
+            return Err(ParameterError(format!(
+                "Poisson's ratio must be in (-1, 0.5), got {poisson}"
+            )));
+        }
+        Ok(LinearElasticSpec { young, poisson })
+    }
+}
+
+impl LawDefinition for LinearElasticSpec {
+    const NAME: &'static str = "linear_elasticity";
+    const PARAMETERS: &'static [Parameter] = &ELASTIC_PARAMETERS;
+    type Law<R: Real> = LinearElastic<R>;
+
+    fn read(get: &dyn Fn(&str) -> Option<f64>) -> Result<Self, ParameterError> {
+        Self::new(
+            Self::need(get, "YOUNG_MODULUS")?,
+            Self::need(get, "POISSON_RATIO")?,
+        )
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.young, self.poisson]
+    }
+
+    fn elastic(&self) -> (f64, f64) {
+        (self.young, self.poisson)
+    }
+
+    fn state_len(&self) -> usize {
+        0
+    }
+
+    fn build<R: Real>(&self) -> LinearElastic<R> {
+        LinearElastic::new(self.young, self.poisson)
+    }
+
+    fn examples() -> Vec<Self> {
+        vec![
+            LinearElasticSpec {
+                young: 1e4,
+                poisson: 0.3,
+            },
+            // Negative and nearly incompressible.
+            LinearElasticSpec {
+                young: 2.5e4,
+                poisson: -0.4,
+            },
+            LinearElasticSpec {
+                young: 1e3,
+                poisson: 0.49,
+            },
+        ]
+    }
+}
+
+impl<R: Real> ConstitutiveLaw<R> for LinearElastic<R> {
+    #[inline(always)]
+    fn update(&self, stress: &mut [R; 6], de: &[R; 6], _: &mut [R]) {
+        LinearElastic::update(self, stress, de);
+    }
+
+    fn yield_function(&self, _: &[R; 6], _: &[R]) -> Option<R> {
+        None
+    }
+}
 
 /// Isotropic linear elastic law.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,5 +1,7 @@
 //! Constitutive laws of the solid and the pore liquid's constants.
 
+pub mod conformance;
+pub mod definition;
 pub mod error;
 pub mod law;
 pub mod linear_elastic;
@@ -7,3 +9,4 @@ pub mod liquid;
 pub mod mohr_coulomb;
 pub mod principal;
 pub mod strain_softening_mohr_coulomb;
+pub mod strength;

@@ -31,8 +31,12 @@
 //! plastic point-step adds about 140 ns, one resting on the surface about 85 ns (docs/design.md,
 //! "Laws").
 
-use crate::material::linear_elastic::LinearElastic;
-use crate::material::principal::{split, split_lanes, Split};
+use crate::material::definition::{
+    Bound, ConstitutiveLaw, LawDefinition, Parameter, ParameterError,
+};
+use crate::material::linear_elastic::{LinearElastic, LinearElasticSpec, ELASTIC_PARAMETERS};
+use crate::material::principal::{principal, split, split_lanes, Split};
+use crate::material::strength::{check_strength, DILATANCY, FRICTION, NON_NEGATIVE};
 use crate::real::Real;
 
 /// Anura3D's largest sin φ: above it the yield function uses this value (φ ≈ 87.4°).
@@ -151,6 +155,18 @@ impl<R: Real> Surface<R> {
     pub fn yield_value(&self, lo: R, hi: R) -> R {
         let half = R::of(0.5);
         half * (hi - lo) + half * (hi + lo) * self.sin_phi - self.cohesion
+    }
+
+    /// The largest yield function at the stress `s`: F of its extreme principal stresses and,
+    /// where the cut-off cuts the pyramid, Ft = σ3 - σt.
+    pub fn yield_at(&self, s: &[R; 6]) -> R {
+        let p = principal(s);
+        let f = self.yield_value(p.values[0], p.values[2]);
+        if self.cut_off {
+            f.max(p.values[2] - self.tension)
+        } else {
+            f
+        }
     }
 
     /// The first test of [`Surface::surely_inside`], for `W` stresses at once (`s[c][q]`:
@@ -818,10 +834,149 @@ impl<R: Real> MohrCoulomb<R> {
     }
 }
 
+impl<R: Real> ConstitutiveLaw<R> for MohrCoulomb<R> {
+    #[inline(always)]
+    fn update(&self, stress: &mut [R; 6], de: &[R; 6], _: &mut [R]) {
+        MohrCoulomb::update(self, stress, de);
+    }
+
+    fn yield_function(&self, stress: &[R; 6], _: &[R]) -> Option<R> {
+        Some(self.surface.yield_at(stress))
+    }
+}
+
+/// Mohr–Coulomb's parameters (kPa, angles in degrees), checked by [`MohrCoulombSpec::new`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MohrCoulombSpec {
+    /// Young's modulus (kPa).
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// Friction angle φ (degrees).
+    pub friction_angle: f64,
+    /// Cohesion c (kPa).
+    pub cohesion: f64,
+    /// Dilatancy angle ψ (degrees).
+    pub dilatancy_angle: f64,
+    /// Tensile strength σt (kPa).
+    pub tensile_strength: f64,
+}
+
+const PARAMETERS: [Parameter; 6] = [
+    ELASTIC_PARAMETERS[0],
+    ELASTIC_PARAMETERS[1],
+    Parameter::new("FRICTION_ANGLE", "degrees", "friction angle φ").range(FRICTION.0, FRICTION.1),
+    Parameter::new("COHESION", "kPa", "cohesion c").range(NON_NEGATIVE.0, NON_NEGATIVE.1),
+    Parameter::new("DILATANCY_ANGLE", "degrees", "dilatancy angle ψ, at most φ")
+        .range(DILATANCY.0, DILATANCY.1)
+        .with_default(0.0),
+    Parameter::new(
+        "TENSILE_STRENGTH",
+        "kPa",
+        "tensile strength σt, at most the apex c cos φ / sin φ",
+    )
+    .range(Bound::Closed(0.0), Bound::Closed(f64::INFINITY))
+    .with_default(0.0),
+];
+
+impl MohrCoulombSpec {
+    /// Checked: the elastic constants as [`LinearElasticSpec::new`], φ in [0°, 90°),
+    /// 0 ≤ ψ ≤ φ, c ≥ 0, σt ≥ 0 and, for φ > 0, σt no more than the pyramid's apex
+    /// c cos φ / sin φ (Anura3D's Mohr–Coulomb routine takes a larger σt as given, where its
+    /// cut-off cannot act as one; its older stress routine capped σt at the apex).
+    pub fn new(
+        young: f64,
+        poisson: f64,
+        friction_angle: f64,
+        cohesion: f64,
+        dilatancy_angle: f64,
+        tensile_strength: f64,
+    ) -> Result<Self, ParameterError> {
+        LinearElasticSpec::new(young, poisson)?;
+        check_strength("", friction_angle, dilatancy_angle, cohesion)?;
+        let top = apex(friction_angle, cohesion);
+        // A little room for an apex written out in decimals.
+        if !(tensile_strength >= 0.0 && tensile_strength <= top * (1.0 + 1e-9)) {
+            return Err(ParameterError(format!(
+                "tensile strength must be in [0, {top}] kPa (the apex c cos φ / sin φ), got {tensile_strength}"
+            )));
+        }
+        Ok(MohrCoulombSpec {
+            young,
+            poisson,
+            friction_angle,
+            cohesion,
+            dilatancy_angle,
+            tensile_strength,
+        })
+    }
+}
+
+impl LawDefinition for MohrCoulombSpec {
+    const NAME: &'static str = "mohr_coulomb";
+    const PARAMETERS: &'static [Parameter] = &PARAMETERS;
+    type Law<R: Real> = MohrCoulomb<R>;
+
+    fn read(get: &dyn Fn(&str) -> Option<f64>) -> Result<Self, ParameterError> {
+        let [young, poisson, friction, cohesion, dilatancy, tension] =
+            PARAMETERS.map(|p| Self::need(get, p.key));
+        Self::new(young?, poisson?, friction?, cohesion?, dilatancy?, tension?)
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![
+            self.young,
+            self.poisson,
+            self.friction_angle,
+            self.cohesion,
+            self.dilatancy_angle,
+            self.tensile_strength,
+        ]
+    }
+
+    fn elastic(&self) -> (f64, f64) {
+        (self.young, self.poisson)
+    }
+
+    fn state_len(&self) -> usize {
+        0
+    }
+
+    fn build<R: Real>(&self) -> MohrCoulomb<R> {
+        MohrCoulomb::new(
+            self.young,
+            self.poisson,
+            self.friction_angle,
+            self.cohesion,
+            self.dilatancy_angle,
+            self.tensile_strength,
+        )
+    }
+
+    fn examples() -> Vec<Self> {
+        let mc = |friction, cohesion, dilatancy, tension| MohrCoulombSpec {
+            young: 1e4,
+            poisson: 0.3,
+            friction_angle: friction,
+            cohesion,
+            dilatancy_angle: dilatancy,
+            tensile_strength: tension,
+        };
+        vec![
+            // With a cut-off; without cohesion (the apex at the origin); associated, the
+            // cut-off at the apex (none); Tresca's prism with a cut-off; sin φ above its cap.
+            mc(30.0, 10.0, 5.0, 1.0),
+            mc(30.0, 0.0, 0.0, 0.0),
+            mc(35.0, 5.0, 35.0, apex(35.0, 5.0)),
+            mc(0.0, 10.0, 0.0, 5.0),
+            mc(88.0, 2.0, 10.0, 0.01),
+        ]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::material::principal::principal;
     use proptest::prelude::*;
 
     const E: f64 = 10_000.0;

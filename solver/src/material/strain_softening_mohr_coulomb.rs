@@ -22,8 +22,10 @@
 //! This law therefore has no Anura3D reference, and its source holds no softening formula either:
 //! the one above is this solver's.
 
-use crate::material::linear_elastic::LinearElastic;
+use crate::material::definition::{ConstitutiveLaw, LawDefinition, Parameter, ParameterError};
+use crate::material::linear_elastic::{LinearElastic, LinearElasticSpec, ELASTIC_PARAMETERS};
 use crate::material::mohr_coulomb::Surface;
+use crate::material::strength::{check_strength, DILATANCY, FRICTION, NON_NEGATIVE};
 use crate::real::Real;
 
 /// Peak or residual strength parameters.
@@ -101,6 +103,185 @@ impl<R: Real> StrainSofteningMohrCoulomb<R> {
 /// The pyramid without cut-off for strength `s`.
 fn surface<R: Real>(s: &Strength) -> Surface<R> {
     Surface::new(s.friction, s.cohesion, s.dilatancy, f64::INFINITY)
+}
+
+impl<R: Real> ConstitutiveLaw<R> for StrainSofteningMohrCoulomb<R> {
+    #[inline(always)]
+    fn update(&self, stress: &mut [R; 6], de: &[R; 6], state: &mut [R]) {
+        StrainSofteningMohrCoulomb::update(self, stress, de, state);
+    }
+
+    fn yield_function(&self, stress: &[R; 6], state: &[R]) -> Option<R> {
+        // The surface `update` returns to from this state: the peak one built at set-up
+        // until the point yields.
+        match state.first() {
+            Some(&eq) if eq != R::ZERO => {
+                Some(surface::<R>(&self.strength(eq.f64())).yield_at(stress))
+            }
+            _ => Some(self.peak_surface.yield_at(stress)),
+        }
+    }
+}
+
+/// Strain-softening Mohr–Coulomb's parameters (kPa, angles in degrees), checked by
+/// [`StrainSofteningMohrCoulombSpec::new`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrainSofteningMohrCoulombSpec {
+    /// Young's modulus (kPa).
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// Peak strength.
+    pub peak: Strength,
+    /// Residual strength.
+    pub residual: Strength,
+    /// Shape factor η.
+    pub shape_factor: f64,
+}
+
+const PARAMETERS: [Parameter; 9] = [
+    ELASTIC_PARAMETERS[0],
+    ELASTIC_PARAMETERS[1],
+    Parameter::new("PEAK_COHESION", "kPa", "peak cohesion c_p")
+        .range(NON_NEGATIVE.0, NON_NEGATIVE.1),
+    Parameter::new("RESIDUAL_COHESION", "kPa", "residual cohesion c_r")
+        .range(NON_NEGATIVE.0, NON_NEGATIVE.1),
+    Parameter::new("PEAK_FRICTION_ANGLE", "degrees", "peak friction angle φ_p")
+        .range(FRICTION.0, FRICTION.1),
+    Parameter::new(
+        "RESIDUAL_FRICTION_ANGLE",
+        "degrees",
+        "residual friction angle φ_r",
+    )
+    .range(FRICTION.0, FRICTION.1),
+    Parameter::new(
+        "PEAK_DILATANCY_ANGLE",
+        "degrees",
+        "peak dilatancy angle ψ_p, at most φ_p",
+    )
+    .range(DILATANCY.0, DILATANCY.1),
+    Parameter::new(
+        "RESIDUAL_DILATANCY_ANGLE",
+        "degrees",
+        "residual dilatancy angle ψ_r, at most φ_r",
+    )
+    .range(DILATANCY.0, DILATANCY.1),
+    Parameter::new(
+        "SHAPE_FACTOR",
+        "",
+        "shape factor η of the softening exp(-η ε_eq^p)",
+    )
+    .range(NON_NEGATIVE.0, NON_NEGATIVE.1),
+];
+
+impl StrainSofteningMohrCoulombSpec {
+    /// Checked: the elastic constants as [`LinearElasticSpec::new`], peak and residual
+    /// strengths each as in [`crate::material::mohr_coulomb::MohrCoulombSpec::new`], η ≥ 0.
+    pub fn new(
+        young: f64,
+        poisson: f64,
+        peak: Strength,
+        residual: Strength,
+        shape_factor: f64,
+    ) -> Result<Self, ParameterError> {
+        LinearElasticSpec::new(young, poisson)?;
+        check_strength("peak ", peak.friction, peak.dilatancy, peak.cohesion)?;
+        check_strength(
+            "residual ",
+            residual.friction,
+            residual.dilatancy,
+            residual.cohesion,
+        )?;
+        if !(shape_factor >= 0.0 && shape_factor.is_finite()) {
+            return Err(ParameterError(format!(
+                "shape factor must be non-negative, got {shape_factor}"
+            )));
+        }
+        Ok(StrainSofteningMohrCoulombSpec {
+            young,
+            poisson,
+            peak,
+            residual,
+            shape_factor,
+        })
+    }
+}
+
+impl LawDefinition for StrainSofteningMohrCoulombSpec {
+    const NAME: &'static str = "strain_softening_mohr_coulomb";
+    const PARAMETERS: &'static [Parameter] = &PARAMETERS;
+    type Law<R: Real> = StrainSofteningMohrCoulomb<R>;
+
+    fn read(get: &dyn Fn(&str) -> Option<f64>) -> Result<Self, ParameterError> {
+        let need = |k| Self::need(get, k);
+        // Read peak, then residual (not the keys' order): the first key missing is named.
+        let (young, poisson) = (need("YOUNG_MODULUS")?, need("POISSON_RATIO")?);
+        let peak = Strength {
+            cohesion: need("PEAK_COHESION")?,
+            friction: need("PEAK_FRICTION_ANGLE")?,
+            dilatancy: need("PEAK_DILATANCY_ANGLE")?,
+        };
+        let residual = Strength {
+            cohesion: need("RESIDUAL_COHESION")?,
+            friction: need("RESIDUAL_FRICTION_ANGLE")?,
+            dilatancy: need("RESIDUAL_DILATANCY_ANGLE")?,
+        };
+        Self::new(young, poisson, peak, residual, need("SHAPE_FACTOR")?)
+    }
+
+    fn values(&self) -> Vec<f64> {
+        let (p, r) = (self.peak, self.residual);
+        vec![
+            self.young,
+            self.poisson,
+            p.cohesion,
+            r.cohesion,
+            p.friction,
+            r.friction,
+            p.dilatancy,
+            r.dilatancy,
+            self.shape_factor,
+        ]
+    }
+
+    fn elastic(&self) -> (f64, f64) {
+        (self.young, self.poisson)
+    }
+
+    fn state_len(&self) -> usize {
+        1
+    }
+
+    fn build<R: Real>(&self) -> StrainSofteningMohrCoulomb<R> {
+        StrainSofteningMohrCoulomb::new(
+            self.young,
+            self.poisson,
+            self.peak,
+            self.residual,
+            self.shape_factor,
+        )
+    }
+
+    fn examples() -> Vec<Self> {
+        let strength = |cohesion, friction, dilatancy| Strength {
+            cohesion,
+            friction,
+            dilatancy,
+        };
+        let law = |peak, residual, shape_factor| StrainSofteningMohrCoulombSpec {
+            young: 1e4,
+            poisson: 0.3,
+            peak,
+            residual,
+            shape_factor,
+        };
+        vec![
+            law(strength(20.0, 35.0, 5.0), strength(2.0, 25.0, 0.0), 50.0),
+            // Softening to no cohesion at all; and none (η = 0).
+            law(strength(5.0, 30.0, 10.0), strength(0.0, 20.0, 0.0), 200.0),
+            law(strength(10.0, 30.0, 0.0), strength(1.0, 20.0, 0.0), 0.0),
+        ]
+    }
 }
 
 #[cfg(test)]
