@@ -33,7 +33,7 @@ pub(super) const TABLE: Table = Table {
         key("points_per_element", "integer", "4 (tetrahedra), 3 (triangles)", "", "material points per element"),
         key("liquid", "table", "none (dry)", "", "the pore liquid of a saturated material: `[material.liquid]`"),
         key("k0", "float", "none", "", "K0 of Anura3D's K0 procedure: the points start from its stresses (gravity along -y)"),
-        key("initial_stress", "[float; 6]", "none", "kPa", "a uniform initial effective stress, xx yy zz xy yz zx (tension positive)"),
+        key("initial_stress", "[float × 6]", "none", "kPa", "a uniform initial effective stress, xx yy zz xy yz zx (tension positive)"),
     ],
 };
 

@@ -14,9 +14,9 @@ pub(super) const TABLE: Table = Table {
     about: "How long to simulate and when to write outputs (a consolidation scene may give \
             both by time factor instead: `[consolidation]`).",
     keys: &[
-        key("end", "float", "required", "s", "the simulated time"),
+        key("end", "float", "required (or `consolidation.end_tv`)", "s", "the simulated time"),
         key("courant", "float", "0.9", "", "Courant number of the time step, in (0, 1] (above 1 only with --force)"),
-        key("output_interval", "float", "required", "s", "time between outputs (the last one is at `end`)"),
+        key("output_interval", "float", "required (or `consolidation.output_tv`)", "s", "time between outputs (the last one is at `end`)"),
         key("max_steps", "integer", "none", "", "stop after this many time steps"),
     ],
 };
