@@ -17,7 +17,8 @@ use console::say;
 use mpm_solve::driver::dispatch::{dispatch, Generic};
 use mpm_solve::driver::units;
 use mpm_solve::element::Element;
-use mpm_solve::input::case::Precision;
+use mpm_solve::input::case::{Case, Precision};
+use mpm_solve::input::overrides::Overrides;
 use mpm_solve::real::Real;
 use progress::{Progress, Reporter};
 
@@ -443,27 +444,43 @@ fn input_kind(path: &std::path::Path) -> anyhow::Result<Input> {
     }
 }
 
-/// The most worker threads a run may ask for: each is started before the input is read, and a
-/// mistyped count (`--threads 99999`) would start them for minutes before any message.
-const MAX_THREADS: usize = 1024;
+/// The options that override the case's settings, as the library takes them.
+fn overrides(args: &Args) -> Overrides {
+    use mpm_solve::input::case::{Drag, Reorder};
+    use mpm_solve::parallel::team::Pin;
+    Overrides {
+        threads: args.threads,
+        pin: match args.pin {
+            PinArg::None => Pin::None,
+            PinArg::Cores => Pin::Cores,
+            PinArg::Auto => Pin::Auto,
+        },
+        first_touch: matches!(args.first_touch, OnOff::On),
+        huge_pages: matches!(args.huge_pages, OnOff::On),
+        reorder: match args.reorder {
+            ReorderArg::None => Reorder::None,
+            ReorderArg::Morton => Reorder::Morton,
+            ReorderArg::Hilbert => Reorder::Hilbert,
+        },
+        drag: match args.drag {
+            DragArg::Implicit => Drag::Implicit,
+            DragArg::Explicit => Drag::Explicit,
+        },
+        precision: args.precision.map(|p| match p {
+            PrecisionArg::F64 => Precision::F64,
+            PrecisionArg::F32 => Precision::F32,
+        }),
+        energy_tolerance: args.energy_tolerance.map(|Tolerance(t)| t),
+        probes: args.probe.clone(),
+        force: args.force,
+    }
+}
 
 fn run(args: Args) -> anyhow::Result<()> {
-    if args.threads == Some(0) {
-        bail!("--threads must be at least 1");
-    }
-    if let Some(n) = args.threads.filter(|&n| n > MAX_THREADS) {
-        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
-        bail!("--threads {n}: at most {MAX_THREADS} (this machine has {cores} cores)");
-    }
-    // Before the input is read: the large arrays are allocated from here on.
-    mpm_solve::parallel::huge_pages::set_enabled(matches!(args.huge_pages, OnOff::On));
-    // Reading, ordering and set-up run on rayon's pool: size it as the run's team.
-    if let Some(n) = args.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .context("sizing the thread pool")?;
-    }
+    let overrides = overrides(&args);
+    // Before the input is read: a mistyped thread count is refused before its threads start,
+    // and the large arrays are allocated from here on.
+    overrides.prepare_process()?;
     let kind = input_kind(&args.input)?;
     let is_scene = kind == Input::Scene;
     if let Some(dir) = &args.export_anura3d {
@@ -521,73 +538,14 @@ fn run(args: Args) -> anyhow::Result<()> {
         );
         case
     };
-    solve(case, &args)
+    solve(case, &args, &overrides)
 }
 
-/// Runs `case` with the command line's probes, output folder and options.
-fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<()> {
-    let out = match (args.out.as_ref().or(args.resume.as_ref()), args.check) {
-        (_, true) => None,
-        (Some(out), false) => {
-            if out.exists() && !out.is_dir() {
-                bail!(
-                    "--out {}: is a file; --out names a folder for the outputs (created if missing)",
-                    out.display()
-                );
-            }
-            Some(out.as_path())
-        }
-        (None, false) => bail!(
-            "--out DIR is required to run a case (a folder for the outputs, created if missing; \
-             --resume DIR continues an interrupted run); --check only predicts what a run would cost"
-        ),
-    };
-    case.drag = match args.drag {
-        DragArg::Implicit => mpm_solve::input::case::Drag::Implicit,
-        DragArg::Explicit => mpm_solve::input::case::Drag::Explicit,
-    };
-    if let Some(p) = args.precision {
-        case.precision = match p {
-            PrecisionArg::F64 => Precision::F64,
-            PrecisionArg::F32 => Precision::F32,
-        };
-    }
-    case.check_courant(args.force)?;
-    if let Some(Tolerance(t)) = args.energy_tolerance {
-        case.guards.energy_tolerance = t;
-    }
-    case.probes.extend(&args.probe);
-    case.probes.sort_unstable();
-    case.probes.dedup();
-    if args.threads == Some(0) {
-        bail!("--threads must be at least 1");
-    }
-    case.engine = mpm_solve::driver::engine::Options {
-        threads: args.threads.unwrap_or(0),
-        pin: match args.pin {
-            PinArg::None => mpm_solve::parallel::team::Pin::None,
-            PinArg::Cores => mpm_solve::parallel::team::Pin::Cores,
-            PinArg::Auto => mpm_solve::parallel::team::Pin::Auto,
-        },
-        first_touch: matches!(args.first_touch, OnOff::On),
-    };
-    let how = match args.reorder {
-        ReorderArg::None => mpm_solve::input::case::Reorder::None,
-        ReorderArg::Morton => mpm_solve::input::case::Reorder::Morton,
-        ReorderArg::Hilbert => mpm_solve::input::case::Reorder::Hilbert,
-    };
-    // A GOM with sections this tool does not understand cannot be renumbered: compute it in
-    // its own order rather than refuse it.
-    let how = match case.model.first_unremappable() {
-        Some(k) if how != mpm_solve::input::case::Reorder::None => {
-            eprintln!(
-                "mpm-solve: warning: section $${k} cannot follow a renumbering; computing in the input's order"
-            );
-            mpm_solve::input::case::Reorder::None
-        }
-        _ => how,
-    };
-    let case = case.reordered(how)?;
+/// Runs `case` with the command line's overrides, output folder and options (or, with
+/// `--check`, predicts what a run would cost).
+fn solve(case: Case, args: &Args, overrides: &Overrides) -> anyhow::Result<()> {
+    let out = output_folder(args)?;
+    let case = mpm_solve::input::overrides::apply(case, overrides)?;
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -597,49 +555,89 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
         max_steps: args.max_steps,
     };
     let Some(out) = out else {
-        let print = |plan: &mpm_solve::input::preflight::Plan| {
-            say!("{plan}");
-            let cheaper = mpm_solve::input::preflight::cheaper_settings(&case);
-            if !cheaper.is_empty() {
-                say!("  cheaper at similar error on the accuracy map (docs/accuracy.md):");
-                for line in cheaper {
-                    say!("    - {line}");
-                }
-            }
-        };
-        if let Err(e) = plan.check(&limits, None) {
-            print(&plan);
-            return Err(e.into());
-        }
-        // The engine a run would build (its threads, pinning, first touch), which checks the
-        // probes against the points it places and times a few steps of the case.
-        struct Calibrate<'a>(&'a mpm_solve::input::case::Case, u64);
-        impl Generic for Calibrate<'_> {
-            type Output = anyhow::Result<Option<mpm_solve::input::preflight::Calibration>>;
-            fn call<R: Real, E: Element>(self) -> Self::Output {
-                use mpm_solve::driver::calibrate;
-                let mut engine = mpm_solve::driver::engine::Engine::<R, E>::new(self.0, false)?;
-                mpm_solve::driver::run::check_probes(self.0, &engine)?;
-                Ok(calibrate::calibrate(
-                    &mut engine,
-                    self.1,
-                    calibrate::BUDGET,
-                )?)
-            }
-        }
-        // (A float beyond u64 saturates.)
-        let run_steps = plan.steps as u64;
-        match dispatch(&case, Calibrate(&case, run_steps))? {
-            Ok(Some(c)) => print(&plan.calibrated(c)),
-            Ok(None) => print(&plan),
-            Err(e) => {
-                print(&plan);
-                return Err(e);
-            }
-        }
-        return Ok(());
+        return check_only(&case, plan, &limits);
     };
     plan.check(&limits, Some(out))?;
+    run_in(&case, &plan, out, args)
+}
+
+/// The run's output folder (`--out`, or `--resume`'s); `None` under `--check`.
+fn output_folder(args: &Args) -> anyhow::Result<Option<&std::path::Path>> {
+    match (args.out.as_ref().or(args.resume.as_ref()), args.check) {
+        (_, true) => Ok(None),
+        (Some(out), false) => {
+            if out.exists() && !out.is_dir() {
+                bail!(
+                    "--out {}: is a file; --out names a folder for the outputs (created if missing)",
+                    out.display()
+                );
+            }
+            Ok(Some(out.as_path()))
+        }
+        (None, false) => bail!(
+            "--out DIR is required to run a case (a folder for the outputs, created if missing; \
+             --resume DIR continues an interrupted run); --check only predicts what a run would cost"
+        ),
+    }
+}
+
+/// `--check`: prints the plan of a run of `case` (with the wall time from a few of its steps
+/// timed here, and cheaper settings), refused when over the limits.
+fn check_only(
+    case: &Case,
+    plan: mpm_solve::input::preflight::Plan,
+    limits: &mpm_solve::input::preflight::Limits,
+) -> anyhow::Result<()> {
+    let print = |plan: &mpm_solve::input::preflight::Plan| {
+        say!("{plan}");
+        let cheaper = mpm_solve::input::preflight::cheaper_settings(case);
+        if !cheaper.is_empty() {
+            say!("  cheaper at similar error on the accuracy map (docs/accuracy.md):");
+            for line in cheaper {
+                say!("    - {line}");
+            }
+        }
+    };
+    if let Err(e) = plan.check(limits, None) {
+        print(&plan);
+        return Err(e.into());
+    }
+    // The engine a run would build (its threads, pinning, first touch), which checks the
+    // probes against the points it places and times a few steps of the case.
+    struct Calibrate<'a>(&'a Case, u64);
+    impl Generic for Calibrate<'_> {
+        type Output = anyhow::Result<Option<mpm_solve::input::preflight::Calibration>>;
+        fn call<R: Real, E: Element>(self) -> Self::Output {
+            use mpm_solve::driver::calibrate;
+            let mut engine = mpm_solve::driver::engine::Engine::<R, E>::new(self.0, false)?;
+            mpm_solve::driver::run::check_probes(self.0, &engine)?;
+            Ok(calibrate::calibrate(
+                &mut engine,
+                self.1,
+                calibrate::BUDGET,
+            )?)
+        }
+    }
+    // (A float beyond u64 saturates.)
+    let run_steps = plan.steps as u64;
+    match dispatch(case, Calibrate(case, run_steps))? {
+        Ok(Some(c)) => print(&plan.calibrated(c)),
+        Ok(None) => print(&plan),
+        Err(e) => {
+            print(&plan);
+            return Err(e);
+        }
+    }
+    Ok(())
+}
+
+/// Runs `case` into the folder `out` (over MPI ranks when launched so), its plan `plan`.
+fn run_in(
+    case: &Case,
+    plan: &mpm_solve::input::preflight::Plan,
+    out: &std::path::Path,
+    args: &Args,
+) -> anyhow::Result<()> {
     let comm = communicator()?;
     let root = comm.as_ref().map_or(true, |c| c.rank() == 0);
     // A rank that fails leaves without MPI's finalisation (which would wait for the others):
@@ -656,29 +654,14 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
     let created = !out.exists();
     // Rank 0 alone owns the output folder of a run over MPI ranks.
     let _lock = if root {
-        match take_folder(&case, out, args) {
+        match take_folder(case, out, args) {
             Ok(lock) => Some(lock),
             Err(e) => return fail(e),
         }
     } else {
         None
     };
-    // A first SIGINT or SIGTERM stops the run after its step, with a checkpoint; a second one
-    // ends the process at once.
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
-    let twice = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register_conditional_shutdown(
-            sig,
-            i32::from(exit_signal(sig as usize)),
-            std::sync::Arc::clone(&twice),
-        )
-        .and_then(|_| signal_hook::flag::register(sig, std::sync::Arc::clone(&twice)))
-        .and_then(|_| {
-            signal_hook::flag::register_usize(sig, std::sync::Arc::clone(&stop), sig as usize)
-        })
-        .context("installing the signal handlers")?;
-    }
+    let stop = stop_on_signals()?;
     let options = mpm_solve::driver::run::RunOptions {
         drop_lost: args.drop_lost,
         max_lost: args.max_lost,
@@ -706,9 +689,9 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
     let reporter = Reporter::new(mode, plan.steps.min(u64::MAX as f64) as u64, case.end_time);
     // One code path, compiled once per precision and element type.
     let result = dispatch(
-        &case,
+        case,
         Execute {
-            case: &case,
+            case,
             out,
             options: &options,
             reporter,
@@ -723,15 +706,40 @@ fn solve(mut case: mpm_solve::input::case::Case, args: &Args) -> anyhow::Result<
     }
     // A run refused at set-up (before its first output) leaves no folder it created.
     if result.is_err() && created {
-        let only_lock = std::fs::read_dir(out)
-            .map(|d| d.flatten().all(|e| e.file_name() == checkpoint::LOCK))
-            .unwrap_or(false);
-        if only_lock {
-            let _ = std::fs::remove_file(out.join(checkpoint::LOCK));
-            let _ = std::fs::remove_dir(out);
-        }
+        remove_unused(out);
     }
     result
+}
+
+/// Installs the handlers of SIGINT and SIGTERM: a first one stops the run after its step, with
+/// a checkpoint (the flag returned holds the signal); a second one ends the process at once.
+fn stop_on_signals() -> anyhow::Result<std::sync::Arc<std::sync::atomic::AtomicUsize>> {
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let twice = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(
+            sig,
+            i32::from(exit_signal(sig as usize)),
+            std::sync::Arc::clone(&twice),
+        )
+        .and_then(|_| signal_hook::flag::register(sig, std::sync::Arc::clone(&twice)))
+        .and_then(|_| {
+            signal_hook::flag::register_usize(sig, std::sync::Arc::clone(&stop), sig as usize)
+        })
+        .context("installing the signal handlers")?;
+    }
+    Ok(stop)
+}
+
+/// Removes the output folder `out` of a refused run when it holds nothing but its lock.
+fn remove_unused(out: &std::path::Path) {
+    let only_lock = std::fs::read_dir(out)
+        .map(|d| d.flatten().all(|e| e.file_name() == checkpoint::LOCK))
+        .unwrap_or(false);
+    if only_lock {
+        let _ = std::fs::remove_file(out.join(checkpoint::LOCK));
+        let _ = std::fs::remove_dir(out);
+    }
 }
 
 /// Takes the output folder for this run under its lock: a new or empty folder, a completed run
