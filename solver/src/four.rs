@@ -1,31 +1,41 @@
-//! Four lanes of one precision as one vector value, written out where the compiler's own
-//! vectorizer does badly: the per-point bodies of the scatters hold one lane per node of a
+//! Lanes of one precision as one value ([`Lanes`]), the type the point passes' physics is
+//! written in once for every width, and four lanes as one vector value ([`Four`]), written out
+//! where the compiler's own vectorizer does badly: the per-point bodies of the scatters hold one lane per node of a
 //! tetrahedron, and left to the compiler they were mostly shuffles and stack traffic
 //! (docs/design.md §9). Each operation is the lane-wise IEEE operation (no fused
 //! multiply-add), so code written with [`Four`] gives the bits of the same code written lane by
 //! lane.
 //!
 //! On x86-64, f64 takes one 256-bit AVX register ([`F64x4`]) and f32 one 128-bit SSE register
-//! ([`F32x4`]); elsewhere both take a plain array ([`Lanes4`]), which the compiler vectorizes
-//! as it can. An [`F64x4`] is made only
+//! ([`F32x4`]); elsewhere both take a plain array ([`Lanes4`], a [`Plain`] of four), which the
+//! compiler vectorizes as it can. An [`F64x4`] is made only
 //! from an [`Avx`] token, which exists only where the processor runs AVX2, so its operations
 //! are safe to call; they compile to single instructions only where inlined into code compiled
 //! with AVX (the passes' AVX2 copies, [`crate::parallel::avx2`]). Each precision names its type
 //! as [`crate::real::Real::Four`]; this file imports nothing of the crate, so that the
 //! precision, on the ground floor, needs nothing above it.
 
-use std::ops::{Add, Mul, Sub};
+use std::ops::{Add, Div, Mul, Sub};
 
-/// Four lanes of `R` as one value.
-pub trait Four<R: Copy>:
+/// Lanes of `R` as one value, each operation the lane-wise IEEE one: what the point passes'
+/// physics is written in, once, whatever the lanes hold (one point or one node each) and
+/// however many there are. A [`Four`] in the passes' four-lane copies; a [`Plain`] array of
+/// `W` in the portable copies and the stress pass's general batches (one lane: the scalar
+/// loop). The same code over any of them gives each lane the bits of the same code written
+/// for one value.
+pub trait Lanes<R: Copy>:
     Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self>
 {
     /// What proves that the processor runs this type's instructions.
     type Token: Copy + Send + Sync;
+    /// All lanes `v`.
+    fn splat(t: Self::Token, v: R) -> Self;
+}
+
+/// Four lanes of `R` as one value.
+pub trait Four<R: Copy>: Lanes<R> {
     /// The token, where the processor runs this type's instructions.
     fn token() -> Option<Self::Token>;
-    /// All four lanes `v`.
-    fn splat(t: Self::Token, v: R) -> Self;
     /// The lanes of `a`.
     fn load(t: Self::Token, a: &[R; 4]) -> Self;
     /// The lanes as an array.
@@ -84,41 +94,52 @@ pub trait Four<R: Copy>:
     }
 }
 
-/// Four lanes as a plain array (f32, and f64 off x86-64): each operation lane by lane.
+/// `W` lanes as a plain array: each operation lane by lane, which the compiler vectorizes as it
+/// can (the portable copies' lanes; one lane is the scalar loop).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Lanes4<R>([R; 4]);
+pub struct Plain<R, const W: usize>(pub [R; W]);
 
-macro_rules! lanes4_op {
+/// Four lanes as a plain array (f32, and f64 off x86-64).
+pub type Lanes4<R> = Plain<R, 4>;
+
+macro_rules! plain_op {
     ($tr:ident, $f:ident, $op:tt) => {
-        impl<R: Copy + std::ops::$tr<Output = R>> $tr for Lanes4<R> {
+        impl<R: Copy + std::ops::$tr<Output = R>, const W: usize> $tr for Plain<R, W> {
             type Output = Self;
             #[inline(always)]
             fn $f(self, o: Self) -> Self {
-                Lanes4(std::array::from_fn(|k| self.0[k] $op o.0[k]))
+                Plain(std::array::from_fn(|k| self.0[k] $op o.0[k]))
             }
         }
     };
 }
-lanes4_op!(Add, add, +);
-lanes4_op!(Sub, sub, -);
-lanes4_op!(Mul, mul, *);
+plain_op!(Add, add, +);
+plain_op!(Sub, sub, -);
+plain_op!(Mul, mul, *);
+plain_op!(Div, div, /);
+
+impl<R, const W: usize> Lanes<R> for Plain<R, W>
+where
+    R: Copy + Add<Output = R> + Sub<Output = R> + Mul<Output = R>,
+{
+    type Token = ();
+    #[inline(always)]
+    fn splat(_: (), v: R) -> Self {
+        Plain([v; W])
+    }
+}
 
 impl<R> Four<R> for Lanes4<R>
 where
     R: Copy + Add<Output = R> + Sub<Output = R> + Mul<Output = R> + PartialOrd,
 {
-    type Token = ();
     #[inline(always)]
     fn token() -> Option<()> {
         Some(())
     }
     #[inline(always)]
-    fn splat(_: (), v: R) -> Self {
-        Lanes4([v; 4])
-    }
-    #[inline(always)]
     fn load(_: (), a: &[R; 4]) -> Self {
-        Lanes4(*a)
+        Plain(*a)
     }
     #[inline(always)]
     fn to_array(self) -> [R; 4] {
@@ -130,7 +151,7 @@ where
     }
     #[inline(always)]
     fn first_of(self, old: Self, live: usize) -> Self {
-        Lanes4(std::array::from_fn(|k| {
+        Plain(std::array::from_fn(|k| {
             if k < live {
                 self.0[k]
             } else {
@@ -145,7 +166,7 @@ pub use x86::{Avx, F32x4, F64x4, Sse};
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::Four;
+    use super::{Four, Lanes};
     use std::arch::x86_64::{
         __m128, __m128d, __m256d, _mm256_add_pd, _mm256_blend_pd, _mm256_castpd128_pd256,
         _mm256_castpd256_pd128, _mm256_cmp_pd, _mm256_extractf128_pd, _mm256_insertf128_pd,
@@ -204,16 +225,19 @@ mod x86 {
     vector_op!(F32x4, Sub, sub, _mm_sub_ps);
     vector_op!(F32x4, Mul, mul, _mm_mul_ps);
 
-    impl Four<f32> for F32x4 {
+    impl Lanes<f32> for F32x4 {
         type Token = Sse;
-        #[inline(always)]
-        fn token() -> Option<Sse> {
-            Some(Sse(()))
-        }
         #[inline(always)]
         fn splat(_: Sse, v: f32) -> Self {
             // SAFETY: SSE is part of x86-64.
             F32x4(unsafe { _mm_set1_ps(v) })
+        }
+    }
+
+    impl Four<f32> for F32x4 {
+        #[inline(always)]
+        fn token() -> Option<Sse> {
+            Some(Sse(()))
         }
         #[inline(always)]
         fn load(_: Sse, a: &[f32; 4]) -> Self {
@@ -360,17 +384,20 @@ mod x86 {
         }
     }
 
-    impl Four<f64> for F64x4 {
+    impl Lanes<f64> for F64x4 {
         type Token = Avx;
-        #[inline(always)]
-        fn token() -> Option<Avx> {
-            std::arch::is_x86_feature_detected!("avx2").then_some(Avx(()))
-        }
         #[inline(always)]
         fn splat(_: Avx, v: f64) -> Self {
             debug_assert!(std::arch::is_x86_feature_detected!("avx"));
             // SAFETY: the token proves that the processor runs AVX.
             F64x4(unsafe { _mm256_set1_pd(v) })
+        }
+    }
+
+    impl Four<f64> for F64x4 {
+        #[inline(always)]
+        fn token() -> Option<Avx> {
+            std::arch::is_x86_feature_detected!("avx2").then_some(Avx(()))
         }
         #[inline(always)]
         fn load(_: Avx, a: &[f64; 4]) -> Self {

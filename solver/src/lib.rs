@@ -3,7 +3,8 @@
 //!
 //! The folders, from the bottom up (each uses only those above it in this list, see
 //! docs/design.md §7.4), on the ground the precision ([`real`]) and its four-lane vectors
-//! ([`four`]); then [`element`] (mesh, locating points), [`material`] (laws), [`state`]
+//! ([`four`]); then [`element`] (mesh, locating points), [`basis`] (what the points map
+//! with), [`material`] (laws), [`state`]
 //! (points, nodes), [`parallel`] (thread team, deterministic sums), [`step`] (the phases of a
 //! step), [`input`] (scenes and Anura3D cases resolved into a [`input::case::Case`]),
 //! [`driver`] (the engine, the loop over output times, output files) and [`jobs`]
@@ -17,6 +18,7 @@
 pub mod four;
 pub mod real;
 
+pub mod basis;
 pub mod element;
 pub mod material;
 pub mod state;

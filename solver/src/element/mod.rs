@@ -18,7 +18,7 @@ use std::fmt::Debug;
 
 use mpm_shared::{Dimension, ElementType};
 
-use crate::four::Four;
+use crate::four::Lanes;
 use crate::real::{Real, V3};
 use tet4::Tet4;
 use tri3::{Tri3, Tri3Axi};
@@ -88,15 +88,16 @@ pub trait Element: Copy + Debug + Default + Send + Sync + 'static {
         first: &V3<R>,
         x: &[[R; W]; 3],
     ) -> [[R; W]; 4];
-    /// [`Element::shape_lanes`] of four points as explicit four-lane vectors (`x[a]`: coordinate
-    /// a, lane q: point q; `[k]`: node k's values, zero past [`Element::NODES`]), for the passes
-    /// written with [`crate::four`]: the same operations in the same order, so the same bits.
-    fn shape_four<R: Real>(
-        t: <R::Four as Four<R>>::Token,
+    /// [`Element::shape_lanes`] in lanes of any kind ([`crate::four::Lanes`]: explicit four-lane
+    /// vectors in the passes' four-lane copies, plain arrays in their portable ones; `x[a]`:
+    /// coordinate a, one lane per point; `[k]`: node k's values, zero past
+    /// [`Element::NODES`]): the same operations in the same order, so the same bits.
+    fn shape_four<R: Real, F: Lanes<R>>(
+        t: F::Token,
         map: &Self::Map<R>,
         first: &V3<R>,
-        x: &[R::Four; 3],
-    ) -> [R::Four; 4];
+        x: &[F; 3],
+    ) -> [F; 4];
     /// The face a point with shape values `n` lies beyond (the most negative one), or `None`
     /// when it is inside, within `tol` (a small negative number).
     fn exit_face<R: Real>(n: &Self::Nodes<R>, tol: R) -> Option<usize>;

@@ -4,7 +4,7 @@
 use mpm_shared::{Dimension, ElementType};
 
 use crate::element::{Element, Geometry};
-use crate::four::Four;
+use crate::four::Lanes;
 use crate::real::{Real, V3};
 
 /// The 4-node linear tetrahedron (10-node models are computed with their corners, as Anura3D
@@ -120,14 +120,14 @@ impl Element for Tet4 {
     }
 
     #[inline(always)]
-    fn shape_four<R: Real>(
-        t: <R::Four as Four<R>>::Token,
+    fn shape_four<R: Real, F: Lanes<R>>(
+        t: F::Token,
         m: &[V3<R>; 3],
         x1: &V3<R>,
-        x: &[R::Four; 3],
-    ) -> [R::Four; 4] {
-        let s = |v: R| R::Four::splat(t, v);
-        let d: [R::Four; 3] = std::array::from_fn(|a| x[a] - s(x1[a]));
+        x: &[F; 3],
+    ) -> [F; 4] {
+        let s = |v: R| F::splat(t, v);
+        let d: [F; 3] = std::array::from_fn(|a| x[a] - s(x1[a]));
         let row = |r: &V3<R>| s(r[0]) * d[0] + s(r[1]) * d[1] + s(r[2]) * d[2];
         let (l2, l3, l4) = (row(&m[0]), row(&m[1]), row(&m[2]));
         [s(R::ONE) - l2 - l3 - l4, l2, l3, l4]

@@ -11,7 +11,7 @@
 use mpm_shared::{Dimension, ElementType};
 
 use crate::element::{Element, Geometry};
-use crate::four::Four;
+use crate::four::Lanes;
 use crate::real::{Real, V3};
 
 /// The 3-node triangle; `AXI` selects the axisymmetric section (see the module's text).
@@ -133,14 +133,14 @@ impl<const AXI: bool> Element for Triangle<AXI> {
     }
 
     #[inline(always)]
-    fn shape_four<R: Real>(
-        t: <R::Four as Four<R>>::Token,
+    fn shape_four<R: Real, F: Lanes<R>>(
+        t: F::Token,
         m: &[[R; 2]; 2],
         x1: &V3<R>,
-        x: &[R::Four; 3],
-    ) -> [R::Four; 4] {
-        let s = |v: R| R::Four::splat(t, v);
-        let d: [R::Four; 2] = std::array::from_fn(|a| x[a] - s(x1[a]));
+        x: &[F; 3],
+    ) -> [F; 4] {
+        let s = |v: R| F::splat(t, v);
+        let d: [F; 2] = std::array::from_fn(|a| x[a] - s(x1[a]));
         let xi = s(m[0][0]) * d[0] + s(m[0][1]) * d[1];
         let eta = s(m[1][0]) * d[0] + s(m[1][1]) * d[1];
         [s(R::ONE) - xi - eta, xi, eta, s(R::ZERO)]

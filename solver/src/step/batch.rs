@@ -6,8 +6,18 @@
 
 use crate::element::Element;
 use crate::four::Four;
-use crate::parallel::gather::node_slots;
 use crate::real::{Real, V3};
+
+/// The lanes of the point passes' portable copies: plain arrays, which the compiler vectorizes
+/// for the baseline instruction set; in a build that assumes AVX2, the precision's four-lane
+/// vectors (the AVX2 copies' own: there is no other copy to take them).
+#[cfg(not(target_feature = "avx2"))]
+pub type Portable<R> = crate::four::Lanes4<R>;
+
+/// The lanes of the point passes' portable copies, in a build that assumes AVX2: the
+/// precision's four-lane vectors.
+#[cfg(target_feature = "avx2")]
+pub type Portable<R> = <R as Real>::Four;
 
 /// Points per batch of particle to grid's shape values, of grid to particle and of the
 /// pore-pressure rate's sums in tetrahedra (triangles go point by point), measured on one
@@ -67,73 +77,49 @@ impl<const W: usize> Batch<W> {
 /// time, one lane per point, and turned by a transpose (each point's own bits; the lanes past
 /// `live` repeat the last point, computed and never used).
 #[inline(always)]
-pub fn node_lane_shapes<E: Element, R: Real>(
-    t: <R::Four as Four<R>>::Token,
+pub fn node_lane_shapes<E: Element, R: Real, F: Four<R>>(
+    t: F::Token,
     map: &E::Map<R>,
     first: &V3<R>,
     x: &[V3<R>],
     j: usize,
     live: usize,
-) -> [R::Four; 4] {
-    let xl = point_lanes3::<R>(t, x, j, live);
-    R::Four::transpose(t, E::shape_four(t, map, first, &xl))
+) -> [F; 4] {
+    let xl = point_lanes3::<R, F>(t, x, j, live);
+    F::transpose(t, E::shape_four(t, map, first, &xl))
 }
 
 /// Points `j..j + live`' values of `a` as lanes (lane q: point j + q; the lanes past `live` the
 /// last of them again): four points' by one load.
 #[inline(always)]
-pub fn point_lanes<R: Real>(
-    t: <R::Four as Four<R>>::Token,
-    a: &[R],
-    j: usize,
-    live: usize,
-) -> R::Four {
+pub fn point_lanes<R: Real, F: Four<R>>(t: F::Token, a: &[R], j: usize, live: usize) -> F {
     if live == 4 {
-        return R::Four::load(t, a[j..j + 4].try_into().expect("four points"));
+        return F::load(t, a[j..j + 4].try_into().expect("four points"));
     }
-    R::Four::load(t, &[0, 1, 2, 3].map(|q: usize| a[j + q.min(live - 1)]))
+    F::load(t, &[0, 1, 2, 3].map(|q: usize| a[j + q.min(live - 1)]))
 }
 
 /// Points `j..j + live`' 3-vectors of `a` one vector per component (lane q: point j + q; the
 /// lanes past `live` the last of them again): four points' by [`Four::load_points3`], from
 /// their twelve consecutive values.
 #[inline(always)]
-pub fn point_lanes3<R: Real>(
-    t: <R::Four as Four<R>>::Token,
+pub fn point_lanes3<R: Real, F: Four<R>>(
+    t: F::Token,
     a: &[V3<R>],
     j: usize,
     live: usize,
-) -> [R::Four; 3] {
+) -> [F; 3] {
     if live == 4 {
         let four: &[V3<R>; 4] = a[j..j + 4].try_into().expect("four points");
-        return R::Four::load_points3(t, four);
+        return F::load_points3(t, four);
     }
     let at = [0, 1, 2, 3].map(|q: usize| j + q.min(live - 1));
     // (A loop, not `from_fn`: the intrinsics in its closure would become calls.)
-    let mut v = [R::Four::splat(t, R::ZERO); 3];
+    let mut v = [F::splat(t, R::ZERO); 3];
     for (c, vc) in v.iter_mut().enumerate() {
-        *vc = R::Four::load(t, &at.map(|i| a[i][c]));
+        *vc = F::load(t, &at.map(|i| a[i][c]));
     }
     v
-}
-
-/// Σ_k N_k a_k at each point of a batch, from the shape values by node (`n[k][q]`) and the
-/// element's nodal values `nodal[k]`: node by node, as a point-by-point loop sums it (the
-/// in-plane components of a 2D element, z 0).
-#[inline(always)]
-pub fn interpolate<E: Element, R: Real, const W: usize>(
-    n: &[[R; W]; 4],
-    nodal: &[V3<R>],
-) -> [[R; W]; 3] {
-    let mut out = [[R::ZERO; W]; 3];
-    for k in 0..E::NODES {
-        for c in 0..E::DIM {
-            for q in 0..W {
-                out[c][q] += n[k][q] * nodal[k][c];
-            }
-        }
-    }
-    out
 }
 
 /// The points an element usually holds (Anura3D's usual placements): a tetrahedron's four, a
@@ -175,26 +161,8 @@ pub fn four_of(active: &[bool], material: &[u32], j: usize, lead: u32) -> bool {
     active[j..j + 4] == [true; 4] && material[j..j + 4] == [lead; 4]
 }
 
-/// Lanes of a per-element sum: one per element node, padded to four (a triangle's fourth lane
-/// carries zeros and is never stored).
-pub const LANES: usize = 4;
-
-/// An element's sums held value by value across its nodes (`sums[c][k]`: value c of node k), so
-/// that each value's update is one operation over the nodes, which the compiler turns into
-/// vector instructions (particle to grid's and grid to particle's per-element sums). Each node's
-/// arithmetic is the one a node-by-node loop does, in the same order, so the sums are the same
-/// bits; from 0, added point by point in order, they are also the bits of adding into the
-/// scatter's buffer in place.
-pub type Lanes<R, const W: usize> = [[R; LANES]; W];
-
-/// One value of `per_node` for each node of the element, zero past its last.
-#[inline(always)]
-pub fn lanes<E: Element, R: Real>(per_node: impl Fn(usize) -> R) -> [R; LANES] {
-    std::array::from_fn(|k| if k < E::NODES { per_node(k) } else { R::ZERO })
-}
-
-/// [`store`] of an element's sums held as four-lane vectors (`sums[c]`: value c of each node,
-/// lane k node k; a triangle's fourth lane never stored): the `W` values of each node's
+/// Stores an element's sums held as lanes (`sums[c]`: value c of each node, lane k node k; a
+/// triangle's fourth lane never stored) into the scatter's buffer: the `W` values of each node's
 /// `stride` from `offset` on, four values at a time turned from value lanes into node lanes by
 /// a transpose and stored whole, the last one to three value by value (values moved, not
 /// computed: the same bits). Callers pass the pass's width and offset as constants of the
@@ -206,9 +174,9 @@ pub fn lanes<E: Element, R: Real>(per_node: impl Fn(usize) -> R) -> [R; LANES] {
 /// If `four` does not hold exactly [`Element::NODES`] rows of `stride` values, or the `W`
 /// values from `offset` do not fit in a row.
 #[inline(always)]
-pub fn store_nodes<E: Element, R: Real, const W: usize>(
-    t: <R::Four as Four<R>>::Token,
-    sums: &[R::Four; W],
+pub fn store_nodes<E: Element, R: Real, F: Four<R>, const W: usize>(
+    t: F::Token,
+    sums: &[F; W],
     four: &mut [R],
     stride: usize,
     offset: usize,
@@ -223,7 +191,7 @@ pub fn store_nodes<E: Element, R: Real, const W: usize>(
     // constants, every index below is one and its check folds away.
     let mut c = 0;
     while c + 4 <= W {
-        let lanes = R::Four::transpose(t, [sums[c], sums[c + 1], sums[c + 2], sums[c + 3]]);
+        let lanes = F::transpose(t, [sums[c], sums[c + 1], sums[c + 2], sums[c + 3]]);
         for (k, node) in lanes.iter().enumerate() {
             if k == E::NODES {
                 break;
@@ -260,23 +228,6 @@ pub fn node_rows<R, const W: usize>(four: &mut [R]) -> &mut [[R; W]; 4] {
     unsafe { &mut *four.as_mut_ptr().cast::<[[R; W]; 4]>() }
 }
 
-/// Stores the element's sums into the scatter's buffer, node by node: `width` values of each
-/// node's `stride`, from `offset` on.
-#[inline(always)]
-pub fn store<E: Element, R: Real, const W: usize>(
-    sums: &Lanes<R, W>,
-    four: &mut [R],
-    stride: usize,
-    offset: usize,
-    width: usize,
-) {
-    for (k, slot) in node_slots::<E, R>(four, stride).enumerate() {
-        for (c, v) in slot[offset..offset + width].iter_mut().enumerate() {
-            *v = sums[c][k];
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -302,33 +253,50 @@ mod tests {
         assert!(wrong.is_err());
     }
 
-    /// [`store_nodes`] writes the values [`store`] writes, where `store` writes them, and
+    /// Node by node, value by value: the `W` values of `sums` (value c of node k: lane k of
+    /// `sums[c]`) into each node's `stride` from `offset` on, the nodes past the element's
+    /// untouched.
+    fn store_reference<E: Element, R: Real, const W: usize>(
+        sums: &[[R; 4]; W],
+        four: &mut [R],
+        stride: usize,
+        offset: usize,
+    ) {
+        for k in 0..E::NODES {
+            for c in 0..W {
+                four[k * stride + offset + c] = sums[c][k];
+            }
+        }
+    }
+
+    /// [`store_nodes`] writes the values of the node-by-node store, where it writes them, and
     /// leaves the rest of the buffer alone: the solid's values and the liquid's after them, of
-    /// a two-phase pass (a tetrahedron's 10 + 12, a triangle's 7 + 9), in both precisions.
-    fn stores_as_store<E: Element, R: Real, const S: usize, const L: usize>() {
-        let Some(t) = R::Four::token() else {
+    /// a two-phase pass (a tetrahedron's 10 + 12, a triangle's 7 + 9), in both precisions, in
+    /// lanes `F`.
+    fn stores_as_store<E: Element, R: Real, F: Four<R>, const S: usize, const L: usize>() {
+        let Some(t) = F::token() else {
             eprintln!("skipped: this processor lacks the four-lane type's instructions");
             return;
         };
         let width = S + L;
         let mut rng = crate::test_rng::uniform(5);
         let mut value = || R::of(rng() * 2e3 - 1e3);
-        let solid: Lanes<R, S> = std::array::from_fn(|_| std::array::from_fn(|_| value()));
-        let liquid: Lanes<R, L> = std::array::from_fn(|_| std::array::from_fn(|_| value()));
+        let solid: [[R; 4]; S] = std::array::from_fn(|_| std::array::from_fn(|_| value()));
+        let liquid: [[R; 4]; L] = std::array::from_fn(|_| std::array::from_fn(|_| value()));
         let marker = R::of(-7.5);
         let nodes = E::NODES;
         let (mut want, mut got) = (vec![marker; nodes * width], vec![marker; nodes * width]);
-        store::<E, R, S>(&solid, &mut want, width, 0, S);
-        store::<E, R, L>(&liquid, &mut want, width, S, L);
-        let s4: [R::Four; S] = std::array::from_fn(|c| R::Four::load(t, &solid[c]));
-        let w4: [R::Four; L] = std::array::from_fn(|c| R::Four::load(t, &liquid[c]));
-        store_nodes::<E, R, S>(t, &s4, &mut got, width, 0);
-        store_nodes::<E, R, L>(t, &w4, &mut got, width, S);
+        store_reference::<E, R, S>(&solid, &mut want, width, 0);
+        store_reference::<E, R, L>(&liquid, &mut want, width, S);
+        let s4: [F; S] = std::array::from_fn(|c| F::load(t, &solid[c]));
+        let w4: [F; L] = std::array::from_fn(|c| F::load(t, &liquid[c]));
+        store_nodes::<E, R, F, S>(t, &s4, &mut got, width, 0);
+        store_nodes::<E, R, F, L>(t, &w4, &mut got, width, S);
         let bits = |v: &[R]| v.iter().map(|x| x.f64().to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&got), bits(&want));
         // Only the solid's: the liquid's places keep their marker.
         let mut dry = vec![marker; nodes * width];
-        store_nodes::<E, R, S>(t, &s4, &mut dry, width, 0);
+        store_nodes::<E, R, F, S>(t, &s4, &mut dry, width, 0);
         for (k, node) in dry.chunks_exact(width).enumerate() {
             assert!(node[S..].iter().all(|&x| x == marker), "node {k}");
             assert_eq!(bits(&node[..S]), bits(&want[width * k..width * k + S]));
@@ -336,7 +304,7 @@ mod tests {
         // A buffer of another width is refused.
         let refused = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             let mut short = vec![marker; nodes * width - 1];
-            store_nodes::<E, R, S>(t, &s4, &mut short, width, 0);
+            store_nodes::<E, R, F, S>(t, &s4, &mut short, width, 0);
         }));
         assert!(refused.is_err());
     }
@@ -344,9 +312,12 @@ mod tests {
     #[test]
     fn an_element_s_vectors_store_as_its_lanes() {
         use crate::element::tri3::Tri3;
-        stores_as_store::<Tet4, f64, 10, 12>();
-        stores_as_store::<Tet4, f32, 10, 12>();
-        stores_as_store::<Tri3, f64, 7, 9>();
-        stores_as_store::<Tri3, f32, 7, 9>();
+        use crate::four::Lanes4;
+        stores_as_store::<Tet4, f64, <f64 as Real>::Four, 10, 12>();
+        stores_as_store::<Tet4, f32, <f32 as Real>::Four, 10, 12>();
+        stores_as_store::<Tri3, f64, <f64 as Real>::Four, 7, 9>();
+        stores_as_store::<Tri3, f32, <f32 as Real>::Four, 7, 9>();
+        stores_as_store::<Tet4, f64, Lanes4<f64>, 10, 12>();
+        stores_as_store::<Tri3, f32, Lanes4<f32>, 7, 9>();
     }
 }

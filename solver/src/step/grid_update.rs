@@ -121,30 +121,47 @@ pub enum Drag {
 /// Nodes lighter than this (relative to the heaviest) are treated as empty.
 pub const MASS_EPS: f64 = 1e-12;
 
+/// One phase's loads and conditions at the nodes for the grid update: the nodal face loads
+/// at multiplier 1 (`traction`) and their multiplier (`scale`), the fixed components
+/// (`fixed[n][a]`), and local damping (factor `alpha`, applied as `rule` says).
+#[derive(Clone, Copy)]
+pub struct NodeLoads<'a, R: Real> {
+    /// Nodal face loads at multiplier 1.
+    pub traction: &'a [V3<R>],
+    /// Their multiplier.
+    pub scale: R,
+    /// Fixed components.
+    pub fixed: &'a [[bool; 3]],
+    /// Local damping factor α.
+    pub alpha: R,
+    /// Where and against which velocity local damping acts.
+    pub rule: DampingRule,
+}
+
 /// a = (f_int + f_ext + traction) / m, with local damping f ← f - α |f| sign(v) per component
 /// (at rest as `rule` says, see [`DampingRule`])
 /// and zero acceleration in fixed directions, over the element's [`Element::DIM`] components (a
-/// 2D section's z-acceleration is 0). `traction` holds nodal face loads at multiplier 1,
-/// `scale` the multiplier; `fixed[n][a]` marks fixed components.
+/// 2D section's z-acceleration is 0), `loads` giving the loads, fixities and damping.
 ///
 /// Returns this process's sums for the out-of-balance force ratio of Anura3D's quasi-static
 /// convergence check, |f_int + f_ext| / |f_ext| over the free components
-/// ([`ForceSums::ratio`] once summed over every process); the step's energy terms are taken
-/// after the remap ([`crate::step::nodal_energy`]). The nodes are shared out on the team in
-/// blocks of [`NODE_BLOCK`], and the sums formed per block (`scratch`): the same for any
+/// ([`ForceSums::ratio`] once summed over every process, `comm`); the step's energy terms are
+/// taken after the remap ([`crate::step::nodal_energy`]). The nodes are shared out on the team
+/// in blocks of [`NODE_BLOCK`], and the sums formed per block (`scratch`): the same for any
 /// thread count.
-#[allow(clippy::too_many_arguments)]
 pub fn grid_update<E: Element, R: Real>(
-    team: &Team,
+    (team, comm): (&Team, &dyn Communicator),
     scratch: &mut GridScratch<R>,
     g: &mut Grid<R>,
-    traction: &[V3<R>],
-    scale: R,
-    fixed: &[[bool; 3]],
-    alpha: R,
-    rule: DampingRule,
-    comm: &dyn Communicator,
+    loads: &NodeLoads<'_, R>,
 ) {
+    let NodeLoads {
+        traction,
+        scale,
+        fixed,
+        alpha,
+        rule,
+    } = *loads;
     let nodes = g.mass.len();
     let eps = scratch.empty_below(team, comm, &g.mass);
     g.empty_below = eps;
@@ -212,6 +229,29 @@ impl ForceSums {
     }
 }
 
+/// The loads and conditions of the two-phase grid update: the mixture's ([`NodeLoads`], its
+/// damping the update's), the liquid's face loads and fixities, the drag's integration, whether
+/// loads on the liquid act on the mixture too, the step's gravity and the step.
+#[derive(Clone, Copy)]
+pub struct TwoPhaseLoads<'a, R: Real> {
+    /// The mixture's loads, fixities and damping.
+    pub mixture: NodeLoads<'a, R>,
+    /// Nodal face loads on the liquid at multiplier 1.
+    pub liquid_traction: &'a [V3<R>],
+    /// Their multiplier.
+    pub liquid_scale: R,
+    /// The liquid's fixed components.
+    pub liquid_fixed: &'a [[bool; 3]],
+    /// How the drag is integrated.
+    pub drag: Drag,
+    /// Whether loads on the liquid act on the mixture too.
+    pub liquid_load_on_mixture: bool,
+    /// The acceleration of gravity this step.
+    pub gravity: V3<R>,
+    /// The step.
+    pub dt: R,
+}
+
 /// Two-phase grid update (docs/design.md §4). With the mixture force F (total-stress internal force,
 /// mixture weight, loads), the liquid force F_w (pore-pressure gradient, liquid weight, loads on
 /// the liquid), the lumped masses M_s, M_w, M̄_w and drag Q, per node and component:
@@ -236,34 +276,29 @@ impl ForceSums {
 /// Anura3D's convergence check; 0 without external force). `gravity` is the acceleration of
 /// this step. The step's energy terms are taken after the remap
 /// ([`crate::step::nodal_energy`]).
-#[allow(clippy::too_many_arguments)]
 pub fn grid_update_two_phase<E: Element, R: Real>(
-    team: &Team,
+    (team, comm): (&Team, &dyn Communicator),
     scratch: &mut GridScratch<R>,
     g: &mut Grid<R>,
-    traction: &[V3<R>],
-    scale: R,
-    liquid_traction: &[V3<R>],
-    liquid_scale: R,
-    fixed: &[[bool; 3]],
-    liquid_fixed: &[[bool; 3]],
-    alpha: R,
-    rule: DampingRule,
-    drag: Drag,
-    liquid_load_on_mixture: bool,
-    gravity: V3<R>,
-    dt: R,
-    comm: &dyn Communicator,
+    loads: &TwoPhaseLoads<'_, R>,
 ) {
     let nodes = g.mass.len();
     let eps = scratch.empty_below(team, comm, &g.mass);
     g.empty_below = eps;
     let gl = g.liquid.as_mut().expect("liquid arrays");
-    let (mass, f_ext, f_int, momentum) = (&g.mass, &g.f_ext, &g.f_int, &g.momentum);
-    let (l_mass, l_mass_n, l_drag, l_momentum, l_force) =
-        (&gl.mass, &gl.mass_n, &gl.drag, &gl.momentum, &gl.force);
     let (acc_s, acc_w) = (Shared::new(&mut g.acc), Shared::new(&mut gl.acc));
     let sums_out = Shared::new(&mut scratch.node_sums);
+    let arrays = TwoPhaseNodes {
+        mass: &g.mass,
+        f_ext: &g.f_ext,
+        f_int: &g.f_int,
+        momentum: &g.momentum,
+        l_mass: &gl.mass,
+        l_mass_n: &gl.mass_n,
+        l_drag: &gl.drag,
+        l_momentum: &gl.momentum,
+        l_force: &gl.force,
+    };
     team.for_blocks(nodes, NODE_BLOCK, &mut scratch.done, |r| {
         // SAFETY: the nodes of this block are this call's only.
         let (acc_s, acc_w, sums) = unsafe {
@@ -277,136 +312,192 @@ pub fn grid_update_two_phase<E: Element, R: Real>(
         // checks.
         let len = acc_s.len();
         let (acc_w, sums) = (&mut acc_w[..len], &mut sums[..len]);
-        let (mass, f_ext, f_int, momentum) = (
-            &mass[r.clone()][..len],
-            &f_ext[r.clone()][..len],
-            &f_int[r.clone()][..len],
-            &momentum[r.clone()][..len],
-        );
-        let (l_mass, l_mass_n, l_drag, l_momentum, l_force) = (
-            &l_mass[r.clone()][..len],
-            &l_mass_n[r.clone()][..len],
-            &l_drag[r.clone()][..len],
-            &l_momentum[r.clone()][..len],
-            &l_force[r.clone()][..len],
-        );
+        let block = arrays.block(r.clone(), len);
         let (traction, liquid_traction, fixed, liquid_fixed) = (
-            &traction[r.clone()][..len],
-            &liquid_traction[r.clone()][..len],
-            &fixed[r.clone()][..len],
-            &liquid_fixed[r.clone()][..len],
+            &loads.mixture.traction[r.clone()][..len],
+            &loads.liquid_traction[r.clone()][..len],
+            &loads.mixture.fixed[r.clone()][..len],
+            &loads.liquid_fixed[r.clone()][..len],
         );
         for (n, ((acc_s, acc_w), sum)) in acc_s.iter_mut().zip(acc_w).zip(sums).enumerate() {
-            let ms = mass[n];
             // Components past the element's dimension stay 0 (a section's z: no force there).
             *acc_s = [R::ZERO; 3];
             *acc_w = [R::ZERO; 3];
-            if ms <= eps {
+            if block.mass[n] <= eps {
                 *sum = [0.0; 4];
                 continue;
             }
-            let (mw, mwn, q) = (l_mass[n], l_mass_n[n], l_drag[n]);
-            let wet = mw > eps;
-            let (mut out2, mut ext2, mut out2_w, mut ext2_w) = (0.0, 0.0, 0.0, 0.0);
+            let wet = block.l_mass[n] > eps;
+            let mut norms = [0.0; 4];
             for a in 0..E::DIM {
-                let lt = liquid_scale * liquid_traction[n][a];
-                let ext = if liquid_load_on_mixture {
-                    f_ext[n][a] + scale * traction[n][a] + lt
+                let lt = loads.liquid_scale * liquid_traction[n][a];
+                let scaled = loads.mixture.scale * traction[n][a];
+                let ext = if loads.liquid_load_on_mixture {
+                    block.f_ext[n][a] + scaled + lt
                 } else {
-                    f_ext[n][a] + scale * traction[n][a]
+                    block.f_ext[n][a] + scaled
                 };
-                let f_mix = f_int[n][a] + ext;
+                let f_mix = block.f_int[n][a] + ext;
                 if !fixed[n][a] {
-                    out2 += f_mix.f64() * f_mix.f64();
-                    ext2 += ext.f64() * ext.f64();
+                    norms[0] += f_mix.f64() * f_mix.f64();
+                    norms[1] += ext.f64() * ext.f64();
                 }
-                if !wet {
-                    acc_s[a] = if fixed[n][a] {
-                        R::ZERO
-                    } else {
-                        damp(rule, alpha, f_mix, momentum[n][a]) / ms
-                    };
-                    acc_w[a] = R::ZERO;
-                    continue;
-                }
-                let f_w = l_force[n][a] + lt;
-                // Start-of-step velocities of the fixity-masked phases (Anura3D's nodal
-                // velocities).
-                let v = if fixed[n][a] {
-                    R::ZERO
+                let c = Component {
+                    ms: block.mass[n],
+                    mw: block.l_mass[n],
+                    mwn: block.l_mass_n[n],
+                    q: block.l_drag[n],
+                    p_s: block.momentum[n][a],
+                    p_w: block.l_momentum[n][a],
+                    f_mix,
+                    f_w: block.l_force[n][a] + lt,
+                    fixed: fixed[n][a],
+                    liquid_fixed: liquid_fixed[n][a],
+                    weight_w: block.l_mass[n] * loads.gravity[a] + lt,
+                };
+                (acc_s[a], acc_w[a]) = if wet {
+                    c.accelerations(loads, &mut norms)
+                } else if c.fixed {
+                    (R::ZERO, R::ZERO)
                 } else {
-                    momentum[n][a] / ms
+                    let m = &loads.mixture;
+                    (damp(m.rule, m.alpha, f_mix, c.p_s) / c.ms, R::ZERO)
                 };
-                let w = if liquid_fixed[n][a] {
-                    R::ZERO
-                } else {
-                    l_momentum[n][a] / mw
-                };
-                if !liquid_fixed[n][a] {
-                    let qvw = q * (v - w);
-                    let (out, ext) = (f_w + qvw, mw * gravity[a] + lt + qvw);
-                    out2_w += out.f64() * out.f64();
-                    ext2_w += ext.f64() * ext.f64();
-                }
-                let fw = match rule {
-                    DampingRule::Phases => f_w,
-                    DampingRule::Anura3d => damp(rule, alpha, f_w, w),
-                };
-                // The liquid's acceleration with the drag at the start-of-step velocities.
-                let a_w_explicit = if liquid_fixed[n][a] {
-                    R::ZERO
-                } else {
-                    (fw + q * (v - w)) / mw
-                };
-                let fs = match rule {
-                    DampingRule::Phases => {
-                        let f_wn = mwn / mw * f_w;
-                        damp(rule, alpha, f_mix - f_wn, momentum[n][a])
-                            + damp(rule, alpha, f_wn, l_momentum[n][a])
-                    }
-                    DampingRule::Anura3d => {
-                        // Anura3D damps the liquid part of the mixture's force against the
-                        // liquid velocity it has just updated (with the explicit drag), the
-                        // solid part against the start-of-step solid velocity.
-                        let w_end = match drag {
-                            Drag::Explicit => w + a_w_explicit * dt,
-                            Drag::Implicit => w,
-                        };
-                        let f_wn = mwn / mw * f_w;
-                        damp(rule, alpha, f_mix - f_wn, v) + damp(rule, alpha, f_wn, w_end)
-                    }
-                };
-                let (a_s, a_w) = match drag {
-                    Drag::Implicit => {
-                        // Relative velocity w - v at the start of the step.
-                        let dv = l_momentum[n][a] / mw - momentum[n][a] / ms;
-                        let qdt = q * dt;
-                        match (fixed[n][a], liquid_fixed[n][a]) {
-                            (true, true) => (R::ZERO, R::ZERO),
-                            (true, false) => (R::ZERO, (fw - q * dv) / (mw + qdt)),
-                            (false, true) => (fs / ms, R::ZERO),
-                            (false, false) => {
-                                let a_w = (fw - q * dv + qdt * fs / ms)
-                                    / (mw + qdt * (R::ONE + mwn / ms));
-                                ((fs - mwn * a_w) / ms, a_w)
-                            }
-                        }
-                    }
-                    Drag::Explicit => {
-                        let a_s = if fixed[n][a] {
-                            R::ZERO
-                        } else {
-                            (fs - mwn * a_w_explicit) / ms
-                        };
-                        (a_s, a_w_explicit)
-                    }
-                };
-                acc_s[a] = a_s;
-                acc_w[a] = a_w;
             }
-            *sum = [out2.sqrt(), ext2.sqrt(), out2_w.sqrt(), ext2_w.sqrt()];
+            *sum = norms.map(f64::sqrt);
         }
     });
+}
+
+/// The nodal arrays the two-phase grid update reads: the solid's mass, external and internal
+/// force and momentum, the liquid's two masses, drag, momentum and force.
+#[derive(Clone, Copy)]
+struct TwoPhaseNodes<'a, R: Real> {
+    mass: &'a [R],
+    f_ext: &'a [V3<R>],
+    f_int: &'a [V3<R>],
+    momentum: &'a [V3<R>],
+    l_mass: &'a [R],
+    l_mass_n: &'a [R],
+    l_drag: &'a [R],
+    l_momentum: &'a [V3<R>],
+    l_force: &'a [V3<R>],
+}
+
+impl<'a, R: Real> TwoPhaseNodes<'a, R> {
+    /// Every array sliced to the nodes `r`, `len` of them (one length: indexed without bounds
+    /// checks).
+    #[inline(always)]
+    fn block(&self, r: std::ops::Range<usize>, len: usize) -> Self {
+        TwoPhaseNodes {
+            mass: &self.mass[r.clone()][..len],
+            f_ext: &self.f_ext[r.clone()][..len],
+            f_int: &self.f_int[r.clone()][..len],
+            momentum: &self.momentum[r.clone()][..len],
+            l_mass: &self.l_mass[r.clone()][..len],
+            l_mass_n: &self.l_mass_n[r.clone()][..len],
+            l_drag: &self.l_drag[r.clone()][..len],
+            l_momentum: &self.l_momentum[r.clone()][..len],
+            l_force: &self.l_force[r][..len],
+        }
+    }
+}
+
+/// One component of a node holding liquid: the masses M_s, M_w, M̄_w and drag Q, both phases'
+/// momenta, the mixture force and the liquid force (loads included), the fixities, and the
+/// liquid's weight with its loads (the external force of its convergence check).
+struct Component<R: Real> {
+    ms: R,
+    mw: R,
+    mwn: R,
+    q: R,
+    p_s: R,
+    p_w: R,
+    f_mix: R,
+    f_w: R,
+    fixed: bool,
+    liquid_fixed: bool,
+    weight_w: R,
+}
+
+impl<R: Real> Component<R> {
+    /// The solid's and the liquid's accelerations ([`grid_update_two_phase`]), the liquid's
+    /// convergence terms added to `norms[2..4]` (squared).
+    #[inline(always)]
+    fn accelerations(&self, loads: &TwoPhaseLoads<'_, R>, norms: &mut [f64; 4]) -> (R, R) {
+        let (rule, alpha, dt) = (loads.mixture.rule, loads.mixture.alpha, loads.dt);
+        let Component {
+            ms,
+            mw,
+            mwn,
+            q,
+            f_w,
+            ..
+        } = *self;
+        // Start-of-step velocities of the fixity-masked phases (Anura3D's nodal velocities).
+        let v = if self.fixed { R::ZERO } else { self.p_s / ms };
+        let w = if self.liquid_fixed {
+            R::ZERO
+        } else {
+            self.p_w / mw
+        };
+        if !self.liquid_fixed {
+            let qvw = q * (v - w);
+            let (out, ext) = (f_w + qvw, self.weight_w + qvw);
+            norms[2] += out.f64() * out.f64();
+            norms[3] += ext.f64() * ext.f64();
+        }
+        let fw = match rule {
+            DampingRule::Phases => f_w,
+            DampingRule::Anura3d => damp(rule, alpha, f_w, w),
+        };
+        // The liquid's acceleration with the drag at the start-of-step velocities.
+        let a_w_explicit = if self.liquid_fixed {
+            R::ZERO
+        } else {
+            (fw + q * (v - w)) / mw
+        };
+        let f_wn = mwn / mw * f_w;
+        let fs = match rule {
+            DampingRule::Phases => {
+                damp(rule, alpha, self.f_mix - f_wn, self.p_s) + damp(rule, alpha, f_wn, self.p_w)
+            }
+            DampingRule::Anura3d => {
+                // Anura3D damps the liquid part of the mixture's force against the liquid
+                // velocity it has just updated (with the explicit drag), the solid part against
+                // the start-of-step solid velocity.
+                let w_end = match loads.drag {
+                    Drag::Explicit => w + a_w_explicit * dt,
+                    Drag::Implicit => w,
+                };
+                damp(rule, alpha, self.f_mix - f_wn, v) + damp(rule, alpha, f_wn, w_end)
+            }
+        };
+        match loads.drag {
+            Drag::Implicit => {
+                // Relative velocity w - v at the start of the step.
+                let dv = self.p_w / mw - self.p_s / ms;
+                let qdt = q * dt;
+                match (self.fixed, self.liquid_fixed) {
+                    (true, true) => (R::ZERO, R::ZERO),
+                    (true, false) => (R::ZERO, (fw - q * dv) / (mw + qdt)),
+                    (false, true) => (fs / ms, R::ZERO),
+                    (false, false) => {
+                        let a_w = (fw - q * dv + qdt * fs / ms) / (mw + qdt * (R::ONE + mwn / ms));
+                        ((fs - mwn * a_w) / ms, a_w)
+                    }
+                }
+            }
+            Drag::Explicit => {
+                let a_s = if self.fixed {
+                    R::ZERO
+                } else {
+                    (fs - mwn * a_w_explicit) / ms
+                };
+                (a_s, a_w_explicit)
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -454,37 +545,27 @@ mod tests {
         rule: DampingRule,
         drag: Drag,
     ) {
+        let mixture = NodeLoads {
+            traction,
+            scale: 0.7,
+            fixed,
+            alpha: 0.05,
+            rule,
+        };
         if g.liquid.is_some() {
-            grid_update_two_phase::<E, _>(
-                team,
-                scratch,
-                g,
-                traction,
-                0.7,
-                traction,
-                0.3,
-                fixed,
-                fixed,
-                0.05,
-                rule,
+            let loads = TwoPhaseLoads {
+                mixture,
+                liquid_traction: traction,
+                liquid_scale: 0.3,
+                liquid_fixed: fixed,
                 drag,
-                true,
-                [0.0, -9.81, 0.0],
-                1e-3,
-                &SingleProcess,
-            );
+                liquid_load_on_mixture: true,
+                gravity: [0.0, -9.81, 0.0],
+                dt: 1e-3,
+            };
+            grid_update_two_phase::<E, _>((team, &SingleProcess), scratch, g, &loads);
         } else {
-            grid_update::<E, _>(
-                team,
-                scratch,
-                g,
-                traction,
-                0.7,
-                fixed,
-                0.05,
-                rule,
-                &SingleProcess,
-            );
+            grid_update::<E, _>((team, &SingleProcess), scratch, g, &mixture);
         }
     }
 

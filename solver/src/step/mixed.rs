@@ -137,17 +137,23 @@ fn average_all<E: Element, R: Real>(
         Select::Full(full) => full[e],
         Select::OneMaterial => one_material(active, material, range),
     };
+    let averages = Averages {
+        team,
+        layout,
+        active,
+        volume,
+        include: &include,
+    };
     if let Some(l) = &mut p.liquid {
         let add = |m: &mut [R; 1], w: R, v: &[R]| m[0] += w * v[0];
-        average(team, layout, active, volume, &mut l.p, 1, &include, add);
+        averages.average((&mut l.p, 1), add);
     }
     let add = |m: &mut [R; 6], w: R, v: &[R]| {
         for c in 0..6 {
             m[c] += w * v[c];
         }
     };
-    let stress = p.stress.as_flattened_mut();
-    average(team, layout, active, volume, stress, 6, &include, add);
+    averages.average((p.stress.as_flattened_mut(), 6), add);
     // Anura3D averages the state too; the scenes' rule never did.
     let k = p.state_len;
     if k > 0 && matches!(select, Select::OneMaterial) {
@@ -157,53 +163,62 @@ fn average_all<E: Element, R: Real>(
                 m[c] += w * *v;
             }
         };
-        average(team, layout, active, volume, &mut p.state, k, &include, add);
+        averages.average((&mut p.state, k), add);
     }
 }
 
-/// Sets the `width` values of each active point of every element `include` selects (element
-/// index, its points) to their volume-weighted mean; `add(sum, weight, values)` accumulates
-/// one point into a sum of `N ≥ width` values. Each thread treats its own elements.
-#[allow(clippy::too_many_arguments)]
-fn average<E: Element, R: Real, const N: usize>(
-    team: &Team,
-    layout: &Layout<R, E>,
-    active: &[bool],
-    volume: &[R],
-    values: &mut [R],
-    width: usize,
-    include: &(dyn Fn(usize, std::ops::Range<usize>) -> bool + Sync),
-    add: impl Fn(&mut [R; N], R, &[R]) + Sync,
-) {
-    debug_assert!(width <= N && values.len() == width * volume.len());
-    let values = Shared::new(values);
-    team.run(|k| {
-        for e in layout.element_range(k) {
-            let range = layout.particles_of(e);
-            if range.is_empty() || !include(e, range.clone()) {
-                continue;
-            }
-            // SAFETY: the particles of element e belong to this thread only.
-            let x = unsafe { values.range(width * range.start..width * range.end) };
-            let (mut v, mut mean) = (R::ZERO, [R::ZERO; N]);
-            for (j, i) in range.clone().enumerate() {
-                if active[i] {
-                    v += volume[i];
-                    add(&mut mean, volume[i], &x[width * j..width * j + width]);
+/// What every set of values' averages reads: the team, the elements' points, which are
+/// active and their volumes (the weights), and which elements take the means (`include`, of
+/// the element's index and its points).
+struct Averages<'a, E: Element, R: Real> {
+    team: &'a Team,
+    layout: &'a Layout<R, E>,
+    active: &'a [bool],
+    volume: &'a [R],
+    include: &'a (dyn Fn(usize, std::ops::Range<usize>) -> bool + Sync),
+}
+
+impl<E: Element, R: Real> Averages<'_, E, R> {
+    /// Sets the `width` values of each active point (`values`, `width` a point) of every
+    /// element `include` selects to their volume-weighted mean; `add(sum, weight, values)`
+    /// accumulates one point into a sum of `N ≥ width` values. Each thread treats its own
+    /// elements.
+    fn average<const N: usize>(
+        &self,
+        (values, width): (&mut [R], usize),
+        add: impl Fn(&mut [R; N], R, &[R]) + Sync,
+    ) {
+        let (active, volume, layout) = (self.active, self.volume, self.layout);
+        debug_assert!(width <= N && values.len() == width * volume.len());
+        let values = Shared::new(values);
+        self.team.run(|k| {
+            for e in layout.element_range(k) {
+                let range = layout.particles_of(e);
+                if range.is_empty() || !(self.include)(e, range.clone()) {
+                    continue;
                 }
-            }
-            if v > R::ZERO {
-                for m in mean.iter_mut().take(width) {
-                    *m /= v;
-                }
-                for (j, i) in range.enumerate() {
+                // SAFETY: the particles of element e belong to this thread only.
+                let x = unsafe { values.range(width * range.start..width * range.end) };
+                let (mut v, mut mean) = (R::ZERO, [R::ZERO; N]);
+                for (j, i) in range.clone().enumerate() {
                     if active[i] {
-                        x[width * j..width * j + width].copy_from_slice(&mean[..width]);
+                        v += volume[i];
+                        add(&mut mean, volume[i], &x[width * j..width * j + width]);
+                    }
+                }
+                if v > R::ZERO {
+                    for m in mean.iter_mut().take(width) {
+                        *m /= v;
+                    }
+                    for (j, i) in range.enumerate() {
+                        if active[i] {
+                            x[width * j..width * j + width].copy_from_slice(&mean[..width]);
+                        }
                     }
                 }
             }
-        }
-    });
+        });
+    }
 }
 
 /// Anura3D's boundary particles, by point id: in every element that has points, the points

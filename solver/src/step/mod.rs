@@ -12,6 +12,7 @@ pub mod moving_mesh;
 pub mod nodal_energy;
 pub mod nodal_velocity;
 pub mod particle_to_grid;
+pub mod passes;
 pub mod prescribed;
 pub mod reaction;
 pub mod smoothing;

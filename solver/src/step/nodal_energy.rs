@@ -201,7 +201,9 @@ mod tests {
     use super::*;
     use crate::element::tet4::Tet4;
     use crate::state::grid::LiquidNodes;
-    use crate::step::grid_update::{grid_update_two_phase, DampingRule, Drag, GridScratch};
+    use crate::step::grid_update::{
+        grid_update_two_phase, DampingRule, Drag, GridScratch, NodeLoads, TwoPhaseLoads,
+    };
 
     /// One saturated node moving along x and y, its liquid faster than its solid, with loads
     /// on both phases and the liquid's weight.
@@ -228,24 +230,24 @@ mod tests {
         let dt = 1e-3;
         let team = Team::new(1, crate::parallel::team::Pin::None).unwrap();
         let (traction, liquid_traction) = ([[0.1, 0.2, 0.0]], [[0.0, -0.3, 0.0]]);
-        grid_update_two_phase::<Tet4, _>(
-            &team,
-            &mut GridScratch::new(1),
-            g,
-            &traction,
-            1.0,
-            &liquid_traction,
-            1.0,
-            &[[false; 3]],
-            &[fixed],
-            alpha,
-            DampingRule::Phases,
+        let loads = TwoPhaseLoads {
+            mixture: NodeLoads {
+                traction: &traction,
+                scale: 1.0,
+                fixed: &[[false; 3]],
+                alpha,
+                rule: DampingRule::Phases,
+            },
+            liquid_traction: &liquid_traction,
+            liquid_scale: 1.0,
+            liquid_fixed: &[fixed],
             drag,
-            true,
+            liquid_load_on_mixture: true,
             gravity,
             dt,
-            &crate::parallel::comm::SingleProcess,
-        );
+        };
+        let single = crate::parallel::comm::SingleProcess;
+        grid_update_two_phase::<Tet4, _>((&team, &single), &mut GridScratch::new(1), g, &loads);
         for a in 0..3 {
             g.vel[0][a] = g.momentum[0][a] / g.mass[0] + g.acc[0][a] * dt;
             let l = g.liquid.as_mut().unwrap();
@@ -318,16 +320,19 @@ mod tests {
             g.momentum[k] = [0.0, m * shares[k] * v0, 0.0];
         }
         let traction = [[0.0; 3], [0.0, load, 0.0]];
+        let loads = NodeLoads {
+            traction: &traction,
+            scale: 1.0,
+            fixed: &[[false; 3]; 2],
+            alpha: 0.0,
+            rule: DampingRule::Phases,
+        };
+        let single = crate::parallel::comm::SingleProcess;
         crate::step::grid_update::grid_update::<Tet4, _>(
-            &team,
+            (&team, &single),
             &mut GridScratch::new(2),
             &mut g,
-            &traction,
-            1.0,
-            &[[false; 3]; 2],
-            0.0,
-            DampingRule::Phases,
-            &crate::parallel::comm::SingleProcess,
+            &loads,
         );
         // The point: v += Δt Σ N a; the remap gives every node the point's new velocity.
         let dv: f64 = (0..2).map(|k| shares[k] * g.acc[k][1] * dt).sum();

@@ -12,11 +12,12 @@
 
 use crate::element::mesh::Mesh;
 use crate::element::Element;
-use crate::parallel::gather::{node_slots, Layout, Slots};
-use crate::parallel::team::{Shared, Team};
+use crate::parallel::gather::{node_slots, Slots};
+use crate::parallel::team::Shared;
 use crate::real::Real;
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::step::passes::Passes;
 
 /// Materials summed in one pass over the slots: three values each (V ε_s, V ε_w, V).
 const PER_PASS: usize = PASS_WIDTH / 3;
@@ -61,18 +62,16 @@ impl<R: Real> StrainSmoothing<R> {
     }
 
     /// Computes the nodal smoothed strain increments of this step from the nodal velocities of
-    /// both phases (`g.vel`, and the liquid's when the case has one).
-    #[allow(clippy::too_many_arguments)]
+    /// both phases (`g.vel`, and the liquid's when the case has one), over the elements
+    /// holding points of `p`.
     pub fn compute<E: Element>(
         &mut self,
-        team: &Team,
-        layout: &Layout<R, E>,
+        passes: &Passes<'_, R, E>,
         slots: &mut Slots<R>,
-        mesh: &Mesh<E, R>,
-        p: &Particles<R>,
-        g: &Grid<R>,
+        (p, g): (&Particles<R>, &Grid<R>),
         dt: R,
     ) {
+        let (team, layout, mesh) = (passes.team, passes.layout, passes.mesh);
         let (column, columns) = (&self.column, self.columns);
         let wvel = g.liquid.as_ref().map(|l| &l.vel);
         for lo in (0..columns).step_by(PER_PASS) {

@@ -30,6 +30,7 @@ use crate::step::grid_update::ForceSums;
 use crate::step::moment::Moment;
 use crate::step::moving_mesh::Inverted;
 use crate::step::nodal_energy::NodalEnergy;
+use crate::step::passes::Passes;
 use crate::step::stress::Guard;
 use crate::step::tail::{self, Nodal};
 use crate::step::{grid_to_particle, grid_update, nodal_energy, particle_to_grid, stress};
@@ -143,21 +144,19 @@ impl<R: Real, E: Element> Engine<R, E> {
             fluids: &self.fluids,
             gravity: at.gravity,
         });
+        let passes = Passes::new(&self.team, &self.layout, &self.mesh, &*self.comm);
         for (grid, body) in once((&mut self.grid, soil)).chain(structure) {
-            particle_to_grid::particle_to_grid(
-                &self.team,
-                &self.layout,
-                &mut self.slots,
-                &self.mesh,
-                &self.particles,
-                &self.gravity_by_material,
-                self.mixed.as_mut(),
+            let to = particle_to_grid::MapToGrid {
+                particles: &self.particles,
+                gravity: &self.gravity_by_material,
                 grid,
                 body,
-                liquid.take(),
+                mixed: self.mixed.as_mut(),
+                liquid: liquid.take(),
                 // (Asked of the liquid's pass only, the first.)
-                self.pore_weights.as_mut(),
-            );
+                pore_weights: self.pore_weights.as_mut(),
+            };
+            particle_to_grid::particle_to_grid(&passes, &mut self.slots, to);
         }
         particle_to_grid::add_point_loads(
             &self.mesh,
@@ -175,23 +174,28 @@ impl<R: Real, E: Element> Engine<R, E> {
         let c = &self.config;
         let dt = R::of(at.dt);
         if self.grid.liquid.is_some() {
+            let loads = grid_update::TwoPhaseLoads {
+                mixture: grid_update::NodeLoads {
+                    traction: &self.traction,
+                    scale: at.traction,
+                    fixed: &self.fixed,
+                    alpha: at.damping,
+                    rule: at.damping_rule,
+                },
+                liquid_traction: &self.liquid_traction,
+                liquid_scale: at.liquid,
+                liquid_fixed: &self.liquid_fixed,
+                drag: c.drag,
+                liquid_load_on_mixture: c.liquid_load_on_mixture,
+                gravity: at.gravity,
+                dt,
+            };
+            let (team, comm) = (&self.team, &*self.comm);
             grid_update::grid_update_two_phase::<E, R>(
-                &self.team,
+                (team, comm),
                 &mut self.grid_scratch,
                 &mut self.grid,
-                &self.traction,
-                at.traction,
-                &self.liquid_traction,
-                at.liquid,
-                &self.fixed,
-                &self.liquid_fixed,
-                at.damping,
-                at.damping_rule,
-                c.drag,
-                c.liquid_load_on_mixture,
-                at.gravity,
-                dt,
-                &*self.comm,
+                &loads,
             );
             let (team, comm) = (&self.team, &*self.comm);
             tail::cut_grid(
@@ -209,17 +213,15 @@ impl<R: Real, E: Element> Engine<R, E> {
                 .as_mut()
                 .map(|s| (&mut s.scratch, &mut s.grid));
             for (scratch, grid) in once((&mut self.grid_scratch, &mut self.grid)).chain(structure) {
-                grid_update::grid_update::<E, R>(
-                    &self.team,
-                    scratch,
-                    grid,
-                    &self.traction,
-                    at.traction,
-                    &self.fixed,
-                    at.damping,
-                    at.damping_rule,
-                    &*self.comm,
-                );
+                let loads = grid_update::NodeLoads {
+                    traction: &self.traction,
+                    scale: at.traction,
+                    fixed: &self.fixed,
+                    alpha: at.damping,
+                    rule: at.damping_rule,
+                };
+                let (team, comm) = (&self.team, &*self.comm);
+                grid_update::grid_update::<E, R>((team, comm), scratch, grid, &loads);
                 tail::cut_grid(&self.team, &*self.comm, scratch, grid, Nodal::Acceleration);
             }
             if let Some(s) = &mut self.structure {
@@ -259,26 +261,24 @@ impl<R: Real, E: Element> Engine<R, E> {
     fn remap(&mut self, at: &Moment<R>) {
         let soil = self.structure.as_ref().map(|s| s.soil());
         let structure = self.structure.as_mut().map(|s| (&mut s.grid, Some(s.body)));
+        let passes = Passes::new(&self.team, &self.layout, &self.mesh, &*self.comm);
         for (k, (grid, body)) in once((&mut self.grid, soil)).chain(structure).enumerate() {
-            grid_to_particle::grid_to_particle(
-                &self.team,
-                &self.layout,
-                &mut self.slots,
-                &self.mesh,
-                &mut self.particles,
+            let remap = grid_to_particle::Remap {
+                particles: &mut self.particles,
                 grid,
-                &self.fixed,
-                R::of(at.dt),
-                R::of(self.config.pic_blend),
-                self.guards.enabled.then_some(&mut self.guard_slots[..]),
+                fixed: &self.fixed,
+                dt: R::of(at.dt),
+                pic: R::of(self.config.pic_blend),
+                guard: self.guards.enabled.then_some(&mut self.guard_slots[..]),
                 body,
-                k == 0,
+                begin: k == 0,
                 // The liquid goes with the soil's pass (contact refuses saturated materials).
-                (k == 0).then_some(grid_to_particle::LiquidRemap {
+                liquid: (k == 0).then_some(grid_to_particle::LiquidRemap {
                     fluids: &self.fluids,
                     fixed: &self.liquid_fixed,
                 }),
-            );
+            };
+            grid_to_particle::grid_to_particle(&passes, &mut self.slots, remap);
         }
         // Each body's re-mapped velocities, their precursor cut before the constraints set
         // theirs.
@@ -298,30 +298,20 @@ impl<R: Real, E: Element> Engine<R, E> {
     fn update_stress(&mut self, at: &Moment<R>) -> bool {
         let dt = R::of(at.dt);
         let c = &self.config;
+        let passes = Passes::new(&self.team, &self.layout, &self.mesh, &*self.comm);
         if let Some(sm) = &mut self.smoothing {
-            sm.compute(
-                &self.team,
-                &self.layout,
-                &mut self.slots,
-                &self.mesh,
-                &self.particles,
-                &self.grid,
-                dt,
-            );
+            sm.compute(&passes, &mut self.slots, (&self.particles, &self.grid), dt);
         }
-        let rate_pending = stress::update_pore_pressure(
-            &self.team,
-            &self.layout,
-            &mut self.slots,
-            &self.mesh,
-            &mut self.particles,
-            &mut self.grid,
-            &self.fluids,
-            c.smooth_pressure,
-            self.smoothing.as_ref(),
-            self.pore_weights.as_mut(),
+        let pressure = stress::PorePressure {
+            particles: &mut self.particles,
+            grid: &mut self.grid,
+            fluids: &self.fluids,
+            smooth: c.smooth_pressure,
+            smoothing: self.smoothing.as_ref(),
+            weights: self.pore_weights.as_mut(),
             dt,
-        );
+        };
+        let rate_pending = stress::update_pore_pressure(&passes, &mut self.slots, pressure);
         let located = self.locates_in_stress_pass();
         if located {
             self.locate_outcome.fill(NOTHING_FOUND);
@@ -340,27 +330,25 @@ impl<R: Real, E: Element> Engine<R, E> {
                 fluids: &self.fluids,
             });
         for (k, (grid, body)) in once((&self.grid, soil)).chain(structure).enumerate() {
-            stress::update_stress_and_move(
-                &self.team,
-                &self.layout,
-                &self.mesh,
-                &mut self.particles,
+            let update = stress::StressUpdate {
+                particles: &mut self.particles,
                 grid,
-                &self.laws,
-                c.objective_stress,
-                c.hoop_in_volume,
-                self.smoothing.as_ref(),
+                laws: &self.laws,
+                objective: c.objective_stress,
+                hoop_in_volume: c.hoop_in_volume,
+                smoothing: self.smoothing.as_ref(),
                 dt,
-                self.guards.enabled.then_some(Guard {
+                guard: self.guards.enabled.then_some(Guard {
                     slots: &mut self.guard_slots,
                     initial_density: &self.initial_density,
                     fluids: &self.fluids,
                     min_volume_ratio: R::of(self.guards.min_volume_ratio),
                 }),
                 body,
-                pore_rate.filter(|_| k == 0),
-                (located && k == 0).then_some(&mut self.locate_outcome[..]),
-            );
+                pore_rate: pore_rate.filter(|_| k == 0),
+                located: (located && k == 0).then_some(&mut self.locate_outcome[..]),
+            };
+            stress::update_stress_and_move(&passes, update);
         }
         if let Some(m) = &self.mixed {
             m.after_stress(&self.team, &self.layout, &mut self.particles);

@@ -1,0 +1,142 @@
+//! Particle to grid over any basis's stencils ([`crate::basis`]): each point's nodes four at a
+//! time in the lanes of [`Lanes4`], its share of each formed by the element kernels' physics
+//! ([`point_sums`], then [`Sums::close`] with the point's own gradients), and summed into the
+//! nodes point by point in point order on the calling thread (the team's scatter holds an
+//! element's corners only, [`crate::basis`]).
+
+use crate::basis::{Basis, Stencil};
+use crate::element::Element;
+use crate::four::{Four, Lanes4};
+use crate::real::{Real, V3};
+use crate::step::contact::maps;
+use crate::step::passes::Passes;
+
+use super::arrays::{PointArrays, Points};
+use super::point::point_sums;
+use super::totals::Sums;
+use super::{liquid_width, solid_width, MapToGrid, NodeSums};
+
+/// No material's points take their weight from the totals: each point adds its own.
+const NO_LEAD: u32 = u32::MAX;
+
+/// [`super::particle_to_grid`] with `passes.basis`'s stencils: the mass, momentum, internal
+/// force and weight of every active point of the body, and the liquid's share in its pass.
+/// Mixed integration and the pore-pressure rate's weights are the linear element's (one
+/// gradient per element): refused, and not formed.
+///
+/// # Panics
+/// Under mixed integration.
+pub(super) fn map_stencils<E, R, B>(passes: &Passes<'_, R, E, B>, to: MapToGrid<'_, R>)
+where
+    E: Element,
+    R: Real,
+    B: Basis<E, R>,
+{
+    let MapToGrid {
+        particles: p,
+        gravity,
+        grid: g,
+        body,
+        mixed,
+        liquid,
+        pore_weights,
+    } = to;
+    assert!(
+        mixed.is_none(),
+        "mixed integration takes the linear element's kernels"
+    );
+    if let Some(w) = pore_weights {
+        // Not formed: the rate's pass takes its points one by one.
+        w.fresh = false;
+    }
+    let liquid = liquid.filter(|_| p.liquid.is_some() && g.liquid.is_some());
+    let (mesh, layout) = (passes.mesh, passes.layout);
+    let (sw, lw) = (solid_width::<E>(), liquid_width::<E>());
+    let width = if liquid.is_some() { sw + lw } else { sw };
+    let mut nodes = vec![R::ZERO; width * mesh.x.len()];
+    let arrays = PointArrays::new(p, liquid.is_some());
+    let liquid_gravity = liquid.map(|l| l.gravity);
+    let mut stencil = Stencil::default();
+    for e in 0..mesh.elements() {
+        let corners = mesh.corners[e].as_ref();
+        for i in layout.particles_of(e) {
+            if !p.active[i] || !maps(body, p.material[i]) {
+                continue;
+            }
+            passes.basis.stencil(mesh, e, &p.x[i], &mut stencil);
+            let one = arrays.element(i..i + 1);
+            let points = Points::<E, R> {
+                arrays: one,
+                liquid: liquid.and_then(|l| one.w.map(|w| (l, w, one.volume0))),
+                map: &mesh.map[e],
+                first: &mesh.x[corners[0] as usize],
+                gravity,
+                body,
+                full: false,
+            };
+            let share = PointShare {
+                points: &points,
+                stencil: &stencil,
+                liquid_gravity,
+            };
+            if liquid.is_some() {
+                share.add::<true>(&mut nodes, width);
+            } else {
+                share.add::<false>(&mut nodes, width);
+            }
+        }
+    }
+    let out = NodeSums::new(g, liquid.is_some());
+    for (n, s) in nodes.chunks_exact(width).enumerate() {
+        out.write::<E>(n, s);
+    }
+}
+
+/// One point with its stencil, and the liquid's gravity in the liquid's pass.
+struct PointShare<'a, E: Element, R: Real> {
+    points: &'a Points<'a, E, R>,
+    stencil: &'a Stencil<R>,
+    liquid_gravity: Option<V3<R>>,
+}
+
+impl<E: Element, R: Real> PointShare<'_, E, R> {
+    /// Adds the point's share of each of its nodes to their sums (`width` values a node: the
+    /// solid's, then the liquid's with `WITH_LIQUID`), four nodes at a time.
+    fn add<const WITH_LIQUID: bool>(&self, nodes: &mut [R], width: usize) {
+        let t = ();
+        let (sw, lw) = (solid_width::<E>(), liquid_width::<E>());
+        let (node, weight, grad) = (
+            self.stencil.nodes(),
+            self.stencil.weights(),
+            self.stencil.gradients(),
+        );
+        for from in (0..node.len()).step_by(4) {
+            let live = (node.len() - from).min(4);
+            let lane = |f: &dyn Fn(usize) -> R| {
+                Lanes4::load(
+                    t,
+                    &std::array::from_fn(|k| if k < live { f(from + k) } else { R::ZERO }),
+                )
+            };
+            let n = lane(&|k| weight[k]);
+            let g: [Lanes4<R>; 3] = std::array::from_fn(|b| lane(&|k| grad[k][b]));
+            let mut sums = Sums::<R, Lanes4<R>>::zero(t, NO_LEAD);
+            point_sums::<E, R, Lanes4<R>, WITH_LIQUID, false>(t, self.points, 0, n, &mut sums);
+            sums.close::<E, WITH_LIQUID>(t, &g, [R::ZERO; 3], self.liquid_gravity);
+            let solid = sums.solid.map(|v| v.to_array());
+            let liquid = sums.liquid.map(|v| v.to_array());
+            for k in 0..live {
+                let at = width * node[from + k] as usize;
+                let values = &mut nodes[at..at + width];
+                for c in 0..sw {
+                    values[c] += solid[c][k];
+                }
+                if WITH_LIQUID {
+                    for c in 0..lw {
+                        values[sw + c] += liquid[c][k];
+                    }
+                }
+            }
+        }
+    }
+}
