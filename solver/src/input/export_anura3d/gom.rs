@@ -5,7 +5,7 @@ use mpm_shared::model::{Body, LineEnding, Refs, Section, Table, Token};
 use mpm_shared::text::real_to_string;
 use mpm_shared::{Dimension, ElementType, Model};
 
-use super::mesh::{reaction_rows, Tet10Mesh};
+use super::mesh::{reaction_rows, safe_name, Tet10Mesh};
 use super::VERSION;
 use crate::input::case::Case;
 use crate::input::scene::{MaterialInput, Resolved};
@@ -228,26 +228,6 @@ fn counted(keyword: &str, refs: Refs, rows: Table) -> Section {
             refs,
             rows,
         },
-    }
-}
-
-/// A material name Anura3D reads whole (its list-directed read stops at blanks, commas, slashes
-/// and quotes): other characters become `_`.
-pub(super) fn safe_name(name: &str) -> String {
-    let s: String = name
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || "_-.+()[]".contains(c) {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    if s.is_empty() {
-        "material".into()
-    } else {
-        s
     }
 }
 

@@ -6,7 +6,6 @@ use std::collections::HashMap;
 use mpm_shared::model::{Table, Token};
 use mpm_shared::{ElementType, Model};
 
-use super::gom::safe_name;
 use crate::input::scene;
 
 /// Mid-edge node k (0-based, 4..10) of a `tetrahedral_old` element lies between these corners.
@@ -214,6 +213,26 @@ pub(super) fn reaction_rows(
         }
     }
     t
+}
+
+/// A material name Anura3D reads whole (its list-directed read stops at blanks, commas, slashes
+/// and quotes): other characters become `_`.
+pub(super) fn safe_name(name: &str) -> String {
+    let s: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "_-.+()[]".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if s.is_empty() {
+        "material".into()
+    } else {
+        s
+    }
 }
 
 #[cfg(test)]

@@ -5,8 +5,8 @@ use serde::Deserialize;
 
 use mpm_shared::Model;
 
+use super::keys::{key, Table};
 use super::material::Materials;
-use super::reference::{key, Table};
 use super::{refuse, Refusal};
 use crate::input::case::{ConsolidationSpec, MaterialSpec, Start, UndrainedState};
 

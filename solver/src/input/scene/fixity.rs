@@ -6,9 +6,9 @@ use serde::Deserialize;
 
 use mpm_shared::Model;
 
+use super::keys::{key, Table};
 use super::material::Materials;
 use super::mesh::{parse_plane, Mesh};
-use super::reference::{key, Table};
 use super::{refuse, Refusal};
 use crate::step::wall_friction::WallAxis;
 

@@ -2,8 +2,8 @@
 
 use serde::Deserialize;
 
+use super::keys::{key, Table};
 use super::mesh::Mesh;
-use super::reference::{key, Table};
 use super::{refuse, Refusal};
 
 /// The keys of `[gravity]`.

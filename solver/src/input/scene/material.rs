@@ -11,8 +11,8 @@ use serde::Deserialize;
 
 use mpm_shared::Model;
 
+use super::keys::{key, scene_key, Table};
 use super::mesh::Mesh;
-use super::reference::{key, scene_key, Table};
 use super::{refuse, Refusal};
 use crate::input::case::MaterialSpec;
 use crate::material::law::{self, LawSpec};

@@ -77,6 +77,7 @@ mod damping;
 mod fixity;
 mod gravity;
 mod initial_stress;
+mod keys;
 mod material;
 mod mesh;
 mod numerics;
@@ -90,7 +91,7 @@ pub use reference::reference_markdown;
 pub use traction::{add_face_loads, TractionInput};
 pub use velocity::{VelocityInput, VelocityTarget};
 
-use reference::{key, Table};
+use keys::{key, Table};
 
 /// The keys at the top level of a scene (the tables among them have sections of their own).
 #[rustfmt::skip]

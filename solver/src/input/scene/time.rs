@@ -2,7 +2,7 @@
 
 use serde::Deserialize;
 
-use super::reference::{key, Table};
+use super::keys::{key, Table};
 use super::{refuse, Refusal};
 use crate::driver::units;
 use crate::input::preflight::MAX_OUTPUTS;

@@ -5,8 +5,8 @@ use serde::Deserialize;
 
 use mpm_shared::Model;
 
+use super::keys::{key, Table};
 use super::mesh::Mesh;
-use super::reference::{key, Table};
 use super::{refuse, Refusal};
 
 /// The keys of `[[traction]]`.

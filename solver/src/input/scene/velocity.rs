@@ -3,9 +3,9 @@
 
 use serde::Deserialize;
 
+use super::keys::{key, Table};
 use super::material::Materials;
 use super::mesh::{parse_plane, Mesh};
-use super::reference::{key, Table};
 use super::{refuse, Refusal};
 use crate::input::case::LoadCurve;
 use crate::step::nodal_velocity::{NodalVelocitySet, PrescribedNode};
