@@ -59,11 +59,66 @@ pub(super) struct PicNodes<'a, R: Real> {
 }
 
 /// Element `e`'s points (`range`): their velocities updated and their momentum re-mapped into
-/// `four` ([`element_lanes`], in lanes `F`; with `WIDE` in the scatter's AVX2 copy, through
-/// [`element_lanes_avx2`]); with `WANT`, their kinetic-energy terms (solid, liquid) returned.
-/// An element without points adds nothing (the scatter's contract).
+/// `four`, and with `WANT` (the guard rails) their kinetic-energy terms added to the block's
+/// slot ([`remap_element`], in lanes `F`; with `WIDE` in the scatter's AVX2 copy, through
+/// [`element_lanes_avx2`], so that the scatter's closure stays small enough to be inlined into
+/// its AVX2 copy). An element without points adds nothing (the scatter's contract), but takes
+/// its turn in its block's kinetic sums.
 #[inline(always)]
 pub(super) fn element_remap<E, R, F, const WANT: bool, const WITH_LIQUID: bool, const WIDE: bool>(
+    cx: &Remapping<'_, E, R>,
+    t: F::Token,
+    e: usize,
+    (range, four): (std::ops::Range<usize>, &mut [R]),
+    pending: &mut [f64; ELEMENT_BLOCK],
+) where
+    E: Element,
+    R: Real,
+    F: Four<R>,
+{
+    if !WANT && range.is_empty() {
+        return;
+    }
+    if WIDE {
+        debug_assert!(crate::parallel::avx2::present());
+        // SAFETY: `WIDE` only in the scatter's AVX2 copy, which runs where the processor has
+        // AVX2.
+        unsafe {
+            element_lanes_avx2::<E, R, F, WANT, WITH_LIQUID>(cx, t, e, (range, four), pending)
+        }
+    } else {
+        remap_element::<E, R, F, WANT, WITH_LIQUID>(cx, t, e, (range, four), pending)
+    }
+}
+
+/// [`element_remap`]'s work: the element's points ([`remap_points`], none for an element
+/// without points), and with `WANT` their kinetic sums into the block's slot ([`add_kinetic`]).
+#[inline(always)]
+pub(super) fn remap_element<E, R, F, const WANT: bool, const WITH_LIQUID: bool>(
+    cx: &Remapping<'_, E, R>,
+    t: F::Token,
+    e: usize,
+    (range, four): (std::ops::Range<usize>, &mut [R]),
+    pending: &mut [f64; ELEMENT_BLOCK],
+) where
+    E: Element,
+    R: Real,
+    F: Four<R>,
+{
+    let kinetic = if range.is_empty() {
+        (0.0, 0.0)
+    } else {
+        remap_points::<E, R, F, WANT, WITH_LIQUID>(cx, t, e, range, four)
+    };
+    if WANT {
+        add_kinetic::<E, R, WITH_LIQUID>(cx, e, kinetic, pending);
+    }
+}
+
+/// [`element_remap`] of an element with points: its points' arrays sliced, its nodes' values
+/// gathered, the walk over its points ([`element_lanes`]).
+#[inline(always)]
+pub(super) fn remap_points<E, R, F, const WANT: bool, const WITH_LIQUID: bool>(
     cx: &Remapping<'_, E, R>,
     t: F::Token,
     e: usize,
@@ -75,13 +130,9 @@ where
     R: Real,
     F: Four<R>,
 {
-    let count = range.len();
-    if count == 0 {
-        return (0.0, 0.0);
-    }
     // The element's points, each array sliced to them once (one length): the loop then indexes
     // without bounds checks.
-    let r = range.clone();
+    let (count, r) = (range.len(), range);
     let (x, mass) = (&cx.x[r.clone()][..count], &cx.mass[r.clone()][..count]);
     let (active, material) = (
         &cx.active[r.clone()][..count],
@@ -117,25 +168,19 @@ where
         map: &cx.mesh.map[e],
         first: &cx.mesh.x[corners[0] as usize],
     };
+    let pic = match &cx.pic {
+        Some(pic) => Some((pic.blend, pic_nodes::<E, R>(pic, corners, cx.acc, cx.dt))),
+        None => None,
+    };
     let kernel = Kernel::<R, F> {
         t,
         dt: cx.dt,
         body: cx.body,
         acc: acc.as_ref(),
         acc_w: acc_w.as_ref().map(|a| a.as_ref()),
-        pic: cx
-            .pic
-            .as_ref()
-            .map(|pic| (pic.blend, pic_nodes::<E, R>(pic, corners, cx.acc, cx.dt))),
+        pic,
     };
-    if WIDE {
-        debug_assert!(crate::parallel::avx2::present());
-        // SAFETY: `WIDE` only in the scatter's AVX2 copy, which runs where the processor has
-        // AVX2.
-        unsafe { element_lanes_avx2::<E, R, F, WANT, WITH_LIQUID>(&kernel, points, four) }
-    } else {
-        element_lanes::<E, R, F, WANT, WITH_LIQUID>(&kernel, points, four)
-    }
+    element_lanes::<E, R, F, WANT, WITH_LIQUID>(&kernel, points, four)
 }
 
 /// The element's nodes' velocities after the step for the PIC blend ([`Pic::node_velocity`]),
@@ -160,25 +205,17 @@ fn pic_nodes<E: Element, R: Real>(
     v
 }
 
-/// [`element_remap`] with the guard rails: the element's kinetic sums into its block's slot,
-/// begun anew at the block's first element where this pass begins them (the second body's
-/// pass adds to the slots the first began), the liquid's (`pending`, the block's elements so
-/// far) after the block's last element (after the solid's sums of the block).
+/// Element `e`'s kinetic sums (solid, liquid) into its block's slot, begun anew at the block's
+/// first element where this pass begins them (the second body's pass adds to the slots the
+/// first began), the liquid's (`pending`, the block's elements so far) after the block's last
+/// element (after the solid's sums of the block).
 #[inline(always)]
-pub(super) fn guarded<E, R, F, const WITH_LIQUID: bool, const WIDE: bool>(
+fn add_kinetic<E: Element, R: Real, const WITH_LIQUID: bool>(
     cx: &Remapping<'_, E, R>,
-    t: F::Token,
     e: usize,
-    range: std::ops::Range<usize>,
-    four: &mut [R],
+    (kinetic, kinetic_w): (f64, f64),
     pending: &mut [f64; ELEMENT_BLOCK],
-) where
-    E: Element,
-    R: Real,
-    F: Four<R>,
-{
-    let (kinetic, kinetic_w) =
-        element_remap::<E, R, F, true, WITH_LIQUID, WIDE>(cx, t, e, range, four);
+) {
     let Some((guard, begin, elements)) = &cx.guard else {
         return;
     };

@@ -27,8 +27,7 @@ use crate::step::contact::OneBody;
 use crate::step::passes::Passes;
 use crate::step::stress::GuardSums;
 
-use element::{element_remap, guarded, LiquidRemapping, PicNodes, Remapping};
-use lanes::{ElementPoints, Kernel};
+use element::{element_remap, LiquidRemapping, PicNodes, Remapping};
 use nodal::{nodal_velocity, PhaseNodes};
 use point::Pic;
 
@@ -200,29 +199,16 @@ fn scatter<E, R, B>(
     // after its last element (after the solid's sums of the block).
     let init = |_| [0.0f64; ELEMENT_BLOCK];
     macro_rules! run {
-        (false, $liquid:literal, $width:literal) => {{
-            if wide {
-                let t = R::Four::token().expect("AVX2, asked for");
-                layout.scatter_with::<$width, true, true, _, _>(team, slots, init, |e, r, f, _| {
-                    element_remap::<E, R, R::Four, false, $liquid, true>(cx, t, e, r, f);
-                })
-            } else {
-                let t = <Portable<R> as Four<R>>::token().expect("the portable lanes");
-                layout.scatter_with::<$width, false, true, _, _>(team, slots, init, |e, r, f, _| {
-                    element_remap::<E, R, Portable<R>, false, $liquid, false>(cx, t, e, r, f);
-                })
-            }
-        }};
-        (true, $liquid:literal, $width:literal) => {{
+        ($want:literal, $liquid:literal, $width:literal) => {{
             if wide {
                 let t = R::Four::token().expect("AVX2, asked for");
                 layout.scatter_with::<$width, true, true, _, _>(team, slots, init, |e, r, f, k| {
-                    guarded::<E, R, R::Four, $liquid, true>(cx, t, e, r, f, k)
+                    element_remap::<E, R, R::Four, $want, $liquid, true>(cx, t, e, (r, f), k)
                 })
             } else {
                 let t = <Portable<R> as Four<R>>::token().expect("the portable lanes");
                 layout.scatter_with::<$width, false, true, _, _>(team, slots, init, |e, r, f, k| {
-                    guarded::<E, R, Portable<R>, $liquid, false>(cx, t, e, r, f, k)
+                    element_remap::<E, R, Portable<R>, $want, $liquid, false>(cx, t, e, (r, f), k)
                 })
             }
         }};
@@ -239,22 +225,23 @@ fn scatter<E, R, B>(
     }
 }
 
-/// [`lanes::element_lanes`] compiled with AVX2 (a function of its own: inlined into the
-/// scatter's element closure, the saturated pass's closure would grow past what the compiler
-/// inlines into its AVX2 copy, as particle to grid's did).
+/// [`element::remap_element`] compiled with AVX2 (a function of its own: inlined into the
+/// scatter's element closure, the closure grew past what the compiler inlines into its AVX2
+/// copy, and was compiled for the baseline).
 ///
 /// # Safety
 /// On x86-64 the processor must have AVX2 ([`crate::parallel::avx2::present`]).
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
 unsafe fn element_lanes_avx2<E, R, F, const WANT: bool, const WITH_LIQUID: bool>(
-    kernel: &Kernel<'_, R, F>,
-    points: ElementPoints<'_, E, R>,
-    four: &mut [R],
-) -> (f64, f64)
-where
+    cx: &Remapping<'_, E, R>,
+    t: F::Token,
+    e: usize,
+    points: (std::ops::Range<usize>, &mut [R]),
+    pending: &mut [f64; ELEMENT_BLOCK],
+) where
     E: Element,
     R: Real,
     F: Four<R>,
 {
-    lanes::element_lanes::<E, R, F, WANT, WITH_LIQUID>(kernel, points, four)
+    element::remap_element::<E, R, F, WANT, WITH_LIQUID>(cx, t, e, points, pending)
 }

@@ -13,24 +13,24 @@ use crate::real::Real;
 use crate::step::batch::Batch;
 use crate::step::contact::maps;
 
-use super::guard::GuardTerms;
+use super::guard::{GuardTerms, Open};
 use super::laws::update_batch;
 use super::point::{moved, pore_change, strain_work, velocity_at, volume_factor};
 use super::strain::{add_objective, spin_increment, strain_increment};
-use super::{ChunkPoints, ElementView, Pass, Sinks};
+use super::{ChunkPoints, ElementView, Pass};
 
 /// `W` lanes of plain values.
 type L<R, const W: usize> = Plain<R, W>;
 
 /// The points of element `el` from `j` up to `end` in batches of `W`: each batch that has a
-/// point taking part ([`batch`]).
+/// point taking part ([`batch`]), its points added to the guard's sums `open` with `guard`.
 #[inline(always)]
 pub(super) fn general_batches<E: Element, R: Real, const W: usize, const WIDE: bool>(
     cx: &Pass<'_, E, R>,
     el: &ElementView<'_, E, R>,
     p: &mut ChunkPoints<'_, R>,
     (mut j, end): (usize, usize),
-    sinks: &mut Sinks<'_>,
+    (open, guard): (&mut Open, bool),
 ) {
     let (active, material) = (p.active, p.material);
     while j < end {
@@ -45,7 +45,7 @@ pub(super) fn general_batches<E: Element, R: Real, const W: usize, const WIDE: b
             (j..j + b.len).all(|i| p.element[i] as usize == el.e),
             "points not sorted by element"
         );
-        batch::<E, R, W, WIDE>(cx, el, p, &b, sinks);
+        batch::<E, R, W, WIDE>(cx, el, p, &b, (&mut *open, guard));
         j += b.len;
     }
 }
@@ -60,7 +60,7 @@ fn batch<E: Element, R: Real, const W: usize, const WIDE: bool>(
     el: &ElementView<'_, E, R>,
     p: &mut ChunkPoints<'_, R>,
     b: &Batch<W>,
-    sinks: &mut Sinks<'_>,
+    (open, guard): (&mut Open, bool),
 ) {
     let (t, dt) = ((), cx.dt);
     let xl = b.gather(p.x);
@@ -113,9 +113,9 @@ fn batch<E: Element, R: Real, const W: usize, const WIDE: bool>(
         p.stress[i] = std::array::from_fn(|c| s1[c].0[q]);
         p.volume[i] = v1.0[q];
     }
-    let Some(open) = sinks.open.as_deref_mut() else {
+    if !guard {
         return;
-    };
+    }
     let strain = strain_work::<E, R, L<R, W>>(t, (&s0, &s1), &de, (&x1, v0, v1));
     // Point by point in order: the block's sums are those of adding in place.
     for i in b.points() {

@@ -47,7 +47,7 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
     el: &ElementView<'_, E, R>,
     p: &mut ChunkPoints<'_, R>,
     (mut j, end): (usize, usize),
-    sinks: &mut Sinks<'_>,
+    mut sinks: Sinks<'_>,
 ) -> usize {
     debug_assert!(!E::AXISYMMETRIC && cx.smoothing.is_none());
     let (active, material) = (p.active, p.material);
@@ -64,8 +64,7 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
         mesh: cx.mesh,
         // The guard's per-material values exist only with the guards.
         guard: sinks
-            .open
-            .is_some()
+            .guard
             .then(|| GuardTerms::of(lead, cx.initial_density, cx.fluids, cx.min_ratio)),
     };
     // The chunk's points: a batch's lanes may read past the element's points (never past
@@ -76,9 +75,9 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
     // they are used, not hoisted out of the loop into lanes and spilled.
     if j + 4 <= n && usual_of::<E>(active, material, j, end, lead) {
         if usual_count::<E>() == 4 {
-            run.in_place::<4>(p, sinks, j);
+            run.in_place::<4>(p, &mut sinks, j);
         } else {
-            run.in_place::<3>(p, sinks, j);
+            run.in_place::<3>(p, &mut sinks, j);
         }
         return j + usual_count::<E>();
     }
@@ -94,10 +93,10 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
         };
         if j + 4 <= n && all_take_part(live) {
             match live {
-                4 => run.in_place::<4>(p, sinks, j),
-                3 => run.in_place::<3>(p, sinks, j),
-                2 => run.in_place::<2>(p, sinks, j),
-                _ => run.in_place::<1>(p, sinks, j),
+                4 => run.in_place::<4>(p, &mut sinks, j),
+                3 => run.in_place::<3>(p, &mut sinks, j),
+                2 => run.in_place::<2>(p, &mut sinks, j),
+                _ => run.in_place::<1>(p, &mut sinks, j),
             }
             j += live;
             continue;
@@ -112,7 +111,7 @@ pub(super) fn elastic_batches<E: Element, R: Real>(
         if b.points().any(|i| material[i] != lead) {
             break;
         }
-        run.copied(p, sinks, &b);
+        run.copied(p, &mut sinks, &b);
         j += b.len;
     }
     j
@@ -160,9 +159,9 @@ impl<E: Element, R: Real> Run<'_, E, R> {
         let wants = (self.guard.is_some(), sinks.locate.is_some());
         let (strain, outside) = self.four_points::<LIVE>(four, wants);
         let mass4 = *<&[R; 4]>::try_from(&p.mass[r]).unwrap();
-        if let (Some(open), Some(g)) = (sinks.open.as_deref_mut(), &self.guard) {
+        if let Some(g) = &self.guard {
             let on = std::array::from_fn(|q| q < LIVE);
-            g.add_four(open, on, strain, *volume4, mass4, pore4.map(|p| *p));
+            g.add_four(sinks.open, on, strain, *volume4, mass4, pore4.map(|p| *p));
         }
         if let Some((found, offset)) = sinks.locate.as_mut().filter(|_| outside) {
             for i in j..j + LIVE {
@@ -199,8 +198,8 @@ impl<E: Element, R: Real> Run<'_, E, R> {
                 pore[i] = p4[q];
             }
         }
-        if let (Some(open), Some(g)) = (sinks.open.as_deref_mut(), &self.guard) {
-            g.add_four(open, b.on, strain, v4, b.at.map(|i| p.mass[i]), p4);
+        if let Some(g) = &self.guard {
+            g.add_four(sinks.open, b.on, strain, v4, b.at.map(|i| p.mass[i]), p4);
         }
         // (The lanes past the batch's points repeat one of its points.)
         if let Some((found, offset)) = sinks.locate.as_mut().filter(|_| outside) {

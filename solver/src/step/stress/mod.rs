@@ -256,11 +256,28 @@ struct ElementView<'e, E: Element, R: Real> {
 }
 
 /// Where a chunk's points leave what they add besides their own values: the guard's sums of
-/// the block they are in (with the guards), and where the pass locates them, the chunk's walks'
+/// the block they are in (added to with the guards: `guard`; always there, so that the
+/// compiler keeps them in registers), and where the pass locates them, the chunk's walks'
 /// outcome and its first point's index.
 struct Sinks<'a> {
-    open: Option<&'a mut Open>,
+    open: &'a mut Open,
+    guard: bool,
     locate: Option<(&'a mut Outcome, usize)>,
+}
+
+impl Sinks<'_> {
+    /// The same sinks, borrowed for a while.
+    #[inline(always)]
+    fn reborrow(&mut self) -> Sinks<'_> {
+        Sinks {
+            open: &mut *self.open,
+            guard: self.guard,
+            locate: self
+                .locate
+                .as_mut()
+                .map(|(found, offset)| (&mut **found, *offset)),
+        }
+    }
 }
 
 impl<E: Element, R: Real> Pass<'_, E, R> {
@@ -326,12 +343,13 @@ fn chunk<E: Element, R: Real, const WIDE: bool>(cx: &Pass<'_, E, R>, t: usize, c
                 open = Open::new(b);
             }
         }
-        let mut sinks = Sinks {
-            open: sums.is_some().then_some(&mut open),
+        let sinks = Sinks {
+            open: &mut open,
+            guard: sums.is_some(),
             locate: cx.located.is_some().then_some((&mut found, r.start)),
         };
         let at = (points.start - r.start, points.end - r.start);
-        element::<E, R, WIDE>(cx, e, &mut p, at, &mut sinks);
+        element::<E, R, WIDE>(cx, e, &mut p, at, sinks);
     }
     if let Some(sums) = sums.as_mut() {
         if open.block < blocks.end {
@@ -355,7 +373,7 @@ fn element<E: Element, R: Real, const WIDE: bool>(
     e: usize,
     p: &mut ChunkPoints<'_, R>,
     (from, end): (usize, usize),
-    sinks: &mut Sinks<'_>,
+    mut sinks: Sinks<'_>,
 ) {
     let mesh = cx.mesh;
     let grad = mesh.grad[e].as_ref();
@@ -387,7 +405,7 @@ fn element<E: Element, R: Real, const WIDE: bool>(
     // there; the points before it are located.
     if let Some(t) = cx.four.filter(|_| WIDE || cfg!(target_feature = "avx2")) {
         if !E::AXISYMMETRIC && cx.smoothing.is_none() {
-            j = lanes::elastic_batches(cx, t, &el, p, (j, end), sinks);
+            j = lanes::elastic_batches(cx, t, &el, p, (j, end), sinks.reborrow());
             // The lanes took every point and located those that left (the common case):
             // nothing of the general loop below is left to do.
             if j == end {
@@ -406,17 +424,14 @@ fn element<E: Element, R: Real, const WIDE: bool>(
     } else {
         batch_width::<E, R>()
     };
-    // Sinks without the walks: the points are located below, after their batches.
-    let mut batch_sinks = Sinks {
-        open: sinks.open.as_deref_mut(),
-        locate: None,
-    };
+    // The guard's sums only: the points are located below, after their batches.
+    let open = (&mut *sinks.open, sinks.guard);
     match width {
-        1 => general::general_batches::<E, R, 1, WIDE>(cx, &el, p, (j, end), &mut batch_sinks),
-        _ => general::general_batches::<E, R, 4, WIDE>(cx, &el, p, (j, end), &mut batch_sinks),
+        1 => general::general_batches::<E, R, 1, WIDE>(cx, &el, p, (j, end), open),
+        _ => general::general_batches::<E, R, 4, WIDE>(cx, &el, p, (j, end), open),
     }
-    if let Some((found, offset)) = sinks.locate.as_mut() {
-        locate::locate_moved(mesh, e, p, (located_from, end), (&mut **found, *offset));
+    if let Some((found, offset)) = sinks.locate {
+        locate::locate_moved(mesh, e, p, (located_from, end), (found, offset));
     }
 }
 
