@@ -231,7 +231,7 @@ fn tolerance(s: &str) -> Result<Tolerance, String> {
     positive(s).map(|v| Tolerance(Some(v)))
 }
 
-/// Exit status of a run stopped by a guard rail (docs/design.md §4.14, README "Exit codes").
+/// Exit status of a run stopped by a guard rail (docs/design.md §4.14, docs/guide/running.md "Exit codes").
 const EXIT_DIVERGED: u8 = 3;
 
 /// Exit status of a run stopped by signal `n` (130 for SIGINT, 143 for SIGTERM).

@@ -257,13 +257,13 @@ fn perturbed_field_exits_1_naming_field_output_and_point() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("compare.toml: unknown field 'strain'"));
 }
 
-/// f32 against f64 on the same case: the tolerances stated in the README, measured here
+/// f32 against f64 on the same case: the tolerances stated in docs/guide/golden-files.md, measured here
 /// (largest relative differences at 0.1 s: position 1.2e-5, displacement 1.0e-3, stress 3.0e-3,
 /// velocity 0.22 of a column nearly at rest, histories and energies about 1e-3). The column's
 /// local damping turns on the sign of nodal velocities that start from zero, so any change of
 /// round-off moves its displacements by about 1e-3 of their largest: regrouping particle to
 /// grid's sums (the element totals, 2026-11-29) moved the f64 run's own by 6.4e-4.
-/// What an f32 run is held to against an f64 run (README, "Golden files in CI").
+/// What an f32 run is held to against an f64 run (docs/guide/golden-files.md).
 const F32_TOLERANCES: [&str; 4] = ["--rtol", "1e-2", "--rtol", "velocity=0.3"];
 
 #[test]

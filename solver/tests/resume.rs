@@ -1,4 +1,4 @@
-//! Checkpoints and `--resume` (docs/design.md §4.15, README "Long runs"): a run killed at any
+//! Checkpoints and `--resume` (docs/design.md §4.15, docs/guide/long-runs.md): a run killed at any
 //! step (an abort of its own after step N, or a SIGKILL from here), or stopped by SIGINT or
 //! SIGTERM, and then resumed, with other thread counts, ends with a folder byte-identical to an
 //! uninterrupted run's (run.json but for its run-specific fields); the folder rules (lock,
