@@ -471,7 +471,7 @@ fn evaluate(
     let two_phase = case.has_liquid();
     let mut judged = case.clone();
     if two_phase {
-        judged.drag = Drag::Explicit;
+        judged.numerics.drag = Drag::Explicit;
     }
     let (steps, time, comparison) = match run_with(&judged) {
         Ok(r) => r,

@@ -181,17 +181,17 @@ fn main() {
         // the φ = 30° surface (ratio 3), beyond the φ = 10° one (ratio 1.42), so under gravity
         // the `mc-plastic` points return at every step.
         use mpm_solve::input::initial_stress::{InitialStress, MaterialStart};
-        let mut materials = vec![None; case.materials.len()];
+        let mut materials = vec![None; case.body.materials.len()];
         materials[1] = Some(MaterialStart::Uniform([
             -100.0, -200.0, -100.0, 0.0, 0.0, 0.0,
         ]));
-        case.initial_stress = Some(InitialStress {
+        case.start.initial_stress = Some(InitialStress {
             k0: None,
             materials,
         });
     }
-    case.courant = 0.5;
-    case.damping = 0.05;
+    case.time.courant = 0.5;
+    case.numerics.damping = 0.05;
     if saturated {
         // Sudden 10 kPa on the top face (nodal loads of the top triangles of the box; of the
         // top edges of the rectangle, per unit thickness).
@@ -203,22 +203,22 @@ fn main() {
         let face = if plane { width } else { width * width };
         let area = face / on_top.len() as f64;
         for n in on_top {
-            case.traction[n] = [0.0, -10.0 * area, 0.0];
+            case.loads.traction[n] = [0.0, -10.0 * area, 0.0];
         }
     } else {
-        case.gravity = [0.0, -9.81, 0.0];
+        case.loads.gravity = [0.0, -9.81, 0.0];
     }
     if order == "morton" {
         case = case.reordered(Reorder::Morton).unwrap();
     }
-    case.guards.enabled = arg(&a, "--guards") != Some("off");
-    case.engine = Options {
+    case.run.guards.enabled = arg(&a, "--guards") != Some("off");
+    case.run.engine = Options {
         threads,
         pin,
         first_touch,
     };
     let f32 = arg(&a, "--precision") == Some("f32");
-    case.precision = if f32 { Precision::F32 } else { Precision::F64 };
+    case.numerics.precision = if f32 { Precision::F32 } else { Precision::F64 };
     let law = arg(&a, "--law").unwrap_or("linear");
     // Vertical velocity -rate·(y - y_bottom): compression at a strain of about 1e-5 per step,
     // its elastic ratio of lateral to vertical increment (ν/(1-ν) = 0.43) below the active
@@ -332,7 +332,7 @@ fn main() {
         order,
         steps,
         if f32 { "f32" } else { "f64" },
-        case.guards.enabled,
+        case.run.guards.enabled,
         bytes_per_point,
         modelled_bytes.join(", "),
         rates,
@@ -427,7 +427,8 @@ fn measure<R: mpm_solve::real::Real, E: Element>(
     for _ in 0..reps {
         let mut engine = match &comm {
             Some(c) => {
-                Engine::<R, E>::with_communicator(case, drop_lost, case.engine, c.clone()).unwrap()
+                Engine::<R, E>::with_communicator(case, drop_lost, case.run.engine, c.clone())
+                    .unwrap()
             }
             None => Engine::<R, E>::new(case, drop_lost).unwrap(),
         };

@@ -504,8 +504,8 @@ fn run(args: Args) -> anyhow::Result<()> {
             args.input.display(),
             units::count(case.model.element_count() as f64),
             units::count(case.model.node_count() as f64),
-            units::duration(case.end_time),
-            case.output_times.len()
+            units::duration(case.time.end_time),
+            case.time.output_times.len()
         );
         case
     } else {
@@ -646,7 +646,7 @@ fn run_in(
         std::mem::forget(comm.clone());
         Err(e)
     };
-    if comm.is_some() && case.consolidation.is_some() {
+    if comm.is_some() && case.start.consolidation.is_some() {
         return fail(anyhow::anyhow!(
             "the consolidation job runs on one process; start it without mpirun"
         ));
@@ -686,7 +686,11 @@ fn run_in(
             every: args.progress_every,
         }
     };
-    let reporter = Reporter::new(mode, plan.steps.min(u64::MAX as f64) as u64, case.end_time);
+    let reporter = Reporter::new(
+        mode,
+        plan.steps.min(u64::MAX as f64) as u64,
+        case.time.end_time,
+    );
     // One code path, compiled once per precision and element type.
     let result = dispatch(
         case,
@@ -756,7 +760,7 @@ fn take_folder(
     }
     let fingerprint = checkpoint::Fingerprint::of(case, args.drop_lost);
     let lock = checkpoint::lock(out)?;
-    let holds = checkpoint::holds(out, &fingerprint, case.output_times.len())?;
+    let holds = checkpoint::holds(out, &fingerprint, case.time.output_times.len())?;
     if args.resume.is_some() {
         match holds {
             Holds::Other(what) => {
@@ -830,7 +834,7 @@ fn execute<R: Real, E: Element>(
     options: &mpm_solve::driver::run::RunOptions,
     mut reporter: Reporter,
 ) -> anyhow::Result<()> {
-    if case.consolidation.is_some() {
+    if case.start.consolidation.is_some() {
         let (engine, t, w) = mpm_solve::jobs::consolidation::run_job_with::<R, E>(
             case,
             out,

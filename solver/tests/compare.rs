@@ -20,9 +20,9 @@ fn testdata(name: &str) -> PathBuf {
 /// the solver in precision `R` into `dir`.
 fn column<R: mpm_solve::real::Real>(dir: &Path) {
     let mut case = mpm_solve::input::scene::load(&testdata("column_gravity.toml")).unwrap();
-    case.end_time = 0.1;
-    case.output_times = vec![0.05, 0.1];
-    case.probes = vec![1, 40];
+    case.time.end_time = 0.1;
+    case.time.output_times = vec![0.05, 0.1];
+    case.run.probes = vec![1, 40];
     mpm_solve::driver::run::run::<R, Tet4>(&case, dir, &Default::default()).unwrap();
 }
 

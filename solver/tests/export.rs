@@ -130,8 +130,8 @@ fn check_mesh(scene: &Case, gom: &Model) {
     assert_eq!(gom.node_count(), next as usize);
     gom.check_shapes(0.0).unwrap();
     for (keyword, want) in [
-        ("START_FIXITY_SURFACE_SOLID", &scene.fixed),
-        ("START_FIXITY_SURFACE_LIQUID", &scene.liquid_fixed),
+        ("START_FIXITY_SURFACE_SOLID", &scene.boundary.fixed),
+        ("START_FIXITY_SURFACE_LIQUID", &scene.boundary.liquid_fixed),
     ] {
         let mut got = vec![[false; 3]; gom.node_count()];
         for r in rows(gom, keyword) {
@@ -156,7 +156,7 @@ fn check_mesh(scene: &Case, gom: &Model) {
     }
     assert!(rows(gom, "START_REMOVE_FIXITY_SURFACE_SOLID").is_empty());
     let points: Vec<u32> = gom.material_points_per_element().unwrap();
-    assert_eq!(points, scene.points_per_element);
+    assert_eq!(points, scene.body.points_per_element);
 }
 
 /// The material points of both runs: same ids and initial positions (exactly), displacements
@@ -251,18 +251,21 @@ fn dry_column_exports_and_runs_the_same() {
     assert_eq!(line("STRAIN_SMOOTHING"), "0");
     assert_eq!(line("QUASISTATIC_CONVERGENCE"), "0");
     // No probes in the scene: the first, a middle and the last point.
-    let n_points: u32 = sc.points_per_element.iter().sum();
+    let n_points: u32 = sc.body.points_per_element.iter().sum();
     assert_eq!(
         cps.settings().unwrap().output_material_points,
         [1, n_points / 2, n_points]
     );
     // The GOM route builds the same case and computes the same.
     let (gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
-    assert_eq!(gc.materials, sc.materials);
-    assert_eq!(gc.gravity, sc.gravity);
-    assert_eq!((gc.courant, gc.damping), (sc.courant, sc.damping));
-    assert_eq!(gc.output_times.len(), sc.output_times.len());
-    for (a, b) in gc.output_times.iter().zip(&sc.output_times) {
+    assert_eq!(gc.body.materials, sc.body.materials);
+    assert_eq!(gc.loads.gravity, sc.loads.gravity);
+    assert_eq!(
+        (gc.time.courant, gc.numerics.damping),
+        (sc.time.courant, sc.numerics.damping)
+    );
+    assert_eq!(gc.time.output_times.len(), sc.time.output_times.len());
+    for (a, b) in gc.time.output_times.iter().zip(&sc.time.output_times) {
         assert!((a - b).abs() <= 1e-12 * b);
     }
     check_runs(&sc, &gc, 1e-9);
@@ -349,7 +352,7 @@ fn saturated_oedometer_exports_loads_and_runs_alike() {
     assert_eq!(line("HOMOGENEOUS_LOCAL_DAMPING"), "1 0.05");
     assert_eq!(line("STRAIN_SMOOTHING"), "1");
     let s = cps.settings().unwrap();
-    assert!((s.time_per_load_step * 20.0 - sc.end_time).abs() < 1e-12 * sc.end_time);
+    assert!((s.time_per_load_step * 20.0 - sc.time.end_time).abs() < 1e-12 * sc.time.end_time);
 
     // A short undamped run: the GOM route computes the same problem.
     let s = scene(dir.path(), "oedometer.toml", "short", &|t| {
@@ -358,28 +361,34 @@ fn saturated_oedometer_exports_loads_and_runs_alike() {
     let (gom_path, cps_path) = export(&s, &dir.path().join("short"));
     let sc = mpm_solve::input::scene::load(&s).unwrap();
     let (mut gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
-    assert_eq!(gc.materials, sc.materials);
-    assert_eq!(gc.fixed[..sc.fixed.len()], sc.fixed[..]);
-    assert_eq!(gc.liquid_fixed[..sc.fixed.len()], sc.liquid_fixed[..]);
-    for (a, b) in gc.traction.iter().zip(&sc.traction) {
+    assert_eq!(gc.body.materials, sc.body.materials);
+    assert_eq!(
+        gc.boundary.fixed[..sc.boundary.fixed.len()],
+        sc.boundary.fixed[..]
+    );
+    assert_eq!(
+        gc.boundary.liquid_fixed[..sc.boundary.fixed.len()],
+        sc.boundary.liquid_fixed[..]
+    );
+    for (a, b) in gc.loads.traction.iter().zip(&sc.loads.traction) {
         for d in 0..3 {
             assert!((a[d] - b[d]).abs() <= 1e-15, "{a:?} {b:?}");
         }
     }
-    assert!(gc.traction[sc.traction.len()..]
+    assert!(gc.loads.traction[sc.loads.traction.len()..]
         .iter()
         .all(|t| *t == [0.0; 3]));
     // The GOM route follows Anura3D's rules (its step, strain smoothing, liquid mass, first
     // step; tests/oracle.rs compares it with Anura3D); with the scene's rules instead it
     // computes the scene's problem to rounding.
-    assert!(gc.strain_smoothing && sc.smooth_pressure);
-    gc.anura3d_time_step = false;
-    gc.strain_smoothing = false;
-    gc.smooth_pressure = true;
-    gc.fixed_liquid_mass = false;
-    gc.initial_step = None;
-    gc.damping_rule = sc.damping_rule;
-    gc.liquid_load_on_mixture = sc.liquid_load_on_mixture;
+    assert!(gc.numerics.strain_smoothing && sc.numerics.smooth_pressure);
+    gc.time.anura3d_time_step = false;
+    gc.numerics.strain_smoothing = false;
+    gc.numerics.smooth_pressure = true;
+    gc.numerics.fixed_liquid_mass = false;
+    gc.time.initial_step = None;
+    gc.numerics.damping_rule = sc.numerics.damping_rule;
+    gc.loads.liquid_load_on_mixture = sc.loads.liquid_load_on_mixture;
     check_runs(&sc, &gc, 1e-9);
 }
 
@@ -476,8 +485,11 @@ fn what_anura3d_cannot_reproduce_is_refused_by_item() {
     let (gc, _) =
         mpm_solve::input::anura3d::load(&gom, &dir.path().join("ramped/ramped.CPS_001")).unwrap();
     assert_eq!(
-        gc.traction_curve,
-        mpm_solve::input::scene::load(&s).unwrap().traction_curve
+        gc.loads.traction_curve,
+        mpm_solve::input::scene::load(&s)
+            .unwrap()
+            .loads
+            .traction_curve
     );
     // Only scenes export.
     Command::cargo_bin("mpm-solve")
@@ -631,13 +643,13 @@ fn integration_and_objective_stress_of_a_scene_reach_the_case_and_the_export() {
     let sc = mpm_solve::input::scene::load(&s).unwrap();
     use mpm_solve::input::case::{Integration, MixedRule};
     assert_eq!(
-        sc.integration,
+        sc.numerics.integration,
         Integration::Mixed {
             filling: 0.9,
             rule: MixedRule::FullAtStart
         }
     );
-    assert!(sc.objective_stress && sc.strain_smoothing);
+    assert!(sc.numerics.objective_stress && sc.numerics.strain_smoothing);
     let (gom_path, cps_path) = export(&s, &dir.path().join("a3d"));
     let cps = std::fs::read(&cps_path).unwrap();
     let (cps, _) = mpm_shared::cps::Cps::read(&cps, "x").unwrap();
@@ -651,14 +663,14 @@ fn integration_and_objective_stress_of_a_scene_reach_the_case_and_the_export() {
     // Anura3D's reading of MPM-MIXED on GOM input (docs/design.md §4.9); in this full column,
     // whose points stay in their elements, both readings compute the same.
     assert_eq!(
-        gc.integration,
+        gc.numerics.integration,
         Integration::Mixed {
             filling: 0.9,
             rule: MixedRule::Anura3d
         }
     );
-    assert_eq!(gc.objective_stress, sc.objective_stress);
-    assert_eq!(gc.strain_smoothing, sc.strain_smoothing);
+    assert_eq!(gc.numerics.objective_stress, sc.numerics.objective_stress);
+    assert_eq!(gc.numerics.strain_smoothing, sc.numerics.strain_smoothing);
     check_runs(&sc, &gc, 1e-9);
 
     let bad = scene(dir.path(), "column_gravity.toml", "bad", &|t| {
@@ -690,7 +702,10 @@ fn prescribed_velocities_export_and_run_the_same() {
     );
     let sc = mpm_solve::input::scene::load(&s).unwrap();
     let (gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
-    let (a, b) = (&sc.nodal_velocity[0], &gc.nodal_velocity[0]);
+    let (a, b) = (
+        &sc.boundary.nodal_velocity[0],
+        &gc.boundary.nodal_velocity[0],
+    );
     // The top's 4-node corners, then the mid-edge nodes the export adds between them.
     let gom = mpm_shared::read_gom_file(&gom_path).unwrap();
     let rows = rows(&gom, "PRESCRIBED_NODAL_VELOCITY_SURFACE");
@@ -744,7 +759,10 @@ fn prescribed_velocities_export_and_run_the_same() {
     let (gom_path, cps_path) = export(&s, &dir.path().join("block"));
     let (gc, _) = mpm_solve::input::anura3d::load(&gom_path, &cps_path).unwrap();
     let sc = mpm_solve::input::scene::load(&s).unwrap();
-    let (a, b) = (sc.prescribed.unwrap(), gc.prescribed.unwrap());
+    let (a, b) = (
+        sc.boundary.prescribed.unwrap(),
+        gc.boundary.prescribed.unwrap(),
+    );
     assert_eq!(a.rows, b.rows);
     assert_eq!(a.rows.len(), sc.model.element_count());
     assert!(std::fs::read_to_string(&cps_path)
@@ -792,11 +810,11 @@ fn a_pressure_loads_as_the_traction_along_the_inward_normal() {
         mpm_solve::input::scene::load(&a).unwrap(),
         mpm_solve::input::scene::load(&b).unwrap(),
     );
-    assert!(ca.traction.iter().any(|f| f[1] != 0.0));
+    assert!(ca.loads.traction.iter().any(|f| f[1] != 0.0));
     // The same to round-off (the unit normal is the cross product times 1 / its length).
     let close = |x: f64, y: f64| (x - y).abs() <= 1e-14 * x.abs().max(y.abs()).max(1e-300);
-    assert_eq!(ca.traction.len(), cb.traction.len());
-    for (fa, fb) in ca.traction.iter().zip(&cb.traction) {
+    assert_eq!(ca.loads.traction.len(), cb.loads.traction.len());
+    for (fa, fb) in ca.loads.traction.iter().zip(&cb.loads.traction) {
         assert!((0..3).all(|d| close(fa[d], fb[d])), "{fa:?} {fb:?}");
     }
     let (ga, _) = export(&a, &dir.path().join("a"));

@@ -304,7 +304,7 @@ fn a_non_finite_stress_is_named() {
     }
 }
 
-/// Guards switched off (a library caller's choice: `Case::guards.enabled`) run the same steps
+/// Guards switched off (a library caller's choice: `case.run.guards.enabled`) run the same steps
 /// to the same state, in both precisions and on both the dry and the two-phase column: the
 /// stress pass's batches once read the guards' per-material values unconditionally.
 #[test]
@@ -312,7 +312,7 @@ fn guards_off_run_to_the_same_state() {
     use mpm_solve::driver::engine::Engine;
     fn run<R: mpm_solve::real::Real>(scene: &str, guards: bool) -> Vec<f64> {
         let mut case = mpm_solve::input::scene::load(&testdata(scene)).unwrap();
-        case.guards.enabled = guards;
+        case.run.guards.enabled = guards;
         let mut engine = Engine::<R, Tet4>::new(&case, false).unwrap();
         for _ in 0..5 {
             engine.step(engine.dt, None).unwrap();

@@ -160,7 +160,7 @@ fn scene_keys_are_read_and_refused_by_name() {
     let d = dir.path();
     // The ground defaults to the highest node; gravity.k0_surface moves it.
     let top = load(&column(d, "top", "k0 = 0.5"));
-    let init = top.initial_stress.as_ref().unwrap();
+    let init = top.start.initial_stress.as_ref().unwrap();
     assert_eq!(init.k0.as_ref().unwrap().surface_point, [0.0, 1.0]);
     let lower = column(d, "lower", "k0 = 0.5");
     let text = std::fs::read_to_string(&lower)
@@ -356,7 +356,7 @@ fn gom_k0_keys_are_modelled_or_refused_by_name() {
     };
     // K0 off: unstressed.
     let off = gom_case(d, "off", &same, &set("K0_PROCEDURE", "0")).unwrap();
-    assert!(off.initial_stress.is_none());
+    assert!(off.start.initial_stress.is_none());
     // The gravity multiplier's first value scales the weight.
     let half = gom_case(d, "half", &same, &set("GRAVITY_LOAD", "step 0.5 1.0")).unwrap();
     assert!((first_vertical(&half) - 0.5 * base).abs() < 1e-12 * base.abs());

@@ -58,7 +58,7 @@ fn settles_in_the_active_state<R: mpm_solve::real::Real>(tol: f64) {
     let dir = tempfile::tempdir().unwrap();
     let case = mpm_solve::input::scene::load(&scene(dir.path(), "mc", &|t| t)).unwrap();
     assert_eq!(
-        case.materials[1].as_ref().unwrap().law.name(),
+        case.body.materials[1].as_ref().unwrap().law.name(),
         "mohr_coulomb"
     );
     let (stress, state_len) = run_in::<R>(&case, &dir.path().join("out"));
@@ -122,7 +122,7 @@ fn an_elastic_mohr_coulomb_run_is_the_linear_elastic_run() {
     let a = mpm_solve::input::scene::load(&strong).unwrap();
     let b = mpm_solve::input::scene::load(&elastic).unwrap();
     assert_eq!(
-        b.materials[1].as_ref().unwrap().law.name(),
+        b.body.materials[1].as_ref().unwrap().law.name(),
         "linear_elasticity"
     );
     let (sa, la) = run(&a, &dir.path().join("a"));
@@ -198,7 +198,7 @@ fn the_export_refuses_the_strain_softening_law() {
         )
     });
     assert_eq!(
-        mpm_solve::input::scene::load(&toml).unwrap().materials[1]
+        mpm_solve::input::scene::load(&toml).unwrap().body.materials[1]
             .as_ref()
             .unwrap()
             .law
@@ -238,7 +238,7 @@ fn gom_files_with_mohr_coulomb_laws_are_read_and_exported_with_anura3d_keys() {
     );
     let (case, _) = mpm_solve::input::anura3d::load(&gom, &cps).unwrap();
     let want = LawSpec::mohr_coulomb(1e4, 0.2, 30.0, 5.0, 10.0, 2.0).unwrap();
-    assert_eq!(case.materials[1].as_ref().unwrap().law, want);
+    assert_eq!(case.body.materials[1].as_ref().unwrap().law, want);
     // The same block with the strain-softening law's keys, in Anura3D's order.
     let at = text.find("$$MATERIAL_MODEL_SOLID").unwrap();
     let end = text[at..].find("$$STARTELMMAT").unwrap() + at;
@@ -253,7 +253,7 @@ fn gom_files_with_mohr_coulomb_laws_are_read_and_exported_with_anura3d_keys() {
     )
     .unwrap();
     let (mut case, _) = mpm_solve::input::anura3d::load(&soft_gom, &cps).unwrap();
-    let law = case.materials[1].as_ref().unwrap().law;
+    let law = case.body.materials[1].as_ref().unwrap().law;
     assert_eq!(law.name(), "strain_softening_mohr_coulomb");
     assert_eq!(law.state_len(), 1);
     assert_eq!(
@@ -261,8 +261,8 @@ fn gom_files_with_mohr_coulomb_laws_are_read_and_exported_with_anura3d_keys() {
         vec![1e4, 0.2, 20.0, 2.0, 35.0, 25.0, 5.0, 0.0, 50.0]
     );
     // It runs, with one state value per point.
-    case.end_time = 2e-3;
-    case.output_times = vec![2e-3];
+    case.time.end_time = 2e-3;
+    case.time.output_times = vec![2e-3];
     let (stress, state_len) = run(&case, &dir.path().join("soft"));
     assert_eq!(state_len, 1);
     assert!(stress.iter().flatten().all(|x| x.is_finite()));

@@ -43,7 +43,7 @@ fn from_anura3d(points: &[MaterialPointState]) -> Step {
 /// [`Step`] per load step.
 fn run_ours(gom: &Path, cps: &Path, drag: Drag, out: &Path) -> Vec<Step> {
     let (mut case, _) = mpm_solve::input::anura3d::load(gom, cps).unwrap();
-    case.drag = drag;
+    case.numerics.drag = drag;
     let mut steps = Vec::new();
     mpm_solve::driver::run::run_observed::<f64, Tet4>(&case, out, &Default::default(), &mut |e| {
         let p = &e.particles;
@@ -153,13 +153,13 @@ fn consolidation_column_matches_anura3d_point_by_point() {
     let name = files.gom.file_stem().unwrap().to_string_lossy().to_string();
     run_oracle(&bin, dir.path(), &name);
     let case = mpm_solve::input::scene::load(&scene).unwrap();
-    let anura: Vec<Step> = (1..=case.output_times.len() as u32)
+    let anura: Vec<Step> = (1..=case.time.output_times.len() as u32)
         .map(|k| from_anura3d(&read_step(dir.path(), &name, k).unwrap()))
         .collect();
     let (ex, im) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     run_ours(&files.gom, &files.cps, Drag::Explicit, ex.path());
     let ours = run_ours(&files.gom, &files.cps, Drag::Implicit, im.path());
-    let steps = case.output_times.len();
+    let steps = case.time.output_times.len();
     let explicit = compare(dir.path(), ex.path(), steps);
     let implicit = compare(dir.path(), im.path(), steps);
     eprintln!(
@@ -181,11 +181,11 @@ fn consolidation_column_matches_anura3d_point_by_point() {
     };
     let layer = Layer::of(&case, &spec).unwrap();
     let (ta, to) = (
-        terzaghi_rms(&layer, &anura, &case.output_times),
-        terzaghi_rms(&layer, &ours, &case.output_times),
+        terzaghi_rms(&layer, &anura, &case.time.output_times),
+        terzaghi_rms(&layer, &ours, &case.time.output_times),
     );
     eprintln!("| T_v | Anura3D RMS / u0 | mpm-solve (implicit drag) RMS / u0 |\n|---:|---:|---:|");
-    for (k, t) in case.output_times.iter().enumerate() {
+    for (k, t) in case.time.output_times.iter().enumerate() {
         eprintln!("| {:.3} | {:.4} | {:.4} |", layer.tv(*t), ta[k], to[k]);
     }
     for (k, r) in explicit.iter().enumerate() {
@@ -233,6 +233,7 @@ fn ten_points_per_element_match_anura3d() {
     run_oracle(&bin, &a3d, "ten");
     let steps = mpm_solve::input::scene::load(&scene)
         .unwrap()
+        .time
         .output_times
         .len();
     let out = tempfile::tempdir().unwrap();
@@ -284,11 +285,11 @@ fn workshop_set_up_no_worse_than_anura3d_against_terzaghi() {
     let files = mpm_solve::input::export_anura3d::export_scene(&scene, dir.path()).unwrap();
     run_oracle(&bin, dir.path(), "workshop");
     let case = mpm_solve::input::scene::load(&scene).unwrap();
-    let anura: Vec<Step> = (1..=case.output_times.len() as u32)
+    let anura: Vec<Step> = (1..=case.time.output_times.len() as u32)
         .map(|k| from_anura3d(&read_step(dir.path(), "workshop", k).unwrap()))
         .collect();
-    let layer = Layer::of(&case, &case.consolidation.unwrap()).unwrap();
-    let theirs = terzaghi_rms(&layer, &anura, &case.output_times);
+    let layer = Layer::of(&case, &case.start.consolidation.unwrap()).unwrap();
+    let theirs = terzaghi_rms(&layer, &anura, &case.time.output_times);
     // Ours: the default job's workshop column (the scene route, its own damping rule).
     let job = mpm_solve::input::scene::load(&testdata("oedometer.toml")).unwrap();
     let out = tempfile::tempdir().unwrap();

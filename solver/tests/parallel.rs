@@ -272,7 +272,7 @@ fn locating_in_the_stress_pass_finds_what_the_locate_pass_finds() {
     let case = mpm_solve::input::scene::load(&testdata("oracle_mc_block.toml")).unwrap();
     for threads in [1, 3] {
         let mut case = case.clone();
-        case.engine.threads = threads;
+        case.run.engine.threads = threads;
         let mut fused = Engine::<f64, Tet4>::new(&case, false).unwrap();
         let mut apart = Engine::<f64, Tet4>::new(&case, true).unwrap();
         let by_id = |p: &mpm_solve::state::particles::Particles<f64>| {

@@ -62,7 +62,11 @@ fn centroid_y(model: &Model, e: usize) -> f64 {
 fn gom_rows_are_read_and_what_is_not_modelled_is_refused() {
     let six = ["0 1 0"; 6];
     let case = load(&column_gom(&rows(&six)), CPS).unwrap();
-    let pv = case.prescribed.as_ref().expect("prescribed velocities");
+    let pv = case
+        .boundary
+        .prescribed
+        .as_ref()
+        .expect("prescribed velocities");
     assert_eq!(pv.rows.len(), 6);
     assert_eq!(pv.multiplier(0.05), 1.0);
     for r in &pv.rows {
@@ -73,6 +77,7 @@ fn gom_rows_are_read_and_what_is_not_modelled_is_refused() {
     // The rows follow a reordering of the elements.
     let moved = case.clone().reordered(Reorder::Hilbert).unwrap();
     let elements: Vec<u32> = moved
+        .boundary
         .prescribed
         .as_ref()
         .unwrap()
@@ -91,6 +96,7 @@ fn gom_rows_are_read_and_what_is_not_modelled_is_refused() {
     let off = CPS.replace("step 1.0 1.0", "off 0.0 1.0");
     assert!(load(&column_gom(&rows(&six)), &off)
         .unwrap()
+        .boundary
         .prescribed
         .is_none());
     // Rows with other components (Anura3D would add the earlier rows' to later points).
@@ -157,14 +163,14 @@ fn pushed_column(speed: f64) -> Case {
             velocity: [0.0, -speed, 0.0],
         })
         .collect();
-    case.prescribed = Some(PrescribedVelocity {
+    case.boundary.prescribed = Some(PrescribedVelocity {
         name: "top".into(),
         rows,
         scale: 1.0,
         curve: LoadCurve::Step,
     });
-    case.end_time = 0.4;
-    case.output_times = vec![0.2, 0.4];
+    case.time.end_time = 0.4;
+    case.time.output_times = vec![0.2, 0.4];
     case
 }
 
@@ -201,6 +207,7 @@ fn pushed_points_and_nodes_move_exactly_with_the_prescribed_velocity() {
     let case = pushed_column(speed);
     // The marked points: those placed in the listed elements.
     let listed: Vec<u32> = case
+        .boundary
         .prescribed
         .as_ref()
         .unwrap()
@@ -260,7 +267,7 @@ fn pushed_points_and_nodes_move_exactly_with_the_prescribed_velocity() {
     // The same for any thread count, bit for bit.
     for threads in [1, 3] {
         let mut c = case.clone();
-        c.engine.threads = threads;
+        c.run.engine.threads = threads;
         let (_, f) = run(&c);
         assert!(f == frames, "{threads} threads differ");
     }
@@ -302,9 +309,9 @@ fn gom_nodal_rows_are_read_and_bad_ones_refused() {
         &["3 0 1 0 0.0 -0.2 0.0", "4 1 1 1 0.0 -0.2 0.0"],
     ));
     let case = load(&gom, CPS).unwrap();
-    assert!(case.prescribed.is_none());
-    let [set] = &case.nodal_velocity[..] else {
-        panic!("one nodal set: {:?}", case.nodal_velocity)
+    assert!(case.boundary.prescribed.is_none());
+    let [set] = &case.boundary.nodal_velocity[..] else {
+        panic!("one nodal set: {:?}", case.boundary.nodal_velocity)
     };
     assert_eq!(set.name, "$$PRESCRIBED_NODAL_VELOCITY_SURFACE");
     assert_eq!((set.rows[0].node, set.rows[1].node), (2, 3));
@@ -328,9 +335,10 @@ fn gom_nodal_rows_are_read_and_bad_ones_refused() {
     );
     // An off multiplier switches them off, as in Anura3D; an empty section is none.
     let off = CPS.replace("step 1.0 1.0", "off 0.0 1.0");
-    assert!(load(&gom, &off).unwrap().nodal_velocity.is_empty());
+    assert!(load(&gom, &off).unwrap().boundary.nodal_velocity.is_empty());
     assert!(load(&column_gom(&nodal_rows("LINE", &[])), CPS)
         .unwrap()
+        .boundary
         .nodal_velocity
         .is_empty());
     // Two kinds of section at once (Anura3D refuses them), a node outside the mesh, a flag

@@ -97,7 +97,7 @@ fn read_reaction(dir: &Path) -> Vec<Row> {
 
 fn run_scene(path: &Path, out: &Path, threads: usize) -> Vec<Row> {
     let mut case = scene::load(path).unwrap();
-    case.engine.threads = threads;
+    case.run.engine.threads = threads;
     run::<f64, Tet4>(&case, out, &RunOptions::default()).unwrap();
     read_reaction(out)
 }
@@ -221,15 +221,15 @@ fn pushed_points() -> Case {
             velocity: [0.0, -0.01, 0.0],
         })
         .collect();
-    case.prescribed = Some(PrescribedVelocity {
+    case.boundary.prescribed = Some(PrescribedVelocity {
         name: "block".into(),
         rows,
         scale: 1.0,
         curve: LoadCurve::ramp(0.2),
     });
-    case.damping = 0.3;
-    case.end_time = 2.0;
-    case.output_times = vec![1.0, 2.0];
+    case.numerics.damping = 0.3;
+    case.time.end_time = 2.0;
+    case.time.output_times = vec![1.0, 2.0];
     case
 }
 
@@ -260,8 +260,8 @@ fn try_scene(velocity: &str) -> Result<Case, String> {
 fn velocity_entries_are_resolved_and_bad_ones_refused() {
     // A surface: its nodes, every component, named by the physical.
     let c = try_scene("[[velocity]]\nphysical = \"top\"\nvelocity = [0.0, -1.0, 0.0]").unwrap();
-    assert_eq!(c.nodal_velocity.len(), 1);
-    let s = &c.nodal_velocity[0];
+    assert_eq!(c.boundary.nodal_velocity.len(), 1);
+    let s = &c.boundary.nodal_velocity[0];
     assert_eq!(s.name, "top");
     assert_eq!(s.rows.len(), 9);
     assert!(s
@@ -271,7 +271,7 @@ fn velocity_entries_are_resolved_and_bad_ones_refused() {
     assert_eq!(s.curve, LoadCurve::Step);
     // A plane, with components and a ramp.
     let c = try_scene("[[velocity]]\nplane = \"y = 1.0\"\nvelocity = [0.0, -1.0, 0.0]\ncomponents = [false, true, false]\nramp = 0.5").unwrap();
-    let s = &c.nodal_velocity[0];
+    let s = &c.boundary.nodal_velocity[0];
     assert_eq!((s.name.as_str(), s.rows.len()), ("y = 1.0", 9));
     assert_eq!(s.rows[0].directions, [false, true, false]);
     assert_eq!(s.curve, LoadCurve::Ramp { over: 0.5 });
@@ -279,9 +279,9 @@ fn velocity_entries_are_resolved_and_bad_ones_refused() {
     let c =
         try_scene("[[velocity]]\nphysical = \"soil\"\nvelocity = [0.0, -1.0, 0.0]\nname = \"all\"")
             .unwrap();
-    let p = c.prescribed.as_ref().unwrap();
+    let p = c.boundary.prescribed.as_ref().unwrap();
     assert_eq!((p.name.as_str(), p.rows.len()), ("all", 480));
-    assert!(c.nodal_velocity.is_empty());
+    assert!(c.boundary.nodal_velocity.is_empty());
 
     let refused = |text: &str, words: &[&str]| {
         let err = try_scene(text).unwrap_err();

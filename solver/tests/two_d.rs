@@ -343,7 +343,7 @@ fn anura3d_2d_cases_agree_with_the_2d_oracle_point_by_point() {
         );
         let (mut case, _) = mpm_solve::input::anura3d::load(&gom, &cps).unwrap();
         // Anura3D's own drag discretisation: the two codes then compute the same numbers.
-        case.drag = Drag::Explicit;
+        case.numerics.drag = Drag::Explicit;
         let ours = tempfile::tempdir().unwrap();
         run_points(&case, ours.path());
         let (w, _) = common::worst_against_anura3d(

@@ -148,7 +148,7 @@ fn dry_scenes_allocate_no_liquid_and_use_fewer_bytes_per_point() {
     assert!(w.particles.liquid.is_some() && w.grid.liquid.is_some());
     assert!(d.particles.bytes_per_point() < w.particles.bytes_per_point());
     assert!(d.grid.bytes() / d.grid.mass.len() < w.grid.bytes() / w.grid.mass.len());
-    assert_eq!(wet.consolidation.unwrap().start, Start::Undrained);
+    assert_eq!(wet.start.consolidation.unwrap().start, Start::Undrained);
 }
 
 #[test]
@@ -156,11 +156,11 @@ fn a_load_on_the_liquid_raises_the_pore_pressure_and_not_the_effective_stress() 
     // The oedometer with its 10 kPa moved from the skeleton to the liquid (a water pressure on
     // the drained top): at equilibrium the pore pressure carries all of it.
     let mut case = scene::load(&testdata("oedometer.toml")).unwrap();
-    let zero = vec![[0.0; 3]; case.traction.len()];
-    case.liquid_traction = std::mem::replace(&mut case.traction, zero);
-    case.consolidation = None;
-    case.end_time = 0.75;
-    case.output_times = vec![0.75];
+    let zero = vec![[0.0; 3]; case.loads.traction.len()];
+    case.loads.liquid_traction = std::mem::replace(&mut case.loads.traction, zero);
+    case.start.consolidation = None;
+    case.time.end_time = 0.75;
+    case.time.output_times = vec![0.75];
     let dir = tempfile::tempdir().unwrap();
     let engine =
         mpm_solve::driver::run::run::<f64, Tet4>(&case, dir.path(), &Default::default()).unwrap();

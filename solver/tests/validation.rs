@@ -68,9 +68,9 @@ fn loaded_column(ny: usize) -> mpm_solve::input::case::Case {
     assert!((total + 10.0 * 0.01).abs() < 1e-9, "top load {total}");
     let soil = MaterialSpec::new("soil", 2000.0, 10000.0, 0.3).unwrap();
     let mut case = Case::single_material("wave", model, soil, 4, fixed);
-    case.traction = traction;
-    case.end_time = 0.02;
-    case.output_times = vec![0.02];
+    case.loads.traction = traction;
+    case.time.end_time = 0.02;
+    case.time.output_times = vec![0.02];
     case
 }
 
@@ -78,7 +78,7 @@ fn loaded_column(ny: usize) -> mpm_solve::input::case::Case {
 fn compression_wave_arrives_at_mid_height_on_time() {
     let case = loaded_column(80);
     let mut engine = Engine::<f64, Tet4>::new(&case, false).unwrap();
-    let c = case.materials[1].as_ref().unwrap().wave_speed();
+    let c = case.body.materials[1].as_ref().unwrap().wave_speed();
     let expected = 0.5 / c;
     // Points in a slab at mid-height; arrival = first time their mean sigma_yy reaches half the load.
     let slab: Vec<usize> = (0..engine.particles.len())

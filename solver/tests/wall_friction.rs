@@ -37,8 +37,8 @@ fn slide(slope: f64, mu: f64, time: f64) -> f64 {
     }
     let material = MaterialSpec::new("block", 2000.0, 1.0e5, 0.2).unwrap();
     let mut case = Case::single_material("slide", model, material, 4, fixed);
-    case.walls = walls;
-    case.element_material = (0..case.model.element_count())
+    case.boundary.walls = walls;
+    case.body.element_material = (0..case.model.element_count())
         .map(|e| {
             let c = centroid(&case.model, e);
             u32::from(c[0] < 0.2 && c[1] < 0.1)
@@ -46,9 +46,9 @@ fn slide(slope: f64, mu: f64, time: f64) -> f64 {
         .collect();
     let g = 9.81;
     let s = slope.to_radians();
-    case.gravity = [g * s.sin(), -g * s.cos(), 0.0];
-    case.end_time = time;
-    case.output_times = vec![time];
+    case.loads.gravity = [g * s.sin(), -g * s.cos(), 0.0];
+    case.time.end_time = time;
+    case.time.output_times = vec![time];
     let dir = tempfile::tempdir().unwrap();
     let mut mean = f64::NAN;
     mpm_solve::driver::run::run_observed::<f64, Tet4>(
@@ -108,11 +108,11 @@ fn scenes_give_walls_their_side_and_refuse_what_no_wall_can_be() {
         side: 1.0,
         friction: 0.4,
     };
-    for (n, w) in case.walls.iter().enumerate() {
+    for (n, w) in case.boundary.walls.iter().enumerate() {
         if case.model.node(n)[1].abs() < 1e-12 {
             assert_eq!(*w, [none, wall, none], "node {n}");
             // The wall holds the normal, not a fixity.
-            assert!(!case.fixed[n][1], "node {n}");
+            assert!(!case.boundary.fixed[n][1], "node {n}");
             on_base += 1;
         } else {
             assert_eq!(*w, [none; 3], "node {n}");
@@ -125,6 +125,7 @@ fn scenes_give_walls_their_side_and_refuse_what_no_wall_can_be() {
     })
     .unwrap();
     assert!(top
+        .boundary
         .walls
         .iter()
         .enumerate()

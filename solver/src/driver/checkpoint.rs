@@ -15,7 +15,9 @@ use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::input::case::Case;
+use crate::input::case::{
+    Body, BoundaryConditions, Case, Execution, Loading, Numerics, StartState, TimeControls,
+};
 use crate::real::Real;
 use crate::state::particles::{Field, FieldReader, FieldVisitor, Particles, Value};
 
@@ -108,6 +110,9 @@ pub struct Item {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Fingerprint(pub Vec<Item>);
 
+/// A fingerprint item before hashing: its name and the value whose `Debug` text is hashed.
+type Named<'a> = (&'static str, &'a dyn std::fmt::Debug);
+
 /// Hashes a value's `Debug` text, keeping it when short.
 struct Capture {
     hash: Fnv,
@@ -148,83 +153,83 @@ impl Item {
 }
 
 impl Fingerprint {
-    /// The fingerprint of `case` run with `drop_lost`. Every field of [`Case`] is taken apart
-    /// here, so a field added to it does not compile until it is placed in or out.
+    /// The fingerprint of `case` run with `drop_lost`. Every field of [`Case`] and of its parts
+    /// is taken apart, here or in the lists of the body and of the loads, so a field added to
+    /// any of them does not compile until it is placed in or out.
     pub fn of(case: &Case, drop_lost: bool) -> Self {
         let Case {
             name,
             inputs,
             model,
-            materials,
-            element_material,
-            points_per_element,
-            input_element,
-            input_node,
+            body,
+            boundary,
+            loads,
+            time,
+            numerics,
+            start,
+            run,
+        } = case;
+        let BoundaryConditions {
             fixed,
             liquid_fixed,
             walls,
-            traction,
-            point_loads,
-            traction_curve,
-            liquid_traction,
-            liquid_curve,
-            liquid_load_on_mixture,
-            gravity,
-            gravity_curve,
-            courant,
-            courant_item,
-            guards,
-            damping,
-            end_time,
-            output_times,
-            max_steps,
-            quasi_static,
-            objective_stress,
-            pic_blend,
-            integration,
-            anura3d_time_step,
-            critical_step,
-            damping_rule,
-            drag,
-            initial_step,
-            smooth_pressure,
-            fixed_liquid_mass,
-            hoop_in_volume,
-            strain_smoothing,
-            consolidation,
-            initial_state,
-            initial_stress,
-            probes,
             prescribed,
             nodal_velocity,
             moving_mesh,
             contact,
+        } = boundary;
+        let TimeControls {
+            courant,
+            courant_item,
+            end_time,
+            output_times,
+            max_steps,
+            quasi_static,
+            anura3d_time_step,
+            critical_step,
+            initial_step,
+        } = time;
+        let Numerics {
+            damping,
+            objective_stress,
+            pic_blend,
+            integration,
+            damping_rule,
+            drag,
+            smooth_pressure,
+            fixed_liquid_mass,
+            hoop_in_volume,
+            strain_smoothing,
+            precision,
+        } = numerics;
+        let StartState {
+            consolidation,
+            initial_state,
+            initial_stress,
+        } = start;
+        let Execution {
+            guards,
+            probes,
             // Threads, pinning and first touch: the results do not depend on them.
             engine: _,
-            precision,
-        } = case;
+        } = run;
         let version = env!("CARGO_PKG_VERSION");
-        let items: [(&str, &dyn std::fmt::Debug); 50] = [
+        // The items' order is that of the checkpoints already written: the body's and the
+        // loads' lists fall in runs of their own, the other parts' items are interleaved.
+        let mut items: Vec<Named> = vec![
             ("solver version", &version),
             ("case name", name),
             ("input files", inputs),
             ("mesh", model),
-            ("materials", materials),
-            ("element materials", element_material),
-            ("points per element", points_per_element),
-            ("element numbers", input_element),
-            ("node numbers", input_node),
+        ];
+        items.extend(Self::body(body));
+        items.extend_from_slice(&[
             ("fixities", fixed),
             ("liquid fixities", liquid_fixed),
             ("walls", walls),
-            ("tractions", traction),
-            ("loads on material points", point_loads),
-            ("traction curve", traction_curve),
-            ("liquid tractions", liquid_traction),
-            ("liquid load curve", liquid_curve),
-            ("liquid load on the mixture", liquid_load_on_mixture),
-            ("gravity", gravity),
-            ("gravity curve", gravity_curve),
+        ]);
+        items.extend(Self::loads(loads));
+        items.extend_from_slice(&[
             ("Courant number", courant),
             ("Courant number's source", courant_item),
             ("guard rails (--energy-tolerance)", guards),
@@ -255,8 +260,50 @@ impl Fingerprint {
             ("contact", contact),
             ("precision (--precision)", precision),
             ("--drop-lost", &drop_lost),
-        ];
+        ]);
         Fingerprint(items.iter().map(|&(n, v)| Item::of(n, v)).collect())
+    }
+
+    /// The fingerprint's items of the mesh's filling, in order, every field taken apart.
+    fn body(body: &Body) -> [Named<'_>; 5] {
+        let Body {
+            materials,
+            element_material,
+            points_per_element,
+            input_element,
+            input_node,
+        } = body;
+        [
+            ("materials", materials),
+            ("element materials", element_material),
+            ("points per element", points_per_element),
+            ("element numbers", input_element),
+            ("node numbers", input_node),
+        ]
+    }
+
+    /// The fingerprint's items of the loads, in order, every field taken apart.
+    fn loads(loads: &Loading) -> [Named<'_>; 8] {
+        let Loading {
+            traction,
+            point_loads,
+            traction_curve,
+            liquid_traction,
+            liquid_curve,
+            liquid_load_on_mixture,
+            gravity,
+            gravity_curve,
+        } = loads;
+        [
+            ("tractions", traction),
+            ("loads on material points", point_loads),
+            ("traction curve", traction_curve),
+            ("liquid tractions", liquid_traction),
+            ("liquid load curve", liquid_curve),
+            ("liquid load on the mixture", liquid_load_on_mixture),
+            ("gravity", gravity),
+            ("gravity curve", gravity_curve),
+        ]
     }
 
     /// What differs from `now` (`self`: the checkpoint's), in words; `None` when nothing.

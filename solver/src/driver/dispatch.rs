@@ -34,7 +34,7 @@ pub fn dispatch<G: Generic>(case: &Case, g: G) -> Result<G::Output, NoEngine> {
         dimension: dimension.keyword(),
         element: element.describe(),
     })?;
-    Ok(match (case.precision, kind) {
+    Ok(match (case.numerics.precision, kind) {
         (Precision::F64, ElementKind::Tet4) => g.call::<f64, Tet4>(),
         (Precision::F64, ElementKind::Tri3) => g.call::<f64, Tri3>(),
         (Precision::F64, ElementKind::Tri3Axi) => g.call::<f64, Tri3Axi>(),

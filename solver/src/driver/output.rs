@@ -53,6 +53,7 @@ impl Output {
         let p = &engine.particles;
         // Points are re-sorted as they move: probes are kept by id and found at each output.
         let probes = case
+            .run
             .probes
             .iter()
             .copied()
@@ -358,14 +359,14 @@ pub fn write_summary<R: Real, E: Element>(
         "case": case.name,
         "inputs": case.inputs,
         "threads": engine.team.threads,
-        "pinning": match case.engine.pin {
+        "pinning": match case.run.engine.pin {
             crate::parallel::team::Pin::None => "none",
             crate::parallel::team::Pin::Cores => "cores",
             crate::parallel::team::Pin::Auto => "auto",
         },
         "pinned_cores": engine.team.pinned,
         "busy_cores": engine.team.busy,
-        "first_touch": case.engine.first_touch,
+        "first_touch": case.run.engine.first_touch,
         "huge_pages": crate::parallel::huge_pages::enabled(),
         "huge_page_bytes": crate::parallel::huge_pages::resident_huge_bytes(),
         "precision": R::NAME,

@@ -354,11 +354,11 @@ fn set_up<R: Real, E: Element>(
             let bound = crate::parallel::machine::bound_to_some_cores();
             let engine_options = crate::driver::engine::Options {
                 pin: if bound {
-                    case.engine.pin
+                    case.run.engine.pin
                 } else {
                     crate::parallel::team::Pin::None
                 },
-                ..case.engine
+                ..case.run.engine
             };
             Engine::<R, E>::with_communicator(
                 case,
@@ -412,7 +412,7 @@ impl Run<'_> {
         saved: Option<checkpoint::Saved>,
     ) -> Result<(), RunError> {
         if let Some(s) = saved {
-            let outputs = self.case.output_times.len();
+            let outputs = self.case.time.output_times.len();
             checkpoint::tidy(self.dir, &s.series, s.finished(outputs))?;
             engine.restore(&s)?;
             observer
@@ -437,7 +437,7 @@ impl Run<'_> {
         engine: &mut Engine<R, E>,
         observer: &mut dyn Observer<R, E>,
     ) -> Result<(), RunError> {
-        let times = &self.case.output_times;
+        let times = &self.case.time.output_times;
         for (k, &t_out) in times.iter().enumerate().skip(self.d.next_output) {
             self.load_step(engine, observer, t_out)?;
             self.output(engine, observer, k)?;
@@ -455,7 +455,7 @@ impl Run<'_> {
         let t0 = Instant::now();
         let t_start = self.d.stepping;
         while !self.load_step_done(engine, t_out) {
-            if self.case.max_steps.is_some_and(|m| engine.steps >= m) {
+            if self.case.time.max_steps.is_some_and(|m| engine.steps >= m) {
                 return Err(RunError::MaxSteps(engine.steps, engine.time));
             }
             let (dt, snap) = self.next_step(engine, t_out);
@@ -474,7 +474,7 @@ impl Run<'_> {
     /// Anura3D ends one.
     fn load_step_done<R: Real, E: Element>(&self, engine: &Engine<R, E>, t_out: f64) -> bool {
         let d = &self.d;
-        let Some(qs) = &self.case.quasi_static else {
+        let Some(qs) = &self.case.time.quasi_static else {
             return engine.time >= t_out * (1.0 - 1e-12);
         };
         // Anura3D ends a quasi-static load step once converged or when its step counter, which
@@ -499,11 +499,11 @@ impl Run<'_> {
         t_out: f64,
     ) -> (f64, Option<f64>) {
         let left = t_out - engine.time;
-        let step = match self.case.initial_step {
+        let step = match self.case.time.initial_step {
             Some(h) if engine.steps == 0 => h.min(engine.dt),
             _ => engine.dt,
         };
-        if self.case.quasi_static.is_some() || step < left {
+        if self.case.time.quasi_static.is_some() || step < left {
             (step, None)
         } else {
             (left, Some(t_out))
@@ -580,7 +580,7 @@ impl Run<'_> {
         observer.on_output(engine);
         // The next load step starts here.
         (self.d.next_output, self.d.taken, self.d.begun) = (k + 1, 0, engine.time);
-        let last = k + 1 == self.case.output_times.len();
+        let last = k + 1 == self.case.time.output_times.len();
         let interrupted = self.interrupted(engine).filter(|_| !last);
         let at_outputs = matches!(self.options.checkpoint, Some(Every::Outputs { .. }));
         if self.options.checkpoint.is_some() && (last || interrupted.is_some() || at_outputs) {
@@ -711,12 +711,13 @@ pub fn check_probes<R: Real, E: Element>(
     case: &Case,
     engine: &Engine<R, E>,
 ) -> Result<(), RunError> {
-    if case.probes.is_empty() {
+    if case.run.probes.is_empty() {
         return Ok(());
     }
     let mut ids = engine.particles.id.clone();
     ids.sort_unstable();
     let unknown: Vec<u32> = case
+        .run
         .probes
         .iter()
         .copied()

@@ -210,7 +210,10 @@ pub enum MixedRule {
     FullAtStart,
 }
 
-/// Everything a run needs.
+/// Everything a run needs, grouped as the input is resolved: the mesh and what fills it, what
+/// holds it, what loads it, how time advances, how the equations are integrated, how the
+/// points start, and what the run checks and records. Scenes ([`crate::input::scene`]) and
+/// Anura3D input ([`crate::input::anura3d`]) each build one.
 #[derive(Debug, Clone)]
 pub struct Case {
     /// Case name (file stem).
@@ -219,6 +222,27 @@ pub struct Case {
     pub inputs: Vec<String>,
     /// The mesh model.
     pub model: Model,
+    /// The materials, which element holds which, and the input's numbering.
+    pub body: Body,
+    /// Fixities, walls, prescribed velocities, the moving mesh and contact.
+    pub boundary: BoundaryConditions,
+    /// Face loads, loads on points and gravity, with their multipliers.
+    pub loads: Loading,
+    /// The time step's Courant number and rule, end and output times, step limits.
+    pub time: TimeControls,
+    /// Integration, damping, drag, smoothing and precision.
+    pub numerics: Numerics,
+    /// Initial stresses and states, and the consolidation job.
+    pub start: StartState,
+    /// Guard rails, probes and threads.
+    pub run: Execution,
+}
+
+/// What fills the mesh: the materials, the material and number of points of each element, and
+/// the numbers the input gave elements and nodes. Every per-element and per-node list follows
+/// the case's order ([`Case::reordered`]).
+#[derive(Debug, Clone)]
+pub struct Body {
     /// Materials by 1-based index (entry 0 unused; `None` for materials no element uses).
     pub materials: Vec<Option<MaterialSpec>>,
     /// Material of each element (0 = empty).
@@ -233,6 +257,12 @@ pub struct Case {
     /// The node (0-based) of the file read for each model node, followed through the solver's
     /// reordering: messages name nodes by it (plus 1).
     pub input_node: Vec<u32>,
+}
+
+/// What holds the body: fixities of the solid and the liquid, rigid walls, velocities
+/// prescribed on points and on nodes, Anura3D's moving mesh and contact.
+#[derive(Debug, Clone)]
+pub struct BoundaryConditions {
     /// Fixed velocity components per model node.
     pub fixed: Vec<[bool; 3]>,
     /// Fixed liquid velocity components per model node (impermeable faces); used only where a
@@ -241,6 +271,22 @@ pub struct Case {
     /// Per model node and axis, the rigid wall normal to that axis the node lies on, if any
     /// ([`crate::step::wall_friction`]); empty when the case has no wall.
     pub walls: Vec<[crate::step::wall_friction::WallAxis; 3]>,
+    /// Velocities prescribed on the material points of some elements (Anura3D's
+    /// `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_*`); `None`: none, or the multiplier is off.
+    pub prescribed: Option<crate::step::prescribed::PrescribedVelocity>,
+    /// Velocities prescribed on nodes (Anura3D's `$$PRESCRIBED_NODAL_VELOCITY_*`, scenes'
+    /// `[[velocity]]` on surfaces and planes), one reaction each.
+    pub nodal_velocity: Vec<crate::step::nodal_velocity::NodalVelocitySet>,
+    /// Anura3D's moving mesh (`$$MOVING_MESH_CORNER_NODES` and its companions), when given.
+    pub moving_mesh: Option<crate::step::moving_mesh::MovingMeshSpec>,
+    /// Contact between a structure and the soil (Anura3D's `$$CONTACT_FORMULATION 1`), when on.
+    pub contact: Option<crate::step::contact::ContactSpec>,
+}
+
+/// What loads the body: face loads on nodes (on the solid and on the liquid) and on material
+/// points, and gravity, each at multiplier 1 with the curve that scales it in time.
+#[derive(Debug, Clone)]
+pub struct Loading {
     /// Nodal face-load forces per model node (kN) at multiplier 1.
     pub traction: Vec<[f64; 3]>,
     /// Loads carried by material points.
@@ -260,14 +306,16 @@ pub struct Case {
     pub gravity: [f64; 3],
     /// Gravity multiplier.
     pub gravity_curve: LoadCurve,
+}
+
+/// How the run steps and how long it lasts: the Courant number and the critical step's rule, the
+/// first step, the end and output times, the step limit and quasi-static load steps.
+#[derive(Debug, Clone)]
+pub struct TimeControls {
     /// Courant number (above 1 only runs with `--force`, see [`Case::check_courant`]).
     pub courant: f64,
     /// Where the Courant number was given (file and key), for messages.
     pub courant_item: String,
-    /// The run-time checks (guard rails) and their tolerances.
-    pub guards: Guards,
-    /// Local damping factor α.
-    pub damping: f64,
     /// End time (s).
     pub end_time: f64,
     /// Output times (s), increasing, the last equal to `end_time`.
@@ -276,6 +324,24 @@ pub struct Case {
     pub max_steps: Option<u64>,
     /// Quasi-static load steps: each output time ends a load step, which may end earlier.
     pub quasi_static: Option<QuasiStatic>,
+    /// Take Anura3D's two-phase critical time step (explicit drag and consolidation terms)
+    /// rather than the implicit-drag one, so that Anura3D inputs step as Anura3D does.
+    pub anura3d_time_step: bool,
+    /// Over which elements, and how often, the critical time step is taken.
+    pub critical_step: CriticalStepRule,
+    /// Length of the calculation's very first step (s), when it differs from the critical step:
+    /// Anura3D starts with a step of 1e-15 s, so that its first full step is damped against a
+    /// velocity that is no longer zero.
+    pub initial_step: Option<f64>,
+}
+
+/// How the equations are integrated: damping, the stress rate and integration, the velocity
+/// update, drag, smoothing, the liquid's mass, the axisymmetric volume and the precision.
+/// Scenes and Anura3D input choose several of them differently.
+#[derive(Debug, Clone)]
+pub struct Numerics {
+    /// Local damping factor α.
+    pub damping: f64,
     /// Jaumann (objective) stress rate instead of the plain small-strain update.
     pub objective_stress: bool,
     /// Share (0–1) of PIC in the points' velocity update: v ← (1 − β) v_FLIP + β v_PIC, v_PIC
@@ -286,19 +352,10 @@ pub struct Case {
     pub pic_blend: f64,
     /// Stress integration.
     pub integration: Integration,
-    /// Take Anura3D's two-phase critical time step (explicit drag and consolidation terms)
-    /// rather than the implicit-drag one, so that Anura3D inputs step as Anura3D does.
-    pub anura3d_time_step: bool,
-    /// Over which elements, and how often, the critical time step is taken.
-    pub critical_step: CriticalStepRule,
     /// How local damping is applied (Anura3D's rule for GOM input, the mixture rule in scenes).
     pub damping_rule: DampingRule,
     /// How the Darcy drag between the phases is integrated in time.
     pub drag: Drag,
-    /// Length of the calculation's very first step (s), when it differs from the critical step:
-    /// Anura3D starts with a step of 1e-15 s, so that its first full step is damped against a
-    /// velocity that is no longer zero.
-    pub initial_step: Option<f64>,
     /// Smooth pore-pressure rates through the nodes (V N-weighted averages, interpolated back
     /// with N; scenes).
     pub smooth_pressure: bool,
@@ -314,6 +371,14 @@ pub struct Case {
     /// both phases averaged element → node → element, material by material
     /// ([`crate::step::smoothing`]); it replaces `smooth_pressure` when on.
     pub strain_smoothing: bool,
+    /// Floating-point precision of the particle and grid state.
+    pub precision: Precision,
+}
+
+/// How the points start: unstressed at rest, with initial stresses, or in the undrained state
+/// a consolidation job starts from; and that job.
+#[derive(Debug, Clone, Default)]
+pub struct StartState {
     /// A consolidation run compared with Terzaghi (scenes with `[consolidation]`).
     pub consolidation: Option<ConsolidationSpec>,
     /// A uniform initial state of the saturated points (the undrained start of a consolidation
@@ -322,22 +387,19 @@ pub struct Case {
     /// Stresses (and pore pressures) the points start with: the K0 procedure or uniform
     /// stresses per material ([`crate::input::initial_stress`]); `None`: unstressed.
     pub initial_stress: Option<crate::input::initial_stress::InitialStress>,
+}
+
+/// What the run checks and records, and how it uses the machine: the guard rails, the points
+/// whose history it writes, and its threads. None of them changes the computed values; the
+/// guard rails may stop a run.
+#[derive(Debug, Clone, Default)]
+pub struct Execution {
+    /// The run-time checks (guard rails) and their tolerances.
+    pub guards: Guards,
     /// Material-point ids written to `history.csv`.
     pub probes: Vec<u32>,
-    /// Velocities prescribed on the material points of some elements (Anura3D's
-    /// `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_*`); `None`: none, or the multiplier is off.
-    pub prescribed: Option<crate::step::prescribed::PrescribedVelocity>,
-    /// Velocities prescribed on nodes (Anura3D's `$$PRESCRIBED_NODAL_VELOCITY_*`, scenes'
-    /// `[[velocity]]` on surfaces and planes), one reaction each.
-    pub nodal_velocity: Vec<crate::step::nodal_velocity::NodalVelocitySet>,
-    /// Anura3D's moving mesh (`$$MOVING_MESH_CORNER_NODES` and its companions), when given.
-    pub moving_mesh: Option<crate::step::moving_mesh::MovingMeshSpec>,
-    /// Contact between a structure and the soil (Anura3D's `$$CONTACT_FORMULATION 1`), when on.
-    pub contact: Option<crate::step::contact::ContactSpec>,
     /// Threads, pinning and first touch of the run (not physics: results do not depend on it).
     pub engine: crate::parallel::team::Options,
-    /// Floating-point precision of the particle and grid state.
-    pub precision: Precision,
 }
 
 /// The checks made at every step (docs/design.md §4.14): non-finite values, collapsing points,
@@ -478,10 +540,11 @@ pub enum ReorderError {
 impl Case {
     /// Refuses a Courant number above 1 unless `force`.
     pub fn check_courant(&self, force: bool) -> Result<(), CourantError> {
-        if self.courant > 1.0 && !force {
+        let time = &self.time;
+        if time.courant > 1.0 && !force {
             return Err(CourantError {
-                item: self.courant_item.clone(),
-                courant: self.courant,
+                item: time.courant_item.clone(),
+                courant: time.courant,
             });
         }
         Ok(())
@@ -490,7 +553,7 @@ impl Case {
     /// The case with its elements ordered along a space-filling curve and its nodes renumbered
     /// by first use (sfcb's ordering), every per-element and per-node datum following, and the
     /// material-point ids and the numbers messages give kept those of the input
-    /// ([`Case::input_element`], [`Case::input_node`]). `Reorder::None` returns it unchanged.
+    /// ([`Body::input_element`], [`Body::input_node`]). `Reorder::None` returns it unchanged.
     pub fn reordered(mut self, how: Reorder) -> Result<Case, ReorderError> {
         let curve = match how {
             Reorder::None => return Ok(self),
@@ -516,9 +579,10 @@ impl Case {
         })?;
         let model = self.model.reordered(&o.order, &o.node_new)?;
         let by_element = |v: &[u32]| o.order.iter().map(|&e| v[e as usize]).collect::<Vec<u32>>();
-        self.input_element = by_element(&self.input_element);
-        self.element_material = by_element(&self.element_material);
-        self.points_per_element = by_element(&self.points_per_element);
+        let body = &mut self.body;
+        body.input_element = by_element(&body.input_element);
+        body.element_material = by_element(&body.element_material);
+        body.points_per_element = by_element(&body.points_per_element);
         fn by_node<T: Copy>(v: &[T], node_new: &[u32]) -> Vec<T> {
             let mut out = v.to_vec();
             for (old, &new) in node_new.iter().enumerate() {
@@ -526,37 +590,42 @@ impl Case {
             }
             out
         }
-        self.input_node = by_node(&self.input_node, &o.node_new);
-        self.fixed = by_node(&self.fixed, &o.node_new);
-        self.liquid_fixed = by_node(&self.liquid_fixed, &o.node_new);
-        if !self.walls.is_empty() {
-            self.walls = by_node(&self.walls, &o.node_new);
+        body.input_node = by_node(&body.input_node, &o.node_new);
+        let boundary = &mut self.boundary;
+        boundary.fixed = by_node(&boundary.fixed, &o.node_new);
+        boundary.liquid_fixed = by_node(&boundary.liquid_fixed, &o.node_new);
+        if !boundary.walls.is_empty() {
+            boundary.walls = by_node(&boundary.walls, &o.node_new);
         }
-        self.traction = by_node(&self.traction, &o.node_new);
-        self.liquid_traction = by_node(&self.liquid_traction, &o.node_new);
-        for load in &mut self.point_loads {
+        let loads = &mut self.loads;
+        loads.traction = by_node(&loads.traction, &o.node_new);
+        loads.liquid_traction = by_node(&loads.liquid_traction, &o.node_new);
+        for load in &mut loads.point_loads {
             for n in load.corners.iter_mut() {
                 *n = o.node_new[*n] as usize;
             }
         }
-        if let Some(pv) = self.prescribed.take() {
+        if let Some(pv) = boundary.prescribed.take() {
             let mut new_of_old = vec![0u32; o.order.len()];
             for (new, &old) in o.order.iter().enumerate() {
                 new_of_old[old as usize] = new as u32;
             }
-            self.prescribed = Some(pv.renumbered(&new_of_old));
+            boundary.prescribed = Some(pv.renumbered(&new_of_old));
         }
-        self.nodal_velocity = std::mem::take(&mut self.nodal_velocity)
+        boundary.nodal_velocity = std::mem::take(&mut boundary.nodal_velocity)
             .into_iter()
             .map(|s| s.renumbered(&o.node_new))
             .collect();
-        self.moving_mesh = self.moving_mesh.take().map(|m| m.renumbered(&o.node_new));
-        if let Some(c) = self.contact.take() {
+        boundary.moving_mesh = boundary
+            .moving_mesh
+            .take()
+            .map(|m| m.renumbered(&o.node_new));
+        if let Some(c) = boundary.contact.take() {
             let mut new_of_old = vec![0u32; o.order.len()];
             for (new, &old) in o.order.iter().enumerate() {
                 new_of_old[old as usize] = new as u32;
             }
-            self.contact = Some(c.renumbered(&new_of_old));
+            boundary.contact = Some(c.renumbered(&new_of_old));
         }
         self.model = model;
         Ok(self)
@@ -580,32 +649,40 @@ impl Case {
 
     /// The 1-based input number of element `e` (0-based, the case's order), for messages.
     pub fn element_number(&self, e: usize) -> u32 {
-        self.input_element.get(e).map_or(e as u32, |&k| k) + 1
+        self.body.input_element.get(e).map_or(e as u32, |&k| k) + 1
     }
 
     /// The 1-based input number of model node `n` (0-based, the case's order), for messages.
     pub fn node_number(&self, n: usize) -> u32 {
-        self.input_node.get(n).map_or(n as u32, |&k| k) + 1
+        self.body.input_node.get(n).map_or(n as u32, |&k| k) + 1
     }
 
     /// How the case's material points are numbered: by input element (see
-    /// [`Case::input_element`]).
+    /// [`Body::input_element`]).
     pub fn point_ids(&self) -> mpm_shared::points::PointIds {
-        mpm_shared::points::PointIds::new(&self.points_per_element, Some(&self.input_element))
+        mpm_shared::points::PointIds::new(
+            &self.body.points_per_element,
+            Some(&self.body.input_element),
+        )
     }
 
     /// True when some material is saturated: the run then allocates and computes the liquid.
     pub fn has_liquid(&self) -> bool {
-        self.materials.iter().flatten().any(|m| m.liquid.is_some())
+        self.body
+            .materials
+            .iter()
+            .flatten()
+            .any(|m| m.liquid.is_some())
     }
 
     /// The prescribed-velocity sets whose reactions `reaction.csv` records, in its order: the
     /// material-point set first, then the nodal sets as given.
     pub fn reactions(&self) -> Vec<crate::step::reaction::Reaction> {
-        self.prescribed
+        self.boundary
+            .prescribed
             .iter()
             .map(|p| p.reaction())
-            .chain(self.nodal_velocity.iter().map(|s| s.reaction()))
+            .chain(self.boundary.nodal_velocity.iter().map(|s| s.reaction()))
             .collect()
     }
 
@@ -624,52 +701,58 @@ impl Case {
             name: name.to_string(),
             inputs: Vec::new(),
             model,
-            materials: vec![None, Some(material)],
-            element_material: vec![1; n_el],
-            points_per_element: vec![points; n_el],
-            input_element: (0..n_el as u32).collect(),
-            input_node: (0..n as u32).collect(),
-            liquid_fixed: fixed.clone(),
-            fixed,
-            walls: Vec::new(),
-            traction: vec![[0.0; 3]; n],
-            point_loads: Vec::new(),
-            traction_curve: LoadCurve::Step,
-            liquid_traction: vec![[0.0; 3]; n],
-            liquid_curve: LoadCurve::Step,
-            liquid_load_on_mixture: true,
-            gravity: [0.0; 3],
-            gravity_curve: LoadCurve::Step,
-            courant: 0.9,
-            courant_item: "courant".into(),
-            guards: Guards::default(),
-            damping: 0.0,
-            end_time: 1.0,
-            output_times: vec![1.0],
-            max_steps: None,
-            quasi_static: None,
-            objective_stress: false,
-            pic_blend: 0.0,
-            integration: Integration::MaterialPoints,
-            anura3d_time_step: false,
-            critical_step: CriticalStepRule::AllElements,
-            damping_rule: DampingRule::Phases,
-            drag: Drag::Implicit,
-            initial_step: None,
-            smooth_pressure: true,
-            strain_smoothing: false,
-            fixed_liquid_mass: false,
-            hoop_in_volume: true,
-            consolidation: None,
-            initial_state: None,
-            initial_stress: None,
-            probes: Vec::new(),
-            prescribed: None,
-            nodal_velocity: Vec::new(),
-            moving_mesh: None,
-            contact: None,
-            engine: Default::default(),
-            precision: Precision::F64,
+            body: Body {
+                materials: vec![None, Some(material)],
+                element_material: vec![1; n_el],
+                points_per_element: vec![points; n_el],
+                input_element: (0..n_el as u32).collect(),
+                input_node: (0..n as u32).collect(),
+            },
+            boundary: BoundaryConditions {
+                liquid_fixed: fixed.clone(),
+                fixed,
+                walls: Vec::new(),
+                prescribed: None,
+                nodal_velocity: Vec::new(),
+                moving_mesh: None,
+                contact: None,
+            },
+            loads: Loading {
+                traction: vec![[0.0; 3]; n],
+                point_loads: Vec::new(),
+                traction_curve: LoadCurve::Step,
+                liquid_traction: vec![[0.0; 3]; n],
+                liquid_curve: LoadCurve::Step,
+                liquid_load_on_mixture: true,
+                gravity: [0.0; 3],
+                gravity_curve: LoadCurve::Step,
+            },
+            time: TimeControls {
+                courant: 0.9,
+                courant_item: "courant".into(),
+                end_time: 1.0,
+                output_times: vec![1.0],
+                max_steps: None,
+                quasi_static: None,
+                anura3d_time_step: false,
+                critical_step: CriticalStepRule::AllElements,
+                initial_step: None,
+            },
+            numerics: Numerics {
+                damping: 0.0,
+                objective_stress: false,
+                pic_blend: 0.0,
+                integration: Integration::MaterialPoints,
+                damping_rule: DampingRule::Phases,
+                drag: Drag::Implicit,
+                smooth_pressure: true,
+                fixed_liquid_mass: false,
+                hoop_in_volume: true,
+                strain_smoothing: false,
+                precision: Precision::F64,
+            },
+            start: StartState::default(),
+            run: Execution::default(),
         }
     }
 }

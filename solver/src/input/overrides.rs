@@ -127,21 +127,21 @@ impl Overrides {
 /// tolerance, probes (added, sorted, each once), the engine's threads, pinning and first touch,
 /// and the mesh ordered as asked.
 pub fn apply(mut case: Case, o: &Overrides) -> Result<Case, OverrideError> {
-    case.drag = o.drag;
+    case.numerics.drag = o.drag;
     if let Some(p) = o.precision {
-        case.precision = p;
+        case.numerics.precision = p;
     }
     case.check_courant(o.force)?;
     if let Some(t) = o.energy_tolerance {
-        case.guards.energy_tolerance = t;
+        case.run.guards.energy_tolerance = t;
     }
-    case.probes.extend(&o.probes);
-    case.probes.sort_unstable();
-    case.probes.dedup();
+    case.run.probes.extend(&o.probes);
+    case.run.probes.sort_unstable();
+    case.run.probes.dedup();
     if o.threads == Some(0) {
         return Err(OverrideError::NoThreads);
     }
-    case.engine = crate::parallel::team::Options {
+    case.run.engine = crate::parallel::team::Options {
         threads: o.threads.unwrap_or(0),
         pin: o.pin,
         first_touch: o.first_touch,
@@ -163,8 +163,8 @@ mod tests {
         let material = MaterialSpec::new("soil", 2000.0, 1e4, 0.3).unwrap();
         let fixed = vec![[false; 3]; model.node_count()];
         let mut c = Case::single_material("box", model, material, 1, fixed);
-        c.courant = courant;
-        c.probes = vec![5, 2];
+        c.time.courant = courant;
+        c.run.probes = vec![5, 2];
         c
     }
 
@@ -173,11 +173,14 @@ mod tests {
         let c = case(0.5);
         let ordered = c.clone().reordered(Reorder::Morton).unwrap();
         let a = apply(c, &Overrides::default()).unwrap();
-        assert_eq!(a.drag, Drag::Implicit);
-        assert_eq!(a.precision, Precision::F64);
-        assert_eq!(a.guards.energy_tolerance, Some(DEFAULT_ENERGY_TOLERANCE));
-        assert_eq!(a.probes, vec![2, 5]);
-        assert_eq!(a.engine, crate::parallel::team::Options::default());
+        assert_eq!(a.numerics.drag, Drag::Implicit);
+        assert_eq!(a.numerics.precision, Precision::F64);
+        assert_eq!(
+            a.run.guards.energy_tolerance,
+            Some(DEFAULT_ENERGY_TOLERANCE)
+        );
+        assert_eq!(a.run.probes, vec![2, 5]);
+        assert_eq!(a.run.engine, crate::parallel::team::Options::default());
         assert_eq!(a.model.coords, ordered.model.coords);
         assert_eq!(a.model.connectivity, ordered.model.connectivity);
     }
@@ -199,13 +202,13 @@ mod tests {
         let c = case(0.5);
         let (coords, connectivity) = (c.model.coords.clone(), c.model.connectivity.clone());
         let a = apply(c, &o).unwrap();
-        assert_eq!(a.drag, Drag::Explicit);
-        assert_eq!(a.precision, Precision::F32);
-        assert_eq!(a.guards.energy_tolerance, Some(0.25));
-        assert_eq!(a.probes, vec![2, 5, 7]);
-        assert_eq!(a.engine.threads, 3);
-        assert_eq!(a.engine.pin, Pin::Cores);
-        assert!(!a.engine.first_touch);
+        assert_eq!(a.numerics.drag, Drag::Explicit);
+        assert_eq!(a.numerics.precision, Precision::F32);
+        assert_eq!(a.run.guards.energy_tolerance, Some(0.25));
+        assert_eq!(a.run.probes, vec![2, 5, 7]);
+        assert_eq!(a.run.engine.threads, 3);
+        assert_eq!(a.run.engine.pin, Pin::Cores);
+        assert!(!a.run.engine.first_touch);
         // `none` keeps the input's order.
         assert_eq!(a.model.coords, coords);
         assert_eq!(a.model.connectivity, connectivity);
@@ -215,7 +218,7 @@ mod tests {
             ..Overrides::default()
         };
         assert_eq!(
-            apply(case(0.5), &off).unwrap().guards.energy_tolerance,
+            apply(case(0.5), &off).unwrap().run.guards.energy_tolerance,
             None
         );
     }
@@ -228,7 +231,7 @@ mod tests {
             force: true,
             ..Overrides::default()
         };
-        assert_eq!(apply(case(1.5), &forced).unwrap().courant, 1.5);
+        assert_eq!(apply(case(1.5), &forced).unwrap().time.courant, 1.5);
     }
 
     #[test]

@@ -197,40 +197,42 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
     };
     let dt = crate::input::time_step::critical(case, 0..altitude.len(), |e| altitude[e])?;
     let points: u64 = case
+        .body
         .points_per_element
         .iter()
-        .zip(&case.element_material)
+        .zip(&case.body.element_material)
         .filter(|(_, &m)| m != 0)
         .map(|(&n, _)| n as u64)
         .sum();
     let two_phase = case.has_liquid();
     // Steps: every output interval (load step) rounds up to whole steps; a quasi-static load
     // step ends after at most its step limit + 1.
-    let mut steps = if case.initial_step.is_some() {
+    let mut steps = if case.time.initial_step.is_some() {
         1.0
     } else {
         0.0
     };
     let mut t0 = 0.0;
-    for &t in &case.output_times {
+    for &t in &case.time.output_times {
         let n = ((t - t0) / dt).ceil().max(1.0);
-        steps += match case.quasi_static.and_then(|q| q.max_steps) {
+        steps += match case.time.quasi_static.and_then(|q| q.max_steps) {
             Some(m) => n.min(m as f64 + 1.0),
             None => n,
         };
         t0 = t;
     }
     let per_point = VTU_POINT_BYTES + if two_phase { VTU_LIQUID_BYTES } else { 0.0 };
-    let outputs = case.output_times.len();
-    let per_output =
-        points as f64 * per_point + VTU_FILE_BYTES + case.probes.len() as f64 * HISTORY_ROW_BYTES;
+    let outputs = case.time.output_times.len();
+    let per_output = points as f64 * per_point
+        + VTU_FILE_BYTES
+        + case.run.probes.len() as f64 * HISTORY_ROW_BYTES;
     let corners = case.model.element_type.nodes() as f64;
     let mesh_file = nodes as f64 * 24.0
         + case.model.element_count() as f64 * (corners * 8.0 + 9.0)
         + VTU_FILE_BYTES;
-    let runs = case.consolidation.map_or(1, |s| s.runs());
+    let runs = case.start.consolidation.map_or(1, |s| s.runs());
     let output_bytes = runs as f64 * (outputs as f64 * per_output + mesh_file);
-    let real = case.precision.bytes() as f64;
+    let real = case.numerics.precision.bytes() as f64;
     let point_bytes = if two_phase { 24.0 } else { 17.0 } * real + 13.0;
     let node_bytes = if two_phase { 32.0 } else { 16.0 } * real + 24.0 + 6.0;
     let element_bytes = (3.0 * 3.0 + 4.0 * 3.0 + 2.0) * real + 4.0 * 4.0 * 2.0;
@@ -238,7 +240,7 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
         + nodes as f64 * node_bytes
         + altitude.len() as f64 * element_bytes;
     let threads = threads.max(1);
-    let rate = rate(threads, two_phase, case.precision);
+    let rate = rate(threads, two_phase, case.numerics.precision);
     let wall_seconds = runs as f64 * steps * (points as f64 / rate + STEP_OVERHEAD);
     Ok(Plan {
         points,
@@ -246,15 +248,15 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
         nodes: case.model.node_count(),
         two_phase,
         dt,
-        end_time: case.end_time,
+        end_time: case.time.end_time,
         steps,
         runs,
         outputs,
-        probes: case.probes.len(),
+        probes: case.run.probes.len(),
         output_bytes,
         memory_bytes,
         threads,
-        precision: case.precision,
+        precision: case.numerics.precision,
         wall_seconds,
         calibration: None,
     })
@@ -336,7 +338,7 @@ impl Plan {
 /// problems are one-dimensional and elastic, so the lines say so.
 pub fn cheaper_settings(case: &Case) -> Vec<String> {
     let mut out = Vec::new();
-    if case.precision == Precision::F64 {
+    if case.numerics.precision == Precision::F64 {
         out.push(format!(
             "--precision f32: about half the bytes per point and {F32_SPEEDUP}× the speed; on the \
              map's dry problems and uncrossed consolidation its error was within \
@@ -344,9 +346,10 @@ pub fn cheaper_settings(case: &Case) -> Vec<String> {
         ));
     }
     let four = case
+        .body
         .points_per_element
         .iter()
-        .zip(&case.element_material)
+        .zip(&case.body.element_material)
         .any(|(&n, &m)| m != 0 && n == 4);
     if four && !case.has_liquid() {
         out.push(
@@ -356,12 +359,12 @@ pub fn cheaper_settings(case: &Case) -> Vec<String> {
                 .into(),
         );
     }
-    if case.courant < 0.9 && !case.has_liquid() {
+    if case.time.courant < 0.9 && !case.has_liquid() {
         out.push(format!(
             "Courant number 0.9 instead of {}: {:.1}× fewer steps; on the map's dry problems the \
              error changed by at most 10 % between Courant 0.1 and 0.9 with 4 points per element",
-            case.courant,
-            0.9 / case.courant
+            case.time.courant,
+            0.9 / case.time.courant
         ));
     }
     out

@@ -21,7 +21,7 @@ pub fn critical(
     min_altitude: impl Fn(usize) -> f64,
 ) -> Result<f64, TimeStepError> {
     let (_, crossing) = shortest_crossing(case, elements, min_altitude);
-    let dt = case.courant * crossing;
+    let dt = case.time.courant * crossing;
     if !(dt > 0.0 && dt.is_finite()) {
         return Err(TimeStepError { dt });
     }
@@ -39,19 +39,20 @@ pub fn shortest_crossing(
 ) -> (usize, f64) {
     // Empty elements may fill: they take the fastest material's speed. An explicit drag must
     // be resolved by the step too: Mieremet's speed has its term.
-    let anura3d_step = case.anura3d_time_step || case.drag == Drag::Explicit;
+    let anura3d_step = case.time.anura3d_time_step || case.numerics.drag == Drag::Explicit;
     let mut best = (elements.start, f64::INFINITY);
-    let occupied_only = case.critical_step == CriticalStepRule::OccupiedEachStep;
+    let occupied_only = case.time.critical_step == CriticalStepRule::OccupiedEachStep;
     for e in elements {
-        if occupied_only && case.points_per_element[e] == 0 {
+        if occupied_only && case.body.points_per_element[e] == 0 {
             // Anura3D's rule: only elements that hold points count.
             continue;
         }
         let dx = min_altitude(e);
-        let m = case.element_material[e] as usize;
-        let c = match case.materials.get(m).and_then(|s| s.as_ref()) {
+        let m = case.body.element_material[e] as usize;
+        let c = match case.body.materials.get(m).and_then(|s| s.as_ref()) {
             Some(s) => s.wave_speed_at(dx, anura3d_step),
             None => case
+                .body
                 .materials
                 .iter()
                 .flatten()

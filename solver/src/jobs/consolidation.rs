@@ -50,6 +50,7 @@ impl Layer {
     /// The layer of `case` (its one saturated material) under `spec`.
     pub fn of(case: &Case, spec: &ConsolidationSpec) -> Result<Self, LayerError> {
         let sat: Vec<_> = case
+            .body
             .materials
             .iter()
             .flatten()
@@ -70,7 +71,7 @@ impl Layer {
         }
         let height = hi - lo;
         let volume: f64 = (0..case.model.element_count())
-            .filter(|&e| case.element_material[e] != 0)
+            .filter(|&e| case.body.element_material[e] != 0)
             .map(|e| element_volume(&case.model, e))
             .sum();
         let e_oed = m.oedometric();
@@ -377,6 +378,7 @@ pub fn run_tracked_with<R: Real, E: Element>(
     watch: &mut dyn crate::driver::run::Observer<R, E>,
 ) -> Result<(Engine<R, E>, Tracker), RunError> {
     let spec = case
+        .start
         .consolidation
         .ok_or_else(|| RunError::Job(Box::new(LayerError::NoTable)))?;
     let mut observer = Observer {
@@ -412,17 +414,18 @@ pub fn run_job_with<R: Real, E: Element>(
     watch: &mut dyn crate::driver::run::Observer<R, E>,
 ) -> Result<JobOutcome<R, E>, RunError> {
     let spec = case
+        .start
         .consolidation
         .ok_or_else(|| RunError::Job(Box::new(LayerError::NoTable)))?;
     let (engine, tracker) = run_tracked_with::<R, E>(case, dir, options, watch)?;
     let workshop = if spec.runs() == 2 {
         let mut twin = case.clone();
-        twin.consolidation = Some(ConsolidationSpec {
+        twin.start.consolidation = Some(ConsolidationSpec {
             start: Start::Rest,
             compare_rest: false,
             ..spec
         });
-        twin.initial_state = None;
+        twin.start.initial_state = None;
         let (_, t) = run_tracked_with::<R, E>(&twin, &dir.join("workshop"), options, watch)?;
         Some(t)
     } else {

@@ -35,9 +35,9 @@ impl CriticalStep {
     /// The rule for `case`, with one result slot per thread of a team of `threads`.
     pub fn new(case: &Case, threads: usize) -> Self {
         CriticalStep {
-            materials: case.materials.clone(),
-            anura3d_speed: case.anura3d_time_step
-                || case.drag == crate::input::case::Drag::Explicit,
+            materials: case.body.materials.clone(),
+            anura3d_speed: case.time.anura3d_time_step
+                || case.numerics.drag == crate::input::case::Drag::Explicit,
             per_thread: vec![(f64::INFINITY, 0); threads],
         }
     }

@@ -166,18 +166,18 @@ impl StepConfig {
     /// The step configuration of `case`.
     pub fn of(case: &Case) -> Self {
         StepConfig {
-            gravity: case.gravity,
-            gravity_curve: case.gravity_curve,
-            traction_curve: case.traction_curve,
-            liquid_curve: case.liquid_curve,
-            damping: case.damping,
-            damping_rule: case.damping_rule,
-            drag: case.drag,
-            liquid_load_on_mixture: case.liquid_load_on_mixture,
-            smooth_pressure: case.smooth_pressure,
-            objective_stress: case.objective_stress,
-            pic_blend: case.pic_blend,
-            hoop_in_volume: case.hoop_in_volume,
+            gravity: case.loads.gravity,
+            gravity_curve: case.loads.gravity_curve,
+            traction_curve: case.loads.traction_curve,
+            liquid_curve: case.loads.liquid_curve,
+            damping: case.numerics.damping,
+            damping_rule: case.numerics.damping_rule,
+            drag: case.numerics.drag,
+            liquid_load_on_mixture: case.loads.liquid_load_on_mixture,
+            smooth_pressure: case.numerics.smooth_pressure,
+            objective_stress: case.numerics.objective_stress,
+            pic_blend: case.numerics.pic_blend,
+            hoop_in_volume: case.numerics.hoop_in_volume,
         }
     }
 }

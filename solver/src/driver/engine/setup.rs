@@ -38,7 +38,7 @@ impl<R: Real, E: Element> Engine<R, E> {
     /// Sets up the mesh, places the material points and computes the time step, with the
     /// case's engine options.
     pub fn new(case: &Case, drop_lost: bool) -> Result<Self, SetupError> {
-        Self::with_options(case, drop_lost, case.engine)
+        Self::with_options(case, drop_lost, case.run.engine)
     }
 
     /// [`Engine::new`] with the given thread options.
@@ -89,14 +89,14 @@ impl<R: Real, E: Element> Engine<R, E> {
         let tables = MaterialTables::of(case);
         // Both energy checks need every energy term; prescribed velocities do work that is not
         // counted, and contact takes energy out that is not counted either.
-        let energy_checked = reactions.is_empty() && case.contact.is_none();
+        let energy_checked = reactions.is_empty() && case.boundary.contact.is_none();
         let two_phase = case.has_liquid();
         let mut engine = Engine {
             input_node,
-            guards: case.guards,
+            guards: case.run.guards,
             guard_slots: vec![
                 GuardSums::EMPTY;
-                if case.guards.enabled {
+                if case.run.guards.enabled {
                     layout.blocks()
                 } else {
                     0
@@ -115,14 +115,14 @@ impl<R: Real, E: Element> Engine<R, E> {
             step_kinetic: 0.0,
             initial_kinetic: 0.0,
             stored_energy: 0.0,
-            courant: (case.courant, critical_element),
+            courant: (case.time.courant, critical_element),
             energy_checked: (energy_checked, energy_checked),
             comm,
             config: StepConfig::of(case),
             input_element,
-            smoothing: case
-                .strain_smoothing
-                .then(|| StrainSmoothing::new(mesh.nodes(), &case.element_material[own.clone()])),
+            smoothing: case.numerics.strain_smoothing.then(|| {
+                StrainSmoothing::new(mesh.nodes(), &case.body.element_material[own.clone()])
+            }),
             gravity_by_material: vec![[R::ZERO; 3]; tables.weight_ratio.len()],
             weight_ratio: tables.weight_ratio,
             grid: grid_of(mesh.nodes(), two_phase),
@@ -151,7 +151,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             liquid_fixed,
             constraints,
             structure,
-            critical_step: (case.critical_step == CriticalStepRule::OccupiedEachStep)
+            critical_step: (case.time.critical_step == CriticalStepRule::OccupiedEachStep)
                 .then(|| CriticalStep::new(case, team.threads)),
             reactions,
             locate_outcome: vec![NOTHING_FOUND; team.threads],
@@ -174,7 +174,7 @@ impl<R: Real, E: Element> Engine<R, E> {
     /// the points in their global order (on one rank, as one process forms them).
     fn take_starting_energies(&mut self, case: &Case) {
         let whole = self.on_root(|e| {
-            let stored = if case.initial_stress.is_some() {
+            let stored = if case.start.initial_stress.is_some() {
                 e.comm.sum(stored_energy(case, &e.particles))
             } else {
                 0.0
@@ -194,7 +194,7 @@ impl<R: Real, E: Element> Engine<R, E> {
 
 /// Refuses what the element type `E` or a run over `ranks` processes does not model.
 fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupError> {
-    let mixed = matches!(case.integration, Integration::Mixed { .. });
+    let mixed = matches!(case.numerics.integration, Integration::Mixed { .. });
     if E::AXISYMMETRIC {
         // Both average over an element, where the radius weighting of an axisymmetric
         // section would enter (Anura3D's own MPM-MIXED integrates such an element at its
@@ -204,25 +204,28 @@ fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupE
                 "mixed integration (MPM-MIXED, Gauss points in full elements)",
             ));
         }
-        if case.strain_smoothing {
+        if case.numerics.strain_smoothing {
             return Err(SetupError::Axisymmetric("strain smoothing"));
         }
     }
     if ranks > 1 {
         let unmodelled = [
             (mixed, "mixed integration (MPM-MIXED)"),
-            (case.strain_smoothing, "strain smoothing"),
-            (case.prescribed.is_some(), "prescribed velocities on points"),
+            (case.numerics.strain_smoothing, "strain smoothing"),
             (
-                !case.nodal_velocity.is_empty(),
+                case.boundary.prescribed.is_some(),
+                "prescribed velocities on points",
+            ),
+            (
+                !case.boundary.nodal_velocity.is_empty(),
                 "prescribed velocities on nodes",
             ),
             (
-                !case.point_loads.is_empty(),
+                !case.loads.point_loads.is_empty(),
                 "loads carried by material points",
             ),
-            (case.moving_mesh.is_some(), "a moving mesh"),
-            (case.contact.is_some(), "contact between bodies"),
+            (case.boundary.moving_mesh.is_some(), "a moving mesh"),
+            (case.boundary.contact.is_some(), "contact between bodies"),
         ];
         if let Some((_, what)) = unmodelled.iter().find(|(on, _)| *on) {
             return Err(SetupError::Distributed { ranks, what });
@@ -242,6 +245,7 @@ fn partition_of<E: Element, R: Real>(
         return Ok(Partition::whole(global));
     }
     let weight: Vec<u64> = case
+        .body
         .points_per_element
         .iter()
         .map(|&n| u64::from(n))
@@ -266,7 +270,7 @@ fn place_points<E: Element, R: Real>(
 ) -> Result<(Particles<R>, Vec<bool>), SetupError> {
     let own = partition.elements();
     let density = |m: u32| {
-        case.materials[m as usize]
+        case.body.materials[m as usize]
             .as_ref()
             .map_or(0.0, |s| s.density)
     };
@@ -274,8 +278,8 @@ fn place_points<E: Element, R: Real>(
     let first_id: Vec<u32> = own.clone().map(|e| ids.input_first(e) as u32).collect();
     let mut particles = particles::place(
         mesh,
-        &case.points_per_element[own.clone()],
-        &case.element_material[own.clone()],
+        &case.body.points_per_element[own.clone()],
+        &case.body.element_material[own.clone()],
         Some(&first_id),
         &|e| case.element_number(partition.global_element(e)),
         density,
@@ -283,7 +287,7 @@ fn place_points<E: Element, R: Real>(
     if particles.is_empty() {
         return Err(SetupError::NoPoints);
     }
-    let boundary = match case.integration {
+    let boundary = match case.numerics.integration {
         Integration::Mixed {
             rule: MixedRule::Anura3d,
             ..
@@ -292,6 +296,7 @@ fn place_points<E: Element, R: Real>(
     };
     // The laws' state slab: as many values per point as the most demanding law keeps.
     particles.state_len = case
+        .body
         .materials
         .iter()
         .flatten()
@@ -302,15 +307,15 @@ fn place_points<E: Element, R: Real>(
     if case.has_liquid() {
         particles.add_liquid(
             |m| {
-                case.materials[m as usize]
+                case.body.materials[m as usize]
                     .as_ref()
                     .map_or(0.0, |s| s.initial_pore_pressure)
             },
-            case.fixed_liquid_mass,
+            case.numerics.fixed_liquid_mass,
         );
     }
     apply_undrained_state(case, &mut particles);
-    if let Some(init) = &case.initial_stress {
+    if let Some(init) = &case.start.initial_stress {
         apply_initial_stress::<E, R>(init, case, partition, &mut particles);
     }
     Ok((particles, boundary))
@@ -318,12 +323,15 @@ fn place_points<E: Element, R: Real>(
 
 /// Saturated points start in the case's undrained state, when it gives one.
 fn apply_undrained_state<R: Real>(case: &Case, particles: &mut Particles<R>) {
-    let (Some(s), Some(lp)) = (&case.initial_state, particles.liquid.as_mut()) else {
+    let (Some(s), Some(lp)) = (&case.start.initial_state, particles.liquid.as_mut()) else {
         return;
     };
     for i in 0..particles.x.len() {
         let m = particles.material[i] as usize;
-        let Some(spec) = case.materials[m].as_ref().filter(|s| s.liquid.is_some()) else {
+        let Some(spec) = case.body.materials[m]
+            .as_ref()
+            .filter(|s| s.liquid.is_some())
+        else {
             continue;
         };
         let law = spec.law.build::<R>();
@@ -349,16 +357,21 @@ fn constraints_of<E: Element, R: Real>(
     fixed: &mut [[bool; 3]],
 ) -> Result<ConstraintsAndStructure<R, E>, SetupError> {
     let mut list = Constraints::new();
-    if !case.walls.is_empty() {
+    if !case.boundary.walls.is_empty() {
         list.push(Walls(walls));
     }
-    let prescribed = case.prescribed.as_ref().map(|pv| {
+    let prescribed = case.boundary.prescribed.as_ref().map(|pv| {
         let pv = pv.clone().owned_by(partition);
         Prescribed::new(&pv, mesh, particles)
     });
-    let structure = match &case.contact {
+    let structure = match &case.boundary.contact {
         Some(spec) => {
-            list.push(Contact::new(spec, mesh, &case.element_material, prescribed));
+            list.push(Contact::new(
+                spec,
+                mesh,
+                &case.body.element_material,
+                prescribed,
+            ));
             Some(Structure::new(spec.material, mesh.nodes()))
         }
         None => {
@@ -368,24 +381,24 @@ fn constraints_of<E: Element, R: Real>(
             None
         }
     };
-    if !case.nodal_velocity.is_empty() {
+    if !case.boundary.nodal_velocity.is_empty() {
         let nv = NodalVelocity::new(
-            &case.nodal_velocity,
+            &case.boundary.nodal_velocity,
             &mesh.node_of_model,
-            usize::from(case.prescribed.is_some()),
+            usize::from(case.boundary.prescribed.is_some()),
         );
         // The grid update and the re-mapping treat them as fixed; they are set after each.
         nv.constrain(fixed);
         list.push(nv);
     }
-    if let Some(spec) = &case.moving_mesh {
+    if let Some(spec) = &case.boundary.moving_mesh {
         list.push(MovingMesh::new(
             spec,
             &case.model,
             mesh,
-            &case.element_material,
-            &case.points_per_element,
-            &case.input_node,
+            &case.body.element_material,
+            &case.body.points_per_element,
+            &case.body.input_node,
         )?);
     }
     Ok((list, structure))
@@ -408,20 +421,19 @@ struct MaterialTables<R: Real> {
 
 impl<R: Real> MaterialTables<R> {
     fn of(case: &Case) -> Self {
+        let materials = &case.body.materials;
         let each = |f: &dyn Fn(&crate::input::case::MaterialSpec) -> f64, empty: f64| {
-            case.materials
+            materials
                 .iter()
                 .map(|m| m.as_ref().map_or(empty, f))
                 .collect::<Vec<f64>>()
         };
         MaterialTables {
-            laws: case
-                .materials
+            laws: materials
                 .iter()
                 .map(|m| m.as_ref().map_or(Law::Void, |s| s.law.build()))
                 .collect(),
-            fluids: case
-                .materials
+            fluids: materials
                 .iter()
                 .map(|m| m.as_ref().and_then(|s| s.liquid.as_ref()).map(Fluid::new))
                 .collect(),
@@ -445,13 +457,16 @@ fn grid_of<R: Real>(nodes: usize, two_phase: bool) -> Grid<R> {
 /// axisymmetric section, whose points' hoop rates differ: the rate's pass goes point by point
 /// there).
 fn pore_weights_of<E: Element, R: Real>(case: &Case, elements: usize) -> Option<PoreWeights<R>> {
-    (case.has_liquid() && case.smooth_pressure && !case.strain_smoothing && !E::AXISYMMETRIC)
+    (case.has_liquid()
+        && case.numerics.smooth_pressure
+        && !case.numerics.strain_smoothing
+        && !E::AXISYMMETRIC)
         .then(|| PoreWeights::new(elements))
 }
 
 /// The mixed rule's per-element sums, under mixed integration.
 fn mixed_of<R: Real>(case: &Case, elements: usize, boundary: Vec<bool>) -> Option<Mixed<R>> {
-    match case.integration {
+    match case.numerics.integration {
         Integration::MaterialPoints => None,
         Integration::Mixed { filling, rule } => Some(Mixed::new(elements, filling, rule, boundary)),
     }
@@ -462,7 +477,7 @@ fn mixed_of<R: Real>(case: &Case, elements: usize, boundary: Vec<bool>) -> Optio
 pub(super) fn stored_energy<R: Real>(case: &Case, particles: &Particles<R>) -> f64 {
     let mut sum = 0.0;
     for i in 0..particles.len() {
-        let Some(m) = case.materials[particles.material[i] as usize].as_ref() else {
+        let Some(m) = case.body.materials[particles.material[i] as usize].as_ref() else {
             continue;
         };
         let s = particles.stress[i].map(|v| v.f64());
@@ -511,7 +526,7 @@ pub(super) fn resolve_point_loads<E: Element, R: Real>(
     case: &Case,
     comm: &dyn Communicator,
 ) -> Result<Vec<(u32, V3<R>)>, SetupError> {
-    if case.point_loads.is_empty() {
+    if case.loads.point_loads.is_empty() {
         return Ok(Vec::new());
     }
     // Points are placed in element order: the first point of each element.
@@ -523,7 +538,7 @@ pub(super) fn resolve_point_loads<E: Element, R: Real>(
         first[e + 1] += first[e];
     }
     let mut out = Vec::new();
-    for load in &case.point_loads {
+    for load in &case.loads.point_loads {
         let c: Vec<u32> = load
             .corners
             .iter()
@@ -578,11 +593,11 @@ impl<R: Real> NodeInputs<R> {
                 .collect()
         };
         NodeInputs {
-            fixed: by_node(&|m| case.fixed[m]),
-            liquid_fixed: by_node(&|m| case.liquid_fixed[m]),
-            walls: crate::step::wall_friction::wall_nodes(&case.walls, &mesh.model_node),
-            traction: loads(&case.traction),
-            liquid_traction: loads(&case.liquid_traction),
+            fixed: by_node(&|m| case.boundary.fixed[m]),
+            liquid_fixed: by_node(&|m| case.boundary.liquid_fixed[m]),
+            walls: crate::step::wall_friction::wall_nodes(&case.boundary.walls, &mesh.model_node),
+            traction: loads(&case.loads.traction),
+            liquid_traction: loads(&case.loads.liquid_traction),
             input_element: (0..mesh.elements())
                 .map(|e| case.element_number(partition.global_element(e)) - 1)
                 .collect(),

@@ -49,12 +49,16 @@ fn state_bits_with<R: crate::real::Real, E: crate::element::Element>(
     // `+dry`: the scene's materials without their liquid.
     let dry = flag(&mut scene, "+dry");
     let mut case = crate::input::scene::load(&dir.join(scene)).unwrap();
-    case.objective_stress |= objective;
+    case.numerics.objective_stress |= objective;
     if ten {
-        case.points_per_element.iter_mut().for_each(|n| *n = 10);
+        case.body
+            .points_per_element
+            .iter_mut()
+            .for_each(|n| *n = 10);
     }
     if dry {
-        case.materials
+        case.body
+            .materials
             .iter_mut()
             .flatten()
             .for_each(|m| m.liquid = None);

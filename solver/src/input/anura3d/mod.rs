@@ -11,7 +11,10 @@ use std::path::Path;
 use mpm_shared::cps::{Cps, Method, Multiplier, Settings};
 use mpm_shared::Model;
 
-use crate::input::case::{Case, Integration, LoadCurve, QuasiStatic};
+use crate::input::case::{
+    Body, BoundaryConditions, Case, Execution, Integration, LoadCurve, Loading, Numerics,
+    QuasiStatic, StartState, TimeControls,
+};
 
 mod contact;
 mod k0;
@@ -344,59 +347,73 @@ impl Parts {
                 .unwrap_or_default(),
             inputs: vec![input.gfile, input.cfile.clone()],
             model: input.model,
-            materials: self.materials.specs,
-            element_material: self.elements.element_material,
-            points_per_element: self.elements.points_per_element,
-            input_element: self.elements.input_element,
-            input_node: (0..n as u32).collect(),
-            fixed: self.loads.fixed,
-            liquid_fixed: self.loads.liquid_fixed,
-            walls: Vec::new(),
-            traction: self.loads.traction,
-            point_loads: self.loads.point_loads,
-            traction_curve: self.loads.traction_curve,
-            liquid_traction: self.loads.liquid_traction,
-            liquid_curve: self.loads.liquid_curve,
-            liquid_load_on_mixture: false,
-            gravity: self.gravity.0,
-            gravity_curve: self.gravity.1,
-            courant: s.courant,
-            courant_item: format!("{}: $$COURANT_NUMBER", input.cfile),
-            guards: Default::default(),
-            damping: s.local_damping.unwrap_or(0.0),
-            end_time: s.load_steps as f64 * s.time_per_load_step,
-            output_times: (1..=s.load_steps)
-                .map(|k| k as f64 * s.time_per_load_step)
-                .collect(),
-            max_steps: None,
-            quasi_static: s.quasi_static.then_some(QuasiStatic {
-                max_steps: s.max_time_steps,
-                force_tolerance: s.tolerated_error_solid[0],
-                energy_tolerance: s.tolerated_error_solid[1],
-                liquid_force_tolerance: s.tolerated_error_liquid[0],
-            }),
-            objective_stress: s.objective_stress,
-            pic_blend: 0.0,
-            integration: self.integration,
-            anura3d_time_step: true,
-            critical_step: crate::input::case::CriticalStepRule::OccupiedEachStep,
-            damping_rule: crate::input::case::DampingRule::Anura3d,
-            drag: crate::input::case::Drag::Implicit,
-            initial_step: Some(ANURA3D_FIRST_STEP),
-            smooth_pressure: false,
-            fixed_liquid_mass: true,
-            hoop_in_volume: false,
-            strain_smoothing: strain_smoothing(&input.cps),
-            consolidation: None,
-            initial_state: None,
-            initial_stress: self.initial_stress,
-            probes: self.probes,
-            prescribed: self.prescribed,
-            nodal_velocity: self.nodal_velocity,
-            moving_mesh: self.moving_mesh,
-            contact: self.contact,
-            engine: Default::default(),
-            precision: crate::input::case::Precision::F64,
+            body: Body {
+                materials: self.materials.specs,
+                element_material: self.elements.element_material,
+                points_per_element: self.elements.points_per_element,
+                input_element: self.elements.input_element,
+                input_node: (0..n as u32).collect(),
+            },
+            boundary: BoundaryConditions {
+                fixed: self.loads.fixed,
+                liquid_fixed: self.loads.liquid_fixed,
+                walls: Vec::new(),
+                prescribed: self.prescribed,
+                nodal_velocity: self.nodal_velocity,
+                moving_mesh: self.moving_mesh,
+                contact: self.contact,
+            },
+            loads: Loading {
+                traction: self.loads.traction,
+                point_loads: self.loads.point_loads,
+                traction_curve: self.loads.traction_curve,
+                liquid_traction: self.loads.liquid_traction,
+                liquid_curve: self.loads.liquid_curve,
+                liquid_load_on_mixture: false,
+                gravity: self.gravity.0,
+                gravity_curve: self.gravity.1,
+            },
+            time: TimeControls {
+                courant: s.courant,
+                courant_item: format!("{}: $$COURANT_NUMBER", input.cfile),
+                end_time: s.load_steps as f64 * s.time_per_load_step,
+                output_times: (1..=s.load_steps)
+                    .map(|k| k as f64 * s.time_per_load_step)
+                    .collect(),
+                max_steps: None,
+                quasi_static: s.quasi_static.then_some(QuasiStatic {
+                    max_steps: s.max_time_steps,
+                    force_tolerance: s.tolerated_error_solid[0],
+                    energy_tolerance: s.tolerated_error_solid[1],
+                    liquid_force_tolerance: s.tolerated_error_liquid[0],
+                }),
+                anura3d_time_step: true,
+                critical_step: crate::input::case::CriticalStepRule::OccupiedEachStep,
+                initial_step: Some(ANURA3D_FIRST_STEP),
+            },
+            numerics: Numerics {
+                damping: s.local_damping.unwrap_or(0.0),
+                objective_stress: s.objective_stress,
+                pic_blend: 0.0,
+                integration: self.integration,
+                damping_rule: crate::input::case::DampingRule::Anura3d,
+                drag: crate::input::case::Drag::Implicit,
+                smooth_pressure: false,
+                fixed_liquid_mass: true,
+                hoop_in_volume: false,
+                strain_smoothing: strain_smoothing(&input.cps),
+                precision: crate::input::case::Precision::F64,
+            },
+            start: StartState {
+                consolidation: None,
+                initial_state: None,
+                initial_stress: self.initial_stress,
+            },
+            run: Execution {
+                guards: Default::default(),
+                probes: self.probes,
+                engine: Default::default(),
+            },
         };
         (case, s)
     }

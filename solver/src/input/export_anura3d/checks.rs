@@ -25,7 +25,7 @@ pub(super) fn refuse(item: impl Into<String>, message: impl Into<String>) -> Ref
 /// Refuses the undrained start of a consolidation run (noting that the export runs the
 /// loading only) and a cap on the time steps.
 pub(super) fn run(case: &Case, notes: &mut Vec<String>) -> Result<(), Refusal> {
-    if let Some(c) = &case.consolidation {
+    if let Some(c) = &case.start.consolidation {
         if c.start == Start::Undrained {
             return Err(refuse(
                 "consolidation.start",
@@ -34,7 +34,7 @@ pub(super) fn run(case: &Case, notes: &mut Vec<String>) -> Result<(), Refusal> {
         }
         notes.push("[consolidation]: the Terzaghi report is mpm-solve's own; the export runs the loading only".into());
     }
-    if let Some(n) = case.max_steps {
+    if let Some(n) = case.time.max_steps {
         return Err(refuse(
             "time.max_steps",
             format!("Anura3D has no cap on the time steps of a dynamic run (got {n}); remove it"),
@@ -45,11 +45,12 @@ pub(super) fn run(case: &Case, notes: &mut Vec<String>) -> Result<(), Refusal> {
 
 /// The outputs as Anura3D's load steps of equal length: (the interval, their number).
 pub(super) fn load_steps(case: &Case) -> Result<(f64, usize), Refusal> {
-    let end = case.end_time;
-    let n_out = case.output_times.len();
-    let interval = case.output_times.first().copied().unwrap_or(end);
+    let end = case.time.end_time;
+    let n_out = case.time.output_times.len();
+    let interval = case.time.output_times.first().copied().unwrap_or(end);
     let tol = 1e-9 * end;
     let equal = case
+        .time
         .output_times
         .iter()
         .enumerate()
@@ -87,8 +88,8 @@ fn multiplier(curve: LoadCurve, end: f64, item: &str) -> Result<&'static str, Re
 
 /// `$$GRAVITY_LOAD`: off without gravity.
 pub(super) fn gravity_load(case: &Case) -> Result<&'static str, Refusal> {
-    if case.gravity.iter().any(|&g| g != 0.0) {
-        multiplier(case.gravity_curve, case.end_time, "gravity.ramp")
+    if case.loads.gravity.iter().any(|&g| g != 0.0) {
+        multiplier(case.loads.gravity_curve, case.time.end_time, "gravity.ramp")
     } else {
         Ok("off  0.0  1.0")
     }
@@ -108,7 +109,7 @@ pub(super) fn loaded(r: &Resolved) -> Vec<&TractionInput> {
 /// `$$SOLID_TRACTION`: off without loads. The case ramps every traction over the longest ramp
 /// given; each must fit Anura3D's.
 pub(super) fn solid_traction(r: &Resolved) -> Result<&'static str, Refusal> {
-    let end = r.case.end_time;
+    let end = r.case.time.end_time;
     for t in &r.tractions {
         multiplier(
             LoadCurve::ramp(t.ramp),
@@ -119,22 +120,22 @@ pub(super) fn solid_traction(r: &Resolved) -> Result<&'static str, Refusal> {
     if loaded(r).is_empty() {
         Ok("off  0.0  1.0")
     } else {
-        multiplier(r.case.traction_curve, end, "traction.ramp")
+        multiplier(r.case.loads.traction_curve, end, "traction.ramp")
     }
 }
 
 /// Refuses what only this solver models: a PIC share in the velocity update, frictional walls.
 pub(super) fn solver_only(case: &Case) -> Result<(), Refusal> {
-    if case.pic_blend > 0.0 {
+    if case.numerics.pic_blend > 0.0 {
         return Err(refuse(
             "pic_blend",
             format!(
                 "Anura3D updates the points' velocities by FLIP alone; remove pic_blend = {} (or set it to 0) to export",
-                case.pic_blend
+                case.numerics.pic_blend
             ),
         ));
     }
-    if !case.walls.is_empty() {
+    if !case.boundary.walls.is_empty() {
         return Err(refuse(
             "fixity.friction",
             "Anura3D has no frictional fixity (its friction acts between bodies in contact); \
@@ -164,15 +165,15 @@ pub(super) fn prescribed_velocity(
             }
             multiplier(
                 LoadCurve::ramp(first.ramp),
-                r.case.end_time,
+                r.case.time.end_time,
                 &format!("velocity \"{}\".ramp", first.name),
             )?
         }
     };
-    if r.case.nodal_velocity.len() > 1 {
+    if r.case.boundary.nodal_velocity.len() > 1 {
         notes.push(format!(
             "[[velocity]]: the {} nodal sets go to one GOM section, so a run of the GOM records one reaction for all of them",
-            r.case.nodal_velocity.len()
+            r.case.boundary.nodal_velocity.len()
         ));
     }
     Ok(multiplier)
@@ -183,7 +184,7 @@ pub(super) fn prescribed_velocity(
 /// materials only, an initial pore pressure.
 pub(super) fn materials(r: &Resolved) -> Result<(), Refusal> {
     let case = &r.case;
-    let n_mat = case.materials.len().saturating_sub(1);
+    let n_mat = case.body.materials.len().saturating_sub(1);
     for k in 1..=n_mat {
         let Some(m) = &r.materials[k] else {
             let name = case.model.materials().get(k - 1).map(|m| m.name.clone());
@@ -246,17 +247,18 @@ pub(super) fn materials(r: &Resolved) -> Result<(), Refusal> {
 /// at most Anura3D's limit, each an existing point.
 pub(super) fn probes(case: &Case) -> Result<Vec<u32>, Refusal> {
     let total_points: u64 = case
+        .body
         .element_material
         .iter()
-        .zip(&case.points_per_element)
+        .zip(&case.body.points_per_element)
         .filter(|(&m, _)| m != 0)
         .map(|(_, &n)| n as u64)
         .sum();
-    let mut probes: Vec<u32> = if case.probes.is_empty() && total_points > 0 {
+    let mut probes: Vec<u32> = if case.run.probes.is_empty() && total_points > 0 {
         // A few points: the first, one in the middle and the last.
         vec![1, total_points.div_ceil(2) as u32, total_points as u32]
     } else {
-        case.probes.clone()
+        case.run.probes.clone()
     };
     probes.sort_unstable();
     probes.dedup();
@@ -281,13 +283,13 @@ pub(super) fn probes(case: &Case) -> Result<Vec<u32>, Refusal> {
 /// Notes where the exported run differs from the scene's: the liquid's damping, and pressure
 /// smoothing done as Anura3D's strain smoothing.
 pub(super) fn differences(case: &Case, notes: &mut Vec<String>) {
-    if case.has_liquid() && case.damping > 0.0 {
+    if case.has_liquid() && case.numerics.damping > 0.0 {
         notes.push(format!(
             "damping.local: Anura3D (and mpm-solve on the exported GOM) damps the liquid by {} too, and the mixture's solid and liquid parts separately; the scene damps the mixture against the solid's velocity only",
-            case.damping
+            case.numerics.damping
         ));
     }
-    if super::smooths(case) && !case.strain_smoothing {
+    if super::smooths(case) && !case.numerics.strain_smoothing {
         notes.push("STRAIN_SMOOTHING 1: Anura3D (and mpm-solve on the exported GOM) smooths the volumetric strain of both phases element by element; the scene smooths pore-pressure rates through V N-weighted nodal averages".into());
     }
 }

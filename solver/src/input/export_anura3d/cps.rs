@@ -30,7 +30,7 @@ pub(super) struct CpsValues<'a> {
 
 /// The CPS: the scene's controls, every other key at the inert value of Anura3D's template.
 pub(super) fn cps_file(case: &Case, v: CpsValues) -> Cps {
-    let g = case.gravity;
+    let g = case.loads.gravity;
     let g_abs = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
     // Without gravity the load is off, but the acceleration keeps Anura3D's default: Anura3D
     // turns the intrinsic permeability into a hydraulic conductivity with it (ρw g κ / μ), and
@@ -43,8 +43,8 @@ pub(super) fn cps_file(case: &Case, v: CpsValues) -> Cps {
         (crate::material::liquid::G, [0.0, -1.0, 0.0])
     };
     let r = real_to_string;
-    let damping = if case.damping > 0.0 {
-        format!("1 {}", r(case.damping))
+    let damping = if case.numerics.damping > 0.0 {
+        format!("1 {}", r(case.numerics.damping))
     } else {
         "0 0.0".into()
     };
@@ -58,10 +58,10 @@ pub(super) fn cps_file(case: &Case, v: CpsValues) -> Cps {
         ("NUMBER_OF_LOADSTEPS", one(&v.load_steps.to_string())),
         ("TIME_PER_LOADSTEP", one(&r(v.interval))),
         ("TOTAL_TIME", one("0.0")),
-        ("COURANT_NUMBER", one(&r(case.courant))),
+        ("COURANT_NUMBER", one(&r(case.time.courant))),
         (
             "COMPUTATION_METHOD",
-            one(match case.integration {
+            one(match case.numerics.integration {
                 Integration::MaterialPoints => "MPM-MP",
                 Integration::Mixed { .. } => "MPM-MIXED",
             }),
@@ -100,11 +100,15 @@ pub(super) fn cps_file(case: &Case, v: CpsValues) -> Cps {
         ("SUBMERGED_CALCULATION", one("0 1")),
         (
             "APPLY_OBJECTIVE_STRESS",
-            one(if case.objective_stress { "1" } else { "0" }),
+            one(if case.numerics.objective_stress {
+                "1"
+            } else {
+                "0"
+            }),
         ),
         (
             "DEGREE_OF_FILLING",
-            one(&match case.integration {
+            one(&match case.numerics.integration {
                 Integration::Mixed { filling, .. } => r(filling),
                 Integration::MaterialPoints => "0.9".into(),
             }),

@@ -26,7 +26,7 @@ pub(super) fn gom_model(
     }
     velocity_sections(case, &mesh, &mut sections);
     sections.push(counted("START_CONTACT_VOLUME", Refs::Element, Table::new()));
-    let n_mat = case.materials.len().saturating_sub(1);
+    let n_mat = case.body.materials.len().saturating_sub(1);
     sections.push(text("NUMBER_OF_MATERIALS", &[&n_mat.to_string()]));
     for (k, m) in r.materials.iter().enumerate().skip(1) {
         let m = m.as_ref().expect("checked in build");
@@ -90,7 +90,7 @@ fn velocity_sections(case: &Case, mesh: &Tet10Mesh, sections: &mut Vec<Section>)
             .chain(d.map(|x| Token::Int(x as i64)))
             .chain(v.map(Token::Real))
     };
-    if let Some(pv) = &case.prescribed {
+    if let Some(pv) = &case.boundary.prescribed {
         let mut t = Table::with_capacity(pv.rows.len(), 7);
         for p in &pv.rows {
             t.push_row(row(p.element, p.directions, p.velocity));
@@ -101,12 +101,12 @@ fn velocity_sections(case: &Case, mesh: &Tet10Mesh, sections: &mut Vec<Section>)
             t,
         ));
     }
-    if case.nodal_velocity.is_empty() {
+    if case.boundary.nodal_velocity.is_empty() {
         return;
     }
     let original = case.model.node_count() as u32;
     let mut t = Table::new();
-    for set in &case.nodal_velocity {
+    for set in &case.boundary.nodal_velocity {
         for p in &set.rows {
             t.push_row(row(p.node, p.directions, p.velocity));
         }
@@ -135,7 +135,7 @@ fn velocity_sections(case: &Case, mesh: &Tet10Mesh, sections: &mut Vec<Section>)
     sections.push(counted(
         "START_OUTPUT_REACTION_FORCES",
         Refs::LabelElementNodes(6),
-        reaction_rows(mesh, &case.nodal_velocity),
+        reaction_rows(mesh, &case.boundary.nodal_velocity),
     ));
 }
 
@@ -190,9 +190,10 @@ fn material_block(
 
 /// Each element's material and material points.
 fn element_sections(case: &Case, sections: &mut Vec<Section>) {
-    let mut elmmat = Table::with_capacity(case.element_material.len(), 1);
-    let mut points = Table::with_capacity(case.element_material.len(), 2);
-    for (&m, &n) in case.element_material.iter().zip(&case.points_per_element) {
+    let body = &case.body;
+    let mut elmmat = Table::with_capacity(body.element_material.len(), 1);
+    let mut points = Table::with_capacity(body.element_material.len(), 2);
+    for (&m, &n) in body.element_material.iter().zip(&body.points_per_element) {
         // Anura3D refuses an element with a material but no points: an element the scene
         // leaves empty (`points_per_element = 0`) is written as inactive (material 0).
         let m = if n == 0 { 0 } else { m };

@@ -131,8 +131,12 @@ fn files(r: &Resolved) -> Result<Anura3dCase, checks::Refusal> {
     checks::materials(r)?;
     let probes = checks::probes(case)?;
     checks::differences(case, &mut notes);
-    let mesh = mesh::Tet10Mesh::of(&case.model, &case.fixed, &case.liquid_fixed)
-        .ok_or_else(|| checks::refuse("mesh", "Anura3D's 3D export needs tetrahedra"))?;
+    let mesh = mesh::Tet10Mesh::of(
+        &case.model,
+        &case.boundary.fixed,
+        &case.boundary.liquid_fixed,
+    )
+    .ok_or_else(|| checks::refuse("mesh", "Anura3D's 3D export needs tetrahedra"))?;
     let loads =
         mesh::load_rows(&mesh, &checks::loaded(r)).map_err(|(item, m)| checks::refuse(item, m))?;
     let gom = gom::gom_model(r, mesh, loads, &mut notes);
@@ -147,6 +151,7 @@ fn files(r: &Resolved) -> Result<Anura3dCase, checks::Refusal> {
             probes: &probes,
             prescribed_velocity,
             k0_surface: case
+                .start
                 .initial_stress
                 .as_ref()
                 .and_then(|i| i.k0.as_ref())
@@ -161,5 +166,5 @@ fn files(r: &Resolved) -> Result<Anura3dCase, checks::Refusal> {
 /// `strain_smoothing` Anura3D's smoothing would act on the solid strain, which the scene does
 /// not smooth).
 fn smooths(case: &crate::input::case::Case) -> bool {
-    case.strain_smoothing || (case.smooth_pressure && case.has_liquid())
+    case.numerics.strain_smoothing || (case.numerics.smooth_pressure && case.has_liquid())
 }

@@ -93,7 +93,7 @@ fn batch<E: Element, R: Real, const W: usize, const WIDE: bool>(
     }
     let v0: L<R, W> = Plain(b.at.map(|i| p.volume[i]));
     // The hoop strain changes an axisymmetric point's volume unless the case follows
-    // Anura3D, which leaves it out ([`crate::input::case::Case::hoop_in_volume`]).
+    // Anura3D, which leaves it out ([`crate::input::case::Numerics::hoop_in_volume`]).
     let de_zz = if E::AXISYMMETRIC && !cx.hoop_in_volume {
         L::<R, W>::splat(t, R::ZERO)
     } else {
