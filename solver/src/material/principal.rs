@@ -395,15 +395,13 @@ pub fn split<R: Real>(s: &[R; 6]) -> Split<R> {
     split_lanes::<R, 1>(&s.map(|x| [x])).lane(0)
 }
 
-/// [`split`] of `W` tensors at once (`s[c][q]`: component c of tensor q), each lane the bits
-/// of [`split`] of that tensor alone: the decomposition is a chain of dependent square roots
-/// and divisions, so tensors side by side overlap their latencies, and each step is one
-/// operation over the lanes (vector instructions) rather than one per tensor. The rare cases
-/// (a tensor to scale, one nearly isotropic) are fixed up lane by lane afterwards.
+/// The tensors of `s` brought into range for [`split_lanes`], each lane's factor back to its
+/// scale (1 in range, a power of two outside it) and each lane's largest entry after scaling.
 #[inline(always)]
-pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> SplitLanes<R, W> {
+#[allow(clippy::type_complexity)]
+fn in_range_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> ([[R; W]; 6], [R; W], [R; W]) {
     // A tensor whose largest entry lies outside [2^-16, 2^16] is decomposed scaled by a power
-    // of two that brings it to about 1: the eigenvector's squared length below is a fourth
+    // of two that brings it to about 1: the eigenvector's squared length there is a fourth
     // power of the entries, which f32 underflows for stresses of order 1e-10 (a load ramped up
     // from zero) and overflows above 1e9. Scaling by a power of two is exact, and the factor
     // is 1 in range, so the bits are those of the unscaled arithmetic wherever it was finite.
@@ -443,6 +441,17 @@ pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> SplitLanes<R, W>
             }
         }
     }
+    (t, up, largest)
+}
+
+/// [`split`] of `W` tensors at once (`s[c][q]`: component c of tensor q), each lane the bits
+/// of [`split`] of that tensor alone: the decomposition is a chain of dependent square roots
+/// and divisions, so tensors side by side overlap their latencies, and each step is one
+/// operation over the lanes (vector instructions) rather than one per tensor. The rare cases
+/// (a tensor to scale, one nearly isotropic) are fixed up lane by lane afterwards.
+#[inline(always)]
+pub fn split_lanes<R: Real, const W: usize>(s: &[[R; W]; 6]) -> SplitLanes<R, W> {
+    let (t, up, largest) = in_range_lanes(s);
     let s = &t;
     let f = far_root_lanes(s, &largest);
     // The far eigenvalue and its projector n ⊗ n / |n|² ([`outer`]) for every lane, then the

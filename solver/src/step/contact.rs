@@ -495,6 +495,46 @@ impl<R: Real> Contact<R> {
         self.nodes.len()
     }
 
+    /// Which bodies have active points in the elements around interface node `k`, and the
+    /// lowest soil material among them (`u32::MAX` for none).
+    fn bodies_around<E: Element>(
+        &self,
+        k: usize,
+        layout: &Layout<R, E>,
+        p: &Particles<R>,
+    ) -> ([bool; 2], u32) {
+        let (mut bodies, mut lowest) = ([false; 2], u32::MAX);
+        for &e in &self.around[self.start[k] as usize..self.start[k + 1] as usize] {
+            for i in layout.particles_of(e as usize) {
+                if !p.active[i] {
+                    continue;
+                }
+                let m = p.material[i];
+                let b = usize::from(self.structure.keeps(m));
+                bodies[b] = true;
+                if b == 0 {
+                    lowest = lowest.min(m);
+                }
+            }
+        }
+        (bodies, lowest)
+    }
+
+    /// The friction coefficient and the adhesion force (adhesion times the node's area) at
+    /// interface node `k` with soil material `lowest`.
+    fn interface_at(&self, k: usize, lowest: u32) -> (f64, f64) {
+        if lowest == u32::MAX {
+            // No soil material around: stick (Anura3D's values).
+            return (10.0, 1000.0);
+        }
+        let (mu, c) = self
+            .interfaces
+            .get(lowest as usize)
+            .copied()
+            .unwrap_or((0.0, 0.0));
+        (mu, c * self.area[k])
+    }
+
     /// The contact correction after the grid update of both bodies (`soil`, `structure`) and
     /// the first override of prescribed velocities (`prescribed(node)`: the structure's
     /// prescribed velocity there and its components, for a masked node). Corrects the bodies'
@@ -514,25 +554,10 @@ impl<R: Real> Contact<R> {
             at,
         } = cx;
         let (alpha, rule, dt) = (at.damping, at.damping_rule, at.dt);
-        let structure = self.structure;
         let dtr = R::of(dt);
         for (k, &node) in self.nodes.iter().enumerate() {
             let n = node as usize;
-            // The bodies and the lowest soil material in the elements around the node.
-            let (mut bodies, mut lowest) = ([false; 2], u32::MAX);
-            for &e in &self.around[self.start[k] as usize..self.start[k + 1] as usize] {
-                for i in layout.particles_of(e as usize) {
-                    if !p.active[i] {
-                        continue;
-                    }
-                    let m = p.material[i];
-                    let b = usize::from(structure.keeps(m));
-                    bodies[b] = true;
-                    if b == 0 {
-                        lowest = lowest.min(m);
-                    }
-                }
-            }
+            let (bodies, lowest) = self.bodies_around(k, layout, p);
             if !bodies[0] && !bodies[1] {
                 continue;
             }
@@ -580,17 +605,7 @@ impl<R: Real> Contact<R> {
                     }
                 }
             }
-            let (mu, c) = if lowest == u32::MAX {
-                // No soil material around: stick (Anura3D's values).
-                (10.0, 1000.0)
-            } else {
-                let (mu, c) = self
-                    .interfaces
-                    .get(lowest as usize)
-                    .copied()
-                    .unwrap_or((0.0, 0.0));
-                (mu, c * self.area[k])
-            };
+            let (mu, c) = self.interface_at(k, lowest);
             for b in 0..2 {
                 if !bodies[b] || (0..3).all(|d| v[b][d] == system[d]) {
                     continue;
