@@ -27,7 +27,9 @@
 //! own (the background grid's issue); until then the stencil passes are the seam's proof,
 //! exercised by a test basis whose points touch their element's and its neighbours' nodes.
 
+pub mod grid;
 pub mod linear;
+pub mod spline;
 
 #[cfg(test)]
 pub mod spread;

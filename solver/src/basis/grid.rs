@@ -1,0 +1,262 @@
+//! The background grid's basis ([`Cartesian`]): tensor products of the one-dimensional
+//! functions of [`super::spline`] on a uniform Cartesian lattice whose nodes are the nodes of
+//! the background mesh ([`crate::input::background`]). A point's nodes follow from its position
+//! alone (no connectivity is read per point): its lattice indices along each axis, then one
+//! table lookup per node from lattice index to the mesh's node number (the mesh's nodes are
+//! renumbered along the space-filling curve like any mesh's).
+
+use crate::basis::spline::{Along, Shape};
+use crate::basis::{Basis, Stencil};
+use crate::element::mesh::Mesh;
+use crate::element::Element;
+use crate::real::{Real, V3};
+
+/// The background grid a case runs on: its lattice and the function of its nodes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridSpec {
+    /// The lattice's first corner (the bounding box's lowest corner).
+    pub origin: [f64; 3],
+    /// The cell's edge along each axis (m).
+    pub cell: [f64; 3],
+    /// Cells along each axis (1 along z in 2D).
+    pub cells: [usize; 3],
+    /// Axes of the lattice: 2 (a section) or 3.
+    pub dim: usize,
+    /// The nodes' function.
+    pub shape: Shape,
+}
+
+impl GridSpec {
+    /// Nodes along each axis.
+    pub fn nodes_along(&self) -> [usize; 3] {
+        std::array::from_fn(|a| if a < self.dim { self.cells[a] + 1 } else { 1 })
+    }
+
+    /// The lattice index of lattice node (i, j, k).
+    pub fn lattice_index(&self, ijk: [usize; 3]) -> usize {
+        let n = self.nodes_along();
+        ijk[0] + n[0] * (ijk[1] + n[1] * ijk[2])
+    }
+
+    /// The lattice node at `x`, if `x` lies on one (within a millionth of a cell).
+    pub fn node_at(&self, x: &[f64]) -> Option<[usize; 3]> {
+        let mut ijk = [0usize; 3];
+        for a in 0..self.dim {
+            let s = (x[a] - self.origin[a]) / self.cell[a];
+            let k = s.round();
+            if (s - k).abs() > 1e-6 || k < 0.0 || k > self.cells[a] as f64 {
+                return None;
+            }
+            ijk[a] = k as usize;
+        }
+        Some(ijk)
+    }
+
+    /// The basis's name, as the scene writes it.
+    pub fn basis_name(&self) -> &'static str {
+        match self.shape {
+            Shape::Linear => "linear",
+            Shape::Gimp { .. } => "gimp",
+            Shape::Bspline2 => "bspline2",
+        }
+    }
+}
+
+/// The background grid's basis on a mesh whose nodes are the lattice's.
+#[derive(Debug, Clone)]
+pub struct Cartesian {
+    spec: GridSpec,
+    /// Per lattice index, the mesh's node there.
+    node: Vec<u32>,
+}
+
+/// A mesh that is not the grid's lattice.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum LatticeError {
+    /// A node off the lattice.
+    #[error("background grid: mesh node {node} at {at:?} is not on the grid's lattice")]
+    OffLattice {
+        /// The node (0-based, the mesh's order).
+        node: usize,
+        /// Where it is.
+        at: [f64; 3],
+    },
+    /// A lattice node without a mesh node.
+    #[error("background grid: no mesh node at lattice node {ijk:?}")]
+    Missing {
+        /// The lattice node.
+        ijk: [usize; 3],
+    },
+}
+
+impl Cartesian {
+    /// The basis of `spec` on `mesh`, whose nodes must be the lattice's, each once.
+    pub fn new<E: Element, R: Real>(
+        spec: GridSpec,
+        mesh: &Mesh<E, R>,
+    ) -> Result<Self, LatticeError> {
+        let n = spec.nodes_along();
+        let mut node = vec![u32::MAX; n[0] * n[1] * n[2]];
+        for (m, x) in mesh.x.iter().enumerate() {
+            let at = x.map(|c| c.f64());
+            let ijk = spec
+                .node_at(&at)
+                .ok_or(LatticeError::OffLattice { node: m, at })?;
+            node[spec.lattice_index(ijk)] = m as u32;
+        }
+        if let Some(k) = node.iter().position(|&m| m == u32::MAX) {
+            let ijk = [k % n[0], k / n[0] % n[1], k / (n[0] * n[1])];
+            return Err(LatticeError::Missing { ijk });
+        }
+        Ok(Cartesian { spec, node })
+    }
+
+    /// The lattice.
+    pub fn spec(&self) -> &GridSpec {
+        &self.spec
+    }
+
+    /// Each axis's nodes and functions at `x`.
+    fn along(&self, x: &[f64; 3]) -> [Along; 3] {
+        let s = &self.spec;
+        std::array::from_fn(|a| {
+            if a < s.dim {
+                s.shape.along((x[a] - s.origin[a]) / s.cell[a], s.cells[a])
+            } else {
+                Along {
+                    first: 0,
+                    len: 1,
+                    n: [1.0, 0.0, 0.0],
+                    dn: [0.0; 3],
+                }
+            }
+        })
+    }
+
+    /// The stencil at `x` (in f64), in lattice order (x fastest), into `out`.
+    pub fn stencil_at<R: Real>(&self, x: &[f64; 3], out: &mut Stencil<R>) {
+        out.clear();
+        let [ax, ay, az] = self.along(x);
+        let h = self.spec.cell;
+        let dim = self.spec.dim;
+        for k in 0..az.len {
+            for j in 0..ay.len {
+                for i in 0..ax.len {
+                    let ijk = [ax.first + i, ay.first + j, az.first + k];
+                    let (nx, ny, nz) = (ax.n[i], ay.n[j], az.n[k]);
+                    let n = nx * ny * nz;
+                    let mut grad = [ax.dn[i] / h[0] * ny * nz, nx * ay.dn[j] / h[1] * nz, 0.0];
+                    if dim == 3 {
+                        grad[2] = nx * ny * az.dn[k] / h[2];
+                    }
+                    // A node whose function and gradient both vanish at x adds nothing.
+                    if n == 0.0 && grad.iter().all(|&g| g == 0.0) {
+                        continue;
+                    }
+                    let node = self.node[self.spec.lattice_index(ijk)];
+                    out.push(node, R::of(n), grad.map(R::of));
+                }
+            }
+        }
+    }
+}
+
+impl<E: Element, R: Real> Basis<E, R> for Cartesian {
+    const LINEAR: bool = false;
+
+    fn stencil(&self, _mesh: &Mesh<E, R>, _e: usize, x: &V3<R>, out: &mut Stencil<R>) {
+        self.stencil_at(&x.map(|c| c.f64()), out);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::tet4::Tet4;
+    use crate::element::tri3::Tri3;
+    use mpm_shared::{generate, ElementType};
+
+    fn spec(dim: usize, cells: [usize; 3], shape: Shape) -> GridSpec {
+        GridSpec {
+            origin: [0.0; 3],
+            cell: [
+                1.0 / cells[0] as f64,
+                2.0 / cells[1] as f64,
+                0.5 / cells[2] as f64,
+            ],
+            cells,
+            dim,
+            shape,
+        }
+    }
+
+    /// Every basis reproduces constants and linear fields through its stencil, with gradients
+    /// that sum to zero and reproduce the identity, at points all over the box (edges too).
+    #[test]
+    fn stencils_reproduce_linear_fields_in_3d_and_2d() {
+        let shapes = [Shape::Linear, Shape::Gimp { a: 0.25 }, Shape::Bspline2];
+        let box3 = generate::box_mesh([3, 4, 2], [1.0, 2.0, 0.5], ElementType::Tet4);
+        let mesh3 = Mesh::<Tet4, f64>::new(&box3).unwrap();
+        let rect = generate::rect_mesh([3, 4], [1.0, 2.0]);
+        let mesh2 = Mesh::<Tri3, f64>::new(&rect).unwrap();
+        let mut rng = crate::test_rng::uniform(7);
+        for shape in shapes {
+            for dim in [2, 3] {
+                let cells = if dim == 3 { [3, 4, 2] } else { [3, 4, 1] };
+                let mut s = spec(dim, cells, shape);
+                if dim == 2 {
+                    s.cell[2] = 1.0;
+                }
+                let (basis, x_of): (Cartesian, Vec<V3<f64>>) = if dim == 3 {
+                    (Cartesian::new(s.clone(), &mesh3).unwrap(), mesh3.x.clone())
+                } else {
+                    (Cartesian::new(s.clone(), &mesh2).unwrap(), mesh2.x.clone())
+                };
+                let mut st = Stencil::<f64>::default();
+                for t in 0..500 {
+                    let mut x = [rng() + 0.5, 2.0 * (rng() + 0.5), 0.5 * (rng() + 0.5)];
+                    if t % 10 == 0 {
+                        x[t % 3] = 0.0;
+                    }
+                    if dim == 2 {
+                        x[2] = 0.0;
+                    }
+                    basis.stencil_at(&x, &mut st);
+                    let sum: f64 = st.weights().iter().sum();
+                    assert!((sum - 1.0).abs() < 1e-12, "{shape:?} {dim}D {x:?}");
+                    for a in 0..dim {
+                        let back: f64 = st
+                            .nodes()
+                            .iter()
+                            .zip(st.weights())
+                            .map(|(&n, w)| w * x_of[n as usize][a])
+                            .sum();
+                        assert!((back - x[a]).abs() < 1e-12, "{shape:?} {dim}D {x:?}");
+                        for b in 0..dim {
+                            let d: f64 = st
+                                .nodes()
+                                .iter()
+                                .zip(st.gradients())
+                                .map(|(&n, g)| g[b] * x_of[n as usize][a])
+                                .sum();
+                            let expect = if a == b { 1.0 } else { 0.0 };
+                            assert!((d - expect).abs() < 1e-10, "{shape:?} {dim}D {x:?}");
+                        }
+                    }
+                    let most = if shape == Shape::Linear { 2 } else { 3 };
+                    assert!(st.len() <= most * most * if dim == 3 { most } else { 1 });
+                }
+            }
+        }
+    }
+
+    /// A mesh whose nodes are not the lattice's is refused, naming the node.
+    #[test]
+    fn a_mesh_off_the_lattice_is_refused() {
+        let box3 = generate::box_mesh([3, 4, 2], [1.0, 2.0, 0.5], ElementType::Tet4);
+        let mesh = Mesh::<Tet4, f64>::new(&box3).unwrap();
+        let coarse = spec(3, [2, 4, 2], Shape::Bspline2);
+        let e = Cartesian::new(coarse, &mesh).unwrap_err();
+        assert!(matches!(e, LatticeError::OffLattice { .. }), "{e}");
+    }
+}
