@@ -1,9 +1,9 @@
 //! The background grid's basis ([`Cartesian`]): tensor products of the one-dimensional
 //! functions of [`super::spline`] on a uniform Cartesian lattice whose nodes are the nodes of
-//! the background mesh ([`crate::input::background`]). A point's nodes follow from its position
-//! alone (no connectivity is read per point): its lattice indices along each axis, then one
-//! table lookup per node from lattice index to the mesh's node number (the mesh's nodes are
-//! renumbered along the space-filling curve like any mesh's).
+//! the background mesh (the scene's `[grid]` table, `input/scene/grid.rs`). A point's nodes
+//! follow from its position alone (no connectivity is read per point): its lattice indices
+//! along each axis, then one table lookup per node from lattice index to the mesh's node
+//! number (the mesh's nodes are renumbered along the space-filling curve like any mesh's).
 
 use crate::basis::spline::{Along, Shape};
 use crate::basis::{Basis, Stencil};
@@ -92,16 +92,21 @@ pub enum LatticeError {
 impl Cartesian {
     /// The basis of `spec` on `mesh`, whose nodes must be the lattice's, each once.
     pub fn new<E: Element, R: Real>(
-        spec: GridSpec,
+        mut spec: GridSpec,
         mesh: &Mesh<E, R>,
     ) -> Result<Self, LatticeError> {
+        // The grid in the mesh's frame (positions relative to its origin), the points'.
+        for (o, m) in spec.origin.iter_mut().zip(mesh.origin) {
+            *o -= m;
+        }
         let n = spec.nodes_along();
         let mut node = vec![u32::MAX; n[0] * n[1] * n[2]];
         for (m, x) in mesh.x.iter().enumerate() {
             let at = x.map(|c| c.f64());
-            let ijk = spec
-                .node_at(&at)
-                .ok_or(LatticeError::OffLattice { node: m, at })?;
+            let ijk = spec.node_at(&at).ok_or(LatticeError::OffLattice {
+                node: m,
+                at: mesh.global(x),
+            })?;
             node[spec.lattice_index(ijk)] = m as u32;
         }
         if let Some(k) = node.iter().position(|&m| m == u32::MAX) {

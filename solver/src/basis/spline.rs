@@ -18,7 +18,7 @@
 //! only the end node's function is non-zero (for the quadratic spline, N₀ = 1 − ξ and N₁ = ξ
 //! on the first half cell, joining the interior splines with a continuous slope), so a fixity
 //! on the end node holds exactly on the boundary plane, and no function is negative. These are
-//! the *modified boundary splines* of docs/design.md §4.7.
+//! the *modified boundary splines* of docs/design.md §4.20.
 
 /// A one-dimensional function of the background grid.
 #[derive(Debug, Clone, Copy, PartialEq)]

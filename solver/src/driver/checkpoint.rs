@@ -201,6 +201,7 @@ impl Fingerprint {
             hoop_in_volume,
             strain_smoothing,
             precision,
+            grid,
         } = numerics;
         let StartState {
             consolidation,
@@ -261,6 +262,11 @@ impl Fingerprint {
             ("precision (--precision)", precision),
             ("--drop-lost", &drop_lost),
         ]);
+        // Last and only where there is one: the checkpoints of cases on the mesh's elements
+        // keep their items.
+        if let Some(grid) = grid {
+            items.push(("background grid", grid));
+        }
         Fingerprint(items.iter().map(|&(n, v)| Item::of(n, v)).collect())
     }
 

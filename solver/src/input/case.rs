@@ -371,6 +371,9 @@ pub struct Numerics {
     /// both phases averaged element → node → element, material by material
     /// ([`crate::step::smoothing`]); it replaces `smooth_pressure` when on.
     pub strain_smoothing: bool,
+    /// The background grid the case runs on, with its basis (`None`: the mesh's elements, the
+    /// linear basis).
+    pub grid: Option<crate::basis::grid::GridSpec>,
     /// Floating-point precision of the particle and grid state.
     pub precision: Precision,
 }
@@ -749,6 +752,7 @@ impl Case {
                 fixed_liquid_mass: false,
                 hoop_in_volume: true,
                 strain_smoothing: false,
+                grid: None,
                 precision: Precision::F64,
             },
             start: StartState::default(),

@@ -24,6 +24,9 @@ pub struct GridScratch<R> {
     /// ([`crate::parallel::gather::Layout::sum_owned`]), so that the sums are the same for any
     /// thread and rank count.
     pub node_sums: Vec<[f64; 4]>,
+    /// Per node, the weights of a background grid's smoothed pore-pressure rates
+    /// ([`crate::step::stress::smooth_rates`]; sized on first use).
+    pub rate_weights: Vec<R>,
 }
 
 impl<R: Real> GridScratch<R> {
@@ -34,6 +37,7 @@ impl<R: Real> GridScratch<R> {
             per_block: vec![R::ZERO; blocks],
             done: vec![(); blocks],
             node_sums: vec![[0.0; 4]; nodes],
+            rate_weights: Vec::new(),
         }
     }
 

@@ -102,6 +102,12 @@ pub enum SetupError {
         /// Input numbers of the face's corner nodes.
         nodes: Vec<u32>,
     },
+    /// A background grid, with a feature that runs on the mesh's elements only.
+    #[error("a background grid ([grid]) cannot model {0} yet; run it on the mesh's elements")]
+    Grid(&'static str),
+    /// The background mesh is not the grid's lattice.
+    #[error(transparent)]
+    Lattice(#[from] crate::basis::grid::LatticeError),
     /// More than one process, with a feature that runs on one only.
     #[error("a run over {ranks} MPI ranks cannot model {what} yet; run it on one process")]
     Distributed {
@@ -192,6 +198,8 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub partition: Partition,
     /// Computational mesh: the partition's elements, numbered locally.
     pub mesh: Mesh<E, R>,
+    /// On a background grid, its basis (`None`: the mesh's linear elements).
+    pub basis: Option<crate::basis::grid::Cartesian>,
     /// Material points.
     pub particles: Particles<R>,
     /// Nodal arrays.

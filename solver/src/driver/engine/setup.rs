@@ -4,6 +4,7 @@
 
 use std::sync::Arc;
 
+use crate::basis::grid::Cartesian;
 use crate::element::locate::NOTHING_FOUND;
 use crate::element::mesh::Mesh;
 use crate::element::Element;
@@ -64,6 +65,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         let partition = partition_of(case, &global, &*comm)?;
         let own = partition.elements();
         let mesh = partition.local_mesh(global);
+        let basis = basis_of(case, &mesh)?;
         let (mut particles, boundary) = place_points(case, &partition, &mesh)?;
         let NodeInputs {
             mut fixed,
@@ -129,6 +131,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             mixed: mixed_of(case, mesh.elements(), boundary),
             pore_weights: pore_weights_of::<E, R>(case, mesh.elements()),
             partition,
+            basis,
             mesh,
             particles,
             fixed,
@@ -208,6 +211,31 @@ fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupE
             return Err(SetupError::Axisymmetric("strain smoothing"));
         }
     }
+    if case.numerics.grid.is_some() {
+        let unmodelled = [
+            (ranks > 1, "a run over several MPI ranks"),
+            (mixed, "mixed integration (MPM-MIXED)"),
+            (case.numerics.strain_smoothing, "strain smoothing"),
+            (!case.boundary.walls.is_empty(), "walls with friction"),
+            (
+                case.boundary.prescribed.is_some(),
+                "prescribed velocities on points",
+            ),
+            (
+                !case.boundary.nodal_velocity.is_empty(),
+                "prescribed velocities on nodes",
+            ),
+            (
+                !case.loads.point_loads.is_empty(),
+                "loads carried by material points",
+            ),
+            (case.boundary.moving_mesh.is_some(), "a moving mesh"),
+            (case.boundary.contact.is_some(), "contact between bodies"),
+        ];
+        if let Some((_, what)) = unmodelled.iter().find(|(on, _)| *on) {
+            return Err(SetupError::Grid(what));
+        }
+    }
     if ranks > 1 {
         let unmodelled = [
             (mixed, "mixed integration (MPM-MIXED)"),
@@ -232,6 +260,17 @@ fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupE
         }
     }
     Ok(())
+}
+
+/// On a background grid, its basis on the grid's mesh.
+fn basis_of<E: Element, R: Real>(
+    case: &Case,
+    mesh: &Mesh<E, R>,
+) -> Result<Option<Cartesian>, SetupError> {
+    Ok(match &case.numerics.grid {
+        Some(spec) => Some(Cartesian::new(spec.clone(), mesh)?),
+        None => None,
+    })
 }
 
 /// This process's share of `global`: all of it on one process, else its range of the curve

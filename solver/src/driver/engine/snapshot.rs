@@ -16,6 +16,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         let Engine {
             // Rebuilt from the case at set-up, or scratch that each step rewrites before reading.
             config: _,
+            basis: _,
             comm: _,
             partition: _,
             mesh: _,

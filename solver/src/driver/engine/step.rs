@@ -156,7 +156,12 @@ impl<R: Real, E: Element> Engine<R, E> {
                 // (Asked of the liquid's pass only, the first.)
                 pore_weights: self.pore_weights.as_mut(),
             };
-            particle_to_grid::particle_to_grid(&passes, &mut self.slots, to);
+            match &self.basis {
+                Some(b) => {
+                    particle_to_grid::particle_to_grid(&passes.with_basis(b), &mut self.slots, to)
+                }
+                None => particle_to_grid::particle_to_grid(&passes, &mut self.slots, to),
+            }
         }
         particle_to_grid::add_point_loads(
             &self.mesh,
@@ -278,7 +283,14 @@ impl<R: Real, E: Element> Engine<R, E> {
                     fixed: &self.liquid_fixed,
                 }),
             };
-            grid_to_particle::grid_to_particle(&passes, &mut self.slots, remap);
+            match &self.basis {
+                Some(b) => grid_to_particle::grid_to_particle(
+                    &passes.with_basis(b),
+                    &mut self.slots,
+                    remap,
+                ),
+                None => grid_to_particle::grid_to_particle(&passes, &mut self.slots, remap),
+            }
         }
         // Each body's re-mapped velocities, their precursor cut before the constraints set
         // theirs.
@@ -311,7 +323,18 @@ impl<R: Real, E: Element> Engine<R, E> {
             weights: self.pore_weights.as_mut(),
             dt,
         };
-        let rate_pending = stress::update_pore_pressure(&passes, &mut self.slots, pressure);
+        // On a grid the rate is smoothed through its nodes here, or each saturated point takes
+        // its own in the stress pass.
+        let rate_pending = match &self.basis {
+            None => stress::update_pore_pressure(&passes, &mut self.slots, pressure),
+            Some(b) if c.smooth_pressure && self.grid.liquid.is_some() => {
+                let (grid, fluids) = (&mut self.grid, &self.fluids);
+                let w = &mut self.grid_scratch.rate_weights;
+                stress::smooth_rates((b, &passes), &self.particles, grid, fluids, w);
+                true
+            }
+            Some(_) => false,
+        };
         let located = self.locates_in_stress_pass();
         if located {
             self.locate_outcome.fill(NOTHING_FOUND);
@@ -347,6 +370,12 @@ impl<R: Real, E: Element> Engine<R, E> {
                 body,
                 pore_rate: pore_rate.filter(|_| k == 0),
                 located: (located && k == 0).then_some(&mut self.locate_outcome[..]),
+                background: self.basis.as_ref(),
+                point_rates: self
+                    .basis
+                    .as_ref()
+                    .filter(|_| k == 0 && self.grid.liquid.is_some() && !rate_pending)
+                    .map(|_| &self.fluids[..]),
             };
             stress::update_stress_and_move(&passes, update);
         }

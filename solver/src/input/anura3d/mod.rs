@@ -402,6 +402,7 @@ impl Parts {
                 fixed_liquid_mass: true,
                 hoop_in_volume: false,
                 strain_smoothing: strain_smoothing(&input.cps),
+                grid: None,
                 precision: crate::input::case::Precision::F64,
             },
             start: StartState {

@@ -124,7 +124,8 @@ pub(super) fn solid_traction(r: &Resolved) -> Result<&'static str, Refusal> {
     }
 }
 
-/// Refuses what only this solver models: a PIC share in the velocity update, frictional walls.
+/// Refuses what only this solver models: a PIC share in the velocity update, a background
+/// grid, frictional walls.
 pub(super) fn solver_only(case: &Case) -> Result<(), Refusal> {
     if case.numerics.pic_blend > 0.0 {
         return Err(refuse(
@@ -132,6 +133,15 @@ pub(super) fn solver_only(case: &Case) -> Result<(), Refusal> {
             format!(
                 "Anura3D updates the points' velocities by FLIP alone; remove pic_blend = {} (or set it to 0) to export",
                 case.numerics.pic_blend
+            ),
+        ));
+    }
+    if let Some(grid) = &case.numerics.grid {
+        return Err(refuse(
+            "grid",
+            format!(
+                "Anura3D computes on the mesh's elements; a background grid ({} basis) has no Anura3D counterpart: remove [grid] to export",
+                grid.basis_name()
             ),
         ));
     }

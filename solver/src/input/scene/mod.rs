@@ -79,6 +79,7 @@ mod consolidation;
 mod damping;
 mod fixity;
 mod gravity;
+mod grid;
 mod initial_stress;
 mod keys;
 mod material;
@@ -112,6 +113,7 @@ pub(crate) const TOP_LEVEL: Table = Table {
         key("time", "table", "required", "", "`[time]`"),
         key("gravity", "table", "none", "", "`[gravity]`"),
         key("damping", "table", "none", "", "`[damping]`"),
+        key("grid", "table", "none (the mesh's elements)", "", "`[grid]`"),
         key("material", "array of tables", "required", "", "`[[material]]`, one per material group"),
         key("fixity", "array of tables", "none", "", "`[[fixity]]`"),
         key("traction", "array of tables", "none", "", "`[[traction]]`"),
@@ -151,6 +153,8 @@ struct Scene {
     gravity: Option<gravity::Gravity>,
     #[serde(default)]
     damping: Option<damping::Damping>,
+    #[serde(default)]
+    grid: Option<grid::Grid>,
     material: Vec<material::Material>,
     #[serde(default)]
     fixity: Vec<fixity::Fixity>,
@@ -265,6 +269,14 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
     time::check_courant(&scene.time)?;
     numerics::check_pic_blend(scene.pic_blend, !scene.velocity.is_empty())?;
     let materials = material::resolve(&scene.material, &mesh)?;
+    // On a background grid everything below resolves on the grid's mesh.
+    let (mesh, materials, grid) = match &scene.grid {
+        Some(g) => {
+            let (mesh, materials, spec) = grid::background(g, mesh, materials)?;
+            (mesh, materials, Some(spec))
+        }
+        None => (mesh, materials, None),
+    };
     let supports = fixity::resolve(&scene.fixity, &mesh, &materials)?;
     let velocities = velocity::resolve(&scene.velocity, &mesh, &materials)?;
     let loads = traction::resolve(&scene.traction, &mesh)?;
@@ -294,6 +306,7 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
         initial_stress,
         precision: numerics::precision(scene.precision.as_deref())?,
         integration: numerics::integration(scene.integration.as_deref())?,
+        grid,
     }
     .resolved(path, scene, mesh))
 }
@@ -311,6 +324,7 @@ struct Sections {
     initial_stress: Option<crate::input::initial_stress::InitialStress>,
     precision: crate::input::case::Precision,
     integration: crate::input::case::Integration,
+    grid: Option<crate::basis::grid::GridSpec>,
 }
 
 impl Sections {
@@ -376,6 +390,7 @@ impl Sections {
                 hoop_in_volume: true,
                 strain_smoothing: scene.strain_smoothing,
                 precision: self.precision,
+                grid: self.grid,
             },
             start: StartState {
                 consolidation: self.consolidation,

@@ -9,12 +9,13 @@ pub use super::keys::{scene_key, Key, Table};
 use crate::material::law;
 
 /// Every table of the scene, in the order the reference lists them.
-pub fn tables() -> [&'static Table; 10] {
+pub fn tables() -> [&'static Table; 11] {
     [
         &super::TOP_LEVEL,
         &super::time::TABLE,
         &super::gravity::TABLE,
         &super::damping::TABLE,
+        &super::grid::TABLE,
         &super::material::TABLE,
         &super::material::LIQUID_TABLE,
         &super::fixity::TABLE,

@@ -12,18 +12,18 @@ use crate::step::contact::maps;
 use crate::step::passes::Passes;
 
 use super::nodal::velocity;
-use super::point::{flip, liquid_mass, NodeState, Pic};
+use super::point::{flip, kinetic, liquid_mass, NodeState, Pic};
 use super::Remap;
+use crate::parallel::gather::ELEMENT_BLOCK;
+use crate::step::stress::GuardSums;
 
 /// One lane: one point.
 type One<R> = Plain<R, 1>;
 
 /// [`super::grid_to_particle`] with `passes.basis`'s stencils: the active points of the body
 /// take their velocity update (FLIP, blended with PIC) and re-map their momentum; with the
-/// liquid, its too. The guard rails' sums are the element kernels'.
-///
-/// # Panics
-/// With the guard rails.
+/// liquid, its too; with the guard rails, each point's kinetic terms into its element's
+/// block's slot (begun anew with `begin`).
 pub(super) fn remap_stencils<E, R, B>(passes: &Passes<'_, R, E, B>, remap: Remap<'_, R>)
 where
     E: Element,
@@ -36,15 +36,15 @@ where
         fixed,
         dt,
         pic,
-        guard,
+        mut guard,
         body,
         liquid,
-        ..
+        begin,
     } = remap;
-    assert!(
-        guard.is_none(),
-        "the guard rails' sums take the element kernels"
-    );
+    // The guard rails' kinetic sums, block by block, point by point in order.
+    if let (Some(slots), true) = (guard.as_deref_mut(), begin) {
+        slots.fill(GuardSums::EMPTY);
+    }
     let liquid = liquid.filter(|_| p.liquid.is_some() && g.liquid.is_some());
     let (mesh, layout) = (passes.mesh, passes.layout);
     let nodes = mesh.x.len();
@@ -82,6 +82,11 @@ where
                 v = b.blend::<E, One<R>>((), n, &node_v[..stencil.len()], v);
             }
             p.v[i] = point_of::<E, R>(v, &p.v[i]);
+            if let Some(slots) = guard.as_deref_mut() {
+                let m = One::splat((), p.mass[i]);
+                let twice = kinetic::<E, R, One<R>>((), m, &lanes_of(&p.v[i]));
+                slots[e / ELEMENT_BLOCK].kinetic += twice.0[0].f64();
+            }
             at.add::<E>(
                 stencil.nodes(),
                 One::splat((), p.mass[i]),
@@ -102,6 +107,10 @@ where
             let volume = lp.volume0.as_ref().map_or(p.volume[i], |v0| v0[i]);
             let mw = liquid_mass((), &f, One::splat((), volume));
             at.add::<E>(stencil.nodes(), mw, &lp.w[i], &mut momentum_w);
+            if let Some(slots) = guard.as_deref_mut() {
+                let twice = kinetic::<E, R, One<R>>((), mw, &lanes_of(&lp.w[i]));
+                slots[e / ELEMENT_BLOCK].kinetic += twice.0[0].f64();
+            }
         }
     }
     for n in 0..nodes {

@@ -83,13 +83,49 @@ fn batch<E: Element, R: Real, const W: usize, const WIDE: bool>(
     }
     let dx = velocity_at::<E, R, L<R, W>>(t, &n, el.vel);
     let de = strain_of::<E, R, W>(cx, el, p, b, (&dx, &xl));
+    finish::<E, R, W, WIDE>(
+        cx,
+        p,
+        b,
+        Motion {
+            x: xl,
+            dx,
+            de,
+            l: el.l,
+        },
+        (open, guard),
+    );
+}
+
+/// A batch's motion in the step: its points' positions `x` and velocities `dx`, their strain
+/// increments `de`, and the velocity gradient `l` the objective terms' spin is taken from.
+pub(super) struct Motion<'l, R: Real, const W: usize> {
+    pub x: [L<R, W>; 3],
+    pub dx: [L<R, W>; 3],
+    pub de: [L<R, W>; 6],
+    pub l: &'l [[R; 3]; 3],
+}
+
+/// The rest of a batch's update once its motion is known (the element's batches here, a
+/// stencil's point in [`super::stencil`]): the law's update ([`update_batch`]) and the
+/// objective terms, the new volume, position and displacement, and the guard's sums.
+#[inline(always)]
+pub(super) fn finish<E: Element, R: Real, const W: usize, const WIDE: bool>(
+    cx: &Pass<'_, E, R>,
+    p: &mut ChunkPoints<'_, R>,
+    b: &Batch<W>,
+    motion: Motion<'_, R, W>,
+    (open, guard): (&mut Open, bool),
+) {
+    let (t, dt) = ((), cx.dt);
+    let Motion { x: xl, dx, de, l } = motion;
     let s = b.gather(p.stress);
     let s0: [L<R, W>; 6] = std::array::from_fn(|c| Plain(s[c]));
     let mut s1 = s0;
     update_batch::<E, R, W, WIDE>(cx, p, b, &mut s1, &de);
     if cx.objective {
         let ev = de[0] + de[1] + de[2];
-        add_objective::<R, L<R, W>>(t, &s0, &mut s1, &spin_increment(el.l, dt), ev);
+        add_objective::<R, L<R, W>>(t, &s0, &mut s1, &spin_increment(l, dt), ev);
     }
     let v0: L<R, W> = Plain(b.at.map(|i| p.volume[i]));
     // The hoop strain changes an axisymmetric point's volume unless the case follows

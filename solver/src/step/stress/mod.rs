@@ -14,12 +14,15 @@ mod laws;
 mod locate;
 mod point;
 mod pore_rate;
+mod stencil;
 mod strain;
 
 pub use guard::{Guard, GuardSums};
 pub use pore_rate::{update_pore_pressure, PorePressure, PoreRate};
+pub use stencil::smooth_rates;
 pub use strain::{rotate, rotation};
 
+use crate::basis::grid::Cartesian;
 use crate::element::locate::{merge, Outcome, NOTHING_FOUND};
 use crate::element::mesh::Mesh;
 use crate::element::{batch_width, Element};
@@ -68,6 +71,11 @@ pub struct StressUpdate<'a, R: Real> {
     pub pore_rate: Option<PoreRate<'a, R>>,
     /// Where the moved points are located too, one [`Outcome`] per thread.
     pub located: Option<&'a mut [Outcome]>,
+    /// On a background grid, its basis: each point strains with its own stencil.
+    pub background: Option<&'a Cartesian>,
+    /// Each saturated point's pore-pressure rate from its own stencil (on a grid), per
+    /// material index its liquid.
+    pub point_rates: Option<&'a [Option<Fluid<R>>]>,
 }
 
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
@@ -110,6 +118,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         body,
         pore_rate,
         located,
+        background,
+        point_rates,
     } = update;
     debug_assert!(
         pore_rate.is_none() || body.is_none(),
@@ -158,6 +168,8 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         material: &p.material,
         elements: Shared::new(&mut p.element),
         located: located.map(Shared::new),
+        background,
+        point_rates,
     };
     // In chunks handed out while the pass runs: a thread slowed by its core leaves the rest of
     // its chunks to the others (each point's update and each block's sums are the same
@@ -210,6 +222,10 @@ struct Pass<'a, E: Element, R: Real> {
     elements: Shared<'a, u32>,
     /// One outcome per thread.
     located: Option<Shared<'a, Outcome>>,
+    /// On a background grid, its basis.
+    background: Option<&'a Cartesian>,
+    /// Per material index its liquid, where each point takes its own pore-pressure rate.
+    point_rates: Option<&'a [Option<Fluid<R>>]>,
 }
 
 /// A chunk's point arrays, each sliced to the chunk's range and indexed by the position in it
@@ -375,6 +391,10 @@ fn element<E: Element, R: Real, const WIDE: bool>(
     (from, end): (usize, usize),
     mut sinks: Sinks<'_>,
 ) {
+    if let Some(basis) = cx.background {
+        stencil::element::<E, R, WIDE>(cx, basis, e, p, (from, end), sinks);
+        return;
+    }
     let mesh = cx.mesh;
     let grad = mesh.grad[e].as_ref();
     let corners = mesh.corners[e].as_ref();
