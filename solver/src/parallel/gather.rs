@@ -123,6 +123,18 @@ pub struct Layout<R: Real, E: Element = Tet4> {
 /// (a 2-wide pass moves a sixth of the bytes of a 12-wide one).
 pub type Slots<R> = Vec<R>;
 
+/// The first `len` values of `slots`, zeroed, as scratch for a pass that does not scatter
+/// through them (the stencil passes of [`crate::basis`]): grown the first time it is short,
+/// so that the time step allocates nothing after its first.
+pub fn scratch<R: Real>(slots: &mut Slots<R>, len: usize) -> &mut [R] {
+    if slots.len() < len {
+        slots.resize(len, R::ZERO);
+    }
+    let out = &mut slots[..len];
+    out.fill(R::ZERO);
+    out
+}
+
 /// [`Layout`]'s `direct` entry of a slot that goes through the slots.
 const TO_SLOT: u32 = u32::MAX;
 

@@ -211,55 +211,45 @@ fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupE
             return Err(SetupError::Axisymmetric("strain smoothing"));
         }
     }
+    let first = |list: &[(bool, &'static str)]| list.iter().find(|(on, _)| *on).map(|f| f.1);
     if case.numerics.grid.is_some() {
-        let unmodelled = [
+        let more = [
             (ranks > 1, "a run over several MPI ranks"),
-            (mixed, "mixed integration (MPM-MIXED)"),
-            (case.numerics.strain_smoothing, "strain smoothing"),
             (!case.boundary.walls.is_empty(), "walls with friction"),
-            (
-                case.boundary.prescribed.is_some(),
-                "prescribed velocities on points",
-            ),
-            (
-                !case.boundary.nodal_velocity.is_empty(),
-                "prescribed velocities on nodes",
-            ),
-            (
-                !case.loads.point_loads.is_empty(),
-                "loads carried by material points",
-            ),
-            (case.boundary.moving_mesh.is_some(), "a moving mesh"),
-            (case.boundary.contact.is_some(), "contact between bodies"),
         ];
-        if let Some((_, what)) = unmodelled.iter().find(|(on, _)| *on) {
+        if let Some(what) = first(&more).or(first(&one_process_only(case))) {
             return Err(SetupError::Grid(what));
         }
     }
     if ranks > 1 {
-        let unmodelled = [
-            (mixed, "mixed integration (MPM-MIXED)"),
-            (case.numerics.strain_smoothing, "strain smoothing"),
-            (
-                case.boundary.prescribed.is_some(),
-                "prescribed velocities on points",
-            ),
-            (
-                !case.boundary.nodal_velocity.is_empty(),
-                "prescribed velocities on nodes",
-            ),
-            (
-                !case.loads.point_loads.is_empty(),
-                "loads carried by material points",
-            ),
-            (case.boundary.moving_mesh.is_some(), "a moving mesh"),
-            (case.boundary.contact.is_some(), "contact between bodies"),
-        ];
-        if let Some((_, what)) = unmodelled.iter().find(|(on, _)| *on) {
+        if let Some(what) = first(&one_process_only(case)) {
             return Err(SetupError::Distributed { ranks, what });
         }
     }
     Ok(())
+}
+
+/// What runs on one process, on the mesh's elements only: whether the case asks for each.
+fn one_process_only(case: &Case) -> [(bool, &'static str); 7] {
+    let b = &case.boundary;
+    [
+        (
+            matches!(case.numerics.integration, Integration::Mixed { .. }),
+            "mixed integration (MPM-MIXED)",
+        ),
+        (case.numerics.strain_smoothing, "strain smoothing"),
+        (b.prescribed.is_some(), "prescribed velocities on points"),
+        (
+            !b.nodal_velocity.is_empty(),
+            "prescribed velocities on nodes",
+        ),
+        (
+            !case.loads.point_loads.is_empty(),
+            "loads carried by material points",
+        ),
+        (b.moving_mesh.is_some(), "a moving mesh"),
+        (b.contact.is_some(), "contact between bodies"),
+    ]
 }
 
 /// On a background grid, its basis on the grid's mesh.

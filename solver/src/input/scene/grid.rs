@@ -138,14 +138,14 @@ pub(super) fn background(
                 .map_or(0, |k| materials.element_material[k])
         })
         .collect();
-    let points_of_material = |m: u32| {
-        (0..materials.element_material.len())
-            .find(|&k| materials.element_material[k] == m)
-            .map_or(0, |k| materials.points_per_element[k])
-    };
+    // Each material's points per element, as the input's elements of that material have them.
     let mut points = vec![0u32; materials.specs.len()];
-    for (m, p) in points.iter_mut().enumerate().skip(1) {
-        *p = points_of_material(m as u32);
+    for (&m, &k) in materials
+        .element_material
+        .iter()
+        .zip(&materials.points_per_element)
+    {
+        points[m as usize] = k;
     }
     let points_per_element = element_material
         .iter()
@@ -359,7 +359,8 @@ fn boundary_groups(input: &Mesh, model: &Model, spec: &GridSpec, finder: &Finder
         }
     }
     // The input's boundary faces, by group, bucketed by cell.
-    let mut by_cell: Vec<Vec<(i32, usize)>> = vec![Vec::new(); finder.elements.len()];
+    // (group, face) pairs by cell.
+    let mut by_cell: Vec<Vec<(usize, usize)>> = vec![Vec::new(); finder.elements.len()];
     let mut group_faces: Vec<Vec<Vec<u32>>> = Vec::new();
     let names: Vec<_> = input
         .msh
@@ -368,14 +369,14 @@ fn boundary_groups(input: &Mesh, model: &Model, spec: &GridSpec, finder: &Finder
         .filter(|p| p.dim == input.groups.dim)
         .cloned()
         .collect();
-    for p in &names {
+    for (g, p) in names.iter().enumerate() {
         let fs = input.boundary_faces(&p.name).unwrap_or_default();
         for (k, f) in fs.iter().enumerate() {
             if f.contains(&u32::MAX) {
                 continue;
             }
             for c in Finder::cells_over(spec, &input.model, f) {
-                by_cell[c].push((p.tag, k));
+                by_cell[c].push((g, k));
             }
         }
         group_faces.push(fs);
@@ -387,15 +388,14 @@ fn boundary_groups(input: &Mesh, model: &Model, spec: &GridSpec, finder: &Finder
         let c = centroid(model, f);
         let mut tags: Vec<i32> = by_cell[finder.cell_of(&c)]
             .iter()
-            .filter(|&&(tag, k)| {
-                let g = names.iter().position(|p| p.tag == tag).unwrap();
+            .filter(|&&(g, k)| {
                 let pts: Vec<&[f64]> = group_faces[g][k]
                     .iter()
                     .map(|&n| input.model.node(n as usize))
                     .collect();
                 on_simplex_face(&pts, &c, tol)
             })
-            .map(|&(tag, _)| tag)
+            .map(|&(g, _)| names[g].tag)
             .collect();
         tags.sort_unstable();
         tags.dedup();

@@ -97,7 +97,7 @@ pub fn grid_to_particle<E, R, B>(
     if B::LINEAR {
         remap_elements(passes, slots, remap);
     } else {
-        stencil::remap_stencils(passes, remap);
+        stencil::remap_stencils(passes, slots, remap);
     }
 }
 

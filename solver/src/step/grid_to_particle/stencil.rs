@@ -14,7 +14,7 @@ use crate::step::passes::Passes;
 use super::nodal::velocity;
 use super::point::{flip, kinetic, liquid_mass, NodeState, Pic};
 use super::Remap;
-use crate::parallel::gather::ELEMENT_BLOCK;
+use crate::parallel::gather::{scratch, Slots, ELEMENT_BLOCK};
 use crate::step::stress::GuardSums;
 
 /// One lane: one point.
@@ -24,8 +24,11 @@ type One<R> = Plain<R, 1>;
 /// take their velocity update (FLIP, blended with PIC) and re-map their momentum; with the
 /// liquid, its too; with the guard rails, each point's kinetic terms into its element's
 /// block's slot (begun anew with `begin`).
-pub(super) fn remap_stencils<E, R, B>(passes: &Passes<'_, R, E, B>, remap: Remap<'_, R>)
-where
+pub(super) fn remap_stencils<E, R, B>(
+    passes: &Passes<'_, R, E, B>,
+    slots: &mut Slots<R>,
+    remap: Remap<'_, R>,
+) where
     E: Element,
     R: Real,
     B: Basis<E, R>,
@@ -52,8 +55,8 @@ where
         flip: R::ONE - pic,
         pic,
     });
-    let mut momentum = vec![[R::ZERO; 3]; nodes];
-    let mut momentum_w = vec![[R::ZERO; 3]; nodes];
+    // Both phases' re-mapped momenta in the scatter's slots (grown on the first step only).
+    let (momentum, momentum_w) = scratch(slots, 6 * nodes).split_at_mut(3 * nodes);
     let mut stencil = Stencil::default();
     for e in 0..mesh.elements() {
         for i in layout.particles_of(e) {
@@ -91,7 +94,7 @@ where
                 stencil.nodes(),
                 One::splat((), p.mass[i]),
                 &p.v[i],
-                &mut momentum,
+                momentum,
             );
             let (Some(l), Some(lp), Some(gl)) = (&liquid, &mut p.liquid, &g.liquid) else {
                 continue;
@@ -106,7 +109,7 @@ where
             lp.w[i] = point_of::<E, R>(w, &lp.w[i]);
             let volume = lp.volume0.as_ref().map_or(p.volume[i], |v0| v0[i]);
             let mw = liquid_mass((), &f, One::splat((), volume));
-            at.add::<E>(stencil.nodes(), mw, &lp.w[i], &mut momentum_w);
+            at.add::<E>(stencil.nodes(), mw, &lp.w[i], momentum_w);
             if let Some(slots) = guard.as_deref_mut() {
                 let twice = kinetic::<E, R, One<R>>((), mw, &lanes_of(&lp.w[i]));
                 slots[e / ELEMENT_BLOCK].kinetic += twice.0[0].f64();
@@ -114,11 +117,16 @@ where
         }
     }
     for n in 0..nodes {
-        g.vel[n] = velocity::<E, R>(&momentum[n], g.mass[n], g.empty_below, &fixed[n]);
+        g.vel[n] = velocity::<E, R>(&vector(momentum, n), g.mass[n], g.empty_below, &fixed[n]);
     }
     if let (Some(l), Some(gl)) = (liquid, g.liquid.as_mut()) {
         for n in 0..nodes {
-            gl.vel[n] = velocity::<E, R>(&momentum_w[n], gl.mass[n], g.empty_below, &l.fixed[n]);
+            gl.vel[n] = velocity::<E, R>(
+                &vector(momentum_w, n),
+                gl.mass[n],
+                g.empty_below,
+                &l.fixed[n],
+            );
         }
     }
 }
@@ -138,12 +146,12 @@ impl<R: Real> Weights<R> {
         Weights { n }
     }
 
-    /// Adds `m` N_k v to each node's momentum.
-    fn add<E: Element>(&self, nodes: &[u32], m: One<R>, v: &V3<R>, momentum: &mut [V3<R>]) {
+    /// Adds `m` N_k v to each node's momentum (`momentum`: three values a node).
+    fn add<E: Element>(&self, nodes: &[u32], m: One<R>, v: &V3<R>, momentum: &mut [R]) {
         for (nk, &node) in self.n.iter().zip(nodes) {
             let mn = m * *nk;
             for c in 0..E::DIM {
-                momentum[node as usize][c] += (mn * One::splat((), v[c])).0[0];
+                momentum[3 * node as usize + c] += (mn * One::splat((), v[c])).0[0];
             }
         }
     }
@@ -162,4 +170,9 @@ fn point_of<E: Element, R: Real>(v: [One<R>; 3], old: &V3<R>) -> V3<R> {
         out[c] = v[c].0[0];
     }
     out
+}
+
+/// Node `n`'s 3-vector of `values` (three a node).
+fn vector<R: Real>(values: &[R], n: usize) -> V3<R> {
+    [values[3 * n], values[3 * n + 1], values[3 * n + 2]]
 }

@@ -118,7 +118,7 @@ pub fn particle_to_grid<E, R, B>(
     if B::LINEAR {
         map_elements(passes, slots, to);
     } else {
-        stencil::map_stencils(passes, to);
+        stencil::map_stencils(passes, slots, to);
     }
 }
 

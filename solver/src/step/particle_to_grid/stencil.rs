@@ -7,6 +7,7 @@
 use crate::basis::{Basis, Stencil};
 use crate::element::Element;
 use crate::four::{Four, Lanes4};
+use crate::parallel::gather::{scratch, Slots};
 use crate::real::{Real, V3};
 use crate::step::contact::maps;
 use crate::step::passes::Passes;
@@ -26,8 +27,11 @@ const NO_LEAD: u32 = u32::MAX;
 ///
 /// # Panics
 /// Under mixed integration.
-pub(super) fn map_stencils<E, R, B>(passes: &Passes<'_, R, E, B>, to: MapToGrid<'_, R>)
-where
+pub(super) fn map_stencils<E, R, B>(
+    passes: &Passes<'_, R, E, B>,
+    slots: &mut Slots<R>,
+    to: MapToGrid<'_, R>,
+) where
     E: Element,
     R: Real,
     B: Basis<E, R>,
@@ -53,7 +57,8 @@ where
     let (mesh, layout) = (passes.mesh, passes.layout);
     let (sw, lw) = (solid_width::<E>(), liquid_width::<E>());
     let width = if liquid.is_some() { sw + lw } else { sw };
-    let mut nodes = vec![R::ZERO; width * mesh.x.len()];
+    // The nodes' sums in the scatter's slots (grown on the first step only).
+    let nodes = scratch(slots, width * mesh.x.len());
     let arrays = PointArrays::new(p, liquid.is_some());
     let liquid_gravity = liquid.map(|l| l.gravity);
     let mut stencil = Stencil::default();
@@ -80,9 +85,9 @@ where
                 liquid_gravity,
             };
             if liquid.is_some() {
-                share.add::<true>(&mut nodes, width);
+                share.add::<true>(nodes, width);
             } else {
-                share.add::<false>(&mut nodes, width);
+                share.add::<false>(nodes, width);
             }
         }
     }
