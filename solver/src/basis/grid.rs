@@ -24,6 +24,9 @@ pub struct GridSpec {
     pub dim: usize,
     /// The nodes' function.
     pub shape: Shape,
+    /// Material points per cell along each axis on a regular sub-lattice (`None`: the
+    /// materials' points per element, placed in the cells' tetrahedra or triangles).
+    pub points_per_axis: Option<usize>,
 }
 
 impl GridSpec {
@@ -121,6 +124,38 @@ impl Cartesian {
         &self.spec
     }
 
+    /// The regular points (`k` a cell along each axis, at the centres of its sub-cells) of the
+    /// cell holding `inside` (in the mesh's frame), into `out`.
+    pub fn cell_points<R: Real>(&self, inside: &[f64; 3], k: usize, out: &mut Vec<V3<R>>) {
+        let s = &self.spec;
+        let mut first = [0.0; 3];
+        for (a, f) in first.iter_mut().enumerate().take(s.dim) {
+            let c = ((inside[a] - s.origin[a]) / s.cell[a]).floor().max(0.0);
+            let c = c.min(s.cells[a] as f64 - 1.0);
+            *f = s.origin[a] + c * s.cell[a];
+        }
+        let along = |a: usize| if a < s.dim { k } else { 1 };
+        for r in 0..along(2) {
+            for q in 0..along(1) {
+                for p in 0..along(0) {
+                    let at = |a: usize, i: usize| {
+                        if a < s.dim {
+                            first[a] + (i as f64 + 0.5) / k as f64 * s.cell[a]
+                        } else {
+                            0.0
+                        }
+                    };
+                    out.push([R::of(at(0, p)), R::of(at(1, q)), R::of(at(2, r))]);
+                }
+            }
+        }
+    }
+
+    /// A cell's volume (its area in 2D).
+    pub fn cell_volume(&self) -> f64 {
+        self.spec.cell[..self.spec.dim].iter().product()
+    }
+
     /// Each axis's nodes and functions at `x`.
     fn along(&self, x: &[f64; 3]) -> [Along; 3] {
         let s = &self.spec;
@@ -192,6 +227,7 @@ mod tests {
             cells,
             dim,
             shape,
+            points_per_axis: None,
         }
     }
 

@@ -1,5 +1,6 @@
 //! Material points, stored as structure of arrays, and their initial placement by Anura3D's rule.
 
+use crate::element::locate::{walk, Found};
 use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::real::{Real, V3};
@@ -485,6 +486,57 @@ pub fn place<E: Element, R: Real>(
         }
     }
     Ok(p)
+}
+
+/// Places material points at given positions: `positions(e, out)` lists the points that
+/// element `e` of material `material[e]` (0 = empty) seeds (none for most elements; the
+/// background grid's cells seed their regular points from one element each, [`place`]'s
+/// `points[e]` of them, numbered from `first_id[e]` as [`place`] numbers them), each with
+/// volume `volume(e, x)`. Each point goes to the element that holds it (walked from its seed,
+/// [`walk`]), and the points are ordered by element (stably: a seed's points in its order).
+pub fn place_at<E: Element, R: Real>(
+    mesh: &Mesh<E, R>,
+    (points, material, first_id): (&[u32], &[u32], Option<&[u32]>),
+    positions: &dyn Fn(usize, &mut Vec<V3<R>>),
+    volume: &dyn Fn(usize, &V3<R>) -> f64,
+    density: impl Fn(u32) -> f64,
+) -> Particles<R> {
+    // (element, id, seed, position)
+    let mut placed: Vec<(u32, u32, u32, V3<R>)> = Vec::new();
+    let (mut id, mut at) = (0u32, Vec::new());
+    for e in 0..points.len() {
+        if let Some(f) = first_id {
+            id = f[e];
+        }
+        at.clear();
+        if material[e] != 0 && points[e] > 0 {
+            positions(e, &mut at);
+            debug_assert_eq!(at.len(), points[e] as usize);
+        }
+        for (q, x) in at.iter().enumerate() {
+            let (Found::In(home) | Found::Outside(home) | Found::Beyond(home)) =
+                walk(mesh, e as u32, x);
+            placed.push((home, id + q as u32 + 1, e as u32, *x));
+        }
+        id += points[e];
+    }
+    placed.sort_by_key(|&(home, id, ..)| (home, id));
+    let mut p = Particles::default();
+    for (home, id, seed, x) in placed {
+        let m = material[seed as usize];
+        let vol = volume(seed as usize, &x);
+        p.x.push(x);
+        p.u.push([R::ZERO; 3]);
+        p.v.push([R::ZERO; 3]);
+        p.volume.push(R::of(vol));
+        p.mass.push(R::of(density(m) * vol));
+        p.stress.push([R::ZERO; 6]);
+        p.element.push(home);
+        p.material.push(m);
+        p.id.push(id);
+        p.active.push(true);
+    }
+    p
 }
 
 #[cfg(test)]

@@ -66,7 +66,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         let own = partition.elements();
         let mesh = partition.local_mesh(global);
         let basis = basis_of(case, &mesh)?;
-        let (mut particles, boundary) = place_points(case, &partition, &mesh)?;
+        let (mut particles, boundary) = place_points(case, &partition, &mesh, basis.as_ref())?;
         let NodeInputs {
             mut fixed,
             liquid_fixed,
@@ -296,6 +296,7 @@ fn place_points<E: Element, R: Real>(
     case: &Case,
     partition: &Partition,
     mesh: &Mesh<E, R>,
+    basis: Option<&Cartesian>,
 ) -> Result<(Particles<R>, Vec<bool>), SetupError> {
     let own = partition.elements();
     let density = |m: u32| {
@@ -305,14 +306,38 @@ fn place_points<E: Element, R: Real>(
     };
     let ids = case.point_ids();
     let first_id: Vec<u32> = own.clone().map(|e| ids.input_first(e) as u32).collect();
-    let mut particles = particles::place(
-        mesh,
+    let (points, material) = (
         &case.body.points_per_element[own.clone()],
         &case.body.element_material[own.clone()],
-        Some(&first_id),
-        &|e| case.element_number(partition.global_element(e)),
-        density,
-    )?;
+    );
+    let mut particles = match basis.and_then(|b| Some((b, b.spec().points_per_axis?))) {
+        // A grid's regular points, seeded cell by cell.
+        Some((b, k)) => {
+            let centroid = |e: usize| {
+                let c = mesh.corners[e].as_ref();
+                std::array::from_fn(|a| {
+                    c.iter().map(|&n| mesh.x[n as usize][a].f64()).sum::<f64>() / c.len() as f64
+                })
+            };
+            let per_cell = k.pow(E::DIM as u32) as f64;
+            particles::place_at(
+                mesh,
+                (points, material, Some(&first_id)),
+                &|e, out| b.cell_points(&centroid(e), k, out),
+                // Per radian in an axisymmetric section, as on elements.
+                &|_, x| b.cell_volume() / per_cell * if E::AXISYMMETRIC { x[0].f64() } else { 1.0 },
+                density,
+            )
+        }
+        None => particles::place(
+            mesh,
+            points,
+            material,
+            Some(&first_id),
+            &|e| case.element_number(partition.global_element(e)),
+            density,
+        )?,
+    };
     if particles.is_empty() {
         return Err(SetupError::NoPoints);
     }

@@ -31,6 +31,7 @@ pub(super) const TABLE: Table = Table {
         key("cell", "float or [float, ...]", "required", "m", "the cells' edge (cubes or squares), or one edge per axis"),
         key("basis", "string", "\"bspline2\"", "", "the nodes' functions: \"linear\" (trilinear cells), \"gimp\" (uniform GIMP) or \"bspline2\" (quadratic B-splines, modified at the box's faces)"),
         key("gimp_half_width", "float", "0.25", "cells", "with \"gimp\": a point's half-width, in (0, 0.5]"),
+        key("points_per_axis", "integer", "none", "", "material points per cell along each axis on a regular sub-lattice (k³ a cell in 3D, k² in 2D), in place of the materials' points per element; a cell takes the material at its centre"),
     ],
 };
 
@@ -43,6 +44,8 @@ pub(super) struct Grid {
     basis: Option<String>,
     #[serde(default)]
     gimp_half_width: Option<f64>,
+    #[serde(default)]
+    points_per_axis: Option<usize>,
 }
 
 /// One edge for all axes, or one per axis.
@@ -127,30 +130,55 @@ pub(super) fn background(
         cells,
         dim,
         shape,
+        points_per_axis: match grid.points_per_axis {
+            Some(0) => return Err(refuse("grid.points_per_axis", "must be at least 1")),
+            k => k,
+        },
     };
     let lattice = lattice_model(&spec, model.dimension);
     let finder = Finder::new(&spec, model);
-    let element_material: Vec<u32> = (0..lattice.element_count())
-        .map(|e| {
-            let c = centroid(&lattice, lattice.element(e));
-            finder
-                .element_at(&c)
-                .map_or(0, |k| materials.element_material[k])
-        })
-        .collect();
-    // Each material's points per element, as the input's elements of that material have them.
-    let mut points = vec![0u32; materials.specs.len()];
-    for (&m, &k) in materials
-        .element_material
-        .iter()
-        .zip(&materials.points_per_element)
-    {
-        points[m as usize] = k;
-    }
-    let points_per_element = element_material
-        .iter()
-        .map(|&m| points[m as usize])
-        .collect();
+    // Elements of a cell (consecutive in the lattice's order).
+    let per_cell = if dim == 3 { 6 } else { 2 };
+    let material_at = |c: &[f64; 3]| {
+        finder
+            .element_at(c)
+            .map_or(0, |k| materials.element_material[k])
+    };
+    let (element_material, points_per_element): (Vec<u32>, Vec<u32>) = match spec.points_per_axis {
+        // Every element of a cell takes the material at the cell's centre; its first element
+        // seeds the cell's regular points.
+        Some(k) => (0..lattice.element_count())
+            .map(|e| {
+                let first = e - e % per_cell;
+                let nodes: Vec<u32> = (first..first + per_cell)
+                    .flat_map(|f| lattice.element(f).to_vec())
+                    .collect();
+                let m = material_at(&box_centre(&lattice, &nodes));
+                let seeds = e % per_cell == 0 && m != 0;
+                (m, if seeds { k.pow(dim as u32) as u32 } else { 0 })
+            })
+            .unzip(),
+        None => {
+            let element_material: Vec<u32> = (0..lattice.element_count())
+                .map(|e| material_at(&centroid(&lattice, lattice.element(e))))
+                .collect();
+            // Each material's points per element, as the input's elements of that material
+            // have them.
+            let mut points = vec![0u32; materials.specs.len()];
+            for (&m, &k) in materials
+                .element_material
+                .iter()
+                .zip(&materials.points_per_element)
+            {
+                points[m as usize] = k;
+            }
+            let per_element = element_material
+                .iter()
+                .map(|&m| points[m as usize])
+                .collect();
+            (element_material, per_element)
+        }
+    };
     let em: Vec<i64> = element_material.iter().map(|&m| m as i64).collect();
     let model = Model::from_mesh(
         lattice.dimension,
@@ -210,6 +238,24 @@ fn lattice_model(spec: &GridSpec, dimension: Dimension) -> Model {
         }
     }
     model
+}
+
+/// The centre of the bounding box of `nodes` in `model` (z 0 in 2D).
+fn box_centre(model: &Model, nodes: &[u32]) -> [f64; 3] {
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for &n in nodes {
+        for (a, &v) in model.node(n as usize).iter().enumerate() {
+            lo[a] = lo[a].min(v);
+            hi[a] = hi[a].max(v);
+        }
+    }
+    std::array::from_fn(|a| {
+        if lo[a] <= hi[a] {
+            0.5 * (lo[a] + hi[a])
+        } else {
+            0.0
+        }
+    })
 }
 
 /// The mean of `nodes`' positions in `model` (z 0 in 2D).
@@ -424,6 +470,148 @@ fn boundary_groups(input: &Mesh, model: &Model, spec: &GridSpec, finder: &Finder
     }
 }
 
+/// A face's load is integrated over its halves (a triangle cut into 4 at its edges' midpoints,
+/// a segment into 2): the grid's cells and their halves then hold each piece whole, where the
+/// hat and the quadratic spline are polynomials of degree 2 at most along each axis, which
+/// the rules below integrate exactly (GIMP's kinks at a cells from a node fall inside pieces:
+/// near exact).
+const FACE_DIVISIONS: usize = 2;
+
+/// Dunavant's 7-point rule on a triangle (degree 5): barycentric coordinates (of the 2nd
+/// and 3rd corners) and weights summing to 1.
+const TRIANGLE_RULE: [([f64; 2], f64); 7] = [
+    ([1.0 / 3.0, 1.0 / 3.0], 0.225),
+    (
+        [0.059_715_871_789_770, 0.470_142_064_105_115],
+        0.132_394_152_788_506,
+    ),
+    (
+        [0.470_142_064_105_115, 0.059_715_871_789_770],
+        0.132_394_152_788_506,
+    ),
+    (
+        [0.470_142_064_105_115, 0.470_142_064_105_115],
+        0.132_394_152_788_506,
+    ),
+    (
+        [0.797_426_985_353_087, 0.101_286_507_323_456],
+        0.125_939_180_544_827,
+    ),
+    (
+        [0.101_286_507_323_456, 0.797_426_985_353_087],
+        0.125_939_180_544_827,
+    ),
+    (
+        [0.101_286_507_323_456, 0.101_286_507_323_456],
+        0.125_939_180_544_827,
+    ),
+];
+
+/// Gauss's 3-point rule on [0, 1] (degree 5): positions and weights summing to 1.
+const SEGMENT_RULE: [(f64, f64); 3] = [
+    (0.112_701_665_379_258_3, 5.0 / 18.0),
+    (0.5, 8.0 / 18.0),
+    (0.887_298_334_620_741_7, 5.0 / 18.0),
+];
+
+/// Adds the nodal forces of tractions `t` (kPa, one per face, uniform on it) on `faces` (the
+/// background model's node ids of their corners) integrated with the grid's functions:
+/// ∫ N_k t dA over each face (per radian, ∫ N_k t r ds, in an axisymmetric section). The
+/// linear faces' rule ([`super::add_face_loads`]) would give a square face's corners unequal
+/// shares (each triangle's third), which the grid's cells, unlike tetrahedra, turn into a
+/// twisting mode. The background model's nodes are the lattice's, in its order.
+pub(super) fn add_face_loads(
+    spec: &GridSpec,
+    model: &Model,
+    faces: &[Vec<u32>],
+    t: &[[f64; 3]],
+    out: &mut [[f64; 3]],
+) {
+    let axisymmetric = model.dimension == Dimension::Axisymmetric;
+    let m = FACE_DIVISIONS;
+    let n = spec.nodes_along();
+    let pos = |k: u32| {
+        let p = model.node(k as usize);
+        [p[0], p[1], p.get(2).copied().unwrap_or(0.0)]
+    };
+    for (f, t) in faces.iter().zip(t) {
+        let corners: Vec<[f64; 3]> = f.iter().map(|&k| pos(k)).collect();
+        let size =
+            crate::input::faces::size(model, &f.iter().map(|&k| k as usize).collect::<Vec<_>>());
+        // Quadrature points and their shares of the face.
+        let mut samples: Vec<([f64; 3], f64)> = Vec::new();
+        let at = |u: f64, v: f64| -> [f64; 3] {
+            std::array::from_fn(|a| {
+                let far = corners.get(2).map_or(0.0, |c| v * c[a]);
+                (1.0 - u - v) * corners[0][a] + u * corners[1][a] + far
+            })
+        };
+        let mf = m as f64;
+        if corners.len() == 2 {
+            for i in 0..m {
+                for (q, w) in SEGMENT_RULE {
+                    samples.push((at((i as f64 + q) / mf, 0.0), w * size / mf));
+                }
+            }
+        } else {
+            let share = size / (mf * mf);
+            for i in 0..m {
+                for j in 0..m - i {
+                    // The upright sub-triangle at (i, j) and, but for the last in a row, the
+                    // inverted one beside it: corners in the face's (u, v).
+                    let (a, b) = (i as f64, j as f64);
+                    let mut pieces = vec![[[a, b], [a + 1.0, b], [a, b + 1.0]]];
+                    if j + 1 < m - i {
+                        pieces.push([[a + 1.0, b], [a + 1.0, b + 1.0], [a, b + 1.0]]);
+                    }
+                    for [p0, p1, p2] in pieces {
+                        for ([l1, l2], w) in TRIANGLE_RULE {
+                            let l0 = 1.0 - l1 - l2;
+                            let u = (l0 * p0[0] + l1 * p1[0] + l2 * p2[0]) / mf;
+                            let v = (l0 * p0[1] + l1 * p1[1] + l2 * p2[1]) / mf;
+                            samples.push((at(u, v), w * share));
+                        }
+                    }
+                }
+            }
+        }
+        for (x, w) in samples {
+            let w = if axisymmetric { w * x[0] } else { w };
+            let along: Vec<_> = (0..3)
+                .map(|a| {
+                    if a < spec.dim {
+                        spec.shape
+                            .along((x[a] - spec.origin[a]) / spec.cell[a], spec.cells[a])
+                    } else {
+                        crate::basis::spline::Along {
+                            first: 0,
+                            len: 1,
+                            n: [1.0, 0.0, 0.0],
+                            dn: [0.0; 3],
+                        }
+                    }
+                })
+                .collect();
+            for k in 0..along[2].len {
+                for j in 0..along[1].len {
+                    for i in 0..along[0].len {
+                        let nk = along[0].n[i] * along[1].n[j] * along[2].n[k];
+                        if nk == 0.0 {
+                            continue;
+                        }
+                        let ijk = [along[0].first + i, along[1].first + j, along[2].first + k];
+                        debug_assert!((0..3).all(|a| ijk[a] < n[a]));
+                        let node = spec.lattice_index(ijk);
+                        for d in 0..3 {
+                            out[node][d] += nk * w * t[d];
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Whether `x` lies on the face `pts` (a triangle in 3D, a segment in 2D), within `tol`.
 fn on_simplex_face(pts: &[&[f64]], x: &[f64; 3], tol: f64) -> bool {
     let p = |k: usize, a: usize| pts[k].get(a).copied().unwrap_or(0.0);
@@ -469,6 +657,64 @@ fn on_simplex_face(pts: &[&[f64]], x: &[f64; 3], tol: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A uniform traction on the box's top face loads its nodes with the grid's functions'
+    /// integrals: the total is the traction times the area, the corners alike (the linear
+    /// faces' rule gives a square's diagonal corners twice the others' share).
+    #[test]
+    fn face_loads_follow_the_grid_s_functions() {
+        for shape in [Shape::Linear, Shape::Bspline2] {
+            let spec = GridSpec {
+                origin: [0.0; 3],
+                cell: [0.1, 0.1, 0.1],
+                cells: [3, 2, 3],
+                dim: 3,
+                shape,
+                points_per_axis: None,
+            };
+            let model = lattice_model(&spec, Dimension::Cartesian3D);
+            // The triangles on y = 0.2.
+            let mut faces = Vec::new();
+            for e in 0..model.element_count() {
+                let nodes = model.element(e);
+                for skip in 0..4 {
+                    let f: Vec<u32> = (0..4).filter(|&k| k != skip).map(|k| nodes[k]).collect();
+                    if f.iter()
+                        .all(|&n| (model.node(n as usize)[1] - 0.2).abs() < 1e-12)
+                    {
+                        faces.push(f);
+                    }
+                }
+            }
+            assert_eq!(faces.len(), 18);
+            let mut out = vec![[0.0; 3]; model.node_count()];
+            add_face_loads(
+                &spec,
+                &model,
+                &faces,
+                &vec![[0.0, -10.0, 0.0]; 18],
+                &mut out,
+            );
+            let total: f64 = out.iter().map(|f| f[1]).sum();
+            assert!((total + 10.0 * 0.09).abs() < 1e-12, "{shape:?}: {total}");
+            let at = |i: usize, k: usize| out[spec.lattice_index([i, 2, k])][1];
+            let corners = [at(0, 0), at(3, 0), at(0, 3), at(3, 3)];
+            for c in corners {
+                assert!((c - corners[0]).abs() < 1e-12, "{shape:?}: {corners:?}");
+            }
+            // Mirror symmetry across the face's middle.
+            assert!((at(1, 0) - at(2, 0)).abs() < 1e-12 && (at(1, 1) - at(2, 2)).abs() < 1e-12);
+            // Nothing below the face.
+            for k in 0..4 {
+                for j in 0..2 {
+                    for i in 0..4 {
+                        let f = out[spec.lattice_index([i, j, k])];
+                        assert!(f.iter().all(|c| c.abs() < 1e-15), "{f:?}");
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn simplex_tests() {

@@ -279,7 +279,7 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
     };
     let supports = fixity::resolve(&scene.fixity, &mesh, &materials)?;
     let velocities = velocity::resolve(&scene.velocity, &mesh, &materials)?;
-    let loads = traction::resolve(&scene.traction, &mesh)?;
+    let loads = traction::resolve(&scene.traction, &mesh, grid.as_ref())?;
     let damping = damping::resolve(scene.damping.as_ref())?;
     let consolidation = consolidation::resolve(scene.consolidation.as_ref())?;
     let by_time_factor =

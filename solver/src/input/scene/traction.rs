@@ -8,6 +8,7 @@ use mpm_shared::Model;
 use super::keys::{key, Table};
 use super::mesh::Mesh;
 use super::{refuse, Refusal};
+use crate::basis::grid::GridSpec;
 
 /// The keys of `[[traction]]`.
 #[rustfmt::skip]
@@ -77,7 +78,13 @@ pub(super) struct Loads {
 }
 
 /// The `[[traction]]` entries on the mesh's faces, in file order.
-pub(super) fn resolve(entries: &[Traction], mesh: &Mesh) -> Result<Loads, Refusal> {
+/// On a background grid (`grid`), the faces' loads are integrated with the grid's functions
+/// ([`super::grid::add_face_loads`]).
+pub(super) fn resolve(
+    entries: &[Traction],
+    mesh: &Mesh,
+    grid: Option<&GridSpec>,
+) -> Result<Loads, Refusal> {
     let mut out = Loads {
         traction: vec![[0.0; 3]; mesh.model.node_count()],
         ramp: 0.0,
@@ -97,12 +104,13 @@ pub(super) fn resolve(entries: &[Traction], mesh: &Mesh) -> Result<Loads, Refusa
         } else {
             Vec::new()
         };
-        add_face_loads(
-            &mesh.model,
-            &input.faces,
-            &input.on_faces(&outward),
-            &mut out.traction,
-        );
+        let loads = input.on_faces(&outward);
+        match grid {
+            Some(g) => {
+                super::grid::add_face_loads(g, &mesh.model, &input.faces, &loads, &mut out.traction)
+            }
+            None => add_face_loads(&mesh.model, &input.faces, &loads, &mut out.traction),
+        }
         out.ramp = out.ramp.max(tr.ramp);
         out.inputs.push(input);
     }
