@@ -7,7 +7,11 @@
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores|auto --first-touch on|off
 //!  --order morton|random|none --precision f64|f32 --guards on|off
 //!  --law linear|mc-elastic|mc-plastic|mc-flowing --surface on|off --dim 3|2 --shear RATE
-//!  --points N`
+//!  --points N --basis tets|linear|gimp|bspline2`
+//!
+//! `--basis` other than `tets` runs the same column, points and loads on a background grid of
+//! its cubes (squares in 2D) with that basis (the scene's `[grid]`, docs/design.md §4.20):
+//! the column's tetrahedra are then the grid's cells cut up to locate the points.
 //!
 //! `--points N` places N material points per element instead of the usual 4 per tetrahedron
 //! and 3 per triangle (any count the element supports: 1, 4 or 10 for tetrahedra, 1 or 3 for
@@ -207,6 +211,28 @@ fn main() {
         }
     } else {
         case.loads.gravity = [0.0, -9.81, 0.0];
+    }
+    if let Some(basis) = arg(&a, "--basis").filter(|&b| b != "tets") {
+        use mpm_solve::basis::grid::GridSpec;
+        use mpm_solve::basis::spline::Shape;
+        let shape = match basis {
+            "linear" => Shape::Linear,
+            "gimp" => Shape::Gimp { a: 0.25 },
+            "bspline2" => Shape::Bspline2,
+            other => {
+                eprintln!("bench_solver: --basis {other}: expected tets, linear, gimp or bspline2");
+                std::process::exit(2);
+            }
+        };
+        let h = width / nxz as f64;
+        case.numerics.grid = Some(GridSpec {
+            origin: [0.0; 3],
+            cell: [h, if plane { 0.01 } else { 1.0 / ny as f64 }, h],
+            cells: if plane { [nxz, ny, 1] } else { [nxz, ny, nxz] },
+            dim: if plane { 2 } else { 3 },
+            shape,
+            points_per_axis: None,
+        });
     }
     if order == "morton" {
         case = case.reordered(Reorder::Morton).unwrap();

@@ -6,6 +6,8 @@
 //! number (the mesh's nodes are renumbered along the space-filling curve like any mesh's).
 
 use crate::basis::spline::{Along, Shape};
+use std::ops::Range;
+
 use crate::basis::{Basis, Stencil};
 use crate::element::mesh::Mesh;
 use crate::element::Element;
@@ -69,6 +71,8 @@ impl GridSpec {
 #[derive(Debug, Clone)]
 pub struct Cartesian {
     spec: GridSpec,
+    /// The lattice index's step along each axis.
+    stride: [usize; 3],
     /// Per lattice index, the mesh's node there.
     node: Vec<u32>,
 }
@@ -116,7 +120,8 @@ impl Cartesian {
             let ijk = [k % n[0], k / n[0] % n[1], k / (n[0] * n[1])];
             return Err(LatticeError::Missing { ijk });
         }
-        Ok(Cartesian { spec, node })
+        let stride = [1, n[0], n[0] * n[1]];
+        Ok(Cartesian { spec, stride, node })
     }
 
     /// The lattice.
@@ -157,20 +162,21 @@ impl Cartesian {
     }
 
     /// Each axis's nodes and functions at `x`.
+    #[inline(always)]
     fn along(&self, x: &[f64; 3]) -> [Along; 3] {
         let s = &self.spec;
-        std::array::from_fn(|a| {
-            if a < s.dim {
-                s.shape.along((x[a] - s.origin[a]) / s.cell[a], s.cells[a])
-            } else {
-                Along {
-                    first: 0,
-                    len: 1,
-                    n: [1.0, 0.0, 0.0],
-                    dn: [0.0; 3],
-                }
+        let on = |a: usize| s.shape.along((x[a] - s.origin[a]) / s.cell[a], s.cells[a]);
+        let z = if s.dim == 3 {
+            on(2)
+        } else {
+            Along {
+                first: 0,
+                len: 1,
+                n: [1.0, 0.0, 0.0],
+                dn: [0.0; 3],
             }
-        })
+        };
+        [on(0), on(1), z]
     }
 
     /// The stencil at `x` (in f64), in lattice order (x fastest), into `out`.
@@ -179,22 +185,25 @@ impl Cartesian {
         let [ax, ay, az] = self.along(x);
         let h = self.spec.cell;
         let dim = self.spec.dim;
+        // The derivatives per metre, and the lattice's strides.
+        let slope = |along: &Along, a: usize| along.dn.map(|d| d / h[a]);
+        let (dx, dy) = (slope(&ax, 0), slope(&ay, 1));
+        let dz = if dim == 3 { slope(&az, 2) } else { [0.0; 3] };
+        let (sy, sz) = (self.stride[1], self.stride[2]);
         for k in 0..az.len {
+            let (nz, dz) = (az.n[k], dz[k]);
             for j in 0..ay.len {
+                let (ny, dy) = (ay.n[j], dy[j]);
+                let row = (ay.first + j) * sy + (az.first + k) * sz + ax.first;
                 for i in 0..ax.len {
-                    let ijk = [ax.first + i, ay.first + j, az.first + k];
-                    let (nx, ny, nz) = (ax.n[i], ay.n[j], az.n[k]);
+                    let nx = ax.n[i];
                     let n = nx * ny * nz;
-                    let mut grad = [ax.dn[i] / h[0] * ny * nz, nx * ay.dn[j] / h[1] * nz, 0.0];
-                    if dim == 3 {
-                        grad[2] = nx * ny * az.dn[k] / h[2];
-                    }
+                    let grad = [dx[i] * ny * nz, nx * dy * nz, nx * ny * dz];
                     // A node whose function and gradient both vanish at x adds nothing.
                     if n == 0.0 && grad.iter().all(|&g| g == 0.0) {
                         continue;
                     }
-                    let node = self.node[self.spec.lattice_index(ijk)];
-                    out.push(node, R::of(n), grad.map(R::of));
+                    out.push(self.node[row + i], R::of(n), grad.map(R::of));
                 }
             }
         }
@@ -206,6 +215,40 @@ impl<E: Element, R: Real> Basis<E, R> for Cartesian {
 
     fn stencil(&self, _mesh: &Mesh<E, R>, _e: usize, x: &V3<R>, out: &mut Stencil<R>) {
         self.stencil_at(&x.map(|c| c.f64()), out);
+    }
+
+    /// The nodes of every stencil taken in the cell that holds `e`'s centroid, from a
+    /// hundredth of a cell below it to a hundredth above (a point on a face, or a rounding
+    /// past it): along each axis, from the first node at the low end to the last at the high
+    /// end (a stencil's first and last node never move back as the point moves up).
+    fn reach(&self, mesh: &Mesh<E, R>, e: usize, out: &mut Vec<u32>) {
+        out.clear();
+        let s = &self.spec;
+        let corners = mesh.corners[e].as_ref();
+        let span: [Range<usize>; 3] = std::array::from_fn(|a| {
+            if a >= s.dim {
+                return 0..1;
+            }
+            let centroid = corners
+                .iter()
+                .map(|&n| mesh.x[n as usize][a].f64())
+                .sum::<f64>()
+                / corners.len() as f64;
+            let cell = ((centroid - s.origin[a]) / s.cell[a]).floor();
+            let cell = cell.clamp(0.0, s.cells[a] as f64 - 1.0);
+            let (lo, hi) = (
+                s.shape.along(cell - 0.01, s.cells[a]),
+                s.shape.along(cell + 1.01, s.cells[a]),
+            );
+            lo.first..hi.first + hi.len
+        });
+        for k in span[2].clone() {
+            for j in span[1].clone() {
+                for i in span[0].clone() {
+                    out.push(self.node[s.lattice_index([i, j, k])]);
+                }
+            }
+        }
     }
 }
 

@@ -23,6 +23,11 @@ impl<E: Element, R: Real> Basis<E, R> for Linear {
             out.push(corners[k], n.as_ref()[k], grad[k]);
         }
     }
+
+    fn reach(&self, mesh: &Mesh<E, R>, e: usize, out: &mut Vec<u32>) {
+        out.clear();
+        out.extend_from_slice(mesh.corners[e].as_ref());
+    }
 }
 
 #[cfg(test)]

@@ -20,12 +20,11 @@
 //! (docs/design.md §9); the stress pass, the pore-pressure rate and the mixed integration need
 //! one gradient per element, and take only this basis.
 //!
-//! A basis of its own ([`Basis::LINEAR`] false) goes through the stencil passes. Their sums are
-//! formed point by point in point order on the calling thread: the team's scatter sums an
-//! element's corners into its slots ([`crate::parallel::gather`], four nodes an element at
-//! most), and a basis whose points reach past their element's corners needs a scatter of its
-//! own (the background grid's issue); until then the stencil passes are the seam's proof,
-//! exercised by a test basis whose points touch their element's and its neighbours' nodes.
+//! A basis of its own ([`Basis::LINEAR`] false) goes through the stencil passes, on the team:
+//! each thread sums its own range of nodes over the points within reach of them, in point order
+//! ([`crate::parallel::reach`], [`Basis::reach`]), so that the sums are the same bits for any
+//! thread count. The background grid ([`grid::Cartesian`]) is such a basis; a test basis whose
+//! points touch their element's and its neighbours' nodes proves the seam (`spread`).
 
 pub mod grid;
 pub mod linear;
@@ -50,6 +49,11 @@ pub trait Basis<E: Element, R: Real>: Sync {
 
     /// The stencil of the point at `x` in element `e` into `out` (cleared first).
     fn stencil(&self, mesh: &Mesh<E, R>, e: usize, x: &V3<R>, out: &mut Stencil<R>);
+
+    /// Every node a point of element `e` may touch, wherever in `e` it lies, into `out`
+    /// (cleared first; a node at most once): what the parallel sum of
+    /// [`crate::parallel::reach`] hands each element to.
+    fn reach(&self, mesh: &Mesh<E, R>, e: usize, out: &mut Vec<u32>);
 }
 
 /// One point's nodes, with its weight and the gradient of its weight at each (up to

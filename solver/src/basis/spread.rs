@@ -9,6 +9,7 @@ use crate::element::Element;
 use crate::material::liquid::{Fluid, LiquidSpec};
 use crate::parallel::comm::SingleProcess;
 use crate::parallel::gather::Layout;
+use crate::parallel::reach::Reach;
 use crate::parallel::team::{Pin, Team};
 use crate::real::V3;
 use crate::state::grid::{Grid, LiquidNodes};
@@ -69,6 +70,11 @@ impl<E: Element, R: crate::real::Real> Basis<E, R> for Spread {
             }
         }
     }
+
+    fn reach(&self, _mesh: &Mesh<E, R>, e: usize, out: &mut Vec<u32>) {
+        out.clear();
+        out.extend_from_slice(&self.nodes[e]);
+    }
 }
 
 /// The linear element through the stencil passes: its stencils, without its element kernels.
@@ -79,6 +85,10 @@ impl<E: Element, R: crate::real::Real> Basis<E, R> for LinearStencils {
 
     fn stencil(&self, mesh: &Mesh<E, R>, e: usize, x: &V3<R>, out: &mut Stencil<R>) {
         Linear.stencil(mesh, e, x, out);
+    }
+
+    fn reach(&self, mesh: &Mesh<E, R>, e: usize, out: &mut Vec<u32>) {
+        Linear.reach(mesh, e, out);
     }
 }
 
@@ -136,13 +146,15 @@ fn mapped<B: Basis<crate::element::tet4::Tet4, f64>>(
     p: &Particles<f64>,
     basis: &B,
 ) -> Grid<f64> {
-    let team = Team::new(1, Pin::None).unwrap();
-    let layout = Layout::new(mesh, p, 1);
+    // Three threads: the stencil passes' sums split by node ranges (`Reach`).
+    let team = Team::new(3, Pin::None).unwrap();
+    let layout = Layout::new(mesh, p, 3);
+    let reach = Reach::new(basis, mesh, &layout, 3);
     let mut slots = layout.new_slots();
     let mut g = Grid::<f64>::new(mesh.x.len());
     g.liquid = Some(LiquidNodes::new(mesh.x.len()));
     let fluids = fluids();
-    let passes = Passes::new(&team, &layout, mesh, &SingleProcess).with_basis(basis);
+    let passes = Passes::new(&team, &layout, mesh, &SingleProcess).with_basis(basis, &reach);
     let to = MapToGrid {
         particles: p,
         gravity: &GRAVITY,
@@ -166,12 +178,14 @@ fn remapped<B: Basis<crate::element::tet4::Tet4, f64>>(
     basis: &B,
     pic: f64,
 ) {
-    let team = Team::new(1, Pin::None).unwrap();
-    let layout = Layout::new(mesh, p, 1);
+    // Three threads: the stencil passes' sums split by node ranges (`Reach`).
+    let team = Team::new(3, Pin::None).unwrap();
+    let layout = Layout::new(mesh, p, 3);
+    let reach = Reach::new(basis, mesh, &layout, 3);
     let mut slots = layout.new_slots();
     let fluids = fluids();
     let fixed = vec![[false; 3]; mesh.x.len()];
-    let passes = Passes::new(&team, &layout, mesh, &SingleProcess).with_basis(basis);
+    let passes = Passes::new(&team, &layout, mesh, &SingleProcess).with_basis(basis, &reach);
     let remap = Remap {
         particles: p,
         grid: g,

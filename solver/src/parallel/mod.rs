@@ -12,5 +12,6 @@ pub mod mpi_comm;
 pub mod partition;
 pub mod placement;
 pub mod pool;
+pub mod reach;
 pub mod sort;
 pub mod team;

@@ -8,6 +8,7 @@ use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::parallel::comm::Communicator;
 use crate::parallel::gather::Layout;
+use crate::parallel::reach::Reach;
 use crate::parallel::team::Team;
 use crate::real::Real;
 
@@ -24,6 +25,9 @@ pub struct Passes<'a, R: Real, E: Element, B = Linear> {
     pub comm: &'a dyn Communicator,
     /// The functions the points interpolate with.
     pub basis: &'a B,
+    /// Who sums which nodes under a basis of its own ([`Passes::with_basis`]); `None` for the
+    /// linear elements, whose sums go through [`Layout`]'s scatter.
+    pub reach: Option<&'a Reach>,
 }
 
 impl<R: Real, E: Element, B> Clone for Passes<'_, R, E, B> {
@@ -48,19 +52,32 @@ impl<'a, R: Real, E: Element> Passes<'a, R, E> {
             mesh,
             comm,
             basis: &Linear,
+            reach: None,
         }
     }
 }
 
 impl<'a, R: Real, E: Element, B: Basis<E, R>> Passes<'a, R, E, B> {
-    /// The same passes with `basis`.
-    pub fn with_basis<C: Basis<E, R>>(self, basis: &'a C) -> Passes<'a, R, E, C> {
+    /// The same passes with `basis`, whose sums the threads split as `reach` says (built for
+    /// this basis, mesh and team).
+    pub fn with_basis<C: Basis<E, R>>(self, basis: &'a C, reach: &'a Reach) -> Passes<'a, R, E, C> {
+        debug_assert_eq!(reach.threads(), self.team.threads);
         Passes {
             team: self.team,
             layout: self.layout,
             mesh: self.mesh,
             comm: self.comm,
             basis,
+            reach: Some(reach),
         }
+    }
+
+    /// The reach of a basis of its own.
+    ///
+    /// # Panics
+    /// On the linear elements' passes ([`Passes::new`]), which have none.
+    pub fn reach(&self) -> &'a Reach {
+        self.reach
+            .expect("a basis of its own's passes carry its reach (Passes::with_basis)")
     }
 }

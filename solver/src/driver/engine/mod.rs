@@ -200,6 +200,8 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub mesh: Mesh<E, R>,
     /// On a background grid, its basis (`None`: the mesh's linear elements).
     pub basis: Option<crate::basis::grid::Cartesian>,
+    /// On a background grid, which nodes each thread sums and which elements it visits to.
+    pub reach: Option<crate::parallel::reach::Reach>,
     /// Material points.
     pub particles: Particles<R>,
     /// Nodal arrays.

@@ -14,6 +14,7 @@ use crate::material::liquid::Fluid;
 use crate::parallel::comm::{Communicator, SingleProcess};
 use crate::parallel::gather::Layout;
 use crate::parallel::partition::Partition;
+use crate::parallel::reach::Reach;
 use crate::parallel::sort::SortScratch;
 use crate::parallel::team::{Shared, Team};
 use crate::real::{Real, V3};
@@ -93,6 +94,9 @@ impl<R: Real, E: Element> Engine<R, E> {
         // counted, and contact takes energy out that is not counted either.
         let energy_checked = reactions.is_empty() && case.boundary.contact.is_none();
         let two_phase = case.has_liquid();
+        let reach = basis
+            .as_ref()
+            .map(|b| Reach::new(b, &mesh, &layout, team.threads));
         let mut engine = Engine {
             input_node,
             guards: case.run.guards,
@@ -132,6 +136,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             pore_weights: pore_weights_of::<E, R>(case, mesh.elements()),
             partition,
             basis,
+            reach,
             mesh,
             particles,
             fixed,

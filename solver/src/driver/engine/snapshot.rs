@@ -3,6 +3,7 @@
 
 use crate::element::locate::NOTHING_FOUND;
 use crate::element::Element;
+use crate::parallel::reach::Reach;
 use crate::parallel::team::Team;
 use crate::real::Real;
 
@@ -17,6 +18,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             // Rebuilt from the case at set-up, or scratch that each step rewrites before reading.
             config: _,
             basis: _,
+            reach: _,
             comm: _,
             partition: _,
             mesh: _,
@@ -133,6 +135,9 @@ impl<R: Real, E: Element> Engine<R, E> {
             .layout
             .for_threads(&self.mesh, &self.particles, team.threads);
         self.slots = self.layout.new_slots();
+        if let Some(b) = &self.basis {
+            self.reach = Some(Reach::new(b, &self.mesh, &self.layout, team.threads));
+        }
         self.locate_outcome = vec![NOTHING_FOUND; team.threads];
         self.team = team;
     }

@@ -156,11 +156,13 @@ impl<R: Real, E: Element> Engine<R, E> {
                 // (Asked of the liquid's pass only, the first.)
                 pore_weights: self.pore_weights.as_mut(),
             };
-            match &self.basis {
-                Some(b) => {
-                    particle_to_grid::particle_to_grid(&passes.with_basis(b), &mut self.slots, to)
-                }
-                None => particle_to_grid::particle_to_grid(&passes, &mut self.slots, to),
+            match (&self.basis, &self.reach) {
+                (Some(b), Some(r)) => particle_to_grid::particle_to_grid(
+                    &passes.with_basis(b, r),
+                    &mut self.slots,
+                    to,
+                ),
+                _ => particle_to_grid::particle_to_grid(&passes, &mut self.slots, to),
             }
         }
         particle_to_grid::add_point_loads(
@@ -283,13 +285,13 @@ impl<R: Real, E: Element> Engine<R, E> {
                     fixed: &self.liquid_fixed,
                 }),
             };
-            match &self.basis {
-                Some(b) => grid_to_particle::grid_to_particle(
-                    &passes.with_basis(b),
+            match (&self.basis, &self.reach) {
+                (Some(b), Some(r)) => grid_to_particle::grid_to_particle(
+                    &passes.with_basis(b, r),
                     &mut self.slots,
                     remap,
                 ),
-                None => grid_to_particle::grid_to_particle(&passes, &mut self.slots, remap),
+                _ => grid_to_particle::grid_to_particle(&passes, &mut self.slots, remap),
             }
         }
         // Each body's re-mapped velocities, their precursor cut before the constraints set
@@ -330,7 +332,8 @@ impl<R: Real, E: Element> Engine<R, E> {
             Some(b) if c.smooth_pressure && self.grid.liquid.is_some() => {
                 let (grid, fluids) = (&mut self.grid, &self.fluids);
                 let w = &mut self.grid_scratch.rate_weights;
-                stress::smooth_rates((b, &passes), &self.particles, grid, fluids, w);
+                let reach = self.reach.as_ref().expect("a grid's reach");
+                stress::smooth_rates((b, reach, &passes), &self.particles, grid, fluids, w);
                 true
             }
             Some(_) => false,

@@ -1,13 +1,16 @@
 //! Particle to grid over any basis's stencils ([`crate::basis`]): each point's nodes four at a
 //! time in the lanes of [`Lanes4`], its share of each formed by the element kernels' physics
 //! ([`point_sums`], then [`Sums::close`] with the point's own gradients), and summed into the
-//! nodes point by point in point order on the calling thread (the team's scatter holds an
-//! element's corners only, [`crate::basis`]).
+//! nodes point by point in point order, each thread its own nodes' sums
+//! ([`crate::parallel::reach`]).
+
+use std::ops::Range;
 
 use crate::basis::{Basis, Stencil};
 use crate::element::Element;
 use crate::four::{Four, Lanes4};
 use crate::parallel::gather::{scratch, Slots};
+use crate::parallel::team::Shared;
 use crate::real::{Real, V3};
 use crate::step::contact::maps;
 use crate::step::passes::Passes;
@@ -54,47 +57,56 @@ pub(super) fn map_stencils<E, R, B>(
         w.fresh = false;
     }
     let liquid = liquid.filter(|_| p.liquid.is_some() && g.liquid.is_some());
-    let (mesh, layout) = (passes.mesh, passes.layout);
+    let (mesh, layout, reach) = (passes.mesh, passes.layout, passes.reach());
     let (sw, lw) = (solid_width::<E>(), liquid_width::<E>());
     let width = if liquid.is_some() { sw + lw } else { sw };
     // The nodes' sums in the scatter's slots (grown on the first step only).
-    let nodes = scratch(slots, width * mesh.x.len());
+    let nodes = Shared::new(scratch(slots, width * mesh.x.len()));
     let arrays = PointArrays::new(p, liquid.is_some());
     let liquid_gravity = liquid.map(|l| l.gravity);
-    let mut stencil = Stencil::default();
-    for e in 0..mesh.elements() {
-        let corners = mesh.corners[e].as_ref();
-        for i in layout.particles_of(e) {
-            if !p.active[i] || !maps(body, p.material[i]) {
-                continue;
-            }
-            passes.basis.stencil(mesh, e, &p.x[i], &mut stencil);
-            let one = arrays.element(i..i + 1);
-            let points = Points::<E, R> {
-                arrays: one,
-                liquid: liquid.and_then(|l| one.w.map(|w| (l, w, one.volume0))),
-                map: &mesh.map[e],
-                first: &mesh.x[corners[0] as usize],
-                gravity,
-                body,
-                full: false,
-            };
-            let share = PointShare {
-                points: &points,
-                stencil: &stencil,
-                liquid_gravity,
-            };
-            if liquid.is_some() {
-                share.add::<true>(nodes, width);
-            } else {
-                share.add::<false>(nodes, width);
+    let out = NodeSums::new(g, liquid.is_some());
+    passes.team.run(|t| {
+        let own = reach.nodes(t);
+        // SAFETY: the threads' node ranges are disjoint (`Reach`): these sums are this
+        // thread's only.
+        let mine = unsafe { nodes.range(width * own.start..width * own.end) };
+        let mut stencil = Stencil::default();
+        for e in reach.elements(t) {
+            let corners = mesh.corners[e].as_ref();
+            for i in layout.particles_of(e) {
+                if !p.active[i] || !maps(body, p.material[i]) {
+                    continue;
+                }
+                passes.basis.stencil(mesh, e, &p.x[i], &mut stencil);
+                if !stencil.nodes().iter().any(|&n| own.contains(&(n as usize))) {
+                    continue;
+                }
+                let one = arrays.element(i..i + 1);
+                let points = Points::<E, R> {
+                    arrays: one,
+                    liquid: liquid.and_then(|l| one.w.map(|w| (l, w, one.volume0))),
+                    map: &mesh.map[e],
+                    first: &mesh.x[corners[0] as usize],
+                    gravity,
+                    body,
+                    full: false,
+                };
+                let share = PointShare {
+                    points: &points,
+                    stencil: &stencil,
+                    liquid_gravity,
+                };
+                if liquid.is_some() {
+                    share.add::<true>(mine, width, own.clone());
+                } else {
+                    share.add::<false>(mine, width, own.clone());
+                }
             }
         }
-    }
-    let out = NodeSums::new(g, liquid.is_some());
-    for (n, s) in nodes.chunks_exact(width).enumerate() {
-        out.write::<E>(n, s);
-    }
+        for (k, s) in mine.chunks_exact(width).enumerate() {
+            out.write::<E>(own.start + k, s);
+        }
+    });
 }
 
 /// One point with its stencil, and the liquid's gravity in the liquid's pass.
@@ -105,9 +117,10 @@ struct PointShare<'a, E: Element, R: Real> {
 }
 
 impl<E: Element, R: Real> PointShare<'_, E, R> {
-    /// Adds the point's share of each of its nodes to their sums (`width` values a node: the
-    /// solid's, then the liquid's with `WITH_LIQUID`), four nodes at a time.
-    fn add<const WITH_LIQUID: bool>(&self, nodes: &mut [R], width: usize) {
+    /// Adds the point's share of each of its nodes in `own` to their sums in `nodes` (from
+    /// `own`'s first; `width` values a node: the solid's, then the liquid's with
+    /// `WITH_LIQUID`), four nodes at a time.
+    fn add<const WITH_LIQUID: bool>(&self, nodes: &mut [R], width: usize, own: Range<usize>) {
         let t = ();
         let (sw, lw) = (solid_width::<E>(), liquid_width::<E>());
         let (node, weight, grad) = (
@@ -131,7 +144,11 @@ impl<E: Element, R: Real> PointShare<'_, E, R> {
             let solid = sums.solid.map(|v| v.to_array());
             let liquid = sums.liquid.map(|v| v.to_array());
             for k in 0..live {
-                let at = width * node[from + k] as usize;
+                let n = node[from + k] as usize;
+                if !own.contains(&n) {
+                    continue;
+                }
+                let at = width * (n - own.start);
                 let values = &mut nodes[at..at + width];
                 for c in 0..sw {
                     values[c] += solid[c][k];

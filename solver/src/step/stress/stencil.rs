@@ -9,6 +9,8 @@ use crate::basis::Stencil;
 use crate::element::Element;
 use crate::four::Plain;
 use crate::material::liquid::Fluid;
+use crate::parallel::reach::Reach;
+use crate::parallel::team::Shared;
 use crate::real::Real;
 use crate::real::V3;
 use crate::state::grid::Grid;
@@ -123,40 +125,58 @@ fn point_rate<E: Element, R: Real>(
 /// The pore pressure's rate smoothed through the grid's nodes, as on the mesh's elements
 /// ([`super::update_pore_pressure`]): each saturated point's own rate averaged to its nodes
 /// with weights V N, Σ V N r / Σ V N, into the liquid's nodal `rate` (0 at a node without
-/// saturated points), for the stress pass to interpolate back ([`super::PoreRate`]). Point by
-/// point in point order on the calling thread; `weights` is the nodes' Σ V N, rewritten.
+/// saturated points), for the stress pass to interpolate back ([`super::PoreRate`]). Each
+/// thread sums its own nodes over their points in point order ([`Reach`]); `weights` is the
+/// nodes' Σ V N, rewritten.
 pub fn smooth_rates<E: Element, R: Real>(
-    (basis, passes): (&Cartesian, &Passes<'_, R, E>),
+    (basis, reach, passes): (&Cartesian, &Reach, &Passes<'_, R, E>),
     p: &Particles<R>,
     g: &mut Grid<R>,
     fluids: &[Option<Fluid<R>>],
     weights: &mut Vec<R>,
 ) {
     let gl = g.liquid.as_mut().expect("a two-phase case's nodes");
-    gl.rate.fill(R::ZERO);
-    weights.clear();
+    // Grown on the first step only.
     weights.resize(gl.rate.len(), R::ZERO);
-    let mut st = Stencil::<R>::default();
-    for e in 0..passes.mesh.elements() {
-        for i in passes.layout.particles_of(e) {
-            let Some(f) = fluids[p.material[i] as usize]
-                .as_ref()
-                .filter(|_| p.active[i])
-            else {
-                continue;
-            };
-            basis.stencil_at(&p.x[i].map(|c| c.f64()), &mut st);
-            let r = point_rate::<E, R>(f, &st, (&g.vel, &gl.vel), &p.x[i]);
-            for (&node, &n) in st.nodes().iter().zip(st.weights()) {
-                let w = p.volume[i] * n;
-                gl.rate[node as usize] += w * r;
-                weights[node as usize] += w;
+    let (rate, weights) = (Shared::new(&mut gl.rate), Shared::new(weights));
+    let velocities = (&g.vel[..], &gl.vel[..]);
+    passes.team.run(|t| {
+        let own = reach.nodes(t);
+        // SAFETY: the threads' node ranges are disjoint (`Reach`).
+        let (rate, weights) = unsafe { (rate.range(own.clone()), weights.range(own.clone())) };
+        rate.fill(R::ZERO);
+        weights.fill(R::ZERO);
+        let mut st = Stencil::<R>::default();
+        for e in reach.elements(t) {
+            for i in passes.layout.particles_of(e) {
+                let Some(f) = fluids[p.material[i] as usize]
+                    .as_ref()
+                    .filter(|_| p.active[i])
+                else {
+                    continue;
+                };
+                basis.stencil_at(&p.x[i].map(|c| c.f64()), &mut st);
+                if !st.nodes().iter().any(|&n| own.contains(&(n as usize))) {
+                    continue;
+                }
+                let r = point_rate::<E, R>(f, &st, velocities, &p.x[i]);
+                for (&node, &n) in st.nodes().iter().zip(st.weights()) {
+                    let Some(k) = (node as usize)
+                        .checked_sub(own.start)
+                        .filter(|&k| k < own.len())
+                    else {
+                        continue;
+                    };
+                    let w = p.volume[i] * n;
+                    rate[k] += w * r;
+                    weights[k] += w;
+                }
             }
         }
-    }
-    for (rate, &w) in gl.rate.iter_mut().zip(weights.iter()) {
-        if w > R::ZERO {
-            *rate /= w;
+        for (rate, &w) in rate.iter_mut().zip(weights.iter()) {
+            if w > R::ZERO {
+                *rate /= w;
+            }
         }
-    }
+    });
 }
