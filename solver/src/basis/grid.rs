@@ -193,12 +193,13 @@ impl Cartesian {
         for k in 0..az.len {
             let (nz, dz) = (az.n[k], dz[k]);
             for j in 0..ay.len {
-                let (ny, dy) = (ay.n[j], dy[j]);
+                // What the row's nodes share: N_y N_z, N_y' N_z, N_y N_z'.
+                let (nyz, dyz, nydz) = (ay.n[j] * nz, dy[j] * nz, ay.n[j] * dz);
                 let row = (ay.first + j) * sy + (az.first + k) * sz + ax.first;
                 for i in 0..ax.len {
                     let nx = ax.n[i];
-                    let n = nx * ny * nz;
-                    let grad = [dx[i] * ny * nz, nx * dy * nz, nx * ny * dz];
+                    let n = nx * nyz;
+                    let grad = [dx[i] * nyz, nx * dyz, nx * nydz];
                     // A node whose function and gradient both vanish at x adds nothing.
                     if n == 0.0 && grad.iter().all(|&g| g == 0.0) {
                         continue;

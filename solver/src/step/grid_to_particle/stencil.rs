@@ -74,13 +74,14 @@ pub(super) fn remap_stencils<E, R, B>(
         passes.team.run_chunks(layout.thread_chunks(), |_, c| {
             let mut stencil = Stencil::default();
             let mut at_nodes = [[R::ZERO; 3]; MOST_NODES];
+            let mut weights = Weights::new();
             for e in layout.chunk_elements(c) {
                 for i in layout.particles_of(e) {
                     if !active[i] || !maps(body, material[i]) {
                         continue;
                     }
                     passes.basis.stencil(mesh, e, &x[i], &mut stencil);
-                    let n = &Weights::of(&stencil).n[..stencil.len()];
+                    let n = weights.set(&stencil);
                     // SAFETY: point i and its element's block are chunk c's, which one
                     // thread runs.
                     let (vi, block) = unsafe {
@@ -141,6 +142,7 @@ pub(super) fn remap_stencils<E, R, B>(
         // SAFETY: the threads' node ranges are disjoint (`Reach`).
         let (mine, mine_w) = unsafe { (momentum.range(span.clone()), momentum_w.range(span)) };
         let mut stencil = Stencil::default();
+        let mut at = Weights::new();
         for e in reach.elements(t) {
             for i in layout.particles_of(e) {
                 if !takes_part(i) {
@@ -150,7 +152,7 @@ pub(super) fn remap_stencils<E, R, B>(
                 if !stencil.nodes().iter().any(|&n| own.contains(&(n as usize))) {
                     continue;
                 }
-                let at = Weights::of(&stencil);
+                at.set(&stencil);
                 let nodes = stencil.nodes();
                 at.add::<E>(nodes, One::splat((), p.mass[i]), &p.v[i], mine, &own);
                 let (Some(l), Some(lp)) = (&liquid, &p.liquid) else {
@@ -218,13 +220,19 @@ struct Weights<R: Real> {
 }
 
 impl<R: Real> Weights<R> {
-    /// The weights of `stencil`.
-    fn of(stencil: &Stencil<R>) -> Self {
-        let mut n = [One::splat((), R::ZERO); MOST_NODES];
-        for (nk, &w) in n.iter_mut().zip(stencil.weights()) {
+    /// Room for a stencil's weights (one per thread and pass, reused point after point).
+    fn new() -> Self {
+        Weights {
+            n: [One::splat((), R::ZERO); MOST_NODES],
+        }
+    }
+
+    /// The weights of `stencil`, into the front of the room.
+    fn set(&mut self, stencil: &Stencil<R>) -> &[One<R>] {
+        for (nk, &w) in self.n.iter_mut().zip(stencil.weights()) {
             *nk = Plain([w]);
         }
-        Weights { n }
+        &self.n[..stencil.len()]
     }
 
     /// Adds `m` N_k v to the momentum of each node in `own` (`momentum`: three values a

@@ -130,14 +130,15 @@ impl<E: Element, R: Real> PointShare<'_, E, R> {
         );
         for from in (0..node.len()).step_by(4) {
             let live = (node.len() - from).min(4);
-            let lane = |f: &dyn Fn(usize) -> R| {
-                Lanes4::load(
-                    t,
-                    &std::array::from_fn(|k| if k < live { f(from + k) } else { R::ZERO }),
-                )
-            };
-            let n = lane(&|k| weight[k]);
-            let g: [Lanes4<R>; 3] = std::array::from_fn(|b| lane(&|k| grad[k][b]));
+            let (mut n, mut g) = ([R::ZERO; 4], [[R::ZERO; 4]; 3]);
+            for k in 0..live {
+                n[k] = weight[from + k];
+                for (b, gb) in g.iter_mut().enumerate() {
+                    gb[k] = grad[from + k][b];
+                }
+            }
+            let n = Lanes4::load(t, &n);
+            let g = g.map(|gb| Lanes4::load(t, &gb));
             let mut sums = Sums::<R, Lanes4<R>>::zero(t, NO_LEAD);
             point_sums::<E, R, Lanes4<R>, WITH_LIQUID, false>(t, self.points, 0, n, &mut sums);
             sums.close::<E, WITH_LIQUID>(t, &g, [R::ZERO; 3], self.liquid_gravity);
