@@ -26,6 +26,8 @@
 //! thread count. The background grid ([`grid::Cartesian`]) is such a basis; a test basis whose
 //! points touch their element's and its neighbours' nodes proves the seam (`spread`).
 
+pub mod background;
+pub mod ddmp;
 pub mod grid;
 pub mod linear;
 pub mod spline;

@@ -202,6 +202,7 @@ impl Fingerprint {
             strain_smoothing,
             precision,
             grid,
+            gradient,
         } = numerics;
         let StartState {
             consolidation,
@@ -266,6 +267,9 @@ impl Fingerprint {
         // keep their items.
         if let Some(grid) = grid {
             items.push(("background grid", grid));
+        }
+        if *gradient != crate::input::case::Gradient::Element {
+            items.push(("gradients", gradient));
         }
         Fingerprint(items.iter().map(|&(n, v)| Item::of(n, v)).collect())
     }

@@ -335,6 +335,18 @@ pub struct TimeControls {
     pub initial_step: Option<f64>,
 }
 
+/// The gradients of the points' functions on the mesh's linear elements.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Gradient {
+    /// The element's own, constant over it (they jump where a point crosses a face).
+    #[default]
+    Element,
+    /// The dual-domain gradients ([`crate::basis::ddmp`]): continuous across faces.
+    Ddmp,
+    /// The dual-domain gradients blended with the element's own towards its centroid.
+    DdmpBlended,
+}
+
 /// How the equations are integrated: damping, the stress rate and integration, the velocity
 /// update, drag, smoothing, the liquid's mass, the axisymmetric volume and the precision.
 /// Scenes and Anura3D input choose several of them differently.
@@ -374,6 +386,8 @@ pub struct Numerics {
     /// The background grid the case runs on, with its basis (`None`: the mesh's elements, the
     /// linear basis).
     pub grid: Option<crate::basis::grid::GridSpec>,
+    /// The gradients the points take on the mesh's elements (not on a grid).
+    pub gradient: Gradient,
     /// Floating-point precision of the particle and grid state.
     pub precision: Precision,
 }
@@ -753,6 +767,7 @@ impl Case {
                 hoop_in_volume: true,
                 strain_smoothing: false,
                 grid: None,
+                gradient: Gradient::Element,
                 precision: Precision::F64,
             },
             start: StartState::default(),

@@ -108,6 +108,12 @@ pub enum SetupError {
     /// The background mesh is not the grid's lattice.
     #[error(transparent)]
     Lattice(#[from] crate::basis::grid::LatticeError),
+    /// The dual-domain gradients reach too many nodes.
+    #[error(transparent)]
+    DdmpReach(#[from] crate::basis::ddmp::DdmpError),
+    /// The dual-domain gradients, with a feature that runs on the elements' own only.
+    #[error("the dual-domain gradients (gradient = \"ddmp\") cannot model {0} yet; use gradient = \"element\"")]
+    Ddmp(&'static str),
     /// More than one process, with a feature that runs on one only.
     #[error("a run over {ranks} MPI ranks cannot model {what} yet; run it on one process")]
     Distributed {
@@ -198,9 +204,10 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub partition: Partition,
     /// Computational mesh: the partition's elements, numbered locally.
     pub mesh: Mesh<E, R>,
-    /// On a background grid, its basis (`None`: the mesh's linear elements).
-    pub basis: Option<crate::basis::grid::Cartesian>,
-    /// On a background grid, which nodes each thread sums and which elements it visits to.
+    /// A basis of its own: a background grid's, or the dual-domain gradients (`None`: the
+    /// mesh's linear elements and their kernels).
+    pub basis: Option<crate::basis::background::Background>,
+    /// With a basis of its own, which nodes each thread sums and which elements it visits to.
     pub reach: Option<crate::parallel::reach::Reach>,
     /// Material points.
     pub particles: Particles<R>,

@@ -4,10 +4,13 @@
 
 use std::sync::Arc;
 
+use crate::basis::background::Background;
+use crate::basis::ddmp::Ddmp;
 use crate::basis::grid::Cartesian;
 use crate::element::locate::NOTHING_FOUND;
 use crate::element::mesh::Mesh;
 use crate::element::Element;
+use crate::input::case::Gradient;
 use crate::input::case::{Case, CriticalStepRule, Integration, MixedRule};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
@@ -94,9 +97,6 @@ impl<R: Real, E: Element> Engine<R, E> {
         // counted, and contact takes energy out that is not counted either.
         let energy_checked = reactions.is_empty() && case.boundary.contact.is_none();
         let two_phase = case.has_liquid();
-        let reach = basis
-            .as_ref()
-            .map(|b| Reach::new(b, &mesh, &layout, team.threads));
         let mut engine = Engine {
             input_node,
             guards: case.run.guards,
@@ -135,8 +135,8 @@ impl<R: Real, E: Element> Engine<R, E> {
             mixed: mixed_of(case, mesh.elements(), boundary),
             pore_weights: pore_weights_of::<E, R>(case, mesh.elements()),
             partition,
+            reach: (basis.as_ref()).map(|b| Reach::new(b, &mesh, &layout, team.threads)),
             basis,
-            reach,
             mesh,
             particles,
             fixed,
@@ -226,6 +226,15 @@ fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupE
             return Err(SetupError::Grid(what));
         }
     }
+    if case.numerics.gradient != Gradient::Element {
+        let more = [
+            (ranks > 1, "a run over several MPI ranks"),
+            (!case.boundary.walls.is_empty(), "walls with friction"),
+        ];
+        if let Some(what) = first(&more).or(first(&one_process_only(case))) {
+            return Err(SetupError::Ddmp(what));
+        }
+    }
     if ranks > 1 {
         if let Some(what) = first(&one_process_only(case)) {
             return Err(SetupError::Distributed { ranks, what });
@@ -257,14 +266,20 @@ fn one_process_only(case: &Case) -> [(bool, &'static str); 7] {
     ]
 }
 
-/// On a background grid, its basis on the grid's mesh.
+/// A basis of its own: on a background grid, its basis on the grid's mesh; with the
+/// dual-domain gradients, their averages on the mesh.
 fn basis_of<E: Element, R: Real>(
     case: &Case,
     mesh: &Mesh<E, R>,
-) -> Result<Option<Cartesian>, SetupError> {
-    Ok(match &case.numerics.grid {
-        Some(spec) => Some(Cartesian::new(spec.clone(), mesh)?),
-        None => None,
+) -> Result<Option<Background>, SetupError> {
+    let n = &case.numerics;
+    Ok(match (&n.grid, n.gradient) {
+        (Some(spec), _) => Some(Background::Grid(Cartesian::new(spec.clone(), mesh)?)),
+        (None, Gradient::Element) => None,
+        (None, g) => Some(Background::Ddmp(Ddmp::new(
+            mesh,
+            g == Gradient::DdmpBlended,
+        )?)),
     })
 }
 
@@ -301,7 +316,7 @@ fn place_points<E: Element, R: Real>(
     case: &Case,
     partition: &Partition,
     mesh: &Mesh<E, R>,
-    basis: Option<&Cartesian>,
+    basis: Option<&Background>,
 ) -> Result<(Particles<R>, Vec<bool>), SetupError> {
     let own = partition.elements();
     let density = |m: u32| {
@@ -315,7 +330,10 @@ fn place_points<E: Element, R: Real>(
         &case.body.points_per_element[own.clone()],
         &case.body.element_material[own.clone()],
     );
-    let mut particles = match basis.and_then(|b| Some((b, b.spec().points_per_axis?))) {
+    let mut particles = match basis
+        .and_then(|b| b.grid())
+        .and_then(|b| Some((b, b.spec().points_per_axis?)))
+    {
         // A grid's regular points, seeded cell by cell.
         Some((b, k)) => {
             let centroid = |e: usize| {

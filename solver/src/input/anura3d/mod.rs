@@ -403,6 +403,7 @@ impl Parts {
                 hoop_in_volume: false,
                 strain_smoothing: strain_smoothing(&input.cps),
                 grid: None,
+                gradient: crate::input::case::Gradient::Element,
                 precision: crate::input::case::Precision::F64,
             },
             start: StartState {

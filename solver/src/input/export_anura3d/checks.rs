@@ -125,7 +125,7 @@ pub(super) fn solid_traction(r: &Resolved) -> Result<&'static str, Refusal> {
 }
 
 /// Refuses what only this solver models: a PIC share in the velocity update, a background
-/// grid, frictional walls.
+/// grid, the dual-domain gradients, frictional walls.
 pub(super) fn solver_only(case: &Case) -> Result<(), Refusal> {
     if case.numerics.pic_blend > 0.0 {
         return Err(refuse(
@@ -143,6 +143,12 @@ pub(super) fn solver_only(case: &Case) -> Result<(), Refusal> {
                 "Anura3D computes on the mesh's elements; a background grid ({} basis) has no Anura3D counterpart: remove [grid] to export",
                 grid.basis_name()
             ),
+        ));
+    }
+    if case.numerics.gradient != crate::input::case::Gradient::Element {
+        return Err(refuse(
+            "gradient",
+            "Anura3D takes each element's own gradients; the dual-domain gradients have no Anura3D counterpart: remove gradient to export".to_string(),
         ));
     }
     if !case.boundary.walls.is_empty() {

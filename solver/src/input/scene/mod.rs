@@ -10,6 +10,7 @@
 //! objective_stress = false        # Anura3D's objective stress rate, for large rotations
 //! strain_smoothing = false        # Anura3D's strain smoothing (eases volumetric locking)
 //! pic_blend = 0.0                 # share of PIC in the points' velocity update (0: FLIP)
+//! gradient = "element"            # or "ddmp", "ddmp_blended" (dual-domain gradients)
 //! [time]
 //! end = 0.5                       # s
 //! courant = 0.5
@@ -110,6 +111,7 @@ pub(crate) const TOP_LEVEL: Table = Table {
         key("objective_stress", "bool", "false", "", "Anura3D's objective stress rate (APPLY_OBJECTIVE_STRESS), for large rotations"),
         key("strain_smoothing", "bool", "false", "", "Anura3D's strain smoothing (STRAIN_SMOOTHING): eases volumetric locking of linear elements"),
         key("pic_blend", "float", "0 (FLIP)", "", "share of PIC in the points' velocity update, in [0, 1]"),
+        key("gradient", "string", "\"element\"", "", "the points' gradients on the mesh's elements: \"element\" (their own), \"ddmp\" (dual-domain: continuous across faces) or \"ddmp_blended\" (with the element's own towards its centroid); a study option (docs/design.md §4.21)"),
         key("time", "table", "required", "", "`[time]`"),
         key("gravity", "table", "none", "", "`[gravity]`"),
         key("damping", "table", "none", "", "`[damping]`"),
@@ -148,6 +150,10 @@ struct Scene {
     /// Share of PIC in the points' velocity update (0, the default, is Anura3D's FLIP).
     #[serde(default)]
     pic_blend: f64,
+    /// The points' gradients on the mesh's elements: "element" (default), "ddmp" or
+    /// "ddmp_blended".
+    #[serde(default)]
+    gradient: Option<String>,
     time: time::Time,
     #[serde(default)]
     gravity: Option<gravity::Gravity>,
@@ -306,6 +312,7 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
         initial_stress,
         precision: numerics::precision(scene.precision.as_deref())?,
         integration: numerics::integration(scene.integration.as_deref())?,
+        gradient: numerics::gradient(scene.gradient.as_deref(), grid.is_some())?,
         grid,
     }
     .resolved(path, scene, mesh))
@@ -324,6 +331,7 @@ struct Sections {
     initial_stress: Option<crate::input::initial_stress::InitialStress>,
     precision: crate::input::case::Precision,
     integration: crate::input::case::Integration,
+    gradient: crate::input::case::Gradient,
     grid: Option<crate::basis::grid::GridSpec>,
 }
 
@@ -391,6 +399,7 @@ impl Sections {
                 strain_smoothing: scene.strain_smoothing,
                 precision: self.precision,
                 grid: self.grid,
+                gradient: self.gradient,
             },
             start: StartState {
                 consolidation: self.consolidation,

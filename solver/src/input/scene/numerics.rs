@@ -2,7 +2,7 @@
 //! the points' velocity update.
 
 use super::{refuse, Refusal};
-use crate::input::case::{Integration, MixedRule, Precision};
+use crate::input::case::{Gradient, Integration, MixedRule, Precision};
 
 /// Refuses a PIC share outside [0, 1], and any PIC share with prescribed velocities.
 pub(super) fn check_pic_blend(pic_blend: f64, has_velocities: bool) -> Result<(), Refusal> {
@@ -49,4 +49,26 @@ pub(super) fn integration(integration: Option<&str>) -> Result<Integration, Refu
             format!("{s:?} is not an integration; use \"points\" or \"mixed\""),
         )),
     }
+}
+
+/// The gradients `gradient` names on the mesh's elements (their own by default).
+pub(super) fn gradient(gradient: Option<&str>, on_grid: bool) -> Result<Gradient, Refusal> {
+    let g = match gradient {
+        None | Some("element") => Gradient::Element,
+        Some("ddmp") => Gradient::Ddmp,
+        Some("ddmp_blended") => Gradient::DdmpBlended,
+        Some(s) => {
+            return Err(refuse(
+                "gradient",
+                format!("{s:?} is not a gradient; use \"element\", \"ddmp\" or \"ddmp_blended\""),
+            ))
+        }
+    };
+    if on_grid && g != Gradient::Element {
+        return Err(refuse(
+            "gradient",
+            "the dual-domain gradients are the mesh's elements'; a [grid] takes its basis's own",
+        ));
+    }
+    Ok(g)
 }

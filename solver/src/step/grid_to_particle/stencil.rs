@@ -15,10 +15,12 @@ use crate::step::passes::Passes;
 
 use super::nodal::velocity;
 use super::point::{flip, kinetic, liquid_mass, NodeState, Pic};
-use super::Remap;
+use super::{LiquidRemap, Remap};
 use crate::parallel::gather::{scratch, Slots, ELEMENT_BLOCK};
 use crate::parallel::team::Shared;
 use crate::state::grid::Grid;
+use crate::state::particles::Particles;
+use crate::step::contact::OneBody;
 use crate::step::stress::GuardSums;
 
 /// One lane: one point.
@@ -54,12 +56,11 @@ pub(super) fn remap_stencils<E, R, B>(
         slots.fill(GuardSums::EMPTY);
     }
     let liquid = liquid.filter(|_| p.liquid.is_some() && g.liquid.is_some());
-    let (mesh, layout, reach) = (passes.mesh, passes.layout, passes.reach());
+    let (mesh, layout) = (passes.mesh, passes.layout);
     let blend = (pic > R::ZERO).then_some(Pic {
         flip: R::ONE - pic,
         pic,
     });
-    let takes_part = |i: usize| p.active[i] && maps(body, p.material[i]);
     // The velocity update: each point once, by the chunk that holds its element.
     {
         let v = Shared::new(&mut p.v);
@@ -124,7 +125,23 @@ pub(super) fn remap_stencils<E, R, B>(
             }
         });
     }
-    // The momenta re-mapped, each thread its own nodes', and their velocities.
+    remap_momenta(passes, slots, (p, g), (fixed, body, liquid));
+}
+
+/// The second half of [`remap_stencils`]: each thread re-maps into its own nodes the momenta
+/// of the body's points within their reach (the liquid's too), point by point in point order,
+/// and forms its nodes' velocities.
+fn remap_momenta<E, R, B>(
+    passes: &Passes<'_, R, E, B>,
+    slots: &mut Slots<R>,
+    (p, g): (&Particles<R>, &mut Grid<R>),
+    (fixed, body, liquid): (&[[bool; 3]], Option<OneBody>, Option<LiquidRemap<'_, R>>),
+) where
+    E: Element,
+    R: Real,
+    B: Basis<E, R>,
+{
+    let (mesh, layout, reach) = (passes.mesh, passes.layout, passes.reach());
     let nodes = mesh.x.len();
     let (momentum, momentum_w) = scratch(slots, 6 * nodes).split_at_mut(3 * nodes);
     let (momentum, momentum_w) = (Shared::new(momentum), Shared::new(momentum_w));
@@ -135,7 +152,6 @@ pub(super) fn remap_stencils<E, R, B>(
         .as_mut()
         .filter(|_| liquid.is_some())
         .map(|gl| (&gl.mass, Shared::new(&mut gl.vel)));
-    let p = &*p;
     passes.team.run(|t| {
         let own = reach.nodes(t);
         let span = 3 * own.start..3 * own.end;
@@ -145,7 +161,7 @@ pub(super) fn remap_stencils<E, R, B>(
         let mut at = Weights::new();
         for e in reach.elements(t) {
             for i in layout.particles_of(e) {
-                if !takes_part(i) {
+                if !p.active[i] || !maps(body, p.material[i]) {
                     continue;
                 }
                 passes.basis.stencil(mesh, e, &p.x[i], &mut stencil);

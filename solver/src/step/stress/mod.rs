@@ -22,7 +22,7 @@ pub use pore_rate::{update_pore_pressure, PorePressure, PoreRate};
 pub use stencil::smooth_rates;
 pub use strain::{rotate, rotation};
 
-use crate::basis::grid::Cartesian;
+use crate::basis::background::Background;
 use crate::element::locate::{merge, Outcome, NOTHING_FOUND};
 use crate::element::mesh::Mesh;
 use crate::element::{batch_width, Element};
@@ -71,8 +71,9 @@ pub struct StressUpdate<'a, R: Real> {
     pub pore_rate: Option<PoreRate<'a, R>>,
     /// Where the moved points are located too, one [`Outcome`] per thread.
     pub located: Option<&'a mut [Outcome]>,
-    /// On a background grid, its basis: each point strains with its own stencil.
-    pub background: Option<&'a Cartesian>,
+    /// A basis of its own (a background grid's, or the dual-domain gradients): each point
+    /// strains with its own stencil.
+    pub background: Option<&'a Background>,
     /// Each saturated point's pore-pressure rate from its own stencil (on a grid), per
     /// material index its liquid.
     pub point_rates: Option<&'a [Option<Fluid<R>>]>,
@@ -222,8 +223,8 @@ struct Pass<'a, E: Element, R: Real> {
     elements: Shared<'a, u32>,
     /// One outcome per thread.
     located: Option<Shared<'a, Outcome>>,
-    /// On a background grid, its basis.
-    background: Option<&'a Cartesian>,
+    /// A basis of its own.
+    background: Option<&'a Background>,
     /// Per material index its liquid, where each point takes its own pore-pressure rate.
     point_rates: Option<&'a [Option<Fluid<R>>]>,
 }

@@ -4,8 +4,8 @@
 //! ([`super::general::finish`]). The points of a chunk are updated by one thread, as on the
 //! mesh's elements: each point's result is the same whichever thread computes it.
 
-use crate::basis::grid::Cartesian;
-use crate::basis::Stencil;
+use crate::basis::background::Background;
+use crate::basis::{Basis, Stencil};
 use crate::element::Element;
 use crate::four::Plain;
 use crate::material::liquid::Fluid;
@@ -29,7 +29,7 @@ use super::{ChunkPoints, Pass, Sinks};
 /// moves; then, where the pass locates, the moved points are located.
 pub(super) fn element<E: Element, R: Real, const WIDE: bool>(
     cx: &Pass<'_, E, R>,
-    grid: &Cartesian,
+    basis: &Background,
     e: usize,
     p: &mut ChunkPoints<'_, R>,
     (from, end): (usize, usize),
@@ -43,7 +43,7 @@ pub(super) fn element<E: Element, R: Real, const WIDE: bool>(
             continue;
         }
         let x = p.x[j];
-        grid.stencil_at(&x.map(|c| c.f64()), &mut st);
+        basis.stencil(cx.mesh, e, &x, &mut st);
         // L[a][b] = ∂v_a/∂x_b and the velocity at the point (in-plane only in 2D).
         let mut l = [[R::ZERO; 3]; 3];
         let mut v = [R::ZERO; 3];
@@ -129,7 +129,7 @@ fn point_rate<E: Element, R: Real>(
 /// thread sums its own nodes over their points in point order ([`Reach`]); `weights` is the
 /// nodes' Σ V N, rewritten.
 pub fn smooth_rates<E: Element, R: Real>(
-    (basis, reach, passes): (&Cartesian, &Reach, &Passes<'_, R, E>),
+    (basis, reach, passes): (&Background, &Reach, &Passes<'_, R, E>),
     p: &Particles<R>,
     g: &mut Grid<R>,
     fluids: &[Option<Fluid<R>>],
@@ -155,7 +155,7 @@ pub fn smooth_rates<E: Element, R: Real>(
                 else {
                     continue;
                 };
-                basis.stencil_at(&p.x[i].map(|c| c.f64()), &mut st);
+                basis.stencil(passes.mesh, e, &p.x[i], &mut st);
                 if !st.nodes().iter().any(|&n| own.contains(&(n as usize))) {
                     continue;
                 }

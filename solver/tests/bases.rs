@@ -1,6 +1,8 @@
-//! The background grid (`[grid]`): runs on it give the same bytes for any thread count in both
-//! precisions, dry and saturated, in 3D and in plane strain; the quadratic B-splines settle a
-//! self-weight column to the closed form; what the grid does not model is refused by name.
+//! The bases of their own: the background grid (`[grid]`) and the dual-domain gradients on the
+//! mesh's elements (`gradient = "ddmp"`). Runs with either give the same bytes for any thread
+//! count in both precisions, dry and saturated, in 3D and in plane strain; the quadratic
+//! B-splines settle a self-weight column to the closed form; what neither models is refused by
+//! name.
 
 mod common;
 
@@ -128,6 +130,9 @@ fn grid_runs_are_the_same_bytes_for_any_thread_count() {
             0.02,
         ),
         saturated(d, true, "[grid]\ncell = 0.05", 0.01),
+        dry_column(d, "dry_ddmp", "gradient = \"ddmp\"", 1, 0.02),
+        saturated(d, false, "gradient = \"ddmp_blended\"", 0.01),
+        saturated(d, true, "gradient = \"ddmp\"", 0.01),
     ];
     for scene in &scenes {
         for precision in ["f64", "f32"] {
@@ -222,6 +227,30 @@ fn what_the_grid_does_not_model_is_refused_by_name() {
             ),
             "strain smoothing",
         ),
+        (
+            dry_column(
+                d,
+                "ddmp_mixed",
+                "integration = \"mixed\"\ngradient = \"ddmp\"",
+                1,
+                0.01,
+            ),
+            "the dual-domain gradients (gradient = \"ddmp\") cannot model mixed integration",
+        ),
+        (
+            dry_column(
+                d,
+                "ddmp_grid",
+                "gradient = \"ddmp\"\n[grid]\ncell = 0.1",
+                1,
+                0.01,
+            ),
+            "a [grid] takes its basis's own",
+        ),
+        (
+            dry_column(d, "ddmp_name", "gradient = \"smooth\"", 1, 0.01),
+            "is not a gradient",
+        ),
     ];
     for (scene, says) in &cases {
         let o = solve(scene, &d.join("never"), &[]);
@@ -240,6 +269,18 @@ fn what_the_grid_does_not_model_is_refused_by_name() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && err.contains("remove [grid] to export"),
+        "{err}"
+    );
+    let o = Command::cargo_bin("mpm-solve")
+        .unwrap()
+        .arg(dry_column(d, "export_ddmp", "gradient = \"ddmp\"", 1, 0.01))
+        .arg("--export-anura3d")
+        .arg(d.join("a3d_ddmp"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("remove gradient to export"),
         "{err}"
     );
 }
