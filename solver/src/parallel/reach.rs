@@ -16,12 +16,12 @@
 
 use std::ops::Range;
 
-use crate::basis::Basis;
+use crate::basis::{Basis, Stencil};
 use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::parallel::gather::Layout;
 use crate::parallel::team::balanced_ranges;
-use crate::real::Real;
+use crate::real::{Real, V3};
 
 /// Who sums which nodes, and which elements each must visit to do so.
 #[derive(Debug, Clone)]
@@ -92,6 +92,35 @@ impl Reach {
         self.runs[t].iter().flat_map(|r| r.clone())
     }
 
+    /// Calls `f(e, i, stencil)`, in point order, for each point `i` that `takes_part` of the
+    /// elements `e` thread `t` visits whose stencil under `basis` (at `x[i]`) touches one of
+    /// the thread's nodes: the points whose shares the thread sums.
+    pub fn visit<E, R, B>(
+        &self,
+        t: usize,
+        (basis, mesh, layout): (&B, &Mesh<E, R>, &Layout<R, E>),
+        (x, takes_part): (&[V3<R>], impl Fn(usize) -> bool),
+        mut f: impl FnMut(usize, usize, &Stencil<R>),
+    ) where
+        E: Element,
+        R: Real,
+        B: Basis<E, R>,
+    {
+        let own = self.nodes(t);
+        let mut stencil = Stencil::default();
+        for e in self.elements(t) {
+            for i in layout.particles_of(e) {
+                if !takes_part(i) {
+                    continue;
+                }
+                basis.stencil(mesh, e, &x[i], &mut stencil);
+                if stencil.nodes().iter().any(|&n| own.contains(&(n as usize))) {
+                    f(e, i, &stencil);
+                }
+            }
+        }
+    }
+
     /// The share of element visits beyond one per element: what the halo costs.
     pub fn halo_share(&self) -> f64 {
         (self.visits - 1.0).max(0.0)
@@ -103,7 +132,6 @@ mod tests {
     use super::*;
     use crate::basis::grid::{Cartesian, GridSpec};
     use crate::basis::spline::Shape;
-    use crate::basis::Stencil;
     use crate::element::tet4::Tet4;
     use crate::state::particles::Particles;
     use mpm_shared::{generate, ElementType};

@@ -157,31 +157,23 @@ fn remap_momenta<E, R, B>(
         let span = 3 * own.start..3 * own.end;
         // SAFETY: the threads' node ranges are disjoint (`Reach`).
         let (mine, mine_w) = unsafe { (momentum.range(span.clone()), momentum_w.range(span)) };
-        let mut stencil = Stencil::default();
         let mut at = Weights::new();
-        for e in reach.elements(t) {
-            for i in layout.particles_of(e) {
-                if !p.active[i] || !maps(body, p.material[i]) {
-                    continue;
-                }
-                passes.basis.stencil(mesh, e, &p.x[i], &mut stencil);
-                if !stencil.nodes().iter().any(|&n| own.contains(&(n as usize))) {
-                    continue;
-                }
-                at.set(&stencil);
-                let nodes = stencil.nodes();
-                at.add::<E>(nodes, One::splat((), p.mass[i]), &p.v[i], mine, &own);
-                let (Some(l), Some(lp)) = (&liquid, &p.liquid) else {
-                    continue;
-                };
-                let Some(f) = l.fluids[p.material[i] as usize] else {
-                    continue;
-                };
-                let volume = lp.volume0.as_ref().map_or(p.volume[i], |v0| v0[i]);
-                let mw = liquid_mass((), &f, One::splat((), volume));
-                at.add::<E>(nodes, mw, &lp.w[i], mine_w, &own);
-            }
-        }
+        let takes_part = |i: usize| p.active[i] && maps(body, p.material[i]);
+        let on = (passes.basis, mesh, layout);
+        reach.visit(t, on, (&p.x, takes_part), |_, i, stencil| {
+            at.set(stencil);
+            let nodes = stencil.nodes();
+            at.add::<E>(nodes, One::splat((), p.mass[i]), &p.v[i], mine, &own);
+            let (Some(l), Some(lp)) = (&liquid, &p.liquid) else {
+                return;
+            };
+            let Some(f) = l.fluids[p.material[i] as usize] else {
+                return;
+            };
+            let volume = lp.volume0.as_ref().map_or(p.volume[i], |v0| v0[i]);
+            let mw = liquid_mass((), &f, One::splat((), volume));
+            at.add::<E>(nodes, mw, &lp.w[i], mine_w, &own);
+        });
         for n in own.clone() {
             let m = vector(mine, n - own.start);
             // SAFETY: node n is this thread's only.

@@ -70,39 +70,31 @@ pub(super) fn map_stencils<E, R, B>(
         // SAFETY: the threads' node ranges are disjoint (`Reach`): these sums are this
         // thread's only.
         let mine = unsafe { nodes.range(width * own.start..width * own.end) };
-        let mut stencil = Stencil::default();
-        for e in reach.elements(t) {
+        let takes_part = |i: usize| p.active[i] && maps(body, p.material[i]);
+        let on = (passes.basis, mesh, layout);
+        reach.visit(t, on, (&p.x, takes_part), |e, i, stencil| {
             let corners = mesh.corners[e].as_ref();
-            for i in layout.particles_of(e) {
-                if !p.active[i] || !maps(body, p.material[i]) {
-                    continue;
-                }
-                passes.basis.stencil(mesh, e, &p.x[i], &mut stencil);
-                if !stencil.nodes().iter().any(|&n| own.contains(&(n as usize))) {
-                    continue;
-                }
-                let one = arrays.element(i..i + 1);
-                let points = Points::<E, R> {
-                    arrays: one,
-                    liquid: liquid.and_then(|l| one.w.map(|w| (l, w, one.volume0))),
-                    map: &mesh.map[e],
-                    first: &mesh.x[corners[0] as usize],
-                    gravity,
-                    body,
-                    full: false,
-                };
-                let share = PointShare {
-                    points: &points,
-                    stencil: &stencil,
-                    liquid_gravity,
-                };
-                if liquid.is_some() {
-                    share.add::<true>(mine, width, own.clone());
-                } else {
-                    share.add::<false>(mine, width, own.clone());
-                }
+            let one = arrays.element(i..i + 1);
+            let points = Points::<E, R> {
+                arrays: one,
+                liquid: liquid.and_then(|l| one.w.map(|w| (l, w, one.volume0))),
+                map: &mesh.map[e],
+                first: &mesh.x[corners[0] as usize],
+                gravity,
+                body,
+                full: false,
+            };
+            let share = PointShare {
+                points: &points,
+                stencil,
+                liquid_gravity,
+            };
+            if liquid.is_some() {
+                share.add::<true>(mine, width, own.clone());
+            } else {
+                share.add::<false>(mine, width, own.clone());
             }
-        }
+        });
         for (k, s) in mine.chunks_exact(width).enumerate() {
             out.write::<E>(own.start + k, s);
         }

@@ -146,33 +146,25 @@ pub fn smooth_rates<E: Element, R: Real>(
         let (rate, weights) = unsafe { (rate.range(own.clone()), weights.range(own.clone())) };
         rate.fill(R::ZERO);
         weights.fill(R::ZERO);
-        let mut st = Stencil::<R>::default();
-        for e in reach.elements(t) {
-            for i in passes.layout.particles_of(e) {
-                let Some(f) = fluids[p.material[i] as usize]
-                    .as_ref()
-                    .filter(|_| p.active[i])
+        let saturated = |i: usize| p.active[i] && fluids[p.material[i] as usize].is_some();
+        let on = (basis, passes.mesh, passes.layout);
+        reach.visit(t, on, (&p.x, saturated), |_, i, st| {
+            let Some(f) = &fluids[p.material[i] as usize] else {
+                return;
+            };
+            let r = point_rate::<E, R>(f, st, velocities, &p.x[i]);
+            for (&node, &n) in st.nodes().iter().zip(st.weights()) {
+                let Some(k) = (node as usize)
+                    .checked_sub(own.start)
+                    .filter(|&k| k < own.len())
                 else {
                     continue;
                 };
-                basis.stencil(passes.mesh, e, &p.x[i], &mut st);
-                if !st.nodes().iter().any(|&n| own.contains(&(n as usize))) {
-                    continue;
-                }
-                let r = point_rate::<E, R>(f, &st, velocities, &p.x[i]);
-                for (&node, &n) in st.nodes().iter().zip(st.weights()) {
-                    let Some(k) = (node as usize)
-                        .checked_sub(own.start)
-                        .filter(|&k| k < own.len())
-                    else {
-                        continue;
-                    };
-                    let w = p.volume[i] * n;
-                    rate[k] += w * r;
-                    weights[k] += w;
-                }
+                let w = p.volume[i] * n;
+                rate[k] += w * r;
+                weights[k] += w;
             }
-        }
+        });
         for (rate, &w) in rate.iter_mut().zip(weights.iter()) {
             if w > R::ZERO {
                 *rate /= w;
