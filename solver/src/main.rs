@@ -106,6 +106,12 @@ struct Args {
     /// `precision`, else f64]. Time, work and energies are summed in f64 either way.
     #[arg(long, value_enum)]
     precision: Option<PrecisionArg>,
+    /// The points' gradients on the mesh's elements: `element` (their own, Anura3D's) or the
+    /// dual-domain gradients, continuous across faces (`ddmp`, `ddmp-blended`; their error
+    /// falls with refinement where the element's does not: docs/accuracy-ddmp.md)
+    /// [default: the scene's `gradient`, else element].
+    #[arg(long, value_enum)]
+    basis: Option<BasisArg>,
     /// Run a Courant number above 1 (refused otherwise: the explicit step is unstable; the
     /// guard rails then stop the run when it blows up).
     #[arg(long)]
@@ -249,6 +255,13 @@ enum PrecisionArg {
 enum DragArg {
     Implicit,
     Explicit,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum BasisArg {
+    Element,
+    Ddmp,
+    DdmpBlended,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -446,7 +459,7 @@ fn input_kind(path: &std::path::Path) -> anyhow::Result<Input> {
 
 /// The options that override the case's settings, as the library takes them.
 fn overrides(args: &Args) -> Overrides {
-    use mpm_solve::input::case::{Drag, Reorder};
+    use mpm_solve::input::case::{Drag, Gradient, Reorder};
     use mpm_solve::parallel::team::Pin;
     Overrides {
         threads: args.threads,
@@ -469,6 +482,11 @@ fn overrides(args: &Args) -> Overrides {
         precision: args.precision.map(|p| match p {
             PrecisionArg::F64 => Precision::F64,
             PrecisionArg::F32 => Precision::F32,
+        }),
+        gradient: args.basis.map(|b| match b {
+            BasisArg::Element => Gradient::Element,
+            BasisArg::Ddmp => Gradient::Ddmp,
+            BasisArg::DdmpBlended => Gradient::DdmpBlended,
         }),
         energy_tolerance: args.energy_tolerance.map(|Tolerance(t)| t),
         probes: args.probe.clone(),

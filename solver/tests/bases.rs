@@ -169,6 +169,36 @@ fn grid_runs_are_the_same_bytes_for_any_thread_count() {
 }
 
 /// RMS over the points of (σ_yy − (−γ (H − y0))) / (γH) after the run of `scene`.
+#[test]
+fn the_basis_flag_chooses_the_gradients_as_the_scene_key_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let plain = dry_column(d, "plain", "", 1, 0.02);
+    let keyed = dry_column(d, "keyed", "gradient = \"ddmp_blended\"", 1, 0.02);
+    let run = |scene: &Path, name: &str, extra: &[&str]| {
+        let out = d.join(name);
+        let o = solve(scene, &out, extra);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        outputs(&out)
+    };
+    let by_key = run(&keyed, "by_key", &[]);
+    let by_flag = run(&plain, "by_flag", &["--basis", "ddmp-blended"]);
+    let element = run(&plain, "element", &[]);
+    let back = run(&keyed, "back", &["--basis", "element"]);
+    assert_eq!(by_key, by_flag);
+    assert_eq!(element, back);
+    assert_ne!(by_key, element, "the gradients change the answer");
+    let grid = dry_column(d, "grid", "[grid]\ncell = 0.1", 1, 0.02);
+    let o = solve(&grid, &d.join("grid_ddmp"), &["--basis", "ddmp"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("background grid"), "{err}");
+}
+
 fn vertical_stress_error(scene: &Path, out: &Path) -> f64 {
     let case = mpm_solve::input::scene::load(scene).unwrap();
     let e = run::<f64, Tet4>(&case, out, &RunOptions::default()).unwrap();
@@ -235,7 +265,7 @@ fn what_the_grid_does_not_model_is_refused_by_name() {
                 1,
                 0.01,
             ),
-            "the dual-domain gradients (gradient = \"ddmp\") cannot model mixed integration",
+            "the dual-domain gradients (gradient = \"ddmp\", --basis ddmp) cannot model mixed integration",
         ),
         (
             dry_column(

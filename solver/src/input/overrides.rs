@@ -4,7 +4,7 @@
 //! fills an [`Overrides`] from its options; [`Overrides::check`] and
 //! [`Overrides::prepare_process`] run before the input is read, [`apply`] on the case read.
 
-use crate::input::case::{Case, CourantError, Drag, Precision, Reorder, ReorderError};
+use crate::input::case::{Case, CourantError, Drag, Gradient, Precision, Reorder, ReorderError};
 use crate::parallel::team::Pin;
 
 /// The most worker threads a run may ask for: each is started before the input is read, and a
@@ -29,6 +29,8 @@ pub struct Overrides {
     pub drag: Drag,
     /// Precision of the particle and grid state (`--precision`; `None`: the case's).
     pub precision: Option<Precision>,
+    /// The points' gradients on the mesh's elements (`--basis`; `None`: the case's).
+    pub gradient: Option<Gradient>,
     /// The energy balance's tolerance (`--energy-tolerance`): `Some(None)` not checked,
     /// `Some(Some(share))` that share; `None`: the case's.
     pub energy_tolerance: Option<Option<f64>>,
@@ -48,6 +50,7 @@ impl Default for Overrides {
             reorder: Reorder::Morton,
             drag: Drag::Implicit,
             precision: None,
+            gradient: None,
             energy_tolerance: None,
             probes: Vec::new(),
             force: false,
@@ -78,6 +81,12 @@ pub enum OverrideError {
     /// The mesh could not be ordered.
     #[error(transparent)]
     Reorder(#[from] ReorderError),
+    /// `--basis ddmp` on a case computed on a background grid.
+    #[error(
+        "--basis: the dual-domain gradients are the mesh's elements'; this case is computed on \
+         a background grid ([grid]), whose basis has its own"
+    )]
+    BasisOnGrid,
 }
 
 impl Overrides {
@@ -123,13 +132,19 @@ impl Overrides {
     }
 }
 
-/// `case` with the overrides applied: drag, precision, the Courant check (`force`), energy
+/// `case` with the overrides applied: drag, precision, gradients, the Courant check (`force`), energy
 /// tolerance, probes (added, sorted, each once), the engine's threads, pinning and first touch,
 /// and the mesh ordered as asked.
 pub fn apply(mut case: Case, o: &Overrides) -> Result<Case, OverrideError> {
     case.numerics.drag = o.drag;
     if let Some(p) = o.precision {
         case.numerics.precision = p;
+    }
+    if let Some(g) = o.gradient {
+        if case.numerics.grid.is_some() && g != Gradient::Element {
+            return Err(OverrideError::BasisOnGrid);
+        }
+        case.numerics.gradient = g;
     }
     case.check_courant(o.force)?;
     if let Some(t) = o.energy_tolerance {
@@ -195,6 +210,7 @@ mod tests {
             reorder: Reorder::None,
             drag: Drag::Explicit,
             precision: Some(Precision::F32),
+            gradient: Some(Gradient::Ddmp),
             energy_tolerance: Some(Some(0.25)),
             probes: vec![7, 2, 7],
             force: false,
@@ -204,6 +220,7 @@ mod tests {
         let a = apply(c, &o).unwrap();
         assert_eq!(a.numerics.drag, Drag::Explicit);
         assert_eq!(a.numerics.precision, Precision::F32);
+        assert_eq!(a.numerics.gradient, Gradient::Ddmp);
         assert_eq!(a.run.guards.energy_tolerance, Some(0.25));
         assert_eq!(a.run.probes, vec![2, 5, 7]);
         assert_eq!(a.run.engine.threads, 3);
@@ -221,6 +238,30 @@ mod tests {
             apply(case(0.5), &off).unwrap().run.guards.energy_tolerance,
             None
         );
+    }
+
+    #[test]
+    fn the_dual_domain_gradients_are_refused_on_a_grid() {
+        let mut c = case(0.5);
+        c.numerics.grid = Some(crate::basis::grid::GridSpec {
+            origin: [0.0; 3],
+            cell: [0.5; 3],
+            cells: [2; 3],
+            dim: 3,
+            shape: crate::basis::spline::Shape::Linear,
+            points_per_axis: None,
+        });
+        let ddmp = Overrides {
+            gradient: Some(Gradient::DdmpBlended),
+            ..Overrides::default()
+        };
+        let e = apply(c.clone(), &ddmp).unwrap_err();
+        assert!(e.to_string().contains("background grid"), "{e}");
+        let element = Overrides {
+            gradient: Some(Gradient::Element),
+            ..Overrides::default()
+        };
+        assert!(apply(c, &element).is_ok());
     }
 
     #[test]

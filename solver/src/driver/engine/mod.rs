@@ -112,7 +112,10 @@ pub enum SetupError {
     #[error(transparent)]
     DdmpReach(#[from] crate::basis::ddmp::DdmpError),
     /// The dual-domain gradients, with a feature that runs on the elements' own only.
-    #[error("the dual-domain gradients (gradient = \"ddmp\") cannot model {0} yet; use gradient = \"element\"")]
+    #[error(
+        "the dual-domain gradients (gradient = \"ddmp\", --basis ddmp) cannot model {0} yet; \
+         use the elements' own (gradient = \"element\")"
+    )]
     Ddmp(&'static str),
     /// More than one process, with a feature that runs on one only.
     #[error("a run over {ranks} MPI ranks cannot model {what} yet; run it on one process")]
