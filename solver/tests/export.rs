@@ -848,7 +848,7 @@ fn a_pressure_loads_as_the_traction_along_the_inward_normal() {
         });
         let err = mpm_solve::input::scene::load(&s).unwrap_err().to_string();
         assert!(
-            err.contains("traction \"top\"") && err.contains("either traction"),
+            err.contains("traction \"top\"") && err.contains("give one of traction"),
             "{name}: {err}"
         );
     }

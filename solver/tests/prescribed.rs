@@ -317,7 +317,7 @@ fn gom_nodal_rows_are_read_and_bad_ones_refused() {
     assert_eq!((set.rows[0].node, set.rows[1].node), (2, 3));
     assert_eq!(set.rows[0].directions, [false, true, false]);
     assert_eq!(set.rows[1].velocity, [0.0, -0.2, 0.0]);
-    assert_eq!((set.scale, set.curve), (1.0, LoadCurve::Step));
+    assert_eq!((set.scale, set.curve.clone()), (1.0, LoadCurve::Step));
     assert_eq!(case.reactions().len(), 1);
     // With points prescribed too: two sets, the points' first.
     let both = load(

@@ -177,6 +177,7 @@ impl Fingerprint {
             nodal_velocity,
             moving_mesh,
             contact,
+            absorbing,
         } = boundary;
         let TimeControls {
             courant,
@@ -263,14 +264,16 @@ impl Fingerprint {
             ("precision (--precision)", precision),
             ("--drop-lost", &drop_lost),
         ]);
-        // Last and only where there is one: the checkpoints of cases on the mesh's elements
-        // keep their items.
-        if let Some(grid) = grid {
-            items.push(("background grid", grid));
-        }
-        if *gradient != crate::input::case::Gradient::Element {
-            items.push(("gradients", gradient));
-        }
+        // Last and only where there is one: the checkpoints of cases without them keep their
+        // items.
+        let gradients = (*gradient != crate::input::case::Gradient::Element).then_some(gradient);
+        let absorbing = (!absorbing.is_empty()).then_some(absorbing);
+        items.extend(
+            grid.as_ref()
+                .map(|g| ("background grid", g as &dyn std::fmt::Debug)),
+        );
+        items.extend(gradients.map(|g| ("gradients", g as &dyn std::fmt::Debug)));
+        items.extend(absorbing.map(|a| ("absorbing boundaries", a as &dyn std::fmt::Debug)));
         Fingerprint(items.iter().map(|&(n, v)| Item::of(n, v)).collect())
     }
 

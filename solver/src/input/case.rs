@@ -281,6 +281,9 @@ pub struct BoundaryConditions {
     pub moving_mesh: Option<crate::step::moving_mesh::MovingMeshSpec>,
     /// Contact between a structure and the soil (Anura3D's `$$CONTACT_FORMULATION 1`), when on.
     pub contact: Option<crate::step::contact::ContactSpec>,
+    /// Absorbing boundaries: a dashpot and a spring per model node, one row per node in node
+    /// order (empty: none).
+    pub absorbing: Vec<crate::step::absorbing::AbsorbingNode>,
 }
 
 /// What loads the body: face loads on nodes (on the solid and on the liquid) and on material
@@ -637,6 +640,11 @@ impl Case {
             .moving_mesh
             .take()
             .map(|m| m.renumbered(&o.node_new));
+        for row in &mut boundary.absorbing {
+            row.node = o.node_new[row.node as usize];
+        }
+        boundary.absorbing =
+            crate::step::absorbing::merged(std::mem::take(&mut boundary.absorbing));
         if let Some(c) = boundary.contact.take() {
             let mut new_of_old = vec![0u32; o.order.len()];
             for (new, &old) in o.order.iter().enumerate() {
@@ -733,6 +741,7 @@ impl Case {
                 nodal_velocity: Vec::new(),
                 moving_mesh: None,
                 contact: None,
+                absorbing: Vec::new(),
             },
             loads: Loading {
                 traction: vec![[0.0; 3]; n],

@@ -1,7 +1,10 @@
-//! Load multipliers over time (gravity, tractions, liquid loads, prescribed velocities).
+//! Load multipliers over time (gravity, tractions, liquid loads, prescribed velocities): a
+//! step, a ramp, Anura3D's stairs, a table of (time, multiplier) pairs, and hammer blows.
+
+use std::sync::Arc;
 
 /// How a load grows with time.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum LoadCurve {
     /// Full value from the first step.
     Step,
@@ -23,6 +26,71 @@ pub enum LoadCurve {
         /// Number of load steps.
         steps: u32,
     },
+    /// Linear between (time, multiplier) pairs of increasing time; the first multiplier
+    /// before the first time, the last after the last.
+    Table(Arc<[(f64, f64)]>),
+    /// Hammer blows (see [`Blow`]), each normalised by its peak Z v₀, one every `interval`
+    /// seconds from t = 0, `count` of them; 0 after the last one's interval.
+    Blows {
+        /// One blow's force over Z v₀.
+        blow: Blow,
+        /// Seconds between blows.
+        interval: f64,
+        /// Number of blows.
+        count: u32,
+    },
+}
+
+/// The force of a ram of mass m striking a pile of impedance Z at v₀, over Z v₀: without a
+/// cushion F = Z v₀ exp(−Z t / m) (the pile head takes the ram's momentum as a dashpot would);
+/// through a cushion of stiffness k the cushion's compression s obeys
+/// m s̈ + (k m / Z) ṡ + k s = 0 with s(0) = 0, ṡ(0) = v₀, F = k s, and the blow ends when the
+/// cushion has come back to its length (it cannot pull).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Blow {
+    /// Z / m (1/s).
+    pub decay: f64,
+    /// The cushion's k / m (1/s²), if there is one.
+    pub cushion: Option<f64>,
+}
+
+impl Blow {
+    /// A blow of a ram of `ram_mass` (t) at `velocity` (m/s) on a pile of `impedance` (kN·s/m),
+    /// through a cushion of `cushion` (kN/m) if given.
+    pub fn new(ram_mass: f64, impedance: f64, cushion: Option<f64>) -> Self {
+        Blow {
+            decay: impedance / ram_mass,
+            cushion: cushion.map(|k| k / ram_mass),
+        }
+    }
+
+    /// F(t) / (Z v₀), t seconds after impact.
+    pub fn at(&self, t: f64) -> f64 {
+        if t < 0.0 {
+            return 0.0;
+        }
+        let Some(w2) = self.cushion else {
+            return (-self.decay * t).exp();
+        };
+        // s̈ + 2 ζ ω s̈ + ω² s = 0 with ω² = k/m and 2 ζ ω = k / Z = ω² / decay; F/(Z v₀) =
+        // (k / Z) s / v₀ = 2 ζ ω s / v₀.
+        let w = w2.sqrt();
+        let two_zeta_w = w2 / self.decay;
+        let h = 0.5 * two_zeta_w;
+        let s = if h < w {
+            let wd = (w2 - h * h).sqrt();
+            if t >= std::f64::consts::PI / wd {
+                return 0.0;
+            }
+            (-h * t).exp() * (wd * t).sin() / wd
+        } else if h > w {
+            let r = (h * h - w2).sqrt();
+            ((-(h - r) * t).exp() - (-(h + r) * t).exp()) / (2.0 * r)
+        } else {
+            t * (-h * t).exp()
+        };
+        two_zeta_w * s
+    }
 }
 
 impl LoadCurve {
@@ -38,6 +106,22 @@ impl LoadCurve {
     /// Multiplier at time `t`.
     pub fn at(&self, t: f64) -> f64 {
         match *self {
+            LoadCurve::Table(ref rows) => table_at(rows, t),
+            LoadCurve::Blows {
+                blow,
+                interval,
+                count,
+            } => {
+                let k = (t / interval).floor();
+                if k < 0.0 || k >= f64::from(count) {
+                    0.0
+                } else if k == 0.0 {
+                    // (One blow has an infinite interval: 0 × ∞ is not 0.)
+                    blow.at(t)
+                } else {
+                    blow.at(t - k * interval)
+                }
+            }
             LoadCurve::Step => 1.0,
             LoadCurve::Ramp { over } => (t / over).min(1.0),
             LoadCurve::Stairs {
@@ -52,6 +136,16 @@ impl LoadCurve {
                 from + k / f64::from(steps) * (to - from)
             }
         }
+    }
+}
+
+/// The piecewise-linear multiplier of `rows` (increasing times) at `t`.
+fn table_at(rows: &[(f64, f64)], t: f64) -> f64 {
+    let i = rows.partition_point(|&(ti, _)| ti <= t);
+    match (rows.get(i.wrapping_sub(1)), rows.get(i)) {
+        (Some(&(t0, m0)), Some(&(t1, m1))) => m0 + (m1 - m0) * (t - t0) / (t1 - t0),
+        (Some(&(_, m)), None) | (None, Some(&(_, m))) => m,
+        (None, None) => 0.0,
     }
 }
 
@@ -81,5 +175,76 @@ mod tests {
         };
         assert_eq!(down.at(0.5), 6.0);
         assert_eq!(down.at(1.5), 2.0);
+    }
+
+    #[test]
+    fn a_table_interpolates_and_holds_its_ends() {
+        let c = LoadCurve::Table(vec![(0.0, 0.0), (1.0, 2.0), (3.0, -2.0)].into());
+        assert_eq!(c.at(-1.0), 0.0);
+        assert_eq!(c.at(0.5), 1.0);
+        assert_eq!(c.at(1.0), 2.0);
+        assert_eq!(c.at(2.0), 0.0);
+        assert_eq!(c.at(9.0), -2.0);
+        let late = LoadCurve::Table(vec![(1.0, 5.0)].into());
+        assert_eq!((late.at(0.0), late.at(2.0)), (5.0, 5.0));
+    }
+
+    #[test]
+    fn blows_decay_as_the_ram_gives_its_momentum_and_repeat() {
+        // Z / m = 100 /s: e^-1 after 10 ms; a blow every 0.5 s, two of them.
+        let c = LoadCurve::Blows {
+            blow: Blow::new(2.0, 200.0, None),
+            interval: 0.5,
+            count: 2,
+        };
+        assert_eq!(c.at(0.0), 1.0);
+        assert!((c.at(0.01) - (-1.0f64).exp()).abs() < 1e-15);
+        assert!((c.at(0.51) - (-1.0f64).exp()).abs() < 1e-12);
+        assert_eq!(c.at(1.0), 0.0);
+        let once = LoadCurve::Blows {
+            blow: Blow::new(2.0, 200.0, None),
+            interval: f64::INFINITY,
+            count: 1,
+        };
+        assert!((once.at(0.01) - (-1.0f64).exp()).abs() < 1e-15);
+        // The impulse of one blow is the ram's momentum: ∫ F dt = Z v0 · m / Z = m v0.
+        let dt = 1e-6;
+        let impulse: f64 = (0..400_000).map(|i| c.at((i as f64 + 0.5) * dt) * dt).sum();
+        assert!((impulse - 2.0 / 200.0).abs() < 1e-7, "{impulse}");
+    }
+
+    #[test]
+    fn a_cushion_blow_follows_the_ram_cushion_pile_equations() {
+        // m = 2 t, Z = 200 kN·s/m, v0 = 1: integrate m ẍ = −k s, Z ẏ = k s, s = x − y, with
+        // RK4 and compare F = k s over Z v0, under-, critically (k = 4 Z² / m) and over-damped.
+        let (m, z) = (2.0, 200.0);
+        for k in [1e3, 1e4, 2e4, 8e4, 1e5, 1e6] {
+            let b = Blow::new(m, z, Some(k));
+            assert_eq!(b.at(0.0), 0.0);
+            let rate = |s: f64, ds: f64| (ds, -k * s / m - k * ds / z);
+            let (mut s, mut ds, dt) = (0.0, 1.0, 1e-6);
+            for i in 1..=100_000 {
+                let (a1, b1) = rate(s, ds);
+                let (a2, b2) = rate(s + 0.5 * dt * a1, ds + 0.5 * dt * b1);
+                let (a3, b3) = rate(s + 0.5 * dt * a2, ds + 0.5 * dt * b2);
+                let (a4, b4) = rate(s + dt * a3, ds + dt * b3);
+                s += dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+                ds += dt / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4);
+                if s < 0.0 {
+                    assert_eq!(b.at(i as f64 * dt + 1e-9), 0.0, "k {k}: the blow ends");
+                    break;
+                }
+                let want = k * s / z;
+                let got = b.at(i as f64 * dt);
+                assert!(
+                    (got - want).abs() < 1e-9 * (1.0 + want),
+                    "k {k}, t {}: {got} vs {want}",
+                    i as f64 * dt
+                );
+            }
+        }
+        // A very stiff cushion is the bare blow.
+        let stiff = Blow::new(m, z, Some(1e12));
+        assert!((stiff.at(0.01) - (-1.0f64).exp()).abs() < 1e-3);
     }
 }

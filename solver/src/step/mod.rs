@@ -1,5 +1,6 @@
 //! The phases of one explicit MUSL step, in the order they run, and what they read from the configuration (load curves, damping rule, drag, prescribed velocities).
 
+pub mod absorbing;
 pub mod batch;
 pub mod constraint;
 pub mod contact;

@@ -67,7 +67,7 @@ impl NodalVelocitySet {
             .rows
             .first()
             .map_or(([0.0; 3], [false; 3]), |r| (r.velocity, r.directions));
-        Reaction::new(&self.name, v, d, self.scale, self.curve)
+        Reaction::new(&self.name, v, d, self.scale, self.curve.clone())
     }
 }
 

@@ -114,7 +114,7 @@ impl PrescribedVelocity {
             v,
             self.directions(),
             self.scale,
-            self.curve,
+            self.curve.clone(),
         )
     }
 
@@ -269,7 +269,7 @@ impl<R: Real> Prescribed<R> {
         let n = nodes.len();
         Prescribed {
             scale: spec.scale,
-            curve: spec.curve,
+            curve: spec.curve.clone(),
             directions: spec.directions(),
             elements,
             nodes,

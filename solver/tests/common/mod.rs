@@ -209,3 +209,60 @@ pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
     out.sort();
     out
 }
+
+/// Writes a structured tetrahedral column w × h × w (`cells` cells up, one across) as the Gmsh
+/// 2.2 file `dir/column.msh`, with the volume "soil" and the surface "top".
+pub fn column_msh(dir: &Path, cells: usize, w: f64, h: f64) -> PathBuf {
+    use std::fmt::Write as _;
+    let model =
+        mpm_shared::generate::box_mesh([1, cells, 1], [w, h, w], mpm_shared::ElementType::Tet4);
+    let mut s = String::from(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 2 \"top\"\n3 1 \"soil\"\n$EndPhysicalNames\n",
+    );
+    writeln!(s, "$Nodes\n{}", model.node_count()).unwrap();
+    for n in 0..model.node_count() {
+        let p = model.node(n);
+        writeln!(s, "{} {} {} {}", n + 1, p[0], p[1], p[2]).unwrap();
+    }
+    let mut top = Vec::new();
+    for e in 0..model.element_count() {
+        let c = model.element(e);
+        for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+            let face = f.map(|k| c[k]);
+            if face
+                .iter()
+                .all(|&v| (model.node(v as usize)[1] - h).abs() < 1e-9)
+            {
+                top.push(face);
+            }
+        }
+    }
+    writeln!(
+        s,
+        "$EndNodes\n$Elements\n{}",
+        model.element_count() + top.len()
+    )
+    .unwrap();
+    let mut id = 0;
+    for f in &top {
+        id += 1;
+        writeln!(s, "{id} 2 2 2 4 {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1).unwrap();
+    }
+    for e in 0..model.element_count() {
+        id += 1;
+        let c = model.element(e);
+        writeln!(
+            s,
+            "{id} 4 2 1 1 {} {} {} {}",
+            c[0] + 1,
+            c[1] + 1,
+            c[2] + 1,
+            c[3] + 1
+        )
+        .unwrap();
+    }
+    s.push_str("$EndElements\n");
+    let path = dir.join("column.msh");
+    std::fs::write(&path, s).unwrap();
+    path
+}

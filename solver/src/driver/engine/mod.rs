@@ -182,9 +182,9 @@ impl StepConfig {
     pub fn of(case: &Case) -> Self {
         StepConfig {
             gravity: case.loads.gravity,
-            gravity_curve: case.loads.gravity_curve,
-            traction_curve: case.loads.traction_curve,
-            liquid_curve: case.loads.liquid_curve,
+            gravity_curve: case.loads.gravity_curve.clone(),
+            traction_curve: case.loads.traction_curve.clone(),
+            liquid_curve: case.loads.liquid_curve.clone(),
             damping: case.numerics.damping,
             damping_rule: case.numerics.damping_rule,
             drag: case.numerics.drag,

@@ -25,6 +25,7 @@ use crate::state::grid::{Grid, LiquidNodes};
 use crate::state::particles;
 use crate::state::particles::{Field, FieldVisitor, Particles, Value};
 use crate::state::pore_weights::PoreWeights;
+use crate::step::absorbing::Absorbing;
 use crate::step::constraint::Constraints;
 use crate::step::contact::{Contact, Structure};
 use crate::step::mixed::Mixed;
@@ -93,9 +94,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             particles = first_touch(&team, &layout, particles);
         }
         let tables = MaterialTables::of(case);
-        // Both energy checks need every energy term; prescribed velocities do work that is not
-        // counted, and contact takes energy out that is not counted either.
-        let energy_checked = reactions.is_empty() && case.boundary.contact.is_none();
+        let energy_checked = energy_counted(case, &reactions);
         let two_phase = case.has_liquid();
         let mut engine = Engine {
             input_node,
@@ -200,6 +199,13 @@ impl<R: Real, E: Element> Engine<R, E> {
     }
 }
 
+/// Whether the energy checks can run: they need every energy term, and prescribed velocities
+/// do work that is not counted, while contact and absorbing boundaries take energy out that
+/// is not counted either.
+fn energy_counted(case: &Case, reactions: &[crate::step::reaction::Reaction]) -> bool {
+    reactions.is_empty() && case.boundary.contact.is_none() && case.boundary.absorbing.is_empty()
+}
+
 /// Refuses what the element type `E` or a run over `ranks` processes does not model.
 fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupError> {
     let mixed = matches!(case.numerics.integration, Integration::Mixed { .. });
@@ -244,7 +250,7 @@ fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupE
 }
 
 /// What runs on one process, on the mesh's elements only: whether the case asks for each.
-fn one_process_only(case: &Case) -> [(bool, &'static str); 7] {
+fn one_process_only(case: &Case) -> [(bool, &'static str); 8] {
     let b = &case.boundary;
     [
         (
@@ -263,6 +269,7 @@ fn one_process_only(case: &Case) -> [(bool, &'static str); 7] {
         ),
         (b.moving_mesh.is_some(), "a moving mesh"),
         (b.contact.is_some(), "contact between bodies"),
+        (!b.absorbing.is_empty(), "absorbing boundaries"),
     ]
 }
 
@@ -434,6 +441,13 @@ fn constraints_of<E: Element, R: Real>(
     fixed: &mut [[bool; 3]],
 ) -> Result<ConstraintsAndStructure<R, E>, SetupError> {
     let mut list = Constraints::new();
+    // First: the velocities prescribed after it win on the nodes they share.
+    if !case.boundary.absorbing.is_empty() {
+        list.push(Absorbing::new(
+            &case.boundary.absorbing,
+            &mesh.node_of_model,
+        ));
+    }
     if !case.boundary.walls.is_empty() {
         list.push(Walls(walls));
     }

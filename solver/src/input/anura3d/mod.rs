@@ -362,6 +362,7 @@ impl Parts {
                 nodal_velocity: self.nodal_velocity,
                 moving_mesh: self.moving_mesh,
                 contact: self.contact,
+                absorbing: Vec::new(),
             },
             loads: Loading {
                 traction: self.loads.traction,

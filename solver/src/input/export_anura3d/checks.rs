@@ -68,9 +68,9 @@ pub(super) fn load_steps(case: &Case) -> Result<(f64, usize), Refusal> {
 
 /// Anura3D's multiplier for a load on `curve` over a run ending at `end`: sudden, or a linear
 /// ramp over the whole run; `item` names the scene's load in a refusal.
-fn multiplier(curve: LoadCurve, end: f64, item: &str) -> Result<&'static str, Refusal> {
+fn multiplier(curve: &LoadCurve, end: f64, item: &str) -> Result<&'static str, Refusal> {
     let tol = 1e-9 * end;
-    match curve {
+    match *curve {
         LoadCurve::Step => Ok("step  1.0  1.0"),
         LoadCurve::Ramp { over } if (over - end).abs() <= tol => Ok("linear  0.0  1.0"),
         LoadCurve::Ramp { over } => Err(refuse(
@@ -83,13 +83,21 @@ fn multiplier(curve: LoadCurve, end: f64, item: &str) -> Result<&'static str, Re
             item,
             "a load in stairs (from Anura3D input) is not written back",
         )),
+        LoadCurve::Table(_) | LoadCurve::Blows { .. } => Err(refuse(
+            item,
+            "Anura3D's loads ramp or step only: a curve (a table or hammer blows) is not written",
+        )),
     }
 }
 
 /// `$$GRAVITY_LOAD`: off without gravity.
 pub(super) fn gravity_load(case: &Case) -> Result<&'static str, Refusal> {
     if case.loads.gravity.iter().any(|&g| g != 0.0) {
-        multiplier(case.loads.gravity_curve, case.time.end_time, "gravity.ramp")
+        multiplier(
+            &case.loads.gravity_curve,
+            case.time.end_time,
+            "gravity.ramp",
+        )
     } else {
         Ok("off  0.0  1.0")
     }
@@ -112,7 +120,7 @@ pub(super) fn solid_traction(r: &Resolved) -> Result<&'static str, Refusal> {
     let end = r.case.time.end_time;
     for t in &r.tractions {
         multiplier(
-            LoadCurve::ramp(t.ramp),
+            &LoadCurve::ramp(t.ramp),
             end,
             &format!("traction \"{}\".ramp", t.physical),
         )?;
@@ -120,12 +128,12 @@ pub(super) fn solid_traction(r: &Resolved) -> Result<&'static str, Refusal> {
     if loaded(r).is_empty() {
         Ok("off  0.0  1.0")
     } else {
-        multiplier(r.case.loads.traction_curve, end, "traction.ramp")
+        multiplier(&r.case.loads.traction_curve, end, "traction.ramp")
     }
 }
 
 /// Refuses what only this solver models: a PIC share in the velocity update, a background
-/// grid, the dual-domain gradients, frictional walls.
+/// grid, the dual-domain gradients, frictional walls, absorbing boundaries (not yet written).
 pub(super) fn solver_only(case: &Case) -> Result<(), Refusal> {
     if case.numerics.pic_blend > 0.0 {
         return Err(refuse(
@@ -158,6 +166,14 @@ pub(super) fn solver_only(case: &Case) -> Result<(), Refusal> {
              remove friction from the fixities to export",
         ));
     }
+    if !case.boundary.absorbing.is_empty() {
+        return Err(refuse(
+            "absorbing",
+            "the export does not write Anura3D's absorbing-boundary sections yet (its per-node \
+             dashpots take the reference material's impedance and its own face areas); remove \
+             [[absorbing]] to export",
+        ));
+    }
     Ok(())
 }
 
@@ -170,7 +186,7 @@ pub(super) fn prescribed_velocity(
     let multiplier = match r.velocities.first() {
         None => "off  0.0  1.0",
         Some(first) => {
-            if let Some(v) = r.velocities.iter().find(|v| v.ramp != first.ramp) {
+            if let Some(v) = r.velocities.iter().find(|v| v.curve != first.curve) {
                 return Err(refuse(
                     format!("velocity \"{}\".ramp", v.name),
                     format!(
@@ -180,7 +196,7 @@ pub(super) fn prescribed_velocity(
                 ));
             }
             multiplier(
-                LoadCurve::ramp(first.ramp),
+                &first.curve,
                 r.case.time.end_time,
                 &format!("velocity \"{}\".ramp", first.name),
             )?

@@ -5,6 +5,7 @@ use serde::Deserialize;
 use super::keys::{key, Table};
 use super::mesh::Mesh;
 use super::{refuse, Refusal};
+use crate::step::load_curve::LoadCurve;
 
 /// The keys of `[gravity]`.
 #[rustfmt::skip]
@@ -14,6 +15,7 @@ pub(super) const TABLE: Table = Table {
     keys: &[
         key("vector", "[float, float, float]", "required", "m/s²", "the acceleration (z = 0 in a 2D section, which lies in the x-y plane)"),
         key("ramp", "float", "0 (sudden)", "s", "time to reach the full weight"),
+        key("curve", "[[float, float], ...] or string", "none", "s, –", super::curve::CURVE_HELP),
         key("k0_surface", "float", "the highest node", "m", "height (y) of the ground surface for the K0 procedure (materials' `k0`)"),
     ],
 };
@@ -25,6 +27,9 @@ pub(super) struct Gravity {
     pub vector: [f64; 3],
     #[serde(default)]
     pub ramp: f64,
+    /// A multiplier over time instead of the ramp.
+    #[serde(default)]
+    pub curve: Option<toml::Value>,
     /// Height (y, m) of the ground surface for the K0 procedure; default: the highest node.
     #[serde(default)]
     pub k0_surface: Option<f64>,
@@ -45,10 +50,21 @@ pub(super) fn check_plane(gravity: Option<&Gravity>, mesh: &Mesh) -> Result<(), 
     Ok(())
 }
 
-/// The acceleration (m/s², zero without gravity) and its ramp (s).
-pub(super) fn resolve(gravity: Option<&Gravity>) -> ([f64; 3], f64) {
-    (
-        gravity.map_or([0.0; 3], |g| g.vector),
-        gravity.map_or(0.0, |g| g.ramp),
-    )
+/// The acceleration (m/s², zero without gravity) and its multiplier over time (its ramp's,
+/// or the `curve` given, a CSV file relative to `scene_dir`).
+pub(super) fn resolve(
+    gravity: Option<&Gravity>,
+    scene_dir: &std::path::Path,
+) -> Result<([f64; 3], LoadCurve), Refusal> {
+    let Some(g) = gravity else {
+        return Ok(([0.0; 3], LoadCurve::Step));
+    };
+    let curve = match &g.curve {
+        Some(_) if g.ramp != 0.0 => {
+            return Err(refuse("gravity", "give a ramp or a curve, not both"))
+        }
+        Some(v) => super::curve::resolve(v, scene_dir, "gravity.curve")?,
+        None => LoadCurve::ramp(g.ramp),
+    };
+    Ok((g.vector, curve))
 }

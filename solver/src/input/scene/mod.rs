@@ -76,7 +76,9 @@ use crate::input::case::{
     Numerics, StartState, TimeControls,
 };
 
+mod absorbing;
 mod consolidation;
+mod curve;
 mod damping;
 mod fixity;
 mod gravity;
@@ -120,6 +122,7 @@ pub(crate) const TOP_LEVEL: Table = Table {
         key("fixity", "array of tables", "none", "", "`[[fixity]]`"),
         key("traction", "array of tables", "none", "", "`[[traction]]`"),
         key("velocity", "array of tables", "none", "", "`[[velocity]]`"),
+        key("absorbing", "array of tables", "none", "", "`[[absorbing]]`"),
         key("probes", "[integer, ...]", "none", "", "material-point ids (1-based) written to history.csv"),
         key("consolidation", "table", "none", "", "`[consolidation]`"),
     ],
@@ -168,6 +171,8 @@ struct Scene {
     traction: Vec<traction::Traction>,
     #[serde(default)]
     velocity: Vec<velocity::Velocity>,
+    #[serde(default)]
+    absorbing: Vec<absorbing::Absorbing>,
     #[serde(default)]
     probes: Vec<u32>,
     #[serde(default)]
@@ -284,8 +289,26 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
         None => (mesh, materials, None),
     };
     let supports = fixity::resolve(&scene.fixity, &mesh, &materials)?;
-    let velocities = velocity::resolve(&scene.velocity, &mesh, &materials)?;
-    let loads = traction::resolve(&scene.traction, &mesh, grid.as_ref())?;
+    let scene_dir = path.parent().unwrap_or(Path::new("."));
+    let velocities = velocity::resolve(&scene.velocity, &mesh, &materials, scene_dir)?;
+    let gravity = gravity::resolve(scene.gravity.as_ref(), scene_dir)?;
+    let loads = traction::resolve(&scene.traction, &mesh, grid.as_ref(), scene_dir)?;
+    let absorbing = match (&scene.absorbing[..], &grid, materials.any_saturated()) {
+        ([], _, _) => Vec::new(),
+        (_, Some(_), _) => {
+            return Err(refuse(
+                "absorbing",
+                "not on a background grid ([grid]) yet; run it on the mesh's elements",
+            ))
+        }
+        (_, _, true) => {
+            return Err(refuse(
+                "absorbing",
+                "not in a two-phase (saturated) scene yet: the liquid's dashpots are to come",
+            ))
+        }
+        (entries, None, false) => absorbing::resolve(entries, &mesh, &materials)?,
+    };
     let damping = damping::resolve(scene.damping.as_ref())?;
     let consolidation = consolidation::resolve(scene.consolidation.as_ref())?;
     let by_time_factor =
@@ -304,7 +327,9 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
         materials,
         supports,
         velocities,
+        gravity,
         loads,
+        absorbing,
         damping,
         times,
         consolidation,
@@ -323,7 +348,9 @@ struct Sections {
     materials: material::Materials,
     supports: fixity::Supports,
     velocities: velocity::Velocities,
+    gravity: ([f64; 3], LoadCurve),
     loads: traction::Loads,
+    absorbing: Vec<crate::step::absorbing::AbsorbingNode>,
     damping: (f64, crate::input::case::DampingRule),
     times: time::Times,
     consolidation: Option<crate::input::case::ConsolidationSpec>,
@@ -339,7 +366,7 @@ impl Sections {
     /// The case the scene at `path` runs on `mesh`, with the solver's choices for scenes, and
     /// the scene's entries behind it.
     fn resolved(self, path: &Path, scene: &Scene, mesh: mesh::Mesh) -> Resolved {
-        let (gravity, gravity_ramp) = gravity::resolve(scene.gravity.as_ref());
+        let (gravity, gravity_curve) = self.gravity;
         let model = mesh.model;
         let (elements, nodes) = (model.element_count(), model.node_count());
         let case = Case {
@@ -364,16 +391,17 @@ impl Sections {
                 nodal_velocity: self.velocities.nodal,
                 moving_mesh: None,
                 contact: None,
+                absorbing: self.absorbing,
             },
             loads: Loading {
                 traction: self.loads.traction,
                 point_loads: Vec::new(),
-                traction_curve: LoadCurve::ramp(self.loads.ramp),
+                traction_curve: self.loads.curve,
                 liquid_traction: vec![[0.0; 3]; nodes],
                 liquid_curve: LoadCurve::Step,
                 liquid_load_on_mixture: true,
                 gravity,
-                gravity_curve: LoadCurve::ramp(gravity_ramp),
+                gravity_curve,
             },
             time: TimeControls {
                 courant: scene.time.courant,

@@ -9,7 +9,7 @@ pub use super::keys::{scene_key, Key, Table};
 use crate::material::law;
 
 /// Every table of the scene, in the order the reference lists them.
-pub fn tables() -> [&'static Table; 11] {
+pub fn tables() -> [&'static Table; 12] {
     [
         &super::TOP_LEVEL,
         &super::time::TABLE,
@@ -21,6 +21,7 @@ pub fn tables() -> [&'static Table; 11] {
         &super::fixity::TABLE,
         &super::traction::TABLE,
         &super::velocity::TABLE,
+        &super::absorbing::TABLE,
         &super::consolidation::TABLE,
     ]
 }

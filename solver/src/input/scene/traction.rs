@@ -15,13 +15,16 @@ use crate::basis::grid::GridSpec;
 pub(super) const TABLE: Table = Table {
     header: "[[traction]]",
     about: "A load on a physical boundary group (a surface in 3D, a curve in 2D): a uniform \
-            traction vector, or a pressure normal to each face. Give exactly one of `traction` \
-            and `pressure`. Every traction ramps over the longest `ramp` given.",
+            traction vector, a pressure normal to each face, or a hammer's blows. Give exactly \
+            one of `traction`, `pressure` and `hammer`. Every traction ramps over the longest \
+            `ramp` given, or follows the one `curve` (or `hammer`) they all give.",
     keys: &[
         key("physical", "string", "required", "", "the physical boundary group"),
         key("traction", "[float, float, float]", "none", "kPa", "a uniform traction vector"),
         key("pressure", "float", "none", "kPa", "or a pressure normal to each face, pushing into the body (a tunnel's or a pile's wall)"),
         key("ramp", "float", "0 (sudden)", "s", "time to reach the full load"),
+        key("curve", "[[float, float], ...] or string", "none", "s, –", super::curve::CURVE_HELP),
+        key("hammer", "table", "none", "", "blows of a ram pushing into the body: `{ ram_mass = t, velocity = m/s, impedance = kN·s/m, cushion = kN/m (optional), blows = 1, interval = s }`; F(t) = Z v₀ exp(−Z t / m) per blow (through a cushion, its spring-dashpot response), as a pressure F / A over the group's area A"),
     ],
 };
 
@@ -38,6 +41,12 @@ pub(super) struct Traction {
     pressure: Option<f64>,
     #[serde(default)]
     ramp: f64,
+    /// A multiplier over time instead of the ramp.
+    #[serde(default)]
+    curve: Option<toml::Value>,
+    /// Blows of a ram.
+    #[serde(default)]
+    hammer: Option<super::curve::Hammer>,
 }
 
 /// A `[[traction]]` entry with the faces its physical surface resolved to.
@@ -54,6 +63,8 @@ pub struct TractionInput {
     pub pressure: Option<f64>,
     /// Seconds to full load (0: sudden).
     pub ramp: f64,
+    /// Its multiplier over time, when it gives a `curve` or a `hammer`.
+    pub curve: Option<crate::step::load_curve::LoadCurve>,
 }
 
 impl TractionInput {
@@ -71,8 +82,8 @@ impl TractionInput {
 pub(super) struct Loads {
     /// The nodal forces of every traction at full load.
     pub traction: Vec<[f64; 3]>,
-    /// The longest ramp given (s).
-    pub ramp: f64,
+    /// Their multiplier: the ramp over the longest one given, or the one curve they all give.
+    pub curve: crate::step::load_curve::LoadCurve,
     /// The entries in file order.
     pub inputs: Vec<TractionInput>,
 }
@@ -84,14 +95,16 @@ pub(super) fn resolve(
     entries: &[Traction],
     mesh: &Mesh,
     grid: Option<&GridSpec>,
+    scene_dir: &std::path::Path,
 ) -> Result<Loads, Refusal> {
     let mut out = Loads {
         traction: vec![[0.0; 3]; mesh.model.node_count()],
-        ramp: 0.0,
+        curve: crate::step::load_curve::LoadCurve::Step,
         inputs: Vec::with_capacity(entries.len()),
     };
+    let mut ramp = 0.0f64;
     for tr in entries {
-        let input = tr.resolve(mesh)?;
+        let input = tr.resolve(mesh, scene_dir)?;
         // Only a pressure needs the faces' normals.
         let outward = if input.pressure.is_some() {
             let corners: Vec<Vec<usize>> = input
@@ -111,10 +124,33 @@ pub(super) fn resolve(
             }
             None => add_face_loads(&mesh.model, &input.faces, &loads, &mut out.traction),
         }
-        out.ramp = out.ramp.max(tr.ramp);
+        ramp = ramp.max(tr.ramp);
         out.inputs.push(input);
     }
+    out.curve = one_curve(&out.inputs, ramp)?;
     Ok(out)
+}
+
+/// The face loads' one multiplier: the ramp over the longest `ramp`, or the curve every entry
+/// gives (the loads share one multiplier, as Anura3D's load system does).
+fn one_curve(
+    inputs: &[TractionInput],
+    ramp: f64,
+) -> Result<crate::step::load_curve::LoadCurve, Refusal> {
+    let Some(with) = inputs.iter().find(|t| t.curve.is_some()) else {
+        return Ok(crate::step::load_curve::LoadCurve::ramp(ramp));
+    };
+    match inputs.iter().find(|t| t.curve != with.curve) {
+        Some(other) => Err(refuse(
+            format!("traction \"{}\"", other.physical),
+            format!(
+                "its multiplier differs from traction \"{}\"'s curve: the face loads share one \
+                 multiplier (give them all the same `curve` or `hammer`, or none)",
+                with.physical
+            ),
+        )),
+        None => Ok(with.curve.clone().expect("found with a curve")),
+    }
 }
 
 impl Traction {
@@ -124,7 +160,7 @@ impl Traction {
     }
 
     /// The entry with its group's faces, each of whose corners must be a node of the model.
-    fn resolve(&self, mesh: &Mesh) -> Result<TractionInput, Refusal> {
+    fn resolve(&self, mesh: &Mesh, scene_dir: &std::path::Path) -> Result<TractionInput, Refusal> {
         let faces = mesh.boundary_faces(&self.physical).ok_or_else(|| {
             refuse(
                 self.item(),
@@ -144,21 +180,61 @@ impl Traction {
                 ),
             ));
         }
-        let traction = match (self.traction, self.pressure) {
-            (Some(t), None) => t,
-            (None, Some(_)) => [0.0; 3],
+        if self.curve.is_some() && self.ramp != 0.0 {
+            return Err(refuse(self.item(), "give a ramp or a curve, not both"));
+        }
+        let mut curve = match &self.curve {
+            Some(v) => Some(super::curve::resolve(
+                v,
+                scene_dir,
+                &format!("{}.curve", self.item()),
+            )?),
+            None => None,
+        };
+        let (traction, pressure) = match (self.traction, self.pressure, &self.hammer) {
+            (Some(t), None, None) => (t, None),
+            (None, Some(p), None) => ([0.0; 3], Some(p)),
+            (None, None, Some(h)) => {
+                if self.curve.is_some() || self.ramp != 0.0 {
+                    return Err(refuse(self.item(), "a hammer is its own curve: remove curve and ramp"));
+                }
+                let (blows, peak) = h.resolve(&format!("{}.hammer", self.item()))?;
+                curve = Some(blows);
+                ([0.0; 3], Some(peak / real_area(&mesh.model, &faces)))
+            }
             _ => return Err(refuse(
                 self.item(),
-                "give either traction = [tx, ty, tz] (kPa) or pressure = p (kPa, normal to each face, pushing into the body)",
+                "give one of traction = [tx, ty, tz] (kPa), pressure = p (kPa, normal to each face, pushing into the body) or hammer = { ... }",
             )),
         };
         Ok(TractionInput {
             physical: self.physical.clone(),
             faces,
             traction,
-            pressure: self.pressure,
+            pressure,
             ramp: self.ramp,
+            curve,
         })
+    }
+}
+
+/// The area of `faces` (m²): of the triangles in 3D, of the edges times a metre in plane
+/// strain, of the surface of revolution (2π ∫ r ds) in an axisymmetric section.
+fn real_area(model: &Model, faces: &[Vec<u32>]) -> f64 {
+    let per_radian = model.dimension == mpm_shared::Dimension::Axisymmetric;
+    let sum: f64 = faces
+        .iter()
+        .map(|f| {
+            let corners: Vec<usize> = f.iter().map(|&n| n as usize).collect();
+            crate::input::faces::corner_shares(model, &corners)
+                .iter()
+                .sum::<f64>()
+        })
+        .sum();
+    if per_radian {
+        2.0 * std::f64::consts::PI * sum
+    } else {
+        sum
     }
 }
 
@@ -167,18 +243,10 @@ impl Traction {
 /// a third of its area times the traction, each end of an edge (2D) half its length; in an
 /// axisymmetric section the edge's load is per radian, ∫ N_a t r ds = t L (2 r_a + r_b) / 6.
 pub fn add_face_loads(model: &Model, faces: &[Vec<u32>], t: &[[f64; 3]], out: &mut [[f64; 3]]) {
-    let axisymmetric = model.dimension == mpm_shared::Dimension::Axisymmetric;
     for (f, t) in faces.iter().zip(t) {
         let corners: Vec<usize> = f.iter().map(|&n| n as usize).collect();
-        let size = crate::input::faces::size(model, &corners);
-        for (i, &n) in corners.iter().enumerate() {
-            let share = match corners.len() {
-                2 if axisymmetric => {
-                    let (ra, rb) = (model.node(n)[0], model.node(corners[1 - i])[0]);
-                    size * (2.0 * ra + rb) / 6.0
-                }
-                k => size / k as f64,
-            };
+        let shares = crate::input::faces::corner_shares(model, &corners);
+        for (&n, share) in corners.iter().zip(shares) {
             for d in 0..3 {
                 out[n][d] += share * t[d];
             }

@@ -25,6 +25,7 @@ pub(super) const TABLE: Table = Table {
         key("velocity", "[float, float, float]", "required", "m/s", "the velocity"),
         key("components", "[bool, bool, bool]", "all three", "", "the prescribed components, x y z"),
         key("ramp", "float", "0 (at once)", "s", "time to reach the full velocity"),
+        key("curve", "[[float, float], ...] or string", "none", "s, –", super::curve::CURVE_HELP),
         key("name", "string", "the physical or plane", "", "the set's name in reaction.csv"),
     ],
 };
@@ -42,6 +43,9 @@ pub(super) struct Velocity {
     components: Option<[bool; 3]>,
     #[serde(default)]
     ramp: f64,
+    /// A multiplier over time instead of the ramp.
+    #[serde(default)]
+    curve: Option<toml::Value>,
     #[serde(default)]
     name: Option<String>,
 }
@@ -68,6 +72,8 @@ pub struct VelocityInput {
     pub components: [bool; 3],
     /// Seconds to full velocity (0: at once).
     pub ramp: f64,
+    /// Its multiplier over time (the ramp's, or the `curve` given).
+    pub curve: LoadCurve,
 }
 
 /// The case's prescribed velocities and the entries behind them.
@@ -85,6 +91,7 @@ pub(super) fn resolve(
     entries: &[Velocity],
     mesh: &Mesh,
     materials: &Materials,
+    scene_dir: &std::path::Path,
 ) -> Result<Velocities, Refusal> {
     let mut out = Velocities {
         points: None,
@@ -92,7 +99,7 @@ pub(super) fn resolve(
         inputs: Vec::new(),
     };
     for v in entries {
-        let input = v.checked(mesh, materials)?;
+        let input = v.checked(mesh, materials, scene_dir)?;
         out.add(v, input, mesh, materials)?;
     }
     Ok(out)
@@ -100,7 +107,12 @@ pub(super) fn resolve(
 
 impl Velocity {
     /// The entry checked and resolved against the mesh.
-    fn checked(&self, mesh: &Mesh, materials: &Materials) -> Result<VelocityInput, Refusal> {
+    fn checked(
+        &self,
+        mesh: &Mesh,
+        materials: &Materials,
+        scene_dir: &std::path::Path,
+    ) -> Result<VelocityInput, Refusal> {
         let label = self
             .physical
             .as_ref()
@@ -131,6 +143,13 @@ impl Velocity {
                 "prescribed velocities are not supported yet in scenes with a saturated material",
             ));
         }
+        let curve = match &self.curve {
+            Some(_) if self.ramp != 0.0 => {
+                return Err(refuse(item, "give a ramp or a curve, not both"))
+            }
+            Some(v) => super::curve::resolve(v, scene_dir, &format!("{item}.curve"))?,
+            None => LoadCurve::ramp(self.ramp),
+        };
         let target = self.target(mesh).map_err(|m| refuse(item, m))?;
         Ok(VelocityInput {
             name,
@@ -138,6 +157,7 @@ impl Velocity {
             velocity: self.velocity,
             components,
             ramp: self.ramp,
+            curve,
         })
     }
 
@@ -184,7 +204,7 @@ impl Velocities {
         mesh: &Mesh,
         materials: &Materials,
     ) -> Result<(), Refusal> {
-        let curve = LoadCurve::ramp(v.ramp);
+        let curve = input.curve.clone();
         let name = input.name.clone();
         match &input.target {
             VelocityTarget::Nodes(nodes) => self.nodal.push(NodalVelocitySet {
