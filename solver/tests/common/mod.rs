@@ -266,3 +266,32 @@ pub fn column_msh(dir: &Path, cells: usize, w: f64, h: f64) -> PathBuf {
     std::fs::write(&path, s).unwrap();
     path
 }
+
+/// Writes a structured triangle section w × h (`cells` cells up, one across, each square cut
+/// into two triangles) in the x-y plane as the Gmsh 2.2 file `dir/section.msh`, with the surface
+/// "soil" and the curve "top".
+pub fn section_msh(dir: &Path, cells: usize, w: f64, h: f64) -> PathBuf {
+    use std::fmt::Write as _;
+    let node = |i: usize, j: usize| 1 + i + 2 * j;
+    let mut s = String::from(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n1 2 \"top\"\n2 1 \"soil\"\n$EndPhysicalNames\n",
+    );
+    writeln!(s, "$Nodes\n{}", 2 * (cells + 1)).unwrap();
+    for j in 0..=cells {
+        for i in 0..2 {
+            let y = h * j as f64 / cells as f64;
+            writeln!(s, "{} {} {y} 0", node(i, j), w * i as f64).unwrap();
+        }
+    }
+    writeln!(s, "$EndNodes\n$Elements\n{}", 1 + 2 * cells).unwrap();
+    writeln!(s, "1 1 2 2 2 {} {}", node(0, cells), node(1, cells)).unwrap();
+    for j in 0..cells {
+        let (a, b, c, d) = (node(0, j), node(1, j), node(1, j + 1), node(0, j + 1));
+        writeln!(s, "{} 2 2 1 1 {a} {b} {c}", 2 + 2 * j).unwrap();
+        writeln!(s, "{} 2 2 1 1 {a} {c} {d}", 3 + 2 * j).unwrap();
+    }
+    s.push_str("$EndElements\n");
+    let path = dir.join("section.msh");
+    std::fs::write(&path, s).unwrap();
+    path
+}
