@@ -117,7 +117,9 @@ fn lower_stress<E: Element>(section: Option<&str>, base: &str) -> f64 {
     let case = scene::load(&path).unwrap();
     let mut engine = Engine::<f64, E>::new(&case, false).unwrap();
     while engine.time < end {
-        engine.step(engine.dt.min(end - engine.time).max(1e-12), None).unwrap();
+        engine
+            .step(engine.dt.min(end - engine.time).max(1e-12), None)
+            .unwrap();
     }
     let p = &engine.particles;
     let (sum, n) = (0..p.len())
@@ -129,7 +131,10 @@ fn lower_stress<E: Element>(section: Option<&str>, base: &str) -> f64 {
 
 #[test]
 fn a_dashpot_base_reflects_the_closed_forms_share_of_the_front() {
-    let fixed = lower_stress::<Tet4>(None, "[[fixity]]\nplane = \"y = 0\"\nfixed = [true, true, true]");
+    let fixed = lower_stress::<Tet4>(
+        None,
+        "[[fixity]]\nplane = \"y = 0\"\nfixed = [true, true, true]",
+    );
     let absorbed = lower_stress::<Tet4>(None, "[[absorbing]]\nplane = \"y = 0\"");
     let half = lower_stress::<Tet4>(None, "[[absorbing]]\nplane = \"y = 0\"\nnormal = 0.5");
     eprintln!(
@@ -159,9 +164,77 @@ fn sections_absorb_as_the_column_does() {
         let absorbed = run("[[absorbing]]\nplane = \"y = 0\"");
         let half = run("[[absorbing]]\nplane = \"y = 0\"\nnormal = 0.5");
         eprintln!("{section}: σ_yy / p below mid-height, a = 1 {absorbed:.4}, a = 0.5 {half:.4}");
-        assert!((absorbed - 1.0).abs() < 0.02, "{section}, a = 1: {absorbed}");
-        assert!((half - 1.0 + 1.0 / 3.0).abs() < 0.02, "{section}, a = 0.5: {half}");
+        assert!(
+            (absorbed - 1.0).abs() < 0.02,
+            "{section}, a = 1: {absorbed}"
+        );
+        assert!(
+            (half - 1.0 + 1.0 / 3.0).abs() < 0.02,
+            "{section}, a = 0.5: {half}"
+        );
     }
+}
+
+/// The saturated column (grains 2650 kg/m³, n = 0.4, water K_w = 2.2 GPa, κ = 1e-15 m²: the
+/// drag holds both phases together over the wave's passage) on an absorbing base: the mean
+/// total vertical stress between 0.1 H and 0.4 H over the load once the front reflected at
+/// the base has passed them, and the undrained P-wave speed.
+fn saturated_lower_stress(base: &str) -> (f64, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let (n, grains, k_w) = (0.4, 2.65, 2.2e6);
+    let e_oed = YOUNG * (1.0 - POISSON) / ((1.0 + POISSON) * (1.0 - 2.0 * POISSON));
+    let rho_sat = (1.0 - n) * grains + n;
+    let c_u = ((e_oed + k_w / n) / rho_sat).sqrt();
+    let end = 1.9 * H / c_u;
+    let scene = column_scene(dir.path(), "saturated", base, end);
+    let text = std::fs::read_to_string(&scene).unwrap().replace(
+        &format!("density = {DENSITY}\n"),
+        "density = 2650.0\n",
+    ).replace(
+        "points_per_element = 4\n",
+        "points_per_element = 4\n[material.liquid]\nporosity = 0.4\ndensity = 1000.0\nbulk_modulus = 2.2e6\nintrinsic_permeability = 1e-15\nviscosity = 1e-6\n",
+    );
+    std::fs::write(&scene, text).unwrap();
+    let case = scene::load(&scene).unwrap();
+    let mut engine = Engine::<f64, Tet4>::new(&case, false).unwrap();
+    while engine.time < end {
+        engine
+            .step(engine.dt.min(end - engine.time).max(1e-12), None)
+            .unwrap();
+    }
+    let p = &engine.particles;
+    let pore = &p.liquid.as_ref().expect("saturated").p;
+    let (sum, count) = (0..p.len())
+        .filter(|&i| (0.1 * H..0.4 * H).contains(&p.x[i][1]))
+        .fold((0.0, 0), |(s, k), i| (s + p.stress[i][1] + pore[i], k + 1));
+    (-sum / count as f64 / LOAD, c_u)
+}
+
+#[test]
+fn a_saturated_column_takes_both_phases_dashpots() {
+    // Undrained, the phases move together: the base's impedance is the sum of Anura3D's two
+    // dashpots, the solid's (1 − n) ρ_s V_p with the skeleton's drained V_p and the liquid's
+    // ρ_w V_w, while the column's is ρ_sat c_u; the front comes back with
+    // R = (Z_base − Z_column) / (Z_base + Z_column).
+    let fixed = saturated_lower_stress("[[fixity]]\nplane = \"y = 0\"\nfixed = [true, true, true]");
+    let (absorbed, c_u) = saturated_lower_stress("[[absorbing]]\nplane = \"y = 0\"");
+    let (n, grains, k_w) = (0.4, 2.65, 2.2e6);
+    let e_oed = YOUNG * (1.0 - POISSON) / ((1.0 + POISSON) * (1.0 - 2.0 * POISSON));
+    let rho_dry = (1.0 - n) * grains;
+    let z_base = rho_dry * (e_oed / rho_dry).sqrt() + (k_w * 1.0f64).sqrt();
+    let z_column = ((1.0 - n) * grains + n) * c_u;
+    let r = (z_base - z_column) / (z_base + z_column);
+    eprintln!(
+        "saturated: σ_total / p below mid-height, fixed base {:.4}, absorbing base {absorbed:.4} (R = {:.4}; closed form {r:.4})",
+        fixed.0,
+        absorbed - 1.0
+    );
+    assert!((fixed.0 - 2.0).abs() < 0.1, "fixed base: {}", fixed.0);
+    assert!(
+        (absorbed - 1.0 - r).abs() < 0.02,
+        "R = {}, closed form {r}",
+        absorbed - 1.0
+    );
 }
 
 #[test]

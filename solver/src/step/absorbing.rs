@@ -48,13 +48,19 @@ pub struct AbsorbingNode {
     pub dashpot: Sym,
     /// The spring's tensor K (kN/m).
     pub spring: Sym,
+    /// The liquid's dashpot along each axis (kN·s/m; saturated elements' faces, which are
+    /// normal to an axis).
+    pub liquid_dashpot: [f64; 3],
+    /// The liquid's spring along each axis (kN/m).
+    pub liquid_spring: [f64; 3],
 }
 
 impl AbsorbingNode {
     /// The dashpot and spring of a face's share `w` (m², or m per radian) at a corner, for a face
     /// of outward normal `n` in an element of mass density `rho` (t/m³) and wave speeds `vp`,
     /// `vs` (m/s), with coefficients `a` (normal) and `b` (shear) and spring length `delta` (m;
-    /// 0: none).
+    /// 0: none); in a saturated element also the liquid's along the normal, from its density and
+    /// bulk modulus `liquid` (t/m³, kPa): a ρ_w V_w and ρ_w V_w² / δ, V_w = sqrt(K_w / ρ_w).
     #[allow(clippy::too_many_arguments)]
     pub fn of_face(
         node: u32,
@@ -64,6 +70,7 @@ impl AbsorbingNode {
         (vp, vs): (f64, f64),
         (a, b): (f64, f64),
         delta: f64,
+        liquid: Option<(f64, f64)>,
     ) -> Self {
         let tensor = |normal: f64, shear: f64| -> Sym {
             // normal n nᵀ + shear (I − n nᵀ) = shear I + (normal − shear) n nᵀ.
@@ -83,10 +90,21 @@ impl AbsorbingNode {
         } else {
             [0.0; 6]
         };
+        let (liquid_dashpot, liquid_spring) = match liquid {
+            Some((rho_w, k_w)) => {
+                let vw = (k_w / rho_w).sqrt();
+                let along = n.map(|c| w * c * c);
+                let spring = if delta > 0.0 { k_w / delta } else { 0.0 };
+                (along.map(|x| x * a * rho_w * vw), along.map(|x| x * spring))
+            }
+            None => ([0.0; 3], [0.0; 3]),
+        };
         AbsorbingNode {
             node,
             dashpot,
             spring,
+            liquid_dashpot,
+            liquid_spring,
         }
     }
 
@@ -95,6 +113,10 @@ impl AbsorbingNode {
         for k in 0..6 {
             self.dashpot[k] += other.dashpot[k];
             self.spring[k] += other.spring[k];
+        }
+        for d in 0..3 {
+            self.liquid_dashpot[d] += other.liquid_dashpot[d];
+            self.liquid_spring[d] += other.liquid_spring[d];
         }
     }
 }
@@ -127,6 +149,18 @@ pub struct Absorbing {
     /// Their end-of-step velocities of this step (NaN where a node was empty or a component
     /// fixed: the re-mapping's stays).
     end_velocity: Vec<[f64; 3]>,
+    /// The liquid's dashpots, springs, displacements and end-of-step velocities, as the
+    /// solid's (two-phase cases).
+    liquid: Vec<LiquidAbsorbing>,
+}
+
+/// The liquid's part of a boundary node.
+#[derive(Debug, Clone, Copy)]
+struct LiquidAbsorbing {
+    dashpot: [f64; 3],
+    spring: [f64; 3],
+    displacement: [f64; 3],
+    end_velocity: [f64; 3],
 }
 
 impl Absorbing {
@@ -147,6 +181,15 @@ impl Absorbing {
             spring: mapped.iter().map(|r| r.spring).collect(),
             displacement: vec![[0.0; 3]; mapped.len()],
             end_velocity: vec![[f64::NAN; 3]; mapped.len()],
+            liquid: mapped
+                .iter()
+                .map(|r| LiquidAbsorbing {
+                    dashpot: r.liquid_dashpot,
+                    spring: r.liquid_spring,
+                    displacement: [0.0; 3],
+                    end_velocity: [f64::NAN; 3],
+                })
+                .collect(),
         }
     }
 
@@ -170,6 +213,9 @@ impl Absorbing {
             self.end_velocity[i] = [f64::NAN; 3];
             if m <= grid.empty_below.f64() {
                 // An empty node moves with nothing: its spring keeps its stretch.
+                continue;
+            }
+            if grid.liquid_mass.is_some_and(|l| l[n] > grid.empty_below) {
                 continue;
             }
             let v: [f64; 3] = std::array::from_fn(|d| grid.momentum[n][d].f64() / m);
@@ -206,9 +252,117 @@ impl Absorbing {
     }
 }
 
+/// What [`Absorbing::apply_two_phase`] reads of the grid besides the accelerations: the
+/// solid's and the liquid's masses M_s, M_w, M̄_w, the drag Q, both momenta, both fixities.
+struct TwoPhaseView<'a, R: Real> {
+    mass: (&'a [R], &'a [R], &'a [R]),
+    drag: &'a [R],
+    momentum: (&'a [V3<R>], &'a [V3<R>]),
+    fixed: (&'a [[bool; 3]], &'a [[bool; 3]]),
+    empty_below: R,
+    implicit_drag: bool,
+}
+
+impl Absorbing {
+    /// The boundary's forces at the nodes holding liquid, per component: the grid update solved
+    /// A a₀ = b for (a_s, a_w), with A = [[M_s, M̄_w], [−Q Δt, M_w + Q Δt]] (Q Δt = 0 with the
+    /// explicit drag); the dashpots and springs taken at the end of the step add
+    /// Δt (C + K Δt) to the solid's (mixture row) and the liquid's (both rows) unknowns and
+    /// −C v − K (u + v Δt) to the right-hand sides, and (A + D) a = A a₀ + c is solved. The
+    /// faces of saturated elements are normal to an axis, so the components do not couple.
+    fn apply_two_phase<R: Real>(
+        &mut self,
+        acc_s: &mut [V3<R>],
+        acc_w: &mut [V3<R>],
+        g: TwoPhaseView<'_, R>,
+        dim: usize,
+        dt: f64,
+    ) {
+        let eps = g.empty_below.f64();
+        for (i, &n) in self.nodes.iter().enumerate() {
+            let n = n as usize;
+            let (ms, mw, mwn) = (g.mass.0[n].f64(), g.mass.1[n].f64(), g.mass.2[n].f64());
+            if ms <= eps || mw <= eps {
+                continue;
+            }
+            let (c, k) = (&self.dashpot[i], &self.spring[i]);
+            debug_assert!(
+                c[3..].iter().chain(&k[3..]).all(|&x| x == 0.0),
+                "coupled components"
+            );
+            let l = &mut self.liquid[i];
+            let u = &mut self.displacement[i];
+            self.end_velocity[i] = [f64::NAN; 3];
+            l.end_velocity = [f64::NAN; 3];
+            let qdt = if g.implicit_drag {
+                g.drag[n].f64() * dt
+            } else {
+                0.0
+            };
+            for d in 0..dim {
+                let (fs, fw) = (g.fixed.0[n][d], g.fixed.1[n][d]);
+                let v = if fs {
+                    0.0
+                } else {
+                    g.momentum.0[n][d].f64() / ms
+                };
+                let w = if fw {
+                    0.0
+                } else {
+                    g.momentum.1[n][d].f64() / mw
+                };
+                let (a0s, a0w) = (acc_s[n][d].f64(), acc_w[n][d].f64());
+                let mut a = [[ms, mwn], [-qdt, mw + qdt]];
+                let mut b = [ms * a0s + mwn * a0w, -qdt * a0s + (mw + qdt) * a0w];
+                // The solid's boundary acts on the mixture, the liquid's on both equations.
+                let (ds, dw) = (
+                    dt * (c[d] + k[d] * dt),
+                    dt * (l.dashpot[d] + l.spring[d] * dt),
+                );
+                let (cs, cw) = (
+                    c[d] * v + k[d] * (u[d] + v * dt),
+                    l.dashpot[d] * w + l.spring[d] * (l.displacement[d] + w * dt),
+                );
+                a[0][0] += ds;
+                a[0][1] += dw;
+                a[1][1] += dw;
+                b[0] -= cs + cw;
+                b[1] -= cw;
+                for (j, fixed) in [fs, fw].into_iter().enumerate() {
+                    if fixed {
+                        a[j] = [0.0; 2];
+                        a[0][j] = 0.0;
+                        a[1][j] = 0.0;
+                        a[j][j] = 1.0;
+                        b[j] = 0.0;
+                    }
+                }
+                let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+                let x = [
+                    (b[0] * a[1][1] - a[0][1] * b[1]) / det,
+                    (a[0][0] * b[1] - a[1][0] * b[0]) / det,
+                ];
+                if !fs {
+                    acc_s[n][d] = R::of(x[0]);
+                    self.end_velocity[i][d] = v + x[0] * dt;
+                    u[d] += self.end_velocity[i][d] * dt;
+                }
+                if !fw {
+                    acc_w[n][d] = R::of(x[1]);
+                    l.end_velocity[d] = w + x[1] * dt;
+                    l.displacement[d] += l.end_velocity[d] * dt;
+                }
+            }
+        }
+    }
+}
+
 /// What [`Absorbing::apply`] reads of the grid besides the accelerations.
 struct GridView<'a, R: Real> {
     mass: &'a [R],
+    /// The liquid's mass, in two-phase cases: nodes holding liquid are
+    /// [`Absorbing::apply_two_phase`]'s.
+    liquid_mass: Option<&'a [R]>,
     momentum: &'a [V3<R>],
     empty_below: R,
     fixed: &'a [[bool; 3]],
@@ -245,33 +399,65 @@ impl<R: Real, E: Element> Constraint<R, E> for Absorbing {
         let g = &mut *cx.soil;
         let view = GridView {
             mass: &g.mass,
+            liquid_mass: g.liquid.as_ref().map(|l| &l.mass[..]),
             momentum: &g.momentum,
             empty_below: g.empty_below,
             fixed: cx.fixed,
         };
+        // The nodes with liquid are taken with both phases.
         self.apply(&mut g.acc, view, E::DIM, cx.at.dt);
+        if let Some(l) = &mut g.liquid {
+            let phases = TwoPhaseView {
+                mass: (&g.mass, &l.mass, &l.mass_n),
+                drag: &l.drag,
+                momentum: (&g.momentum, &l.momentum),
+                fixed: (cx.fixed, cx.liquid_fixed),
+                empty_below: g.empty_below,
+                implicit_drag: cx.at.drag == crate::step::grid_update::Drag::Implicit,
+            };
+            self.apply_two_phase(&mut g.acc, &mut l.acc, phases, E::DIM, cx.at.dt);
+        }
     }
 
     fn after_remap(&mut self, cx: &mut Hook<'_, R, E>) {
-        for (&n, v) in self.nodes.iter().zip(&self.end_velocity) {
+        let g = &mut *cx.soil;
+        for (i, &n) in self.nodes.iter().enumerate() {
+            let (n, solid, liquid) = (
+                n as usize,
+                self.end_velocity[i],
+                self.liquid[i].end_velocity,
+            );
             for d in 0..3 {
-                if !v[d].is_nan() {
-                    cx.soil.vel[n as usize][d] = R::of(v[d]);
+                if !solid[d].is_nan() {
+                    g.vel[n][d] = R::of(solid[d]);
+                }
+                if let Some(l) = g.liquid.as_mut().filter(|_| !liquid[d].is_nan()) {
+                    l.vel[n][d] = R::of(liquid[d]);
                 }
             }
         }
     }
 
     fn saved(&self) -> Vec<f64> {
-        self.displacement.iter().flatten().copied().collect()
+        self.displacement
+            .iter()
+            .zip(&self.liquid)
+            .flat_map(|(u, l)| u.iter().chain(&l.displacement).copied())
+            .collect()
     }
 
     fn restore(&mut self, _mesh: &mut crate::element::mesh::Mesh<E, R>, state: &[f64]) -> bool {
-        if state.len() != 3 * self.displacement.len() {
+        if state.len() != 6 * self.displacement.len() {
             return false;
         }
-        for (u, s) in self.displacement.iter_mut().zip(state.chunks_exact(3)) {
+        for ((u, l), s) in self
+            .displacement
+            .iter_mut()
+            .zip(&mut self.liquid)
+            .zip(state.chunks_exact(6))
+        {
             *u = [s[0], s[1], s[2]];
+            l.displacement = [s[3], s[4], s[5]];
         }
         true
     }
@@ -297,6 +483,7 @@ mod tests {
         let fixed = [[false; 3], fixed];
         let view = GridView {
             mass: &mass,
+            liquid_mass: None,
             momentum: &momentum,
             empty_below: 1e-12,
             fixed: &fixed,
@@ -308,18 +495,35 @@ mod tests {
     #[test]
     fn a_face_normal_to_an_axis_gives_anuras_per_axis_dashpot_and_spring() {
         // ρ = 2, V_p = 3, V_s = 1, a = 1, b = 0.5, δ = 4, share 0.25, face normal to y.
-        let r = AbsorbingNode::of_face(0, 0.25, [0.0, -1.0, 0.0], 2.0, (3.0, 1.0), (1.0, 0.5), 4.0);
+        let r = AbsorbingNode::of_face(
+            0,
+            0.25,
+            [0.0, -1.0, 0.0],
+            2.0,
+            (3.0, 1.0),
+            (1.0, 0.5),
+            4.0,
+            None,
+        );
         assert_eq!(r.dashpot, [0.25, 1.5, 0.25, 0.0, 0.0, 0.0]);
         assert_eq!(r.spring, [0.125, 1.125, 0.125, 0.0, 0.0, 0.0]);
-        let no_spring =
-            AbsorbingNode::of_face(0, 1.0, [1.0, 0.0, 0.0], 1.0, (1.0, 1.0), (1.0, 1.0), 0.0);
+        let no_spring = AbsorbingNode::of_face(
+            0,
+            1.0,
+            [1.0, 0.0, 0.0],
+            1.0,
+            (1.0, 1.0),
+            (1.0, 1.0),
+            0.0,
+            None,
+        );
         assert_eq!(no_spring.spring, [0.0; 6]);
     }
 
     #[test]
     fn an_inclined_face_gives_the_rotated_tensor() {
         let s = std::f64::consts::FRAC_1_SQRT_2;
-        let r = AbsorbingNode::of_face(0, 1.0, [s, s, 0.0], 1.0, (2.0, 1.0), (1.0, 1.0), 0.0);
+        let r = AbsorbingNode::of_face(0, 1.0, [s, s, 0.0], 1.0, (2.0, 1.0), (1.0, 1.0), 0.0, None);
         // Along n: 2; across it: 1.
         let c = full(&r.dashpot);
         let along: f64 = (0..3)
@@ -342,7 +546,16 @@ mod tests {
 
     #[test]
     fn rows_of_one_node_add_up_and_mid_edge_nodes_are_left_out() {
-        let one = AbsorbingNode::of_face(1, 1.0, [0.0, 1.0, 0.0], 1.0, (1.0, 1.0), (1.0, 1.0), 0.0);
+        let one = AbsorbingNode::of_face(
+            1,
+            1.0,
+            [0.0, 1.0, 0.0],
+            1.0,
+            (1.0, 1.0),
+            (1.0, 1.0),
+            0.0,
+            None,
+        );
         let mid = AbsorbingNode { node: 3, ..one };
         let b = Absorbing::new(&[one, mid, one], &[0, 1, 2, u32::MAX]);
         assert_eq!(b.len(), 1);
@@ -357,6 +570,8 @@ mod tests {
             node: 1,
             dashpot: [10.0, 10.0, 10.0, 0.0, 0.0, 0.0],
             spring: [0.0; 6],
+            liquid_dashpot: [0.0; 3],
+            liquid_spring: [0.0; 3],
         };
         let mut b = boundary(&[node]);
         let a = step(
@@ -379,6 +594,8 @@ mod tests {
             node: 1,
             dashpot: [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             spring: [2.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            liquid_dashpot: [0.0; 3],
+            liquid_spring: [0.0; 3],
         };
         let mut b = boundary(&[node]);
         let mut v = [0.0; 3];
@@ -400,6 +617,8 @@ mod tests {
             node: 1,
             dashpot: [1.0; 6],
             spring: [1.0; 6],
+            liquid_dashpot: [0.5; 3],
+            liquid_spring: [0.5; 3],
         };
         let mut b = boundary(&[node]);
         b.displacement[0] = [0.5, -1.0, 2.0];

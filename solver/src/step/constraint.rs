@@ -37,6 +37,8 @@ pub struct Hook<'a, R: Real, E: Element> {
     pub structure: Option<&'a mut Grid<R>>,
     /// Fixed components per node.
     pub fixed: &'a [[bool; 3]],
+    /// The liquid's fixed components per node (two-phase cases).
+    pub liquid_fixed: &'a [[bool; 3]],
     /// Face-load forces per node at multiplier 1.
     pub traction: &'a [V3<R>],
     /// The prescribed-velocity sets' reactions, in the case's order.

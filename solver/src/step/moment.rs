@@ -1,7 +1,7 @@
 //! The clock and the load multipliers of one step, formed once at its start for every phase.
 
 use crate::real::{Real, V3};
-use crate::step::grid_update::DampingRule;
+use crate::step::grid_update::{DampingRule, Drag};
 
 /// What a step's phases read of the clock and the loads: the step's start, its length and
 /// the load multipliers at its end, formed once at the start of the step.
@@ -21,6 +21,8 @@ pub struct Moment<R: Real> {
     pub damping: R,
     /// How local damping is applied.
     pub damping_rule: DampingRule,
+    /// How the drag is integrated (two-phase cases).
+    pub drag: Drag,
 }
 
 impl<R: Real> Moment<R> {

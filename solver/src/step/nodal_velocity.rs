@@ -295,6 +295,7 @@ mod tests {
             liquid: 0.0,
             damping: 0.0,
             damping_rule: crate::step::grid_update::DampingRule::Anura3d,
+            drag: crate::step::grid_update::Drag::Implicit,
         }
     }
 

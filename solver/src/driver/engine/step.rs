@@ -115,6 +115,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             liquid: R::of(c.liquid_curve.at(end)),
             damping: R::of(c.damping),
             damping_rule: c.damping_rule,
+            drag: c.drag,
         }
     }
 
@@ -128,6 +129,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             soil: &mut self.grid,
             structure: self.structure.as_mut().map(|s| &mut s.grid),
             fixed: &self.fixed,
+            liquid_fixed: &self.liquid_fixed,
             traction: &self.traction,
             reactions: &mut self.reactions,
         };

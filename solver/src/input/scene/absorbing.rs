@@ -19,7 +19,9 @@ pub(super) const TABLE: Table = Table {
             physical boundary group or on the mesh's faces in a plane: each face of area A in an \
             element of density ρ gives its corners a dashpot a ρ V_p A along its normal and \
             b ρ V_s A across it, and a spring ρ V² A / δ (V_p, V_s the element's P- and S-wave \
-            speeds). Give exactly one of `physical` and `plane`. Dry scenes, one process.",
+            speeds); in a saturated element also the liquid's a ρ_w V_w A and K_w A / δ along the \
+            normal (faces normal to an axis). Give exactly one of `physical` and `plane`. One \
+            process.",
     keys: &[
         key("physical", "string", "none", "", "the physical boundary group"),
         key("plane", "string", "none", "", "or the boundary faces in a plane: \"x = value\", \"y = value\" or \"z = value\""),
@@ -80,6 +82,17 @@ pub(super) fn resolve(
                 (shear_modulus / m.density).sqrt(),
             );
             let n = faces::outward_normal(&mesh.model, face, inner);
+            let liquid = m.liquid.map(|l| (l.density, l.bulk_modulus));
+            if liquid.is_some() && n.iter().filter(|c| c.abs() > 1e-9).count() != 1 {
+                return Err(refuse(
+                    entry.item(),
+                    format!(
+                        "a face of saturated element {} of {} is not normal to x, y or z: the liquid's dashpots lie on such faces only",
+                        element + 1,
+                        mesh.name
+                    ),
+                ));
+            }
             let shares = faces::corner_shares(&mesh.model, face);
             for (&node, w) in face.iter().zip(shares) {
                 rows.push(AbsorbingNode::of_face(
@@ -90,6 +103,7 @@ pub(super) fn resolve(
                     speeds,
                     (entry.normal, entry.shear),
                     entry.spring_length,
+                    liquid,
                 ));
             }
         }

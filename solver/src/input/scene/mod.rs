@@ -293,21 +293,15 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
     let velocities = velocity::resolve(&scene.velocity, &mesh, &materials, scene_dir)?;
     let gravity = gravity::resolve(scene.gravity.as_ref(), scene_dir)?;
     let loads = traction::resolve(&scene.traction, &mesh, grid.as_ref(), scene_dir)?;
-    let absorbing = match (&scene.absorbing[..], &grid, materials.any_saturated()) {
-        ([], _, _) => Vec::new(),
-        (_, Some(_), _) => {
+    let absorbing = match (&scene.absorbing[..], &grid) {
+        ([], _) => Vec::new(),
+        (_, Some(_)) => {
             return Err(refuse(
                 "absorbing",
                 "not on a background grid ([grid]) yet; run it on the mesh's elements",
             ))
         }
-        (_, _, true) => {
-            return Err(refuse(
-                "absorbing",
-                "not in a two-phase (saturated) scene yet: the liquid's dashpots are to come",
-            ))
-        }
-        (entries, None, false) => absorbing::resolve(entries, &mesh, &materials)?,
+        (entries, None) => absorbing::resolve(entries, &mesh, &materials)?,
     };
     let damping = damping::resolve(scene.damping.as_ref())?;
     let consolidation = consolidation::resolve(scene.consolidation.as_ref())?;
