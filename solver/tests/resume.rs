@@ -201,6 +201,20 @@ fn killed_runs_with_prescribed_velocities_resume_byte_identical() {
     });
 }
 
+/// Absorbing boundaries (dashpots and springs on the base, their displacements in the
+/// checkpoint), dry and saturated.
+#[test]
+fn killed_runs_with_absorbing_boundaries_resume_byte_identical() {
+    let absorbing = |t: String| {
+        let base = "physical = \"bottom\"\nfixed = [true, true, true]";
+        assert!(t.contains(base));
+        t.replace(base, "physical = \"bottom\"\nfixed = [true, false, true]")
+            + "[[absorbing]]\nphysical = \"bottom\"\nspring_length = 0.5\n"
+    };
+    killed_and_resumed_with("column_dry", "f64", &absorbing);
+    killed_and_resumed_with("column_saturated", "f32", &absorbing);
+}
+
 #[test]
 fn killed_saturated_runs_resume_byte_identical_in_f64_and_f32() {
     killed_and_resumed("column_saturated", "f64");
