@@ -257,4 +257,23 @@ fn bad_curves_are_refused_naming_the_key() {
     );
     let err = String::from_utf8_lossy(&export.stderr);
     assert!(!export.status.success() && err.contains("curve"), "{err}");
+    // A velocity's table goes to Anura3D's `.PVF`, which reads 0 past its last time: it must
+    // outlast the run.
+    let short = pile_scene(
+        d,
+        "short",
+        "traction = [0.0, 0.0, 0.0]",
+        "[[velocity]]\nphysical = \"top\"\nvelocity = [0.0, -0.01, 0.0]\ncurve = [[0, 0], [0.0005, 1]]",
+        0.001,
+    );
+    let o = common::solve(
+        &short,
+        &d.join("never2"),
+        &["--export-anura3d", &d.join("a3d2").display().to_string()],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("a last one after the end"),
+        "{err}"
+    );
 }

@@ -380,12 +380,24 @@ fn liquid_load_mixed_objective_smoothing_match_anura3d() {
 }
 
 /// A dry column compressed by a rough platen (`[[velocity]]` on its top surface, exported as
-/// `$$PRESCRIBED_NODAL_VELOCITY_SURFACE`), sudden (`step`) and ramped over the run (`linear`),
-/// against Anura3D point by point: u and σ' agree to round-off in every load step.
+/// `$$PRESCRIBED_NODAL_VELOCITY_SURFACE`), sudden (`step`), ramped over the run (`linear`), and
+/// following a table (`file`, the project's `.PVF`), also one that ends within the run (the
+/// platen stops), against Anura3D point by point: u and σ' agree to round-off in every load
+/// step.
 #[test]
 fn prescribed_nodal_velocity_matches_anura3d() {
     let Some(bin) = oracle() else { return };
-    for (name, ramp) in [("sudden", 0.0), ("ramped", 0.2)] {
+    let table = "curve = [[0.0, 0.0], [0.05, 1.0], [0.1, 0.25], [0.15, 1.5], [0.3, 0.5]]";
+    for (name, multiplier, pvf) in [
+        ("sudden", "ramp = 0.0", None),
+        ("ramped", "ramp = 0.2", None),
+        ("table", table, None),
+        (
+            "stopping",
+            table,
+            Some("0.0 0.0\n0.04 1.0\n0.12 0.5\nend\n"),
+        ),
+    ] {
         let dir = tempfile::tempdir().unwrap();
         let text = format!(
             r#"mesh = "{}"
@@ -413,7 +425,7 @@ fixed = [true, false, false]
 [[velocity]]
 physical = "top"
 velocity = [0.002, -0.01, 0.0]
-ramp = {ramp}
+{multiplier}
 "#,
             testdata("oracle_column_tet4.msh").display()
         );
@@ -423,6 +435,9 @@ ramp = {ramp}
         let files = mpm_solve::input::export_anura3d::export_scene(&scene, &a3d).unwrap();
         let gom = std::fs::read_to_string(&files.gom).unwrap();
         assert!(gom.contains("$$PRESCRIBED_NODAL_VELOCITY_SURFACE\n25\n"));
+        if let Some(rows) = pvf {
+            std::fs::write(a3d.join(format!("{name}.PVF")), rows).unwrap();
+        }
         run_oracle(&bin, &a3d, name);
         let out = tempfile::tempdir().unwrap();
         run_ours(&files.gom, &files.cps, Drag::Explicit, out.path());

@@ -29,6 +29,10 @@ pub enum LoadCurve {
     /// Linear between (time, multiplier) pairs of increasing time; the first multiplier
     /// before the first time, the last after the last.
     Table(Arc<[(f64, f64)]>),
+    /// Anura3D's multiplier file (`.PVF`): linear between (time, multiplier) rows as
+    /// [`LoadCurve::Table`], but 0 after the last time (the motion stops), with a rate of 0
+    /// there ([`LoadCurve::rate`]).
+    File(Arc<[(f64, f64)]>),
     /// Hammer blows (see [`Blow`]), each normalised by its peak Z v₀, one every `interval`
     /// seconds from t = 0, `count` of them; 0 after the last one's interval.
     Blows {
@@ -106,7 +110,11 @@ impl LoadCurve {
     /// Multiplier at time `t`.
     pub fn at(&self, t: f64) -> f64 {
         match *self {
-            LoadCurve::Table(ref rows) => table_at(rows, t),
+            LoadCurve::Table(ref rows) => table_at(rows, t, false),
+            LoadCurve::File(ref rows) => match rows.last() {
+                Some(&(last, _)) if t > last => 0.0,
+                _ => table_at(rows, t, true),
+            },
             LoadCurve::Blows {
                 blow,
                 interval,
@@ -139,10 +147,21 @@ impl LoadCurve {
     }
 }
 
-/// The piecewise-linear multiplier of `rows` (increasing times) at `t`.
-fn table_at(rows: &[(f64, f64)], t: f64) -> f64 {
+impl LoadCurve {
+    /// Whether a step ending at `end` is past an Anura3D file's last time, where Anura3D stops
+    /// the motion without decelerating it (the multiplier's rate is then 0).
+    pub fn stopped(&self, end: f64) -> bool {
+        matches!(self, LoadCurve::File(rows) if rows.last().is_some_and(|&(last, _)| end > last))
+    }
+}
+
+/// The piecewise-linear multiplier of `rows` (increasing times) at `t`; with `anura3d`, in
+/// Anura3D's order of operations (its `.PVF` multipliers), else in that of a ramp (a table
+/// [[0, 0], [T, 1]] is a ramp over T to the bit).
+fn table_at(rows: &[(f64, f64)], t: f64, anura3d: bool) -> f64 {
     let i = rows.partition_point(|&(ti, _)| ti <= t);
     match (rows.get(i.wrapping_sub(1)), rows.get(i)) {
+        (Some(&(t0, m0)), Some(&(t1, m1))) if anura3d => m0 + (m1 - m0) / (t1 - t0) * (t - t0),
         (Some(&(t0, m0)), Some(&(t1, m1))) => m0 + (m1 - m0) * (t - t0) / (t1 - t0),
         (Some(&(_, m)), None) | (None, Some(&(_, m))) => m,
         (None, None) => 0.0,
@@ -175,6 +194,15 @@ mod tests {
         };
         assert_eq!(down.at(0.5), 6.0);
         assert_eq!(down.at(1.5), 2.0);
+    }
+
+    #[test]
+    fn an_anura3d_file_stops_after_its_last_time() {
+        let c = LoadCurve::File(vec![(0.0, 0.0), (1.0, 2.0)].into());
+        assert_eq!(c.at(0.5), 1.0);
+        assert_eq!(c.at(1.0), 2.0);
+        assert_eq!(c.at(1.0 + 1e-12), 0.0);
+        assert!(!c.stopped(0.75) && c.stopped(1.25));
     }
 
     #[test]

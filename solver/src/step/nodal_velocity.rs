@@ -236,10 +236,8 @@ impl<R: Real> NodalVelocity<R> {
             .iter_mut()
             .enumerate()
         {
-            let end = r.multiplier(t + dt);
-            let start = r.multiplier(t);
-            self.now[k] = R::of(end);
-            self.rate[k] = R::of((end - start) / dt);
+            self.now[k] = R::of(r.multiplier(t + dt));
+            self.rate[k] = R::of(r.rate(t, dt));
             r.force = [0.0; 3];
         }
         for e in &self.entries {

@@ -53,6 +53,15 @@ impl Reaction {
         self.scale * self.curve.at(t)
     }
 
+    /// The multiplier's rate over the step from `t` to `t + dt`: its change over `dt` (0 past
+    /// an Anura3D file's end, [`LoadCurve::stopped`]).
+    pub fn rate(&self, t: f64, dt: f64) -> f64 {
+        if self.curve.stopped(t + dt) {
+            return 0.0;
+        }
+        (self.multiplier(t + dt) - self.multiplier(t)) / dt
+    }
+
     /// The displacement prescribed so far (m), per component.
     pub fn displacement(&self) -> [f64; 3] {
         self.velocity.map(|v| v * self.travel)

@@ -35,7 +35,7 @@ pub(super) fn on_points(
             "prescribed velocities are not supported yet in cases with a saturated material",
         ));
     }
-    let (scale, curve) = curve(s.prescribed_velocity, steps, cfile, "$$PRESCRIBED_VELOCITY")?;
+    let (scale, curve) = velocity_curve(s.prescribed_velocity, steps, cfile)?;
     Ok(Some(PrescribedVelocity {
         name: crate::step::prescribed::SECTIONS
             .iter()
@@ -73,11 +73,79 @@ pub(super) fn on_nodes(
             "prescribed velocities are not supported yet in cases with a saturated material",
         ));
     }
-    let (scale, curve) = curve(s.prescribed_velocity, steps, cfile, "$$PRESCRIBED_VELOCITY")?;
+    let (scale, curve) = velocity_curve(s.prescribed_velocity, steps, cfile)?;
     Ok(vec![NodalVelocitySet {
         name,
         rows,
         scale,
         curve,
     }])
+}
+
+/// The `$$PRESCRIBED_VELOCITY` multiplier as (scale, curve): Anura3D's `file` reads the
+/// project's `.PVF` beside the CPS (rows `time multiplier`, read up to the first line that is
+/// not two numbers; linear between rows, 0 after the last), the others as every multiplier.
+fn velocity_curve(
+    m: Multiplier,
+    steps: LoadSteps,
+    cfile: &str,
+) -> Result<(f64, crate::step::load_curve::LoadCurve), CaseError> {
+    const KEY: &str = "$$PRESCRIBED_VELOCITY";
+    let Multiplier::File { .. } = m else {
+        return curve(m, steps, cfile, KEY);
+    };
+    let path = std::path::Path::new(cfile).with_extension("PVF");
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        unsupported(
+            cfile,
+            KEY,
+            format!(
+                "file: its multipliers are read from {}: {e}",
+                path.display()
+            ),
+        )
+    })?;
+    let rows: Vec<(f64, f64)> = text
+        .lines()
+        .map_while(|line| {
+            let mut it = line
+                .split(|c: char| c == ',' || c.is_whitespace())
+                .filter(|t| !t.is_empty());
+            let t = it.next()?.replace(['d', 'D'], "e").parse().ok()?;
+            let m = it.next()?.replace(['d', 'D'], "e").parse().ok()?;
+            Some((t, m))
+        })
+        .collect();
+    let pvf = path.display().to_string();
+    match rows.first() {
+        None => {
+            return Err(unsupported(
+                &pvf,
+                KEY,
+                "no rows of `time multiplier` at its start",
+            ))
+        }
+        Some(&(t0, _)) if t0 > 0.0 => {
+            return Err(unsupported(
+                &pvf,
+                KEY,
+                format!("its first time is {t0}: Anura3D needs a row at time 0 or before"),
+            ))
+        }
+        _ => {}
+    }
+    if let Some(i) = rows
+        .windows(2)
+        .position(|w| w[1].0 <= w[0].0 || !w[1].1.is_finite())
+    {
+        return Err(unsupported(
+            &pvf,
+            KEY,
+            format!(
+                "line {}: the times must increase (and the values be finite)",
+                i + 2
+            ),
+        ));
+    }
+    Ok((1.0, crate::step::load_curve::LoadCurve::File(rows.into())))
 }

@@ -83,7 +83,7 @@ fn multiplier(curve: &LoadCurve, end: f64, item: &str) -> Result<&'static str, R
             item,
             "a load in stairs (from Anura3D input) is not written back",
         )),
-        LoadCurve::Table(_) | LoadCurve::Blows { .. } => Err(refuse(
+        LoadCurve::Table(_) | LoadCurve::File(_) | LoadCurve::Blows { .. } => Err(refuse(
             item,
             "Anura3D's loads ramp or step only: a curve (a table or hammer blows) is not written",
         )),
@@ -177,12 +177,38 @@ pub(super) fn solver_only(case: &Case) -> Result<(), Refusal> {
     Ok(())
 }
 
+/// The rows (time, multiplier) of an Anura3D multiplier file (`.PVF`).
+pub(super) type Pvf = Vec<(f64, f64)>;
+
 /// `$$PRESCRIBED_VELOCITY`: Anura3D has one multiplier for every prescribed velocity, so their
-/// ramps must agree; off without any. Several nodal sets are noted (one reaction for all).
+/// ramps (or curves) must agree; off without any. A curve's table goes to the project's `.PVF`
+/// (returned), for which Anura3D needs a first row at time 0 and reads 0 after the last (so it
+/// must end after the run). Several nodal sets are noted (one reaction for all).
 pub(super) fn prescribed_velocity(
     r: &Resolved,
     notes: &mut Vec<String>,
-) -> Result<&'static str, Refusal> {
+) -> Result<(&'static str, Option<Pvf>), Refusal> {
+    if let Some(LoadCurve::Table(rows)) = r.velocities.first().map(|v| &v.curve) {
+        let first = &r.velocities[0];
+        let item = format!("velocity \"{}\".curve", first.name);
+        if let Some(v) = r.velocities.iter().find(|v| v.curve != first.curve) {
+            return Err(refuse(
+                format!("velocity \"{}\".curve", v.name),
+                "Anura3D has one multiplier for every prescribed velocity: give every [[velocity]] the same curve",
+            ));
+        }
+        let end = r.case.time.end_time;
+        match (rows.first(), rows.last()) {
+            (Some(&(t0, _)), Some(&(t1, _))) if t0 == 0.0 && t1 > end => {}
+            _ => {
+                return Err(refuse(
+                    item,
+                    format!("Anura3D's multiplier file needs a first row at time 0 and a last one after the end ({end} s); it reads 0 past its last time"),
+                ))
+            }
+        }
+        return Ok(("file  0.0  1.0", Some(rows.to_vec())));
+    }
     let multiplier = match r.velocities.first() {
         None => "off  0.0  1.0",
         Some(first) => {
@@ -208,7 +234,7 @@ pub(super) fn prescribed_velocity(
             r.case.boundary.nodal_velocity.len()
         ));
     }
-    Ok(multiplier)
+    Ok((multiplier, None))
 }
 
 /// Refuses materials Anura3D would not run the same: missing entries, point counts it does not

@@ -84,6 +84,9 @@ pub struct Anura3dCase {
     pub gom: Model,
     /// The calculation parameters (`.CPS_001`).
     pub cps: Cps,
+    /// The prescribed velocities' multiplier file (`.PVF`: time, multiplier), when their curve
+    /// is a table.
+    pub pvf: Option<Vec<(f64, f64)>>,
     /// Differences the files cannot avoid.
     pub notes: Vec<String>,
 }
@@ -102,6 +105,11 @@ pub fn export_scene(scene_path: &Path, dir: &Path) -> Result<Exported, ExportErr
     let cps = dir.join(format!("{name}.CPS_001"));
     mpm_shared::io::write_output(&gom, &gom_bytes)?;
     mpm_shared::io::write_output(&cps, &cps_bytes)?;
+    if let Some(rows) = &case.pvf {
+        // Shortest round-trip decimals: Anura3D reads the same doubles.
+        let text: String = rows.iter().map(|(t, m)| format!("{t:e} {m:e}\n")).collect();
+        mpm_shared::io::write_output(&dir.join(format!("{name}.PVF")), text.as_bytes())?;
+    }
     Ok(Exported {
         gom,
         cps,
@@ -127,7 +135,7 @@ fn files(r: &Resolved) -> Result<Anura3dCase, checks::Refusal> {
     let gravity_load = checks::gravity_load(case)?;
     let solid_traction = checks::solid_traction(r)?;
     checks::solver_only(case)?;
-    let prescribed_velocity = checks::prescribed_velocity(r, &mut notes)?;
+    let (prescribed_velocity, pvf) = checks::prescribed_velocity(r, &mut notes)?;
     checks::materials(r)?;
     let probes = checks::probes(case)?;
     checks::differences(case, &mut notes);
@@ -158,7 +166,12 @@ fn files(r: &Resolved) -> Result<Anura3dCase, checks::Refusal> {
                 .map(|k| k.surface_point[1]),
         },
     );
-    Ok(Anura3dCase { gom, cps, notes })
+    Ok(Anura3dCase {
+        gom,
+        cps,
+        pvf,
+        notes,
+    })
 }
 
 /// Whether the CPS switches `STRAIN_SMOOTHING` on: when the scene asks for Anura3D's strain
