@@ -31,7 +31,7 @@ pub enum LoadCurve {
     Table(Arc<[(f64, f64)]>),
     /// Anura3D's multiplier file (`.PVF`): linear between (time, multiplier) rows as
     /// [`LoadCurve::Table`], but 0 after the last time (the motion stops), with a rate of 0
-    /// there ([`LoadCurve::rate`]).
+    /// there ([`LoadCurve::stopped`]).
     File(Arc<[(f64, f64)]>),
     /// Hammer blows (see [`Blow`]), each normalised by its peak Z v₀, one every `interval`
     /// seconds from t = 0, `count` of them; 0 after the last one's interval.
