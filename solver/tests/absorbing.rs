@@ -8,11 +8,9 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use mpm_solve::driver::engine::Engine;
 use mpm_solve::element::tet4::Tet4;
 use mpm_solve::element::tri3::{Tri3, Tri3Axi};
 use mpm_solve::element::Element;
-use mpm_solve::input::scene;
 
 /// Column width and height (m), cells along the height, top load (kPa), E (kPa), ν, ρ (kg/m³).
 const W: f64 = 0.1;
@@ -29,13 +27,30 @@ fn wave_speed() -> f64 {
     (e_oed / (DENSITY / 1000.0)).sqrt()
 }
 
-/// A scene of the column with `base` (TOML tables) holding its bottom, the sides on rollers,
-/// undamped, until `end`.
-fn column_scene(dir: &Path, name: &str, base: &str, end: f64) -> PathBuf {
-    let mesh = common::column_msh(dir, CELLS, W, H);
+/// A scene of the 3D column (`section` `None`) or of the section (plane strain or
+/// axisymmetric, x the radius), with `base` holding its bottom, the sides on rollers, the load
+/// held on its top, undamped, until `end`.
+fn column_scene(dir: &Path, name: &str, section: Option<&str>, base: &str, end: f64) -> PathBuf {
+    let (mesh, head, points, z_rollers) = match section {
+        None => (
+            common::column_msh(dir, CELLS, W, H),
+            String::new(),
+            4,
+            format!(
+                "[[fixity]]\nplane = \"z = 0\"\nfixed = [false, false, true]\n\
+             [[fixity]]\nplane = \"z = {W}\"\nfixed = [false, false, true]\n"
+            ),
+        ),
+        Some(s) => (
+            common::section_msh(dir, CELLS, W, H),
+            format!("section = \"{s}\"\n"),
+            3,
+            String::new(),
+        ),
+    };
     let text = format!(
         r#"mesh = "{mesh}"
-[time]
+{head}[time]
 end = {end}
 output_interval = {end}
 courant = 0.5
@@ -44,20 +59,14 @@ physical = "soil"
 density = {DENSITY}
 young = {YOUNG}
 poisson = {POISSON}
-points_per_element = 4
+points_per_element = {points}
 [[fixity]]
 plane = "x = 0"
 fixed = [true, false, false]
 [[fixity]]
 plane = "x = {W}"
 fixed = [true, false, false]
-[[fixity]]
-plane = "z = 0"
-fixed = [false, false, true]
-[[fixity]]
-plane = "z = {W}"
-fixed = [false, false, true]
-[[traction]]
+{z_rollers}[[traction]]
 physical = "top"
 traction = [0.0, -{LOAD}, 0.0]
 {base}
@@ -69,58 +78,14 @@ traction = [0.0, -{LOAD}, 0.0]
     path
 }
 
-/// A scene of the section (plane strain or axisymmetric, x the radius) with `base` holding its
-/// bottom, the sides on rollers, undamped, until `end`.
-fn section_scene(dir: &Path, section: &str, base: &str, end: f64) -> PathBuf {
-    let mesh = common::section_msh(dir, CELLS, W, H);
-    let text = format!(
-        r#"mesh = "{mesh}"
-section = "{section}"
-[time]
-end = {end}
-output_interval = {end}
-courant = 0.5
-[[material]]
-physical = "soil"
-density = {DENSITY}
-young = {YOUNG}
-poisson = {POISSON}
-points_per_element = 3
-[[fixity]]
-plane = "x = 0"
-fixed = [true, false, false]
-[[fixity]]
-plane = "x = {W}"
-fixed = [true, false, false]
-[[traction]]
-physical = "top"
-traction = [0.0, -{LOAD}, 0.0]
-{base}
-"#,
-        mesh = mesh.display()
-    );
-    let path = dir.join(format!("{section}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
 /// The mean σ_yy over the points between 0.1 H and 0.4 H, as a share of the load, when the
 /// front reflected at the base has passed them (t = 1.9 H / c) and nothing else has come back;
 /// on the 3D column, or on a section (`Some("plane_strain" | "axisymmetric")`) with element `E`.
 fn lower_stress<E: Element>(section: Option<&str>, base: &str) -> f64 {
     let dir = tempfile::tempdir().unwrap();
     let end = 1.9 * H / wave_speed();
-    let path = match section {
-        None => column_scene(dir.path(), "column", base, end),
-        Some(s) => section_scene(dir.path(), s, base, end),
-    };
-    let case = scene::load(&path).unwrap();
-    let mut engine = Engine::<f64, E>::new(&case, false).unwrap();
-    while engine.time < end {
-        engine
-            .step(engine.dt.min(end - engine.time).max(1e-12), None)
-            .unwrap();
-    }
+    let path = column_scene(dir.path(), "column", section, base, end);
+    let engine = common::run_scene::<E>(&path, end, |_| {});
     let p = &engine.particles;
     let (sum, n) = (0..p.len())
         .filter(|&i| (0.1 * H..0.4 * H).contains(&p.x[i][1]))
@@ -186,7 +151,7 @@ fn saturated_lower_stress(base: &str) -> (f64, f64) {
     let rho_sat = (1.0 - n) * grains + n;
     let c_u = ((e_oed + k_w / n) / rho_sat).sqrt();
     let end = 1.9 * H / c_u;
-    let scene = column_scene(dir.path(), "saturated", base, end);
+    let scene = column_scene(dir.path(), "saturated", None, base, end);
     let text = std::fs::read_to_string(&scene).unwrap().replace(
         &format!("density = {DENSITY}\n"),
         "density = 2650.0\n",
@@ -195,13 +160,7 @@ fn saturated_lower_stress(base: &str) -> (f64, f64) {
         "points_per_element = 4\n[material.liquid]\nporosity = 0.4\ndensity = 1000.0\nbulk_modulus = 2.2e6\nintrinsic_permeability = 1e-15\nviscosity = 1e-6\n",
     );
     std::fs::write(&scene, text).unwrap();
-    let case = scene::load(&scene).unwrap();
-    let mut engine = Engine::<f64, Tet4>::new(&case, false).unwrap();
-    while engine.time < end {
-        engine
-            .step(engine.dt.min(end - engine.time).max(1e-12), None)
-            .unwrap();
-    }
+    let engine = common::run_scene::<Tet4>(&scene, end, |_| {});
     let p = &engine.particles;
     let pore = &p.liquid.as_ref().expect("saturated").p;
     let (sum, count) = (0..p.len())
@@ -244,13 +203,8 @@ fn a_spring_holds_the_base_at_p_delta_over_e_oed() {
     // Long enough for the dashpot to take the waves out (a = 1 leaves little to ring).
     let end = 40.0 * H / wave_speed();
     let base = format!("[[absorbing]]\nplane = \"y = 0\"\nspring_length = {delta}");
-    let case = scene::load(&column_scene(dir.path(), "spring", &base, end)).unwrap();
-    let mut engine = Engine::<f64, Tet4>::new(&case, false).unwrap();
-    while engine.time < end {
-        engine
-            .step(engine.dt.min(end - engine.time).max(1e-12), None)
-            .unwrap();
-    }
+    let path = column_scene(dir.path(), "spring", None, &base, end);
+    let engine = common::run_scene::<Tet4>(&path, end, |_| {});
     let p = &engine.particles;
     let (sum, n) = (0..p.len())
         .filter(|&i| p.x[i][1] < 0.5 * H / CELLS as f64)
@@ -273,6 +227,7 @@ fn absorbing_runs_are_the_same_bytes_for_any_thread_count() {
     let scene = column_scene(
         d,
         "threads",
+        None,
         "[[absorbing]]\nplane = \"y = 0\"\nspring_length = 1.0",
         end,
     );
@@ -318,7 +273,7 @@ fn what_absorbing_boundaries_cannot_do_yet_is_refused_by_name() {
         ),
     ];
     for (i, (base, expected)) in cases.iter().enumerate() {
-        let scene = column_scene(d, &format!("bad{i}"), base, 0.001);
+        let scene = column_scene(d, &format!("bad{i}"), None, base, 0.001);
         let o = common::solve(&scene, &d.join(format!("out{i}")), &[]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
@@ -329,6 +284,7 @@ fn what_absorbing_boundaries_cannot_do_yet_is_refused_by_name() {
     let grid = column_scene(
         d,
         "grid",
+        None,
         "[[absorbing]]\nplane = \"y = 0\"\n[grid]\ncell = 0.05",
         0.001,
     );
@@ -336,7 +292,7 @@ fn what_absorbing_boundaries_cannot_do_yet_is_refused_by_name() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("background grid"), "{err}");
     let export = common::solve(
-        &column_scene(d, "export", "[[absorbing]]\nplane = \"y = 0\"", 0.001),
+        &column_scene(d, "export", None, "[[absorbing]]\nplane = \"y = 0\"", 0.001),
         &d.join("never"),
         &["--export-anura3d", &d.join("a3d").display().to_string()],
     );

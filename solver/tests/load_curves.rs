@@ -8,7 +8,6 @@ use std::path::{Path, PathBuf};
 
 use mpm_solve::driver::engine::Engine;
 use mpm_solve::element::tet4::Tet4;
-use mpm_solve::input::scene;
 
 /// The pile: 0.1 × 0.1 m, 1 m long, 100 cells, ν = 0 so that the lateral rollers leave the
 /// bar's wave speed sqrt(E / ρ) and its impedance Z = A sqrt(E ρ).
@@ -70,14 +69,8 @@ physical = "top"
 }
 
 /// Runs `scene` in the library to `end`, calling `each` after every step.
-fn run(scene_path: &Path, end: f64, mut each: impl FnMut(&Engine<f64, Tet4>)) -> Engine<f64, Tet4> {
-    let case = scene::load(scene_path).unwrap();
-    let mut engine = Engine::<f64, Tet4>::new(&case, false).unwrap();
-    while engine.time < end * (1.0 - 1e-12) {
-        engine.step(engine.dt.min(end - engine.time), None).unwrap();
-        each(&engine);
-    }
-    engine
+fn run(scene_path: &Path, end: f64, each: impl FnMut(&Engine<f64, Tet4>)) -> Engine<f64, Tet4> {
+    common::run_scene(scene_path, end, each)
 }
 
 #[test]

@@ -83,34 +83,25 @@ fn outward_edge_normals(model: &Model, edges: &[[usize; 2]]) -> Result<Vec<[f64;
 }
 
 /// Outward unit normals of the boundary faces of a 3D model, each oriented away from the
-/// fourth corner of the tetrahedron that has it.
+/// fourth corner of the tetrahedron that has it (the last one, for a face between two).
 fn outward_face_normals(model: &Model, faces: &[[usize; 3]]) -> Result<Vec<[f64; 3]>, String> {
-    let key = |f: [usize; 3]| {
-        let mut k = f;
+    let key = |f: &[usize]| {
+        let mut k = [f[0], f[1], f[2]];
         k.sort_unstable();
         k
     };
     let mut opposite: std::collections::HashMap<[usize; 3], Option<usize>> =
-        faces.iter().map(|&f| (key(f), None)).collect();
+        faces.iter().map(|f| (key(f), None)).collect();
     for e in 0..model.element_count() {
-        let c = &model.element(e)[..4];
-        for skip in 0..4 {
-            let mut f = [0usize; 3];
-            let mut j = 0;
-            for (i, &n) in c.iter().enumerate() {
-                if i != skip {
-                    f[j] = n as usize;
-                    j += 1;
-                }
-            }
-            if let Some(slot) = opposite.get_mut(&key(f)) {
-                *slot = Some(c[skip] as usize);
+        for (face, off) in element_faces(model, e) {
+            if let Some(slot) = opposite.get_mut(&key(&face)) {
+                *slot = Some(off);
             }
         }
     }
     faces
         .iter()
-        .map(|&f| {
+        .map(|f| {
             let inner = opposite[&key(f)].ok_or_else(|| {
                 format!(
                     "the loaded face with corner nodes {} {} {} is not a face of any element",
@@ -119,24 +110,7 @@ fn outward_face_normals(model: &Model, faces: &[[usize; 3]]) -> Result<Vec<[f64;
                     f[2] + 1
                 )
             })?;
-            let p = f.map(|n| model.node(n));
-            let q = model.node(inner);
-            let (a, b) = (
-                [0, 1, 2].map(|d| p[1][d] - p[0][d]),
-                [0, 1, 2].map(|d| p[2][d] - p[0][d]),
-            );
-            let mut n = [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ];
-            let len = n.iter().map(|v| v * v).sum::<f64>().sqrt();
-            let towards_inner: f64 = (0..3).map(|d| n[d] * (q[d] - p[0][d])).sum();
-            let sign = if towards_inner > 0.0 { -1.0 } else { 1.0 };
-            for v in n.iter_mut() {
-                *v *= sign / len;
-            }
-            Ok(n)
+            Ok(outward_normal(model, f, inner))
         })
         .collect()
 }

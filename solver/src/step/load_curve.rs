@@ -155,6 +155,19 @@ impl LoadCurve {
     }
 }
 
+/// One `time multiplier` row of a curve file (a scene's CSV, Anura3D's `.PVF`): two numbers
+/// separated by commas or white space, Fortran's `d` exponents taken; `None` otherwise. With
+/// `strict` a third field is refused (a scene's CSV), else ignored (Fortran's list-directed
+/// read of two values).
+pub fn parse_row(line: &str, strict: bool) -> Option<(f64, f64)> {
+    let mut fields = line
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|f| !f.is_empty());
+    let mut number = || fields.next()?.replace(['d', 'D'], "e").parse::<f64>().ok();
+    let row = (number()?, number()?);
+    (!strict || fields.next().is_none()).then_some(row)
+}
+
 /// The piecewise-linear multiplier of `rows` (increasing times) at `t`; with `anura3d`, in
 /// Anura3D's order of operations (its `.PVF` multipliers), else in that of a ramp (a table
 /// [[0, 0], [T, 1]] is a ramp over T to the bit).

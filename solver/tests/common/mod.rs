@@ -295,3 +295,19 @@ pub fn section_msh(dir: &Path, cells: usize, w: f64, h: f64) -> PathBuf {
     std::fs::write(&path, s).unwrap();
     path
 }
+
+/// Runs the scene at `path` in the library (f64, elements `E`) to `end`, calling `each` after
+/// every step.
+pub fn run_scene<E: mpm_solve::element::Element>(
+    path: &Path,
+    end: f64,
+    mut each: impl FnMut(&mpm_solve::driver::engine::Engine<f64, E>),
+) -> mpm_solve::driver::engine::Engine<f64, E> {
+    let case = mpm_solve::input::scene::load(path).unwrap();
+    let mut engine = mpm_solve::driver::engine::Engine::<f64, E>::new(&case, false).unwrap();
+    while engine.time < end * (1.0 - 1e-12) {
+        engine.step(engine.dt.min(end - engine.time), None).unwrap();
+        each(&engine);
+    }
+    engine
+}

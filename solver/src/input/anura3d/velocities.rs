@@ -107,14 +107,7 @@ fn velocity_curve(
     })?;
     let rows: Vec<(f64, f64)> = text
         .lines()
-        .map_while(|line| {
-            let mut it = line
-                .split(|c: char| c == ',' || c.is_whitespace())
-                .filter(|t| !t.is_empty());
-            let t = it.next()?.replace(['d', 'D'], "e").parse().ok()?;
-            let m = it.next()?.replace(['d', 'D'], "e").parse().ok()?;
-            Some((t, m))
-        })
+        .map_while(|line| crate::step::load_curve::parse_row(line, false))
         .collect();
     let pvf = path.display().to_string();
     match rows.first() {

@@ -69,15 +69,7 @@ fn read_csv(path: &Path, item: &str) -> Result<Vec<(f64, f64)>, Refusal> {
         if line.is_empty() {
             continue;
         }
-        let fields: Vec<&str> = line
-            .split(|c: char| c == ',' || c.is_whitespace())
-            .filter(|f| !f.is_empty())
-            .collect();
-        let parsed = match fields.as_slice() {
-            [t, m] => t.parse::<f64>().ok().zip(m.parse::<f64>().ok()),
-            _ => None,
-        };
-        match parsed {
+        match crate::step::load_curve::parse_row(line, true) {
             Some(row) => rows.push(row),
             // A header: only before any row.
             None if rows.is_empty() && i == 0 => {}
