@@ -114,6 +114,9 @@ pub struct Settings {
     pub local_damping: Option<f64>,
     /// `MASS_SCALING`: factor when switched on.
     pub mass_scaling: Option<f64>,
+    /// `BULK_VISCOSITY_DAMPING`: the linear and quadratic coefficients [b1, b2] when switched
+    /// on.
+    pub bulk_viscosity: Option<[f64; 2]>,
     /// `MAXIMUM_TIME_STEPS`.
     pub max_time_steps: Option<u64>,
     /// `QUASISTATIC_CONVERGENCE`.
@@ -437,6 +440,32 @@ impl Cps {
         Ok(Some(v))
     }
 
+    /// `flag a b`: `Some([a, b])` when the flag is on.
+    fn flag_pair(&self, key: &str) -> Result<Option<[f64; 2]>> {
+        let Some(e) = self.get(key) else {
+            return Ok(None);
+        };
+        let toks = self.tokens(e)?;
+        let flag = toks
+            .first()
+            .and_then(|t| text::parse_int(t))
+            .ok_or_else(|| Error::format(self.at(e, 1), "expected '0|1 value value'"))?;
+        if flag == 0 {
+            return Ok(None);
+        }
+        let value = |k: usize| {
+            toks.get(k)
+                .and_then(|t| text::parse_real(t))
+                .ok_or_else(|| {
+                    Error::format(
+                        self.at(e, 1),
+                        "expected '1 value value' with numeric values",
+                    )
+                })
+        };
+        Ok(Some([value(1)?, value(2)?]))
+    }
+
     fn flag(&self, key: &str) -> Result<bool> {
         let Some(e) = self.get(key) else {
             return Ok(false);
@@ -564,6 +593,7 @@ impl Cps {
             prescribed_velocity: self.multiplier("PRESCRIBED_VELOCITY")?,
             local_damping: self.flag_value("HOMOGENEOUS_LOCAL_DAMPING")?,
             mass_scaling: self.flag_value("MASS_SCALING")?,
+            bulk_viscosity: self.flag_pair("BULK_VISCOSITY_DAMPING")?,
             max_time_steps,
             quasi_static: self.flag("QUASISTATIC_CONVERGENCE")?,
             objective_stress: self.flag("APPLY_OBJECTIVE_STRESS")?,
@@ -698,7 +728,7 @@ impl Cps {
 mod tests {
     use super::*;
 
-    const SRC: &str = "### Anura3D_2024 ###\n$$NUMBER_OF_LOADSTEPS\n50\n$$TIME_PER_LOADSTEP\n0.05\n$$COURANT_NUMBER\n0.5\n$$COMPUTATION_METHOD\nMPM-MP\n$$GRAVITY_LOAD\noff 0.0 1.0\n$$SOLID_TRACTION\nstep 1.0 1.0\n$$PRESCRIBED_VELOCITY\nlinear 0.0 2.0\n$$HOMOGENEOUS_LOCAL_DAMPING\n1 0.05\n$$MASS_SCALING\n0 1.0\n$$SOMETHING_NEW\n1\n$$SOMETHING_NEW\n2\n$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n2\n$$OUTPUT_MATERIAL_POINTS\n3\n5\n$$END\n";
+    const SRC: &str = "### Anura3D_2024 ###\n$$NUMBER_OF_LOADSTEPS\n50\n$$TIME_PER_LOADSTEP\n0.05\n$$COURANT_NUMBER\n0.5\n$$COMPUTATION_METHOD\nMPM-MP\n$$GRAVITY_LOAD\noff 0.0 1.0\n$$SOLID_TRACTION\nstep 1.0 1.0\n$$PRESCRIBED_VELOCITY\nlinear 0.0 2.0\n$$HOMOGENEOUS_LOCAL_DAMPING\n1 0.05\n$$MASS_SCALING\n0 1.0\n$$BULK_VISCOSITY_DAMPING\n1 0.42 1.2\n$$SOMETHING_NEW\n1\n$$SOMETHING_NEW\n2\n$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n2\n$$OUTPUT_MATERIAL_POINTS\n3\n5\n$$END\n";
 
     #[test]
     fn refuses_load_step_counts_that_are_not_whole_or_past_the_limit() {
@@ -736,7 +766,7 @@ mod tests {
     fn types_the_design_keys_and_warns_once() {
         let (cps, warnings) = Cps::read(SRC.as_bytes(), "a.CPS_001").unwrap();
         assert_eq!(warnings.len(), 1);
-        assert!(warnings[0].contains("a.CPS_001:20: unknown CPS key '$$SOMETHING_NEW'"));
+        assert!(warnings[0].contains("a.CPS_001:22: unknown CPS key '$$SOMETHING_NEW'"));
         let s = cps.settings().unwrap();
         assert_eq!(s.load_steps, 50);
         assert_eq!(s.courant, 0.5);
@@ -758,6 +788,7 @@ mod tests {
         );
         assert_eq!(s.local_damping, Some(0.05));
         assert_eq!(s.mass_scaling, None);
+        assert_eq!(s.bulk_viscosity, Some([0.42, 1.2]));
         assert_eq!(s.output_material_points, vec![3, 5]);
         assert_eq!(s.gravity_vector, [0.0, -1.0, 0.0]);
     }
@@ -791,10 +822,17 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("without '$$END'"), "{e}");
+        let bad = SRC.replace("1 0.42 1.2", "1 0.42");
+        let (cps, _) = Cps::read(bad.as_bytes(), "a").unwrap();
+        let e = cps.settings().unwrap_err().to_string();
+        assert!(
+            e.contains("$$BULK_VISCOSITY_DAMPING") && e.contains("'1 value value'"),
+            "{e}"
+        );
         let twice = SRC.replace("$$END", "$$COURANT_NUMBER\n0.9\n$$END");
         let e = Cps::read(twice.as_bytes(), "t").unwrap_err().to_string();
         assert!(
-            e.contains("t:29: '$$COURANT_NUMBER' is given twice (lines 6 and 29)"),
+            e.contains("t:31: '$$COURANT_NUMBER' is given twice (lines 6 and 31)"),
             "{e}"
         );
     }

@@ -76,7 +76,6 @@ fn refused_example(kind: KeyKind, pattern: &str) -> Option<(String, String)> {
         (KeyKind::GomSection, "START_EXCAVATION_SOLID") => (pattern, "1 1\n".into()),
         (KeyKind::CpsKey, "TOTAL_TIME") => (pattern, "0.5".into()),
         (KeyKind::CpsKey, "MASS_SCALING") => (pattern, "1 10.0".into()),
-        (KeyKind::CpsKey, "BULK_VISCOSITY_DAMPING") => (pattern, "1 0.06 1.2".into()),
         (KeyKind::CpsKey, "HYDRAULIC_HEAD") => (pattern, "on".into()),
         (
             KeyKind::CpsKey,

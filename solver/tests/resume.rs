@@ -215,6 +215,18 @@ fn killed_runs_with_absorbing_boundaries_resume_byte_identical() {
     killed_and_resumed_with("column_saturated", "f32", &absorbing);
 }
 
+/// Bulk viscosity (each point's viscous pressure and strain rate in the checkpoint), dry and
+/// saturated.
+#[test]
+fn killed_runs_with_bulk_viscosity_resume_byte_identical() {
+    let bulk = |t: String| {
+        assert!(t.contains("[damping]\n"));
+        t.replace("[damping]\n", "[damping]\nbulk_viscosity = [0.2, 1.5]\n")
+    };
+    killed_and_resumed_with("column_dry", "f64", &bulk);
+    killed_and_resumed_with("column_saturated", "f32", &bulk);
+}
+
 #[test]
 fn killed_saturated_runs_resume_byte_identical_in_f64_and_f32() {
     killed_and_resumed("column_saturated", "f64");

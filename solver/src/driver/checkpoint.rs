@@ -201,6 +201,7 @@ impl Fingerprint {
             fixed_liquid_mass,
             hoop_in_volume,
             strain_smoothing,
+            bulk_viscosity,
             precision,
             grid,
             gradient,
@@ -266,15 +267,33 @@ impl Fingerprint {
         ]);
         // Last and only where there is one: the checkpoints of cases without them keep their
         // items.
-        let gradients = (*gradient != crate::input::case::Gradient::Element).then_some(gradient);
-        let absorbing = (!absorbing.is_empty()).then_some(absorbing);
-        items.extend(
-            grid.as_ref()
-                .map(|g| ("background grid", g as &dyn std::fmt::Debug)),
-        );
-        items.extend(gradients.map(|g| ("gradients", g as &dyn std::fmt::Debug)));
-        items.extend(absorbing.map(|a| ("absorbing boundaries", a as &dyn std::fmt::Debug)));
+        items.extend(Self::optional(grid, gradient, absorbing, bulk_viscosity));
         Fingerprint(items.iter().map(|&(n, v)| Item::of(n, v)).collect())
+    }
+
+    /// The fingerprint's last items, each only where the case has it.
+    // (The list as a `&Vec`: a slice is unsized and cannot be a `&dyn Debug`.)
+    #[allow(clippy::ptr_arg)]
+    fn optional<'a>(
+        grid: &'a Option<crate::basis::grid::GridSpec>,
+        gradient: &'a crate::input::case::Gradient,
+        absorbing: &'a Vec<crate::step::absorbing::AbsorbingNode>,
+        bulk: &'a Option<crate::step::bulk_viscosity::BulkViscosity>,
+    ) -> Vec<Named<'a>> {
+        let mut out: Vec<Named<'a>> = Vec::new();
+        if let Some(g) = grid {
+            out.push(("background grid", g));
+        }
+        if *gradient != crate::input::case::Gradient::Element {
+            out.push(("gradients", gradient));
+        }
+        if !absorbing.is_empty() {
+            out.push(("absorbing boundaries", absorbing));
+        }
+        if let Some(b) = bulk {
+            out.push(("bulk viscosity", b));
+        }
+        out
     }
 
     /// The fingerprint's items of the mesh's filling, in order, every field taken apart.

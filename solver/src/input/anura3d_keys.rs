@@ -327,6 +327,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (CpsKey, "SOLID_TRACTION", Modelled), // as GRAVITY_LOAD
     (CpsKey, "LIQUID_PRESSURE", Modelled), // as GRAVITY_LOAD
     (CpsKey, "HOMOGENEOUS_LOCAL_DAMPING", Modelled),
+    (CpsKey, "BULK_VISCOSITY_DAMPING", Modelled), // a viscous pressure in the internal force
     (CpsKey, "QUASISTATIC_CONVERGENCE", Modelled),
     (CpsKey, "TOLERATED_ERROR_SOLID", Modelled),
     (CpsKey, "MAXIMUM_TIME_STEPS", Modelled), // the quasi-static step limit
@@ -365,11 +366,6 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         CpsKey,
         "MASS_SCALING",
         RefusedUnlessInert("mass scaling (parsed, not applied); inert: flag 0"),
-    ),
-    (
-        CpsKey,
-        "BULK_VISCOSITY_DAMPING",
-        RefusedUnlessInert("bulk viscosity damping; inert: flag 0"),
     ),
     (
         CpsKey,
@@ -744,6 +740,7 @@ mod tests {
             "SOLID_TRACTION",
             "LIQUID_PRESSURE",
             "HOMOGENEOUS_LOCAL_DAMPING",
+            "BULK_VISCOSITY_DAMPING",
             "MAXIMUM_TIME_STEPS",
             "QUASISTATIC_CONVERGENCE",
             "TOLERATED_ERROR_SOLID",

@@ -386,6 +386,8 @@ pub struct Numerics {
     /// both phases averaged element → node → element, material by material
     /// ([`crate::step::smoothing`]); it replaces `smooth_pressure` when on.
     pub strain_smoothing: bool,
+    /// Bulk viscosity damping ([`crate::step::bulk_viscosity`]); `None`: none.
+    pub bulk_viscosity: Option<crate::step::bulk_viscosity::BulkViscosity>,
     /// The background grid the case runs on, with its basis (`None`: the mesh's elements, the
     /// linear basis).
     pub grid: Option<crate::basis::grid::GridSpec>,
@@ -775,6 +777,7 @@ impl Case {
                 fixed_liquid_mass: false,
                 hoop_in_volume: true,
                 strain_smoothing: false,
+                bulk_viscosity: None,
                 grid: None,
                 gradient: Gradient::Element,
                 precision: Precision::F64,

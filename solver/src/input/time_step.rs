@@ -31,7 +31,9 @@ pub fn critical(
 /// The element (the case's numbering) a wave crosses fastest, and that time (s): the critical
 /// step is the Courant number times it. `(elements.start, ∞)` for no elements. Under
 /// [`CriticalStepRule::OccupiedEachStep`] only the elements that hold points at the start count
-/// (the engine takes the step again after every step: [`crate::step::time_step`]).
+/// (the engine takes the step again after every step: [`crate::step::time_step`]). Bulk
+/// viscosity shortens each crossing time by its factor at rest
+/// ([`crate::step::bulk_viscosity::BulkViscosity::step_factor`]).
 pub fn shortest_crossing(
     case: &Case,
     elements: std::ops::Range<usize>,
@@ -59,7 +61,11 @@ pub fn shortest_crossing(
                 .map(|s| s.wave_speed_at(dx, anura3d_step))
                 .fold(0.0, f64::max),
         };
-        let t = dx / c;
+        let mut t = dx / c;
+        if let Some(b) = &case.numerics.bulk_viscosity {
+            // Bulk viscosity shortens the step; the points are at rest here.
+            t *= b.step_factor(t, 0.0);
+        }
         // `<` keeps the first of equal ones and skips a NaN, as `f64::min` did.
         if t < best.1 {
             best = (e, t);

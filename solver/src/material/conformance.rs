@@ -481,6 +481,7 @@ fn through_checkpoint<R: Real>(stress: [R; 6], state: Vec<R>) -> ([R; 6], Vec<R>
         state,
         state_len,
         liquid: None,
+        bulk: None,
     };
     let mut bytes = Vec::new();
     point.put_point(0, &mut bytes);

@@ -471,6 +471,10 @@ mod tests {
             state: (0..2 * n).map(f).collect(),
             state_len: 2,
             liquid: None,
+            bulk: Some(crate::state::particles::BulkPoints {
+                pressure: (0..n).map(|i| 3.0 * f(i)).collect(),
+                rate: (0..n).map(|i| -f(i)).collect(),
+            }),
         }
     }
 

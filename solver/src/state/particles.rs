@@ -35,6 +35,8 @@ pub struct Particles<R: Real> {
     pub state_len: usize,
     /// Liquid state, present only when the case has a saturated material.
     pub liquid: Option<LiquidPoints<R>>,
+    /// Bulk viscosity state, present only when the case damps with it.
+    pub bulk: Option<BulkPoints<R>>,
 }
 
 /// How a per-point array appears in the particle files (`particles_NNNNN.vtu`).
@@ -203,6 +205,7 @@ macro_rules! field_list {
             state,
             state_len,
             liquid,
+            bulk,
         } = $particles;
         let one = |name, written| Field {
             name,
@@ -235,6 +238,10 @@ macro_rules! field_list {
                 $visitor.field(one("volume0", Written::No), v0);
             }
         }
+        if let Some(BulkPoints { pressure, rate }) = bulk {
+            $visitor.field(one("bulk_pressure", Written::No), pressure);
+            $visitor.field(one("bulk_rate", Written::No), rate);
+        }
     }};
 }
 
@@ -249,6 +256,17 @@ pub struct LiquidPoints<R: Real> {
     /// initial volume (Anura3D keeps a point's liquid mass constant); `None`: the current
     /// volume (the liquid mass n ρw V follows the point's volume at constant porosity).
     pub volume0: Option<Vec<R>>,
+}
+
+/// Bulk viscosity state of the material points ([`crate::step::bulk_viscosity`]).
+#[derive(Debug, Clone, Default)]
+pub struct BulkPoints<R: Real> {
+    /// The viscous pressure q (kPa, tension positive) the stress pass formed, which the next
+    /// step's internal force adds to the normal stresses.
+    pub pressure: Vec<R>,
+    /// The volumetric strain rate tr Δε / Δt (1/s) it was formed from, which the critical step
+    /// reads.
+    pub rate: Vec<R>,
 }
 
 impl<R: Real> Particles<R> {
@@ -408,6 +426,14 @@ impl<R: Real> Particles<R> {
             volume0: fixed_liquid_mass.then(|| self.volume.clone()),
         });
     }
+
+    /// Adds the bulk viscosity state, every point without a viscous pressure.
+    pub fn add_bulk(&mut self) {
+        self.bulk = Some(BulkPoints {
+            pressure: vec![R::ZERO; self.len()],
+            rate: vec![R::ZERO; self.len()],
+        });
+    }
 }
 
 /// An element asks for a number of material points its type cannot place.
@@ -558,6 +584,7 @@ mod tests {
                 ..Default::default()
             }),
             state_len: 2,
+            bulk: Some(BulkPoints::default()),
             ..Default::default()
         };
         let mut names = Names(Vec::new());
@@ -586,11 +613,12 @@ mod tests {
         let mut all: Vec<&str> = names.0.iter().map(|(n, _)| *n).collect();
         all.sort_unstable();
         all.dedup();
-        assert_eq!(all.len(), 14, "every array once");
+        assert_eq!(all.len(), 16, "every array once");
         // x u v (3 × 24) mass volume (16) stress (48) element material id (12) active (1),
-        // 2 state values (16), then p w volume0 (8 + 24 + 8).
-        assert_eq!(p.bytes_per_point(), 72 + 16 + 48 + 12 + 1 + 16 + 40);
+        // 2 state values (16), then p w volume0 (8 + 24 + 8), bulk pressure and rate (16).
+        assert_eq!(p.bytes_per_point(), 72 + 16 + 48 + 12 + 1 + 16 + 40 + 16);
         p.liquid = None;
+        p.bulk = None;
         p.state_len = 0;
         assert_eq!(p.bytes_per_point(), 149);
     }

@@ -2,6 +2,7 @@
 
 pub mod absorbing;
 pub mod batch;
+pub mod bulk_viscosity;
 pub mod constraint;
 pub mod contact;
 pub mod grid_to_particle;

@@ -7,7 +7,10 @@
 //!
 //! One pass over the points, each thread over its own range; a thread skips the points that
 //! share the last one's element and material, so the work is about one division per element.
-//! The minimum does not depend on how the points are split among the threads.
+//! The minimum does not depend on how the points are split among the threads. With bulk
+//! viscosity each point's crossing time shrinks by the factor of its volumetric strain rate
+//! (Anura3D's, which takes an element's last point's rate; the points of a linear element
+//! share it, but for an axisymmetric section's hoop term).
 
 use crate::element::mesh::Mesh;
 use crate::element::Element;
@@ -16,6 +19,7 @@ use crate::parallel::gather::Layout;
 use crate::parallel::team::{Shared, Team};
 use crate::real::Real;
 use crate::state::particles::Particles;
+use crate::step::bulk_viscosity::BulkViscosity;
 
 /// Anura3D's floor on the step (s).
 pub const SHORTEST_STEP: f64 = 1e-10;
@@ -27,6 +31,9 @@ pub struct CriticalStep {
     materials: Vec<Option<MaterialSpec>>,
     /// Anura3D's two-phase wave speed (see [`MaterialSpec::wave_speed_at`]).
     anura3d_speed: bool,
+    /// With bulk viscosity, each point's crossing time shrinks by its factor at the point's
+    /// volumetric strain rate.
+    bulk: Option<BulkViscosity>,
     /// Per thread: the shortest crossing time of its points' elements and that element.
     per_thread: Vec<(f64, u32)>,
 }
@@ -39,6 +46,7 @@ impl CriticalStep {
             anura3d_speed: case.time.anura3d_time_step
                 || case.numerics.drag == crate::input::case::Drag::Explicit,
             per_thread: vec![(f64::INFINITY, 0); threads],
+            bulk: case.numerics.bulk_viscosity,
         }
     }
 
@@ -56,7 +64,8 @@ impl CriticalStep {
             self.per_thread = vec![(f64::INFINITY, 0); team.threads];
         }
         let slots = Shared::new(&mut self.per_thread);
-        let (materials, anura3d) = (&self.materials, self.anura3d_speed);
+        let (materials, anura3d, bulk) = (&self.materials, self.anura3d_speed, self.bulk);
+        let rates = p.bulk.as_ref().map(|b| &b.rate[..]);
         team.run(|t| {
             let mut best = (f64::INFINITY, 0u32);
             let mut last = (u32::MAX, u32::MAX);
@@ -65,7 +74,8 @@ impl CriticalStep {
                     continue;
                 }
                 let (e, m) = (p.element[i], p.material[i]);
-                if (e, m) == last {
+                // (With bulk viscosity each point's own rate counts.)
+                if (e, m) == last && bulk.is_none() {
                     continue;
                 }
                 last = (e, m);
@@ -73,7 +83,10 @@ impl CriticalStep {
                     continue;
                 };
                 let dx = mesh.min_altitude[e as usize].f64();
-                let time = dx / spec.wave_speed_at(dx, anura3d);
+                let mut time = dx / spec.wave_speed_at(dx, anura3d);
+                if let (Some(b), Some(rates)) = (&bulk, rates) {
+                    time *= b.step_factor(time, rates[i].f64());
+                }
                 if time < best.0 || (time == best.0 && e < best.1) {
                     best = (time, e);
                 }

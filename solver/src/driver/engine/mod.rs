@@ -274,6 +274,8 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub liquid_fixed: Vec<[bool; 3]>,
     /// Anura3D's strain smoothing, when the case asks for it.
     pub smoothing: Option<crate::step::smoothing::StrainSmoothing<R>>,
+    /// The bulk viscosity's constants, when the case damps with it.
+    pub bulk: Option<crate::step::bulk_viscosity::BulkDamping<R>>,
     /// Per material index: weight density / mass density (1 but for Anura3D's drained soil).
     weight_ratio: Vec<f64>,
     /// Per material index: the gravity acceleration of this step times its weight ratio.

@@ -26,6 +26,7 @@ use crate::state::particles;
 use crate::state::particles::{Field, FieldVisitor, Particles, Value};
 use crate::state::pore_weights::PoreWeights;
 use crate::step::absorbing::Absorbing;
+use crate::step::bulk_viscosity::BulkDamping;
 use crate::step::constraint::Constraints;
 use crate::step::contact::{Contact, Structure};
 use crate::step::mixed::Mixed;
@@ -128,6 +129,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             smoothing: case.numerics.strain_smoothing.then(|| {
                 StrainSmoothing::new(mesh.nodes(), &case.body.element_material[own.clone()])
             }),
+            bulk: bulk_of(case),
             gravity_by_material: vec![[R::ZERO; 3]; tables.weight_ratio.len()],
             weight_ratio: tables.weight_ratio,
             grid: grid_of(mesh.nodes(), two_phase),
@@ -199,11 +201,20 @@ impl<R: Real, E: Element> Engine<R, E> {
     }
 }
 
+/// The bulk viscosity's constants, where the case has it.
+fn bulk_of<R: Real>(case: &Case) -> Option<BulkDamping<R>> {
+    let b = case.numerics.bulk_viscosity.as_ref()?;
+    Some(BulkDamping::new(b, &case.body.materials))
+}
+
 /// Whether the energy checks can run: they need every energy term, and prescribed velocities
-/// do work that is not counted, while contact and absorbing boundaries take energy out that
-/// is not counted either.
+/// do work that is not counted, while contact, absorbing boundaries and bulk viscosity take
+/// energy out that is not counted either.
 fn energy_counted(case: &Case, reactions: &[crate::step::reaction::Reaction]) -> bool {
-    reactions.is_empty() && case.boundary.contact.is_none() && case.boundary.absorbing.is_empty()
+    reactions.is_empty()
+        && case.boundary.contact.is_none()
+        && case.boundary.absorbing.is_empty()
+        && case.numerics.bulk_viscosity.is_none()
 }
 
 /// Refuses what the element type `E` or a run over `ranks` processes does not model.
@@ -397,6 +408,9 @@ fn place_points<E: Element, R: Real>(
             },
             case.numerics.fixed_liquid_mass,
         );
+    }
+    if case.numerics.bulk_viscosity.is_some() {
+        particles.add_bulk();
     }
     apply_undrained_state(case, &mut particles);
     if let Some(init) = &case.start.initial_stress {

@@ -40,6 +40,7 @@ impl<R: Real, E: Element> Engine<R, E> {
             fluids: _,
             liquid_fixed: _,
             smoothing: _,
+            bulk: _,
             weight_ratio: _,
             gravity_by_material: _,
             input_element: _,

@@ -381,6 +381,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                     .as_ref()
                     .filter(|_| k == 0 && self.grid.liquid.is_some() && !rate_pending)
                     .map(|_| &self.fluids[..]),
+                bulk: self.bulk.as_ref(),
             };
             stress::update_stress_and_move(&passes, update);
         }

@@ -287,6 +287,16 @@ fn check_settings(input: &Input) -> Result<Integration, CaseError> {
             format!("must be in (0, 1], got {}", s.courant),
         ));
     }
+    if let Some([b1, b2]) = s.bulk_viscosity {
+        // Anura3D asserts both coefficients positive.
+        if !(b1 > 0.0 && b2 > 0.0 && b1.is_finite() && b2.is_finite()) {
+            return Err(unsupported(
+                cfile,
+                "$$BULK_VISCOSITY_DAMPING",
+                format!("expected '1 b1 b2' with b1 and b2 positive (as Anura3D), got 1 {b1} {b2}"),
+            ));
+        }
+    }
     if !(s.time_per_load_step > 0.0) {
         return Err(unsupported(
             cfile,
@@ -403,6 +413,13 @@ impl Parts {
                 fixed_liquid_mass: true,
                 hoop_in_volume: false,
                 strain_smoothing: strain_smoothing(&input.cps),
+                bulk_viscosity: s.bulk_viscosity.map(|[linear, quadratic]| {
+                    crate::step::bulk_viscosity::BulkViscosity {
+                        linear,
+                        quadratic,
+                        sign: crate::step::bulk_viscosity::Quadratic::Anura3d,
+                    }
+                }),
                 grid: None,
                 gradient: crate::input::case::Gradient::Element,
                 precision: crate::input::case::Precision::F64,

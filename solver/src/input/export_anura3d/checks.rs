@@ -34,6 +34,18 @@ pub(super) fn run(case: &Case, notes: &mut Vec<String>) -> Result<(), Refusal> {
         }
         notes.push("[consolidation]: the Terzaghi report is mpm-solve's own; the export runs the loading only".into());
     }
+    if let Some(b) = case.numerics.bulk_viscosity {
+        if !(b.linear > 0.0 && b.quadratic > 0.0) {
+            return Err(refuse(
+                "damping.bulk_viscosity",
+                format!(
+                    "Anura3D asks for both coefficients positive (got [{}, {}])",
+                    b.linear, b.quadratic
+                ),
+            ));
+        }
+        notes.push("damping.bulk_viscosity: Anura3D (and mpm-solve on the exported GOM) adds the quadratic term as a tensile stress, helping the compression along; the scene's resists it".into());
+    }
     if let Some(n) = case.time.max_steps {
         return Err(refuse(
             "time.max_steps",

@@ -48,6 +48,10 @@ pub(super) fn cps_file(case: &Case, v: CpsValues) -> Cps {
     } else {
         "0 0.0".into()
     };
+    let bulk = match case.numerics.bulk_viscosity {
+        Some(b) => format!("1 {} {}", r(b.linear), r(b.quadratic)),
+        None => "0 0.0 0.0".into(),
+    };
     let probes: Vec<String> = if v.probes.is_empty() {
         vec!["-1".into()]
     } else {
@@ -83,7 +87,7 @@ pub(super) fn cps_file(case: &Case, v: CpsValues) -> Cps {
         ("MAXIMUM_TIME_STEPS", one("10000")),
         ("MASS_SCALING", one("0 1.0")),
         ("HOMOGENEOUS_LOCAL_DAMPING", one(&damping)),
-        ("BULK_VISCOSITY_DAMPING", one("0 0.0 0.0")),
+        ("BULK_VISCOSITY_DAMPING", one(&bulk)),
         ("FIX_SOLID_SKELETON", one("0")),
         ("STRAIN_SMOOTHING", one(if v.smoothing { "1" } else { "0" })),
         ("CONTACT_FORMULATION", one("0")),

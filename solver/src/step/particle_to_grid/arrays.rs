@@ -23,6 +23,8 @@ pub(super) struct PointArrays<'a, R: Real> {
     pub volume: &'a [R],
     pub stress: &'a [[R; 6]],
     pub pore: Option<&'a [R]>,
+    /// The points' bulk viscous pressures, where the case has bulk viscosity.
+    pub bulk: Option<&'a [R]>,
     pub w: Option<&'a [V3<R>]>,
     pub volume0: Option<&'a [R]>,
 }
@@ -45,6 +47,7 @@ impl<'a, R: Real> PointArrays<'a, R> {
             volume: &p.volume,
             stress: &p.stress,
             pore: lp.map(|l| &l.p[..]),
+            bulk: p.bulk.as_ref().map(|b| &b.pressure[..]),
             w: lp.filter(|_| liquid).map(|l| &l.w[..]),
             volume0: lp.filter(|_| liquid).and_then(|l| l.volume0.as_deref()),
         };
@@ -56,6 +59,7 @@ impl<'a, R: Real> PointArrays<'a, R> {
             a.volume.len(),
             a.stress.len(),
             a.pore.map_or(len, <[R]>::len),
+            a.bulk.map_or(len, <[R]>::len),
             a.w.map_or(len, <[V3<R>]>::len),
             a.volume0.map_or(len, <[R]>::len),
         ];
@@ -82,6 +86,7 @@ impl<'a, R: Real> PointArrays<'a, R> {
             volume: &self.volume[..n],
             stress: &self.stress[..n],
             pore: self.pore.map(|a| &a[..n]),
+            bulk: self.bulk.map(|a| &a[..n]),
             w: self.w.map(|a| &a[..n]),
             volume0: self.volume0.map(|a| &a[..n]),
         }
@@ -115,6 +120,7 @@ impl<'a, R: Real> PointArrays<'a, R> {
             volume: sub(self.volume, r.clone()),
             stress: sub(self.stress, r.clone()),
             pore: self.pore.map(|a| sub(a, r.clone())),
+            bulk: self.bulk.map(|a| sub(a, r.clone())),
             w: self.w.map(|a| sub(a, r.clone())),
             volume0: self.volume0.map(|a| sub(a, r.clone())),
         }

@@ -162,7 +162,7 @@ where
     F: Four<R>,
 {
     let p = cx.p;
-    let (mut v, mut s, mut pm) = (R::ZERO, [R::ZERO; 6], R::ZERO);
+    let (mut v, mut s, mut pm, mut qm) = (R::ZERO, [R::ZERO; 6], R::ZERO, R::ZERO);
     for i in range.clone() {
         if p.active[i] {
             v += p.volume[i];
@@ -171,6 +171,9 @@ where
             }
             if let Some(l) = &p.liquid {
                 pm += p.volume[i] * l.p[i];
+            }
+            if let Some(b) = &p.bulk {
+                qm += p.volume[i] * b.pressure[i];
             }
         }
     }
@@ -181,6 +184,7 @@ where
             *c /= v;
         }
         pm /= v;
+        qm /= v;
     }
     // SAFETY: element e is this thread's only.
     unsafe {
@@ -197,11 +201,17 @@ where
     }
     let mut sums = Sums::zero(t, lead);
     if ours {
-        // The Gauss point's total stress: effective plus pore pressure.
+        // The Gauss point's total stress: effective plus pore pressure, and the points' mean
+        // bulk viscous pressure (Anura3D averages it over a full element as the stresses).
         let mut s = s;
         if p.liquid.is_some() {
             for c in s.iter_mut().take(3) {
                 *c += pm;
+            }
+        }
+        if p.bulk.is_some() {
+            for c in s.iter_mut().take(3) {
+                *c += qm;
             }
         }
         for a in 0..E::DIM {

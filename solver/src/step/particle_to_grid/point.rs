@@ -47,6 +47,7 @@ pub(super) fn point_sums<E, R, F, const WITH_LIQUID: bool, const OF_LEAD: bool>(
         pa.volume[i],
         &pa.stress[i],
         pa.pore.map(|p| p[i]),
+        pa.bulk.map(|q| q[i]),
     );
     totals.add_stress(&s);
     let w = splat(m) * n;
@@ -128,7 +129,8 @@ fn liquid_sums<E, R, F, const OF_LEAD: bool>(
 }
 
 /// A point's volume times its total stress, V (σ' + p I) (`pore` its pore pressure p, where the
-/// case has one), as particle to grid's internal force takes it: 0 for the point of a full
+/// case has one), plus V q I (`bulk` its bulk viscous pressure q, where the case has bulk
+/// viscosity), as particle to grid's internal force takes it: 0 for the point of a full
 /// element under mixed integration, whose element's Gauss point takes its force.
 #[inline(always)]
 pub(super) fn volume_stress<R: Real>(
@@ -136,14 +138,15 @@ pub(super) fn volume_stress<R: Real>(
     volume: R,
     stress: &[R; 6],
     pore: Option<R>,
+    bulk: Option<R>,
 ) -> [R; 6] {
     let vol = if full { R::ZERO } else { volume };
     let mut s = stress.map(|c| vol * c);
-    if let Some(p) = pore {
-        let vp = vol * p;
-        s[0] += vp;
-        s[1] += vp;
-        s[2] += vp;
+    for extra in [pore, bulk].into_iter().flatten() {
+        let v = vol * extra;
+        s[0] += v;
+        s[1] += v;
+        s[2] += v;
     }
     s
 }

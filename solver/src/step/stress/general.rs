@@ -136,6 +136,17 @@ pub(super) fn finish<E: Element, R: Real, const W: usize, const WIDE: bool>(
         de[2]
     };
     let v1 = v0 * volume_factor::<R, L<R, W>>(t, de[0], de[1], de_zz);
+    if let (Some(bulk), Some((q, rate))) = (&cx.bulk, p.bulk.as_mut()) {
+        // Anura3D's rate tr Δε / Δt (the hoop strain included) and the viscous pressure of
+        // it, in the element the point strained in.
+        for i in b.points() {
+            let k = i - b.start;
+            let r = (de[0].0[k] + de[1].0[k] + de[2].0[k]) / dt;
+            let length = cx.mesh.min_altitude[p.element[i] as usize];
+            rate[i] = r;
+            q[i] = bulk.damping.pressure(p.material[i], length, r);
+        }
+    }
     let x1 = moved::<E, R, L<R, W>>(t, xl, &dx, dt);
     let u = b.gather(p.u);
     let u0: [L<R, W>; 3] = std::array::from_fn(|a| Plain(u[a]));

@@ -36,6 +36,7 @@ use crate::parallel::team::Shared;
 use crate::real::{Real, V3};
 use crate::state::grid::Grid;
 use crate::state::particles::Particles;
+use crate::step::bulk_viscosity::BulkDamping;
 use crate::step::contact::OneBody;
 use crate::step::passes::Passes;
 use crate::step::smoothing::StrainSmoothing;
@@ -77,6 +78,9 @@ pub struct StressUpdate<'a, R: Real> {
     /// Each saturated point's pore-pressure rate from its own stencil (on a grid), per
     /// material index its liquid.
     pub point_rates: Option<&'a [Option<Fluid<R>>]>,
+    /// The bulk viscosity, where the case damps with it: each point's viscous pressure and
+    /// volumetric strain rate are formed ([`crate::step::bulk_viscosity`]).
+    pub bulk: Option<&'a BulkDamping<R>>,
 }
 
 /// Δε = sym(Σ v_n ⊗ ∇N_n) Δt; σ += D Δε (plus, when `objective`, Anura3D's objective terms:
@@ -121,6 +125,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         located,
         background,
         point_rates,
+        bulk,
     } = update;
     debug_assert!(
         pore_rate.is_none() || body.is_none(),
@@ -171,6 +176,11 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         located: located.map(Shared::new),
         background,
         point_rates,
+        bulk: bulk.zip(p.bulk.as_mut()).map(|(b, points)| BulkPass {
+            damping: b,
+            pressure: Shared::new(&mut points.pressure),
+            rate: Shared::new(&mut points.rate),
+        }),
     };
     // In chunks handed out while the pass runs: a thread slowed by its core leaves the rest of
     // its chunks to the others (each point's update and each block's sums are the same
@@ -227,6 +237,16 @@ struct Pass<'a, E: Element, R: Real> {
     background: Option<&'a Background>,
     /// Per material index its liquid, where each point takes its own pore-pressure rate.
     point_rates: Option<&'a [Option<Fluid<R>>]>,
+    /// The bulk viscosity and the points' arrays it forms.
+    bulk: Option<BulkPass<'a, R>>,
+}
+
+/// The bulk viscosity in the stress pass: its constants, and the points' viscous pressures and
+/// volumetric strain rates each chunk takes its own range of.
+struct BulkPass<'a, R: Real> {
+    damping: &'a BulkDamping<R>,
+    pressure: Shared<'a, R>,
+    rate: Shared<'a, R>,
 }
 
 /// A chunk's point arrays, each sliced to the chunk's range and indexed by the position in it
@@ -253,6 +273,8 @@ struct ChunkPoints<'s, R: Real> {
     /// The laws' states, `k` values a point.
     state: &'s mut [R],
     k: usize,
+    /// With bulk viscosity, the points' viscous pressures and volumetric strain rates.
+    bulk: Option<(&'s mut [R], &'s mut [R])>,
 }
 
 /// What one element shares among its points: its index, velocity gradient `l` (∂v_a/∂x_b),
@@ -325,6 +347,12 @@ impl<E: Element, R: Real> Pass<'_, E, R> {
             // Each point's state is its own `k` values.
             state: self.states.range(self.k * r.start..self.k * r.end),
             k: self.k,
+            bulk: self.bulk.as_ref().map(|b| {
+                (
+                    &mut b.pressure.range(r.clone())[..n],
+                    &mut b.rate.range(r.clone())[..n],
+                )
+            }),
         }
     }
 }
@@ -425,7 +453,8 @@ fn element<E: Element, R: Real, const WIDE: bool>(
     // bits). They stop at the first batch they do not take, and the general loop goes on from
     // there; the points before it are located.
     if let Some(t) = cx.four.filter(|_| WIDE || cfg!(target_feature = "avx2")) {
-        if !E::AXISYMMETRIC && cx.smoothing.is_none() {
+        // (Bulk viscosity forms each point's viscous pressure in the general batches.)
+        if !E::AXISYMMETRIC && cx.smoothing.is_none() && cx.bulk.is_none() {
             j = lanes::elastic_batches(cx, t, &el, p, (j, end), sinks.reborrow());
             // The lanes took every point and located those that left (the common case):
             // nothing of the general loop below is left to do.
