@@ -302,3 +302,314 @@ fn what_absorbing_boundaries_cannot_do_yet_is_refused_by_name() {
         "{err}"
     );
 }
+
+/// `gom` with the sections `(keyword, body)` put before `$$NUMBER_OF_MATERIALS`.
+fn with_sections(gom: &str, sections: &[(&str, String)]) -> String {
+    let mut text = String::new();
+    for (k, body) in sections {
+        text.push_str(&format!("$${k}\n{body}"));
+    }
+    gom.replacen(
+        "$$NUMBER_OF_MATERIALS",
+        &(text + "$$NUMBER_OF_MATERIALS"),
+        1,
+    )
+}
+
+/// Runs the GOM case `dir/NAME` with the explicit drag (Anura3D's), writing into `out`.
+fn run_gom(dir: &Path, name: &str, out: &Path) {
+    let (mut case, _) = mpm_solve::input::anura3d::load(
+        &dir.join(format!("{name}.GOM")),
+        &dir.join(format!("{name}.CPS_001")),
+    )
+    .unwrap();
+    assert!(!case.boundary.absorbing.is_empty());
+    case.numerics.drag = mpm_solve::input::case::Drag::Explicit;
+    struct Run<'a>(&'a mpm_solve::input::case::Case, &'a Path);
+    impl mpm_solve::driver::dispatch::Generic for Run<'_> {
+        type Output = ();
+        fn call<R: mpm_solve::real::Real, E: Element>(self) {
+            mpm_solve::driver::run::run::<R, E>(self.0, self.1, &Default::default()).unwrap();
+        }
+    }
+    mpm_solve::driver::dispatch::dispatch(&case, Run(&case, out)).unwrap();
+}
+
+/// The worst difference of displacement, stress and pore pressure (relative to each field's
+/// largest Anura3D value) over the outputs of Anura3D's run in `anura` and ours of its files
+/// (`name`), written to `ours`; and how many outputs paired.
+fn ours_against_anura3d(anura: &Path, name: &str, ours: &Path) -> ([f64; 3], usize) {
+    run_gom(anura, name, ours);
+    common::worst_against_anura3d(anura, ours, ["displacement", "stress", "pore_pressure"])
+}
+
+/// A saturated material's liquid, as a scene gives it.
+const SATURATED: &str = "[material.liquid]\nporosity = 0.4\ndensity = 1000.0\nbulk_modulus = 2.15e4\nintrinsic_permeability = 1.0214e-9\nviscosity = 1.0e-6\n";
+
+/// The column of [`anura3ds_absorbing_base_matches_anura3d_point_by_point`] exported to
+/// Anura3D's files in `dir/a3d` (its material's `liquid` lines, its end time): the GOM's text,
+/// the absorbing sections to add to it, the CPS's text, and the exported files.
+fn gom_column(
+    dir: &Path,
+    liquid: &str,
+    end: f64,
+) -> (
+    String,
+    Vec<(&'static str, String)>,
+    String,
+    mpm_solve::input::export_anura3d::Exported,
+) {
+    let text = format!(
+        r#"mesh = "{}"
+[time]
+end = {end}
+output_interval = {}
+courant = 0.5
+[[material]]
+physical = "soil"
+density = 2000.0
+young = 1000.0
+poisson = 0.3
+points_per_element = 4
+{liquid}[[fixity]]
+physical = "bottom"
+fixed = [true, false, true]
+[[fixity]]
+plane = "x = 0"
+fixed = [true, false, false]
+[[fixity]]
+plane = "x = 0.1"
+fixed = [true, false, false]
+[[fixity]]
+plane = "z = 0"
+fixed = [false, false, true]
+[[fixity]]
+plane = "z = 0.1"
+fixed = [false, false, true]
+[[traction]]
+physical = "top"
+traction = [0.0, -10.0, 0.0]
+"#,
+        common::testdata("oracle_column_tet4.msh").display(),
+        end / 4.0
+    );
+    let scene = dir.join("c.toml");
+    std::fs::write(&scene, text).unwrap();
+    let a3d = dir.join("a3d");
+    let files = mpm_solve::input::export_anura3d::export_scene(&scene, &a3d).unwrap();
+    let gom = std::fs::read_to_string(&files.gom).unwrap();
+    let model = mpm_shared::gom::read(gom.as_bytes(), "c.GOM").unwrap();
+    let base: Vec<usize> = (0..model.node_count())
+        .filter(|&n| model.node(n)[1] == 0.0)
+        .collect();
+    assert!(base.len() >= 9, "{} base nodes", base.len());
+    let rows = |a: &str| {
+        let mut s = format!("{}\n", base.len());
+        for n in &base {
+            s.push_str(&format!("{} 1 0.1 0.3 1 {a} 0.3 1 0.1 0.3\n", n + 1));
+        }
+        s
+    };
+    let mut sections = vec![("ABSORBING_BOUNDARY_SURFACE_SOLID", rows("0.5"))];
+    if !liquid.is_empty() {
+        sections.push(("ABSORBING_BOUNDARY_SURFACE_LIQUID", rows("0.5")));
+    }
+    sections.push(("ABSORBING_BOUNDARY_REFERENCE_MATERIAL_INDEX", "1\n".into()));
+    let cps = std::fs::read_to_string(&files.cps).unwrap();
+    (gom, sections, cps, files)
+}
+
+/// A column of ours (0.1 × 1 × 0.1 m, 2 × 20 × 2 cells, a sudden 10 kPa on its top, sides on
+/// rollers), dry and saturated, whose base rests on Anura3D's absorbing boundary
+/// (`$$ABSORBING_BOUNDARY_SURFACE_SOLID`, and `_LIQUID` when saturated: a = 0.5 normal to the
+/// base, δ = 0.3 m), its increments from the points' sums (Anura3D's default) and
+/// from the nodes (`$$APPLY_NODE_DATA_AB 1`), run by the 3D Anura3D and by us: every
+/// point's displacement, effective stress and pore pressure agree within 1e-10 of their
+/// largest values at each of four outputs; and the two rules' answers part. (The points'
+/// sums are not normalised: a node takes several times its own motion, and with a = 1 the
+/// lagged dashpot sinks the column in both codes.)
+#[test]
+fn anura3ds_absorbing_base_matches_anura3d_point_by_point() {
+    let Some(bin) = common::oracle("Anura3D's absorbing boundary against Anura3D") else {
+        return;
+    };
+    for (phases, liquid, end) in [("dry", "", 0.08), ("saturated", SATURATED, 0.02)] {
+        let dir = tempfile::tempdir().unwrap();
+        let (gom, sections, cps, files) = gom_column(dir.path(), liquid, end);
+        for (mode, node_data) in [("point sums", false), ("node data", true)] {
+            let run = dir.path().join(format!("{}", node_data as u8));
+            std::fs::create_dir_all(&run).unwrap();
+            std::fs::write(run.join("c.GOM"), with_sections(&gom, &sections)).unwrap();
+            let cps = if node_data {
+                cps.replace("$$END", "$$APPLY_NODE_DATA_AB\n1\n$$END")
+            } else {
+                cps.clone()
+            };
+            std::fs::write(run.join("c.CPS_001"), cps).unwrap();
+            common::run_oracle(&bin, &run, "c");
+            let (w, outputs) = ours_against_anura3d(&run, "c", &run.join("ours"));
+            eprintln!(
+                "{phases} column, {mode}: u {:.1e}, σ' {:.1e}, p {:.1e} over {outputs} outputs",
+                w[0], w[1], w[2]
+            );
+            assert_eq!(outputs, 4);
+            for (v, f) in w.iter().zip(["displacement", "σ'", "p"]) {
+                assert!(*v <= 1e-10, "{phases}, {mode}: {f} differs by {v:.2e}");
+            }
+        }
+        // The boundary acts, and the two rules differ: the nodes' rule's stresses part from
+        // the points' sums' run.
+        let (w, _) = common::worst_against_anura3d(
+            &dir.path().join("0"),
+            &dir.path().join("1").join("ours"),
+            ["stress"],
+        );
+        eprintln!("{phases} column: the two rules part by σ' {:.1e}", w[0]);
+        assert!(w[0] > 1e-3, "{phases}: the rules agree within {:.1e}", w[0]);
+        if !liquid.is_empty() {
+            // The liquid's boundary counts too: without its rows the pore pressures part.
+            let solid_only = dir.path().join("solid_only");
+            std::fs::create_dir_all(&solid_only).unwrap();
+            let keep = [sections[0].clone(), sections[2].clone()];
+            std::fs::write(solid_only.join("c.GOM"), with_sections(&gom, &keep)).unwrap();
+            std::fs::copy(&files.cps, solid_only.join("c.CPS_001")).unwrap();
+            let out = solid_only.join("ours");
+            run_gom(&solid_only, "c", &out);
+            let (w, _) =
+                common::worst_against_anura3d(&dir.path().join("0"), &out, ["pore_pressure"]);
+            eprintln!(
+                "without the liquid's rows the pore pressures part by {:.1e}",
+                w[0]
+            );
+            assert!(
+                w[0] > 1e-3,
+                "the liquid's boundary changes p by {:.1e}",
+                w[0]
+            );
+        }
+    }
+}
+
+/// Anura3D's own absorbing-boundary benchmark (`Oedometer_AbsorbingBoundary_GravityLoading_2D`,
+/// a plane-strain column under its weight on an absorbing base), run as MPM (`MPM-MP`: the
+/// benchmark is FEM) over four load steps of 0.25 s, its base freed in y so that the boundary
+/// carries the column (the benchmark also fixes it, which leaves the boundary idle) with
+/// δ = 0.01 m, by the 2D Anura3D and by us, with the points' sums and with the nodes' data:
+/// displacement and stress within 1e-10 of their largest values at every output.
+#[test]
+fn anura3ds_2d_absorbing_benchmark_matches_the_2d_oracle() {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let oracle = mpm_shared::suite::anura3d_oracle_2d(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    let suite = mpm_shared::suite::anura3d_benchmarks(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    let (Some(bin), Some(suite)) = (oracle, suite) else {
+        mpm_shared::suite::skipped(
+            "the 2D absorbing boundary against Anura3D (ANURA3D_ORACLE_2D or ANURA3D_BENCHMARKS not set)",
+        );
+        return;
+    };
+    let name = "Oedometer_AbsorbingBoundary_GravityLoading_2D";
+    let src = suite.join(format!(
+        "Benchmarks/Pre-Commit_Tests/{name}/{name}.A3D/{name}"
+    ));
+    let gom = std::fs::read_to_string(src.with_extension("GOM")).unwrap();
+    let at = gom.find("$$START_FIXITY_LINE_SOLID").unwrap();
+    let mut fixities = gom[at..].to_string();
+    for (fixed, free) in [
+        ("\n1 1 1\n", "\n1 1 0\n"),
+        ("\n3 0 1\n", "\n3 0 0\n"),
+        ("\n6 1 1\n", "\n6 1 0\n"),
+    ] {
+        assert!(fixities.contains(fixed));
+        fixities = fixities.replacen(fixed, free, 1);
+    }
+    let gom = format!("{}{fixities}", &gom[..at]).replace(" 1 1.5 15\n", " 1 1.5 0.01\n");
+    let mut cps = String::new();
+    let mut set: Option<&str> = None;
+    for line in std::fs::read_to_string(src.with_extension("CPS_001"))
+        .unwrap()
+        .lines()
+    {
+        if let Some(v) = set.take() {
+            cps.push_str(v);
+        } else {
+            cps.push_str(line);
+            set = match line.trim() {
+                "$$COMPUTATION_METHOD" => Some("MPM-MP"),
+                "$$NUMBER_OF_LOADSTEPS" => Some("4"),
+                "$$TIME_PER_LOADSTEP" => Some("0.25"),
+                "$$QUASISTATIC_CONVERGENCE" => Some("0"),
+                "$$VISUALIZATION_OPTION" => Some("VTK"),
+                _ => None,
+            };
+        }
+        cps.push('\n');
+    }
+    for (rule, node_data) in [("point sums", false), ("node data", true)] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("b.GOM"), &gom).unwrap();
+        let cps = if node_data {
+            cps.replace("$$END", "$$APPLY_NODE_DATA_AB\n1\n$$END")
+        } else {
+            cps.clone()
+        };
+        std::fs::write(dir.path().join("b.CPS_001"), cps).unwrap();
+        common::run_oracle(&bin, dir.path(), "b");
+        let (w, outputs) = ours_against_anura3d(dir.path(), "b", &dir.path().join("ours"));
+        eprintln!(
+            "2D benchmark, {rule}: u {:.1e}, σ' {:.1e} over {outputs} outputs",
+            w[0], w[1]
+        );
+        assert_eq!(outputs, 4);
+        for (v, f) in w.iter().zip(["displacement", "σ'"]) {
+            assert!(*v <= 1e-10, "{rule}: {f} differs by {v:.2e}");
+        }
+    }
+}
+
+/// Anura3D's absorbing boundary (its accumulated forces, the last step's motion, and with the
+/// points' sums each point's increment, which follow the points' re-sorting) goes through a
+/// checkpoint: the saturated column of [`anura3ds_absorbing_base_matches_anura3d_point_by_point`]
+/// killed after step 30 (checkpoints every 7 steps, two threads) and resumed on one thread ends
+/// with the uninterrupted run's files, byte for byte, with either rule.
+#[test]
+fn anura3ds_absorbing_base_resumes_byte_identical() {
+    let dir = tempfile::tempdir().unwrap();
+    let (gom, sections, cps, _) = gom_column(dir.path(), SATURATED, 0.02);
+    for node_data in [false, true] {
+        let run = dir.path().join(format!("{}", node_data as u8));
+        std::fs::create_dir_all(&run).unwrap();
+        let input = run.join("c.GOM");
+        std::fs::write(&input, with_sections(&gom, &sections)).unwrap();
+        let cps = if node_data {
+            cps.replace("$$END", "$$APPLY_NODE_DATA_AB\n1\n$$END")
+        } else {
+            cps.clone()
+        };
+        std::fs::write(run.join("c.CPS_001"), cps).unwrap();
+        let (full, cut) = (run.join("full"), run.join("cut"));
+        let o = common::solve(&input, &full, &["--threads", "1"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let every = ["--checkpoint-every", "7", "--threads"];
+        let killed = common::solve(
+            &input,
+            &cut,
+            &[&every[..], &["2", "--abort-after-step", "30"]].concat(),
+        );
+        assert!(!killed.status.success(), "the run was to abort");
+        let resumed = std::process::Command::new(env!("CARGO_BIN_EXE_mpm-solve"))
+            .arg(&input)
+            .args(["-q", "--resume", cut.to_str().unwrap(), "--threads", "1"])
+            .args(&every[..2])
+            .output()
+            .unwrap();
+        assert!(
+            resumed.status.success(),
+            "{}",
+            String::from_utf8_lossy(&resumed.stderr)
+        );
+        assert!(
+            common::outputs(&full) == common::outputs(&cut),
+            "node data {node_data}: the resumed run's files differ"
+        );
+    }
+}

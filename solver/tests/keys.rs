@@ -67,9 +67,6 @@ fn refused_example(kind: KeyKind, pattern: &str) -> Option<(String, String)> {
             "PRESCRIBED_NODAL_VELOCITY_SURFACE_SOLID",
             "1\n1 0 1 0 0.0 -0.1 0.0\n".into(),
         ),
-        (KeyKind::GomSection, "ABSORBING_BOUNDARY_*") => {
-            ("ABSORBING_BOUNDARY_SURFACE_SOLID", "1\n1 1 1 1\n".into())
-        }
         (KeyKind::GomSection, "INITIAL_VELOCITY_MATERIAL_POINT") => {
             (pattern, "1\n1 0.0 -0.1 0.0\n".into())
         }

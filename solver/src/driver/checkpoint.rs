@@ -178,6 +178,7 @@ impl Fingerprint {
             moving_mesh,
             contact,
             absorbing,
+            absorbing_rule,
         } = boundary;
         let TimeControls {
             courant,
@@ -268,6 +269,9 @@ impl Fingerprint {
         // Last and only where there is one: the checkpoints of cases without them keep their
         // items.
         items.extend(Self::optional(grid, gradient, absorbing, bulk_viscosity));
+        if *absorbing_rule != crate::step::absorbing::AbsorbingRule::EndOfStep {
+            items.push(("absorbing boundaries' rule", absorbing_rule));
+        }
         Fingerprint(items.iter().map(|&(n, v)| Item::of(n, v)).collect())
     }
 

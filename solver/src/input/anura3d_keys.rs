@@ -129,16 +129,8 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "PRESCRIBED_*",
         RefusedUnlessInert("other prescribed quantities; inert: an empty list"),
     ),
-    (
-        GomSection,
-        "ABSORBING_BOUNDARY_REFERENCE_MATERIAL_INDEX",
-        Ignored("only used by absorbing boundaries, which are refused unless empty"),
-    ),
-    (
-        GomSection,
-        "ABSORBING_BOUNDARY_*",
-        RefusedUnlessInert("absorbing (viscous) boundaries; inert: an empty list"),
-    ),
+    (GomSection, "ABSORBING_BOUNDARY_REFERENCE_MATERIAL_INDEX", Modelled), // the dashpots' material
+    (GomSection, "ABSORBING_BOUNDARY_*", Modelled), // solid and liquid; gas refused
     (
         GomSection,
         "INITIAL_VELOCITY_MATERIAL_POINT",
@@ -328,6 +320,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (CpsKey, "LIQUID_PRESSURE", Modelled), // as GRAVITY_LOAD
     (CpsKey, "HOMOGENEOUS_LOCAL_DAMPING", Modelled),
     (CpsKey, "BULK_VISCOSITY_DAMPING", Modelled), // a viscous pressure in the internal force
+    (CpsKey, "APPLY_NODE_DATA_AB", Modelled), // absorbing boundaries from nodal or point data
     (CpsKey, "QUASISTATIC_CONVERGENCE", Modelled),
     (CpsKey, "TOLERATED_ERROR_SOLID", Modelled),
     (CpsKey, "MAXIMUM_TIME_STEPS", Modelled), // the quasi-static step limit
@@ -683,10 +676,10 @@ mod tests {
             status(GomSection, "START_FIXITY_LINE_GAS"),
             KeyStatus::RefusedUnlessInert(_)
         ));
-        assert!(matches!(
+        assert_eq!(
             status(GomSection, "ABSORBING_BOUNDARY_REFERENCE_MATERIAL_INDEX"),
-            KeyStatus::Ignored(_)
-        ));
+            KeyStatus::Modelled
+        );
         assert_eq!(
             lookup(MaterialKey, "MATERIAL_PARAMETER_SOLID_07").map(|e| e.0),
             Some("MATERIAL_PARAMETER_SOLID_*")

@@ -284,6 +284,8 @@ pub struct BoundaryConditions {
     /// Absorbing boundaries: a dashpot and a spring per model node, one row per node in node
     /// order (empty: none).
     pub absorbing: Vec<crate::step::absorbing::AbsorbingNode>,
+    /// How the absorbing boundaries act (ours for scenes, Anura3D's for GOM input).
+    pub absorbing_rule: crate::step::absorbing::AbsorbingRule,
 }
 
 /// What loads the body: face loads on nodes (on the solid and on the liquid) and on material
@@ -744,6 +746,7 @@ impl Case {
                 moving_mesh: None,
                 contact: None,
                 absorbing: Vec::new(),
+                absorbing_rule: Default::default(),
             },
             loads: Loading {
                 traction: vec![[0.0; 3]; n],

@@ -36,6 +36,21 @@ use crate::element::Element;
 use crate::real::{Real, V3};
 use crate::step::constraint::{Constraint, Hook};
 
+/// How a case's absorbing boundaries act.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AbsorbingRule {
+    /// Ours: the dashpots and springs taken implicitly at the end of the step ([`Absorbing`]).
+    #[default]
+    EndOfStep,
+    /// Anura3D's (GOM input): an accumulated force, one step behind, along each axis
+    /// ([`crate::step::absorbing_anura3d`]); `point_sums`: its increments from sums over the
+    /// points (Anura3D's default), else from the nodes' own motion (`$$APPLY_NODE_DATA_AB 1`).
+    Anura3d {
+        /// Increments from unnormalised sums over the points.
+        point_sums: bool,
+    },
+}
+
 /// A symmetric 3×3 tensor stored as xx, yy, zz, xy, yz, xz.
 pub type Sym = [f64; 6];
 

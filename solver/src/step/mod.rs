@@ -1,6 +1,7 @@
 //! The phases of one explicit MUSL step, in the order they run, and what they read from the configuration (load curves, damping rule, drag, prescribed velocities).
 
 pub mod absorbing;
+pub mod absorbing_anura3d;
 pub mod batch;
 pub mod bulk_viscosity;
 pub mod constraint;

@@ -25,7 +25,8 @@ use crate::state::grid::{Grid, LiquidNodes};
 use crate::state::particles;
 use crate::state::particles::{Field, FieldVisitor, Particles, Value};
 use crate::state::pore_weights::PoreWeights;
-use crate::step::absorbing::Absorbing;
+use crate::step::absorbing::{Absorbing, AbsorbingRule};
+use crate::step::absorbing_anura3d::AbsorbingAnura3d;
 use crate::step::bulk_viscosity::BulkDamping;
 use crate::step::constraint::Constraints;
 use crate::step::contact::{Contact, Structure};
@@ -456,11 +457,16 @@ fn constraints_of<E: Element, R: Real>(
 ) -> Result<ConstraintsAndStructure<R, E>, SetupError> {
     let mut list = Constraints::new();
     // First: the velocities prescribed after it win on the nodes they share.
-    if !case.boundary.absorbing.is_empty() {
-        list.push(Absorbing::new(
-            &case.boundary.absorbing,
-            &mesh.node_of_model,
-        ));
+    let rows = &case.boundary.absorbing;
+    match case.boundary.absorbing_rule {
+        _ if rows.is_empty() => {}
+        AbsorbingRule::EndOfStep => list.push(Absorbing::new(rows, &mesh.node_of_model)),
+        AbsorbingRule::Anura3d { point_sums } => list.push(AbsorbingAnura3d::new(
+            rows,
+            point_sums,
+            mesh,
+            particles.len(),
+        )),
     }
     if !case.boundary.walls.is_empty() {
         list.push(Walls(walls));

@@ -114,7 +114,6 @@ fn sections(input: &Input) -> Result<Loads, CaseError> {
             || (k.starts_with("PRESCRIBED_")
                 && !crate::step::prescribed::SECTIONS.contains(&k)
                 && !crate::step::nodal_velocity::SECTIONS.contains(&k))
-            || k.starts_with("ABSORBING_")
             || k.starts_with("START_FIXITY_")
             || k == "START_EXCAVATION_SOLID"
         {

@@ -16,6 +16,7 @@ use crate::input::case::{
     QuasiStatic, StartState, TimeControls,
 };
 
+mod absorbing;
 mod contact;
 mod k0;
 mod keys;
@@ -214,6 +215,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             .unwrap_or_default(),
     };
     let contact = contact::read(&input, &materials.specs, &elements, with)?;
+    let absorbing = absorbing::read(&input, &materials.specs)?;
     let k0_case = k0::K0Case {
         coupled: materials.coupled,
         submerged: materials.drained,
@@ -233,6 +235,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         nodal_velocity,
         moving_mesh,
         contact,
+        absorbing,
         initial_stress,
         gravity: (gravity, gravity_curve),
     };
@@ -338,6 +341,11 @@ struct Parts {
     nodal_velocity: Vec<crate::step::nodal_velocity::NodalVelocitySet>,
     moving_mesh: Option<crate::step::moving_mesh::MovingMeshSpec>,
     contact: Option<crate::step::contact::ContactSpec>,
+    /// The absorbing boundaries' rows and rule.
+    absorbing: Option<(
+        Vec<crate::step::absorbing::AbsorbingNode>,
+        crate::step::absorbing::AbsorbingRule,
+    )>,
     initial_stress: Option<crate::input::initial_stress::InitialStress>,
     /// The gravity acceleration at full multiplier, and its curve.
     gravity: ([f64; 3], LoadCurve),
@@ -349,6 +357,14 @@ impl Parts {
     fn case(self, input: Input) -> (Case, Settings) {
         let s = input.settings;
         let n = input.model.node_count();
+        let (absorbing, absorbing_rule) = self.absorbing.unwrap_or_default();
+        // With absorbing boundaries Anura3D fixes the liquid where the solid is fixed, whatever
+        // the liquid's own fixities (its PBoundaryWater becomes PBoundary).
+        let liquid_fixed = if absorbing.is_empty() {
+            self.loads.liquid_fixed
+        } else {
+            self.loads.fixed.clone()
+        };
         let case = Case {
             name: input
                 .gom
@@ -366,13 +382,14 @@ impl Parts {
             },
             boundary: BoundaryConditions {
                 fixed: self.loads.fixed,
-                liquid_fixed: self.loads.liquid_fixed,
+                liquid_fixed,
                 walls: Vec::new(),
                 prescribed: self.prescribed,
                 nodal_velocity: self.nodal_velocity,
                 moving_mesh: self.moving_mesh,
                 contact: self.contact,
-                absorbing: Vec::new(),
+                absorbing,
+                absorbing_rule,
             },
             loads: Loading {
                 traction: self.loads.traction,

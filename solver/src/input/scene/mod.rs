@@ -386,6 +386,7 @@ impl Sections {
                 moving_mesh: None,
                 contact: None,
                 absorbing: self.absorbing,
+                absorbing_rule: Default::default(),
             },
             loads: Loading {
                 traction: self.loads.traction,
