@@ -99,3 +99,21 @@ fn a_two_phase_column_is_the_same_on_one_to_four_ranks() {
 fn points_migrating_between_ranks_give_the_threaded_results() {
     same_for_any_rank_count("testdata/mc_column_soft.toml", true);
 }
+
+/// Bulk viscosity: each point's viscous pressure and strain rate travel with it between ranks,
+/// and the critical step is the same minimum.
+#[test]
+fn bulk_viscosity_is_the_same_on_one_to_four_ranks() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let golden = root.join("testdata/golden");
+    let text = std::fs::read_to_string(golden.join("column_saturated.toml")).unwrap();
+    let mesh = golden.join("../column_tet4.msh");
+    let text = text
+        .replace("\"../column_tet4.msh\"", &format!("{:?}", mesh))
+        .replace("[damping]\n", "[damping]\nbulk_viscosity = [0.2, 1.5]\n");
+    assert!(text.contains("bulk_viscosity") && !text.contains("\"../"));
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = tmp.path().join("bulk.toml");
+    std::fs::write(&scene, text).unwrap();
+    same_for_any_rank_count(scene.to_str().unwrap(), false);
+}

@@ -133,6 +133,21 @@ impl MaterialSpec {
         }
     }
 
+    /// The density (t/m³) and P-wave speed (m/s) bulk viscosity damps with, Anura3D's choice
+    /// (docs/design.md §4.4a): a saturated material's mixture density (1 − n) ρs + n ρw and
+    /// undrained speed sqrt((E_oed + K_w / n) / ρ_mix); otherwise the density its critical step
+    /// takes and sqrt(E_oed / ρ).
+    pub fn bulk_medium(&self) -> (f64, f64) {
+        let (rho, modulus) = match &self.liquid {
+            Some(l) => (
+                self.density + l.porosity * l.density,
+                self.oedometric() + l.bulk_modulus / l.porosity,
+            ),
+            None => (self.wave_density, self.oedometric()),
+        };
+        (rho, (modulus / rho).sqrt())
+    }
+
     /// P-wave speed of the dry skeleton, sqrt(E_oed / ρ) (m/s).
     pub fn wave_speed(&self) -> f64 {
         (self.oedometric() / self.wave_density).sqrt()
@@ -859,5 +874,27 @@ impl UndrainedState {
             vertical_strain: eps,
             pore_pressure: kw_over_n * eps,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Bulk viscosity damps a saturated material with its mixture density and undrained speed,
+    /// a dry one with its own density and P-wave speed.
+    #[test]
+    fn bulk_viscosity_takes_anuras_medium() {
+        let law = LawSpec::linear_elastic(1.0e4, 0.3).unwrap();
+        let liquid =
+            crate::material::liquid::LiquidSpec::new(0.4, 1000.0, 2.0e6, 1e-12, 1e-6).unwrap();
+        let spec = MaterialSpec::saturated("s", 2650.0, law, liquid).unwrap();
+        let (rho, c) = spec.bulk_medium();
+        let mixture = 0.6 * 2.65 + 0.4;
+        assert!((rho - mixture).abs() < 1e-12);
+        let undrained = ((spec.oedometric() + 2.0e6 / 0.4) / mixture).sqrt();
+        assert!((c - undrained).abs() < 1e-9 * undrained);
+        let dry = MaterialSpec::new("d", 2000.0, 1.0e5, 0.25).unwrap();
+        assert_eq!(dry.bulk_medium(), (2.0, dry.wave_speed()));
     }
 }

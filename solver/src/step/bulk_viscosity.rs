@@ -19,7 +19,6 @@
 //! The critical step shrinks by √(1 + χ²) − χ, χ = b1 − b2² Δt_e ε̇_v (Δt_e the element's
 //! crossing time), as Anura3D's.
 
-use crate::input::case::MaterialSpec;
 use crate::real::Real;
 
 /// The sign of the quadratic term (see the module's notes).
@@ -58,25 +57,6 @@ struct Medium<R: Real> {
     c: R,
 }
 
-impl<R: Real> Medium<R> {
-    /// Anura3D's choice for `spec`: a saturated material's mixture density and undrained speed
-    /// sqrt((E_oed + K_w / n) / ρ_mix); otherwise the dry density its critical step takes and
-    /// sqrt(E_oed / ρ).
-    fn of(spec: &MaterialSpec) -> Self {
-        let (rho, modulus) = match &spec.liquid {
-            Some(l) => (
-                spec.density + l.porosity * l.density,
-                spec.oedometric() + l.bulk_modulus / l.porosity,
-            ),
-            None => (spec.wave_density, spec.oedometric()),
-        };
-        Medium {
-            rho: R::of(rho),
-            c: R::of((modulus / rho).sqrt()),
-        }
-    }
-}
-
 /// What the stress pass needs of the bulk viscosity: the coefficients in the run's precision
 /// and each material's medium.
 #[derive(Debug, Clone)]
@@ -90,8 +70,9 @@ pub struct BulkDamping<R: Real> {
 }
 
 impl<R: Real> BulkDamping<R> {
-    /// The damping of `b` for `materials` (by material index; `None` entries unused).
-    pub fn new(b: &BulkViscosity, materials: &[Option<MaterialSpec>]) -> Self {
+    /// The damping of `b` for materials of (ρ (t/m³), c (m/s)) `media`, by material index
+    /// (`None`: unused; [`crate::input::case::MaterialSpec::bulk_medium`] gives Anura3D's).
+    pub fn new(b: &BulkViscosity, media: &[Option<(f64, f64)>]) -> Self {
         BulkDamping {
             linear: R::of(b.linear),
             quadratic: R::of(b.quadratic),
@@ -99,16 +80,14 @@ impl<R: Real> BulkDamping<R> {
                 Quadratic::Resisting => -1.0,
                 Quadratic::Anura3d => 1.0,
             }),
-            media: materials
+            media: media
                 .iter()
                 .map(|m| {
-                    m.as_ref().map_or(
-                        Medium {
-                            rho: R::ZERO,
-                            c: R::ZERO,
-                        },
-                        Medium::of,
-                    )
+                    let (rho, c) = m.unwrap_or((0.0, 0.0));
+                    Medium {
+                        rho: R::of(rho),
+                        c: R::of(c),
+                    }
                 })
                 .collect(),
         }
@@ -132,26 +111,20 @@ impl<R: Real> BulkDamping<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::material::liquid::LiquidSpec;
 
-    fn dry() -> MaterialSpec {
-        MaterialSpec::new("soil", 2000.0, 1.0e5, 0.25).unwrap()
-    }
-
-    /// The linear term is b1 ρ c L ε̇ with the dry P-wave speed; the quadratic one enters in
-    /// compression only, with its sign.
+    /// The linear term is b1 ρ c L ε̇; the quadratic one enters in compression only, with its
+    /// sign.
     #[test]
     fn pressure_terms() {
-        let spec = dry();
-        let (rho, c) = (2.0, (spec.oedometric() / 2.0).sqrt());
+        let (rho, c) = (2.0, 250.0);
         let b = |sign| BulkViscosity {
             linear: 0.4,
             quadratic: 1.5,
             sign,
         };
-        let materials = [None, Some(spec)];
-        let resisting = BulkDamping::<f64>::new(&b(Quadratic::Resisting), &materials);
-        let anura3d = BulkDamping::<f64>::new(&b(Quadratic::Anura3d), &materials);
+        let media = [None, Some((rho, c))];
+        let resisting = BulkDamping::<f64>::new(&b(Quadratic::Resisting), &media);
+        let anura3d = BulkDamping::<f64>::new(&b(Quadratic::Anura3d), &media);
         let (l, rate) = (0.1, 3.0);
         let linear = 0.4 * rho * c * l * rate;
         assert!((resisting.pressure(1, l, rate) - linear).abs() < 1e-12 * linear);
@@ -161,19 +134,6 @@ mod tests {
         let a = anura3d.pressure(1, l, -rate);
         assert!((r - (-linear - quad)).abs() < 1e-12 * linear);
         assert!((a - (-linear + quad)).abs() < 1e-12 * linear);
-    }
-
-    /// A saturated material damps with its mixture density and undrained speed.
-    #[test]
-    fn saturated_medium() {
-        let law = crate::material::law::LawSpec::linear_elastic(1.0e4, 0.3).unwrap();
-        let liquid = LiquidSpec::new(0.4, 1000.0, 2.0e6, 1e-12, 1e-6).unwrap();
-        let spec = MaterialSpec::saturated("s", 2650.0, law, liquid).unwrap();
-        let m = Medium::<f64>::of(&spec);
-        let rho = 0.6 * 2.65 + 0.4;
-        assert!((m.rho - rho).abs() < 1e-12);
-        let c = ((spec.oedometric() + 2.0e6 / 0.4) / rho).sqrt();
-        assert!((m.c - c).abs() < 1e-9 * c);
     }
 
     /// The step's factor is √(1 + b1²) − b1 at rest, smaller in compression.

@@ -11,7 +11,7 @@ use crate::element::locate::NOTHING_FOUND;
 use crate::element::mesh::Mesh;
 use crate::element::Element;
 use crate::input::case::Gradient;
-use crate::input::case::{Case, CriticalStepRule, Integration, MixedRule};
+use crate::input::case::{Case, CriticalStepRule, Integration, MaterialSpec, MixedRule};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::comm::{Communicator, SingleProcess};
@@ -205,7 +205,13 @@ impl<R: Real, E: Element> Engine<R, E> {
 /// The bulk viscosity's constants, where the case has it.
 fn bulk_of<R: Real>(case: &Case) -> Option<BulkDamping<R>> {
     let b = case.numerics.bulk_viscosity.as_ref()?;
-    Some(BulkDamping::new(b, &case.body.materials))
+    let media: Vec<_> = case
+        .body
+        .materials
+        .iter()
+        .map(|m| m.as_ref().map(MaterialSpec::bulk_medium))
+        .collect();
+    Some(BulkDamping::new(b, &media))
 }
 
 /// Whether the energy checks can run: they need every energy term, and prescribed velocities
