@@ -613,3 +613,63 @@ fn anura3ds_absorbing_base_resumes_byte_identical() {
         );
     }
 }
+
+/// What Anura3D's absorbing boundary sections cannot hold is refused, naming the section: gas
+/// rows, a flagged axis without a spring length (Anura3D divides by it), a missing reference
+/// material, liquid rows on a dry reference material.
+#[test]
+fn bad_absorbing_sections_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let (gom, sections, cps, _) = gom_column(dir.path(), "", 0.02);
+    let solid = sections[0].1.clone();
+    let reference = (
+        "ABSORBING_BOUNDARY_REFERENCE_MATERIAL_INDEX",
+        "1\n".to_string(),
+    );
+    let zero_delta = solid.replacen(" 0.5 0.3 ", " 0.5 0.0 ", 1);
+    assert_ne!(zero_delta, solid);
+    for (what, sections, expect) in [
+        (
+            "gas rows",
+            vec![
+                ("ABSORBING_BOUNDARY_SURFACE_GAS", solid.clone()),
+                reference.clone(),
+            ],
+            "gas phases are not modelled",
+        ),
+        (
+            "δ = 0",
+            vec![
+                ("ABSORBING_BOUNDARY_SURFACE_SOLID", zero_delta),
+                reference.clone(),
+            ],
+            "Anura3D divides the spring by it",
+        ),
+        (
+            "no reference material",
+            vec![("ABSORBING_BOUNDARY_SURFACE_SOLID", solid.clone())],
+            "$$ABSORBING_BOUNDARY_REFERENCE_MATERIAL_INDEX: missing",
+        ),
+        (
+            "liquid rows on a dry material",
+            vec![
+                ("ABSORBING_BOUNDARY_SURFACE_LIQUID", solid.clone()),
+                reference.clone(),
+            ],
+            "the reference material is not saturated",
+        ),
+    ] {
+        let run = dir.path().join(what.replace(' ', "_"));
+        std::fs::create_dir_all(&run).unwrap();
+        std::fs::write(run.join("c.GOM"), with_sections(&gom, &sections)).unwrap();
+        std::fs::write(run.join("c.CPS_001"), &cps).unwrap();
+        let e = mpm_solve::input::anura3d::load(&run.join("c.GOM"), &run.join("c.CPS_001"))
+            .err()
+            .unwrap_or_else(|| panic!("{what}: accepted"))
+            .to_string();
+        assert!(
+            e.contains(expect) && e.contains("ABSORBING_BOUNDARY"),
+            "{what}: {e}"
+        );
+    }
+}

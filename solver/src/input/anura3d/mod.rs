@@ -222,6 +222,15 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
         materials: materials.specs.len(),
     };
     let initial_stress = k0::procedure(&input, &materials.k0, k0_case)?;
+    if absorbing.is_some() && initial_stress.is_some() {
+        // Anura3D presets the boundary's forces from the K0 stresses through an array it never
+        // allocates: no defined behaviour to follow.
+        return Err(unsupported(
+            &input.cfile,
+            "$$K0_PROCEDURE",
+            "with absorbing boundaries ($$ABSORBING_BOUNDARY_*) Anura3D's start is undefined (it presets their forces from an unallocated array); not modelled",
+        ));
+    }
     let s = &input.settings;
     let (gm, gravity_curve) = curve(s.gravity_load, steps, &input.cfile, "$$GRAVITY_LOAD")?;
     let gravity = s.gravity_vector.map(|v| v * s.gravity_acceleration * gm);
