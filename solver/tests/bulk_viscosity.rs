@@ -381,3 +381,37 @@ fn bulk_viscosity_damps_the_ringing_behind_a_front() {
         "b1 = 0.4: {strong:?} against {bare:?}"
     );
 }
+
+/// Anura3D damps the nodal force before it subtracts the bulk viscous one; here the viscous
+/// pressure is part of the internal force. A GOM case with both is refused, naming both keys.
+#[test]
+fn bulk_viscosity_with_local_damping_is_refused_on_gom_input() {
+    let Some(src) = wave_benchmark("bulk viscosity with local damping") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        src.join("wave_small.GOM"),
+        dir.path().join("wave_small.GOM"),
+    )
+    .unwrap();
+    let cps = std::fs::read_to_string(src.join("wave_small.CPS_001"))
+        .unwrap()
+        .replace(
+            "$$HOMOGENEOUS_LOCAL_DAMPING\n0 0.75",
+            "$$HOMOGENEOUS_LOCAL_DAMPING\n1 0.75",
+        );
+    assert!(cps.contains("\n1 0.75"));
+    std::fs::write(dir.path().join("wave_small.CPS_001"), cps).unwrap();
+    let e = mpm_solve::input::anura3d::load(
+        &dir.path().join("wave_small.GOM"),
+        &dir.path().join("wave_small.CPS_001"),
+    )
+    .err()
+    .expect("refused")
+    .to_string();
+    assert!(
+        e.contains("$$BULK_VISCOSITY_DAMPING") && e.contains("HOMOGENEOUS_LOCAL_DAMPING"),
+        "{e}"
+    );
+}

@@ -40,6 +40,7 @@ const PHASE_FIELDS: [&[(&str, Access)]; 5] = [
         ("p", Read),
         ("w", Read),
         ("volume0", Read),
+        ("bulk_pressure", Read),
     ],
     // grid update: nodes only
     &[],
@@ -66,6 +67,9 @@ const PHASE_FIELDS: [&[(&str, Access)]; 5] = [
         ("volume", ReadWrite),
         ("state", ReadWrite),
         ("p", ReadWrite),
+        // Written only: formed from the strain.
+        ("bulk_pressure", ReadWrite),
+        ("bulk_rate", ReadWrite),
     ],
     // locate: the walk from the old element
     &[("x", Read), ("active", Read), ("element", ReadWrite)],

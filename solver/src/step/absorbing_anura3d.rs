@@ -287,7 +287,11 @@ impl<R: Real, E: Element> Constraint<R, E> for AbsorbingAnura3d {
         }
         let mut moved = vec![[0.0; 6]; self.per_point.len()];
         for (old, &new) in new_of_old.iter().enumerate() {
-            moved[new as usize] = self.per_point[old];
+            // (A point a restored checkpoint does not hold maps nowhere; the restore refuses
+            // the file.)
+            if let (Some(to), Some(&v)) = (moved.get_mut(new as usize), self.per_point.get(old)) {
+                *to = v;
+            }
         }
         self.per_point = moved;
     }

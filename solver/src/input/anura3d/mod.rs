@@ -299,6 +299,15 @@ fn check_settings(input: &Input) -> Result<Integration, CaseError> {
             format!("must be in (0, 1], got {}", s.courant),
         ));
     }
+    if let (Some(_), Some(alpha)) = (s.bulk_viscosity, s.local_damping.filter(|&a| a > 0.0)) {
+        // Anura3D damps the force before it subtracts the viscous one; here the viscous
+        // pressure is part of the internal force the damping acts on.
+        return Err(unsupported(
+            cfile,
+            "$$BULK_VISCOSITY_DAMPING",
+            format!("with $$HOMOGENEOUS_LOCAL_DAMPING on ({alpha}) is not modelled: Anura3D damps the force before it subtracts the viscous one; switch one of them off"),
+        ));
+    }
     if let Some([b1, b2]) = s.bulk_viscosity {
         // Anura3D asserts both coefficients positive.
         if !(b1 > 0.0 && b2 > 0.0 && b1.is_finite() && b2.is_finite()) {
