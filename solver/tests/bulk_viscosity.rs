@@ -407,8 +407,7 @@ fn bulk_viscosity_with_local_damping_is_refused_on_gom_input() {
         &dir.path().join("wave_small.GOM"),
         &dir.path().join("wave_small.CPS_001"),
     )
-    .err()
-    .expect("refused")
+    .expect_err("refused")
     .to_string();
     assert!(
         e.contains("$$BULK_VISCOSITY_DAMPING") && e.contains("HOMOGENEOUS_LOCAL_DAMPING"),
