@@ -420,50 +420,36 @@ impl Cps {
     }
 
     fn flag_value(&self, key: &str) -> Result<Option<f64>> {
-        let Some(e) = self.get(key) else {
-            return Ok(None);
-        };
-        let toks = self.tokens(e)?;
-        let flag = toks
-            .first()
-            .and_then(|t| text::parse_int(t))
-            .ok_or_else(|| Error::format(self.at(e, 1), "expected '0|1 value'"))?;
-        if flag == 0 {
-            return Ok(None);
-        }
-        let v = toks
-            .get(1)
-            .and_then(|t| text::parse_real(t))
-            .ok_or_else(|| {
-                Error::format(self.at(e, 1), "expected '1 value' with a numeric value")
-            })?;
-        Ok(Some(v))
+        Ok(self.flag_values::<1>(key)?.map(|[v]| v))
     }
 
-    /// `flag a b`: `Some([a, b])` when the flag is on.
-    fn flag_pair(&self, key: &str) -> Result<Option<[f64; 2]>> {
+    /// `flag v1 .. vN`: the N values when the flag is on (not 0).
+    fn flag_values<const N: usize>(&self, key: &str) -> Result<Option<[f64; N]>> {
         let Some(e) = self.get(key) else {
             return Ok(None);
         };
+        let values = " value".repeat(N);
         let toks = self.tokens(e)?;
         let flag = toks
             .first()
             .and_then(|t| text::parse_int(t))
-            .ok_or_else(|| Error::format(self.at(e, 1), "expected '0|1 value value'"))?;
+            .ok_or_else(|| Error::format(self.at(e, 1), format!("expected '0|1{values}'")))?;
         if flag == 0 {
             return Ok(None);
         }
-        let value = |k: usize| {
-            toks.get(k)
+        let mut out = [0.0; N];
+        for (k, v) in out.iter_mut().enumerate() {
+            *v = toks
+                .get(1 + k)
                 .and_then(|t| text::parse_real(t))
                 .ok_or_else(|| {
                     Error::format(
                         self.at(e, 1),
-                        "expected '1 value value' with numeric values",
+                        format!("expected '1{values}' with numeric values"),
                     )
-                })
-        };
-        Ok(Some([value(1)?, value(2)?]))
+                })?;
+        }
+        Ok(Some(out))
     }
 
     fn flag(&self, key: &str) -> Result<bool> {
@@ -593,7 +579,7 @@ impl Cps {
             prescribed_velocity: self.multiplier("PRESCRIBED_VELOCITY")?,
             local_damping: self.flag_value("HOMOGENEOUS_LOCAL_DAMPING")?,
             mass_scaling: self.flag_value("MASS_SCALING")?,
-            bulk_viscosity: self.flag_pair("BULK_VISCOSITY_DAMPING")?,
+            bulk_viscosity: self.flag_values::<2>("BULK_VISCOSITY_DAMPING")?,
             max_time_steps,
             quasi_static: self.flag("QUASISTATIC_CONVERGENCE")?,
             objective_stress: self.flag("APPLY_OBJECTIVE_STRESS")?,

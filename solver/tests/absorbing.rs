@@ -359,40 +359,7 @@ fn gom_column(
     String,
     mpm_solve::input::export_anura3d::Exported,
 ) {
-    let text = format!(
-        r#"mesh = "{}"
-[time]
-end = {end}
-output_interval = {}
-courant = 0.5
-[[material]]
-physical = "soil"
-density = 2000.0
-young = 1000.0
-poisson = 0.3
-points_per_element = 4
-{liquid}[[fixity]]
-physical = "bottom"
-fixed = [true, false, true]
-[[fixity]]
-plane = "x = 0"
-fixed = [true, false, false]
-[[fixity]]
-plane = "x = 0.1"
-fixed = [true, false, false]
-[[fixity]]
-plane = "z = 0"
-fixed = [false, false, true]
-[[fixity]]
-plane = "z = 0.1"
-fixed = [false, false, true]
-[[traction]]
-physical = "top"
-traction = [0.0, -10.0, 0.0]
-"#,
-        common::testdata("oracle_column_tet4.msh").display(),
-        end / 4.0
-    );
+    let text = common::oracle_column_scene(end, 4, "", liquid, "[true, false, true]");
     let scene = dir.join("c.toml");
     std::fs::write(&scene, text).unwrap();
     let a3d = dir.join("a3d");
@@ -523,27 +490,16 @@ fn anura3ds_2d_absorbing_benchmark_matches_the_2d_oracle() {
         fixities = fixities.replacen(fixed, free, 1);
     }
     let gom = format!("{}{fixities}", &gom[..at]).replace(" 1 1.5 15\n", " 1 1.5 0.01\n");
-    let mut cps = String::new();
-    let mut set: Option<&str> = None;
-    for line in std::fs::read_to_string(src.with_extension("CPS_001"))
-        .unwrap()
-        .lines()
-    {
-        if let Some(v) = set.take() {
-            cps.push_str(v);
-        } else {
-            cps.push_str(line);
-            set = match line.trim() {
-                "$$COMPUTATION_METHOD" => Some("MPM-MP"),
-                "$$NUMBER_OF_LOADSTEPS" => Some("4"),
-                "$$TIME_PER_LOADSTEP" => Some("0.25"),
-                "$$QUASISTATIC_CONVERGENCE" => Some("0"),
-                "$$VISUALIZATION_OPTION" => Some("VTK"),
-                _ => None,
-            };
-        }
-        cps.push('\n');
-    }
+    let cps = common::with_cps_values(
+        &std::fs::read_to_string(src.with_extension("CPS_001")).unwrap(),
+        &[
+            ("$$COMPUTATION_METHOD", "MPM-MP"),
+            ("$$NUMBER_OF_LOADSTEPS", "4"),
+            ("$$TIME_PER_LOADSTEP", "0.25"),
+            ("$$QUASISTATIC_CONVERGENCE", "0"),
+            ("$$VISUALIZATION_OPTION", "VTK"),
+        ],
+    );
     for (rule, node_data) in [("point sums", false), ("node data", true)] {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("b.GOM"), &gom).unwrap();

@@ -6,7 +6,6 @@
 
 use std::path::{Path, PathBuf};
 
-use mpm_solve::compare::tolerance::Tolerances;
 use mpm_solve::driver::dispatch::{dispatch, Generic};
 use mpm_solve::driver::engine::Engine;
 use mpm_solve::driver::run::{run, RunError};
@@ -133,17 +132,10 @@ impl Generic for Write<'_> {
 /// The worst difference of each of position, displacement, stress and pore pressure (relative
 /// to its largest Anura3D value) between the Anura3D run in `anura` and ours in `ours`.
 fn worst(anura: &Path, ours: &Path) -> [f64; 4] {
-    let report = mpm_solve::compare::compare(anura, ours, &Tolerances::default())
-        .unwrap_or_else(|e| panic!("cannot compare with Anura3D: {e}"));
-    assert!(!report.outputs.is_empty());
-    ["position", "displacement", "stress", "pore_pressure"].map(|field| {
-        report
-            .outputs
-            .iter()
-            .flat_map(|o| o.fields.iter().filter(|f| f.field == field))
-            .map(|f| f.max_rel)
-            .fold(0.0f64, f64::max)
-    })
+    let fields = ["position", "displacement", "stress", "pore_pressure"];
+    let (w, outputs) = common::worst_against_anura3d(anura, ours, fields);
+    assert!(outputs > 0);
+    w
 }
 
 /// The wave benchmarks (`wave`: linear elastic; `wave_MC`: Mohr-Coulomb, whose steps are long
@@ -208,42 +200,8 @@ fn a_suddenly_loaded_column_matches_anura3d_point_by_point() {
     let saturated = "[material.liquid]\nporosity = 0.4\ndensity = 1000.0\nbulk_modulus = 2.15e4\nintrinsic_permeability = 1.0214e-9\nviscosity = 1.0e-6\n";
     for (name, end, liquid) in [("dry", 0.03, ""), ("saturated", 0.006, saturated)] {
         let dir = tempfile::tempdir().unwrap();
-        let text = format!(
-            r#"mesh = "{}"
-[time]
-end = {end}
-output_interval = {}
-courant = 0.5
-[damping]
-bulk_viscosity = [0.4, 1.5]
-[[material]]
-physical = "soil"
-density = 2000.0
-young = 1000.0
-poisson = 0.3
-points_per_element = 4
-{liquid}[[fixity]]
-physical = "bottom"
-fixed = [true, true, true]
-[[fixity]]
-plane = "x = 0"
-fixed = [true, false, false]
-[[fixity]]
-plane = "x = 0.1"
-fixed = [true, false, false]
-[[fixity]]
-plane = "z = 0"
-fixed = [false, false, true]
-[[fixity]]
-plane = "z = 0.1"
-fixed = [false, false, true]
-[[traction]]
-physical = "top"
-traction = [0.0, -10.0, 0.0]
-"#,
-            common::testdata("oracle_column_tet4.msh").display(),
-            end / 3.0
-        );
+        let damping = "[damping]\nbulk_viscosity = [0.4, 1.5]\n";
+        let text = common::oracle_column_scene(end, 3, damping, liquid, "[true, true, true]");
         let scene = dir.path().join(format!("{name}.toml"));
         std::fs::write(&scene, text).unwrap();
         let a3d = dir.path().join("a3d");

@@ -332,27 +332,16 @@ fn liquid_load_mixed_objective_smoothing_match_anura3d() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::copy(case.join("test-4005.GOM"), dir.path().join("c.GOM")).unwrap();
     // Four dynamic load steps with a sudden load and light damping.
-    let mut cps = String::new();
-    let mut set: Option<&str> = None;
-    for line in std::fs::read_to_string(case.join("test-4005.CPS_001"))
-        .unwrap()
-        .lines()
-    {
-        if let Some(v) = set.take() {
-            cps.push_str(v);
-        } else {
-            cps.push_str(line);
-            set = match line.trim() {
-                "$$NUMBER_OF_LOADSTEPS" => Some("4"),
-                "$$TIME_PER_LOADSTEP" => Some("0.0005"),
-                "$$QUASISTATIC_CONVERGENCE" => Some("0"),
-                "$$HOMOGENEOUS_LOCAL_DAMPING" => Some("1 0.05"),
-                "$$LIQUID_PRESSURE" => Some("step 1.0 1.0"),
-                _ => None,
-            };
-        }
-        cps.push('\n');
-    }
+    let cps = common::with_cps_values(
+        &std::fs::read_to_string(case.join("test-4005.CPS_001")).unwrap(),
+        &[
+            ("$$NUMBER_OF_LOADSTEPS", "4"),
+            ("$$TIME_PER_LOADSTEP", "0.0005"),
+            ("$$QUASISTATIC_CONVERGENCE", "0"),
+            ("$$HOMOGENEOUS_LOCAL_DAMPING", "1 0.05"),
+            ("$$LIQUID_PRESSURE", "step 1.0 1.0"),
+        ],
+    );
     std::fs::write(dir.path().join("c.CPS_001"), cps).unwrap();
     run_oracle(&bin, dir.path(), "c");
     let out = tempfile::tempdir().unwrap();

@@ -311,3 +311,68 @@ pub fn run_scene<E: mpm_solve::element::Element>(
     }
     engine
 }
+
+/// The scene of a laterally confined column on `oracle_column_tet4.msh` (0.1 × 1 × 0.1 m,
+/// ρ = 2000 kg/m³, E = 1000 kPa, ν = 0.3, 4 points per element, sides on rollers) under a
+/// sudden 10 kPa on its top, until `end` in `outputs` outputs at Courant 0.5: `extra` lines
+/// after `[time]` (a `[damping]` table), `liquid` lines after the material (a
+/// `[material.liquid]` table, or nothing), the base's fixed components `bottom`.
+pub fn oracle_column_scene(
+    end: f64,
+    outputs: u32,
+    extra: &str,
+    liquid: &str,
+    bottom: &str,
+) -> String {
+    format!(
+        r#"mesh = "{}"
+[time]
+end = {end}
+output_interval = {}
+courant = 0.5
+{extra}[[material]]
+physical = "soil"
+density = 2000.0
+young = 1000.0
+poisson = 0.3
+points_per_element = 4
+{liquid}[[fixity]]
+physical = "bottom"
+fixed = {bottom}
+[[fixity]]
+plane = "x = 0"
+fixed = [true, false, false]
+[[fixity]]
+plane = "x = 0.1"
+fixed = [true, false, false]
+[[fixity]]
+plane = "z = 0"
+fixed = [false, false, true]
+[[fixity]]
+plane = "z = 0.1"
+fixed = [false, false, true]
+[[traction]]
+physical = "top"
+traction = [0.0, -10.0, 0.0]
+"#,
+        testdata("oracle_column_tet4.msh").display(),
+        end / outputs as f64
+    )
+}
+
+/// The CPS `text` with the value line of each key of `set` (`$$KEY`, value) replaced.
+pub fn with_cps_values(text: &str, set: &[(&str, &str)]) -> String {
+    let mut out = String::new();
+    let mut next: Option<&str> = None;
+    for line in text.lines() {
+        match next.take() {
+            Some(v) => out.push_str(v),
+            None => {
+                out.push_str(line);
+                next = set.iter().find(|(k, _)| *k == line.trim()).map(|(_, v)| *v);
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
