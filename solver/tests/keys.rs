@@ -229,7 +229,9 @@ fn every_refused_key_stops_a_case_naming_key_value_and_place() {
         "refused keys without an example value in refused_example (add one): {}",
         missing.join(", ")
     );
-    assert!(checked >= 25, "only {checked} refused keys checked");
+    // A floor against a vacuous pass: 24 kinds of key are refused unless inert (bulk viscosity
+    // and absorbing boundaries became modelled).
+    assert!(checked >= 24, "only {checked} refused keys checked");
 }
 
 #[test]
