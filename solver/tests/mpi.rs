@@ -117,3 +117,54 @@ fn bulk_viscosity_is_the_same_on_one_to_four_ranks() {
     std::fs::write(&scene, text).unwrap();
     same_for_any_rank_count(scene.to_str().unwrap(), false);
 }
+
+/// The stencil passes keep no slots to exchange (docs/design.md §4.20): a background grid or
+/// the dual-domain gradients over several ranks stop before the run, naming what is refused.
+#[test]
+fn a_grid_or_dual_domain_run_over_ranks_is_refused_by_name() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let testdata = root.join("testdata");
+    let text = std::fs::read_to_string(testdata.join("oedometer.toml")).unwrap();
+    let mesh = testdata.join("oedometer_tet4.msh");
+    // A plain timed run: the consolidation job itself runs on one process only.
+    let text = text.split("[consolidation]").next().unwrap();
+    let text = text
+        .replace("\"oedometer_tet4.msh\"", &format!("{mesh:?}"))
+        .replace("[time]\n", "[time]\nend = 0.001\noutput_interval = 0.001\n");
+    assert!(!text.contains("\"oedometer_tet4.msh\"") && text.contains("end = 0.001"));
+    let tmp = tempfile::tempdir().unwrap();
+    let grid = tmp.path().join("grid.toml");
+    std::fs::write(
+        &grid,
+        text.replacen("[time]", "[grid]\ncell = 0.1\n[time]", 1),
+    )
+    .unwrap();
+    let plain = tmp.path().join("plain.toml");
+    std::fs::write(&plain, &text).unwrap();
+    for (scene, extra, named) in [
+        (
+            &grid,
+            None,
+            "background grid ([grid]) cannot model a run over several MPI ranks",
+        ),
+        (&plain, Some("ddmp"), "dual-domain gradients"),
+    ] {
+        let mut cmd = Command::new("mpirun");
+        cmd.args(["--oversubscribe", "-np", "2"])
+            .arg(env!("CARGO_BIN_EXE_mpm-solve"))
+            .arg(scene)
+            .arg("--out")
+            .arg(tmp.path().join("out"))
+            .args(["--threads", "1", "-q"])
+            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+        if let Some(basis) = extra {
+            cmd.args(["--basis", basis]);
+        }
+        let out = cmd.output().expect("mpirun on the path");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{scene:?} ran over 2 ranks");
+        assert!(stderr.contains(named), "{scene:?}: {stderr}");
+        assert!(stderr.contains("MPI ranks"), "{scene:?}: {stderr}");
+    }
+}

@@ -26,6 +26,15 @@ impl Background {
             Background::Ddmp(_) => None,
         }
     }
+
+    /// Bytes of the tables a stencil reads: in all the elements (read once per element whose
+    /// points a pass visits) and in all the nodes (gathered, read once per node).
+    pub fn table_bytes(&self) -> (usize, usize) {
+        match self {
+            Background::Grid(g) => (0, g.table_bytes()),
+            Background::Ddmp(d) => d.table_bytes(),
+        }
+    }
 }
 
 impl<E: Element, R: Real> Basis<E, R> for Background {

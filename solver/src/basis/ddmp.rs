@@ -143,6 +143,14 @@ impl Ddmp {
         self.row_start[j] as usize..self.row_start[j + 1] as usize
     }
 
+    /// Bytes of the tables a stencil reads, per element (its reach, slots and their starts)
+    /// and in all the nodes' rows (entries and their starts): for the traffic model.
+    pub fn table_bytes(&self) -> (usize, usize) {
+        let per_element = 4 * (self.reach.len() + 2 * self.reach_start.len()) + self.slot.len();
+        let rows = 4 * (self.row_start.len() + self.column.len()) + 24 * self.average.len();
+        (per_element, rows)
+    }
+
     /// The most nodes an element's points touch.
     pub fn widest(&self) -> usize {
         self.reach_start

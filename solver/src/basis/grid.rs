@@ -97,6 +97,12 @@ pub enum LatticeError {
 }
 
 impl Cartesian {
+    /// Bytes of the table a stencil reads (the mesh's node at each lattice index): for the
+    /// traffic model.
+    pub fn table_bytes(&self) -> usize {
+        4 * self.node.len()
+    }
+
     /// The basis of `spec` on `mesh`, whose nodes must be the lattice's, each once.
     pub fn new<E: Element, R: Real>(
         mut spec: GridSpec,

@@ -149,6 +149,110 @@ pub fn modelled_bytes<R: Real, E: Element>(
     ]
 }
 
+/// The point arrays grid to particle's re-mapping and the pore-rate smoothing read again on
+/// a basis of its own (their passes visit points by owner computes).
+const REMAP_FIELDS: &[(&str, Access)] = &[
+    ("x", Read),
+    ("v", Read),
+    ("w", Read),
+    ("mass", Read),
+    ("material", Read),
+    ("active", Read),
+];
+const SMOOTH_FIELDS: &[(&str, Access)] = &[
+    ("x", Read),
+    ("volume", Read),
+    ("material", Read),
+    ("active", Read),
+];
+
+/// What the stencil passes of a basis of its own read besides the points
+/// ([`crate::basis::background::Background`]), for [`modelled_bytes_stencil`].
+#[derive(Debug, Clone, Copy)]
+pub struct StencilTables {
+    /// Element visits per element of a pass by owner computes (1 plus the threads' halo,
+    /// [`crate::parallel::reach::Reach::halo_share`]).
+    pub visits: f64,
+    /// Bytes of the stencil's per-element tables in all the elements.
+    pub element_bytes: usize,
+    /// Bytes of the stencil's per-node tables in all the nodes.
+    pub node_bytes: usize,
+    /// Whether a stencil evaluates the element's own map (the dual-domain gradients' weights
+    /// are the element's shape functions; a grid's come from the position alone).
+    pub element_map: bool,
+    /// Whether the pore-pressure rate is smoothed through the nodes (a saturated grid case).
+    pub smoothed_rate: bool,
+}
+
+/// The modelled bytes per particle-step of each phase of a case whose points map with a basis
+/// of its own (a background grid or the dual-domain gradients), on a mesh of `elements`
+/// elements of type `E` and `nodes` nodes. The stencil passes keep no slots: each thread sums
+/// its own nodes, visiting every point within reach of them, so the points near a thread's
+/// border are read by both threads beside it (`t.visits`), and each node's accumulators are
+/// read and written once. A stencil's weights come from the point's position (and on the
+/// dual-domain gradients its element's map and tables, once per element visited); its
+/// nodes' tables are gathered and counted once per node per pass. Locate walks the mesh's
+/// elements as [`modelled_bytes`] counts.
+pub fn modelled_bytes_stencil<R: Real, E: Element>(
+    p: &Particles<R>,
+    elements: usize,
+    nodes: usize,
+    t: StencilTables,
+) -> [f64; 5] {
+    let s = std::mem::size_of::<R>();
+    let liquid = p.liquid.is_some();
+    let points = p.len().max(1) as f64;
+    let per_point = |bytes: f64| bytes / points;
+    let map = if t.element_map {
+        std::mem::size_of::<E::Map<R>>() as f64 * elements as f64
+    } else {
+        0.0
+    };
+    // Per evaluation of every point's stencil: the element tables, then the node tables.
+    let element = per_point(map + t.element_bytes as f64);
+    let node_tables = per_point(t.node_bytes as f64);
+    let walk = per_point(
+        ((std::mem::size_of::<E::Map<R>>() + E::NODES * (std::mem::size_of::<V3<R>>() + 4) + s)
+            * elements) as f64,
+    );
+    // A node's accumulators `width` values wide, read and written once.
+    let direct = |width: usize| per_point((2 * width * s * nodes) as f64);
+    let per_node = |bytes: f64| bytes * nodes as f64 / points;
+    let (d, v) = (E::DIM, 3 * s);
+    let both = |dry: f64, wet: f64| if liquid { dry + wet } else { dry };
+    let fields = |f: &[(&str, Access)]| point_bytes(p, f) as f64;
+    let smoothing = if liquid && t.smoothed_rate {
+        (fields(SMOOTH_FIELDS) + element) * t.visits + node_tables + direct(2)
+    } else {
+        0.0
+    };
+    [
+        // particle to grid: the points within reach of each thread's nodes, the accumulators
+        (fields(PHASE_FIELDS[0]) + both(element, 0.0)) * t.visits
+            + node_tables
+            + both(direct(1 + 3 * d), direct(3 + 3 * d))
+            + per_node(both((s + 3 * v) as f64, (3 * s + 2 * v + 2 * v) as f64)),
+        // grid update: as on the elements
+        per_node(both((s + 5 * v + 3) as f64, (3 * s + 3 * v + 3 + v) as f64)),
+        // grid to particle: each point once (velocities), then the re-mapping by owner
+        // computes
+        fields(PHASE_FIELDS[2])
+            + element
+            + (fields(REMAP_FIELDS) + element) * t.visits
+            + 2.0 * node_tables
+            + both(direct(d), direct(d))
+            + per_node(both((s + 3 + v) as f64, (s + 3 + v) as f64)),
+        // stress: each point's stencil once; the smoothed pore-pressure rate
+        fields(PHASE_FIELDS[3])
+            + element
+            + node_tables
+            + smoothing
+            + per_node(both((s + 6 * v + 3) as f64, (2 * s + 4 * v + 3) as f64)),
+        // locate
+        fields(PHASE_FIELDS[4]) + walk,
+    ]
+}
+
 /// [`modelled_bytes`] of a run that locates its points in the stress pass (docs/design.md
 /// §4.10): the stress pass also rewrites the element numbers it reads, and the locate phase
 /// moves no point data of its own (its re-sort is left out, as above).
@@ -235,5 +339,61 @@ mod tests {
             with_pore_weights::<f32>(wet, 20, 80)[0],
             wet[0] + 20.0 * 20.0 / 80.0
         );
+    }
+
+    #[test]
+    fn a_stencil_basis_reads_no_slots_and_pays_its_halo_and_tables() {
+        let grid = StencilTables {
+            visits: 1.0,
+            element_bytes: 0,
+            node_bytes: 0,
+            element_map: false,
+            smoothed_rate: false,
+        };
+        // 80 points, 20 elements, 4 nodes: the points' arrays, a node's 10 accumulators read
+        // and written, the nodal arrays; no element data and no slots.
+        let p = points(80, false);
+        let one = modelled_bytes_stencil::<f64, Tet4>(&p, 20, 4, grid);
+        let fields = point_bytes(&p, PHASE_FIELDS[0]) as f64;
+        let nodal = (2.0 * 10.0 * 8.0 + 8.0 + 9.0 * 8.0) * 4.0 / 80.0;
+        assert_eq!(one[0], fields + nodal);
+        // Against the elements' model with every corner straight to its node: the element
+        // data (192 bytes an element, over 4 points) is what the grid spares.
+        let direct = modelled_bytes::<f64, Tet4>(&p, 20, 4, 0.0);
+        assert_eq!(direct[0] - one[0], 192.0 / 4.0);
+        // Half the points read twice (threads' halo): only the owner-computes reads grow.
+        let halo = modelled_bytes_stencil::<f64, Tet4>(
+            &p,
+            20,
+            4,
+            StencilTables {
+                visits: 1.5,
+                ..grid
+            },
+        );
+        assert_eq!(halo[0] - one[0], 0.5 * fields);
+        assert_eq!(halo[1], one[1]);
+        assert!(halo[2] > one[2]);
+        assert_eq!([halo[3], halo[4]], [one[3], one[4]]);
+        // Per-element tables (the dual-domain gradients') are read once per element visit and
+        // stencil evaluation: particle to grid, both passes of grid to particle, stress.
+        let ddmp = StencilTables {
+            element_bytes: 800,
+            ..grid
+        };
+        let tables = modelled_bytes_stencil::<f64, Tet4>(&p, 20, 4, ddmp);
+        assert_eq!(tables[0] - one[0], 10.0);
+        assert_eq!(tables[2] - one[2], 20.0);
+        assert_eq!(tables[3] - one[3], 10.0);
+        // The liquid's smoothed rate adds a pass to the stress phase.
+        let wet = points(80, true);
+        let plain = modelled_bytes_stencil::<f64, Tet4>(&wet, 20, 4, grid);
+        let smoothed = StencilTables {
+            smoothed_rate: true,
+            ..grid
+        };
+        let smoothed = modelled_bytes_stencil::<f64, Tet4>(&wet, 20, 4, smoothed);
+        assert!(smoothed[3] > plain[3]);
+        assert_eq!(smoothed[0], plain[0]);
     }
 }

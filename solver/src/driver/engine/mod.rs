@@ -390,6 +390,24 @@ impl<R: Real, E: Element> Engine<R, E> {
     /// The modelled bytes per particle-step of each step phase (`driver::traffic`), for the
     /// way this run locates its points and takes its pore-pressure rate's weights.
     pub fn modelled_bytes(&self) -> [f64; 5] {
+        use crate::driver::traffic::{modelled_bytes_stencil, StencilTables};
+        if let Some(basis) = &self.basis {
+            let (element_bytes, node_bytes) = basis.table_bytes();
+            let tables = StencilTables {
+                visits: 1.0 + self.reach.as_ref().map_or(0.0, |r| r.halo_share()),
+                element_bytes,
+                node_bytes,
+                element_map: basis.grid().is_none(),
+                smoothed_rate: self.config.smooth_pressure && self.grid.liquid.is_some(),
+            };
+            let (elements, nodes) = (self.mesh.elements(), self.mesh.nodes());
+            let bytes = modelled_bytes_stencil::<R, E>(&self.particles, elements, nodes, tables);
+            return if self.locates_in_stress_pass() {
+                crate::driver::traffic::locating_in_stress(bytes)
+            } else {
+                bytes
+            };
+        }
         let bytes = crate::driver::traffic::modelled_bytes::<R, E>(
             &self.particles,
             self.mesh.elements(),
