@@ -6,17 +6,14 @@
 
 use std::path::{Path, PathBuf};
 
-use mpm_solve::driver::dispatch::{dispatch, Generic};
+use mpm_solve::driver::dispatch::dispatch;
 use mpm_solve::driver::engine::Engine;
-use mpm_solve::driver::run::{run, RunError};
 use mpm_solve::element::tri3::Tri3;
-use mpm_solve::element::Element;
 use mpm_solve::input::case::{Case, Drag};
-use mpm_solve::real::Real;
 use mpm_solve::step::bulk_viscosity::{BulkViscosity, Quadratic};
 
 mod common;
-use common::run_oracle;
+use common::{run_oracle, Write};
 
 /// The `wave` benchmark's folder, or `None` (reported as skipped) without `ANURA3D_BENCHMARKS`.
 fn wave_benchmark(what: &str) -> Option<PathBuf> {
@@ -118,15 +115,6 @@ fn the_wave_benchmark_reproduces_its_expected_energies() {
         "the damping changes little: {:.2e}",
         worst[1]
     );
-}
-
-struct Write<'a>(&'a Case, &'a Path);
-
-impl Generic for Write<'_> {
-    type Output = Result<(), RunError>;
-    fn call<R: Real, E: Element>(self) -> Self::Output {
-        run::<R, E>(self.0, self.1, &Default::default()).map(|_| ())
-    }
 }
 
 /// The worst difference of each of position, displacement, stress and pore pressure (relative

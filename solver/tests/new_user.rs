@@ -43,7 +43,7 @@ fn keys_that_change_results_and_are_not_modelled_stop_the_case() {
         dir.path().join("scene.CPS_001"),
     );
     let base = std::fs::read_to_string(&cps).unwrap();
-    for (key, value) in [("MASS_SCALING", "1 100"), ("FIX_SOLID_SKELETON", "1")] {
+    for (key, value) in [("APPLY_POROSITY_UPDATE", "1"), ("FIX_SOLID_SKELETON", "1")] {
         // The export writes each key with its inert value: set it as a user would.
         let head = format!("$${key}\n");
         let at = base.find(&head).expect("the export writes the key") + head.len();

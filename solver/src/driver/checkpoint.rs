@@ -203,6 +203,7 @@ impl Fingerprint {
             hoop_in_volume,
             strain_smoothing,
             bulk_viscosity,
+            mass_scaling,
             precision,
             grid,
             gradient,
@@ -272,6 +273,7 @@ impl Fingerprint {
         if *absorbing_rule != crate::step::absorbing::AbsorbingRule::EndOfStep {
             items.push(("absorbing boundaries' rule", absorbing_rule));
         }
+        items.extend((*mass_scaling != 1.0).then_some(("mass scaling", mass_scaling as _)));
         Fingerprint(items.iter().map(|&(n, v)| Item::of(n, v)).collect())
     }
 

@@ -458,9 +458,11 @@ impl PhaseTables {
     }
 }
 
-/// `run.json`'s energy terms.
+/// `run.json`'s energy terms; under mass scaling by f, the kinetic energy of the scaled mass
+/// (f times the physical one) beside it: what the run's inertia carries that the soil's would
+/// not.
 fn energy_json<R: Real, E: Element>(engine: &Engine<R, E>) -> serde_json::Value {
-    serde_json::json!({
+    let mut out = serde_json::json!({
         "kinetic": engine.total_kinetic_energy(),
         "strain": engine.internal_energy(),
         "liquid_compression": engine.internal_energy() - engine.strain_energy,
@@ -470,7 +472,15 @@ fn energy_json<R: Real, E: Element>(engine: &Engine<R, E>) -> serde_json::Value 
         "balance_error": engine.balance_error(),
         "energy_tolerance": engine.guards.energy_tolerance,
         "guards": engine.guards.enabled,
-    })
+    });
+    let f = engine.config.mass_scaling;
+    if f != 1.0 {
+        out["mass_scaling"] = serde_json::json!({
+            "factor": f,
+            "kinetic_of_scaled_mass": f * engine.total_kinetic_energy(),
+        });
+    }
+    out
 }
 
 /// `run.json`'s diagnosis of a diverged run.

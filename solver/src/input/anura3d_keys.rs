@@ -358,7 +358,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         CpsKey,
         "MASS_SCALING",
-        RefusedUnlessInert("mass scaling (parsed, not applied); inert: flag 0"),
+        Modelled, // mass scaling: accelerations over f m, the step √f longer (dry materials)
     ),
     (
         CpsKey,

@@ -405,6 +405,10 @@ pub struct Numerics {
     pub strain_smoothing: bool,
     /// Bulk viscosity damping ([`crate::step::bulk_viscosity`]); `None`: none.
     pub bulk_viscosity: Option<crate::step::bulk_viscosity::BulkViscosity>,
+    /// Anura3D's mass scaling (`$$MASS_SCALING 1 f`, a scene's `time.mass_scaling`): every
+    /// nodal acceleration is the force over f times the mass, so the critical step grows by
+    /// √f; 1 when off (docs/design.md §4.4b).
+    pub mass_scaling: f64,
     /// The background grid the case runs on, with its basis (`None`: the mesh's elements, the
     /// linear basis).
     pub grid: Option<crate::basis::grid::GridSpec>,
@@ -796,6 +800,7 @@ impl Case {
                 hoop_in_volume: true,
                 strain_smoothing: false,
                 bulk_viscosity: None,
+                mass_scaling: 1.0,
                 grid: None,
                 gradient: Gradient::Element,
                 precision: Precision::F64,

@@ -31,8 +31,9 @@ pub fn critical(
 /// The element (the case's numbering) a wave crosses fastest, and that time (s): the critical
 /// step is the Courant number times it. `(elements.start, ∞)` for no elements. Under
 /// [`CriticalStepRule::OccupiedEachStep`] only the elements that hold points at the start count
-/// (the engine takes the step again after every step: [`crate::step::time_step`]). Bulk
-/// viscosity shortens each crossing time by its factor at rest
+/// (the engine takes the step again after every step: [`crate::step::time_step`]). Mass
+/// scaling by f lengthens each crossing time by √f; bulk
+/// viscosity shortens it by its factor at rest
 /// ([`crate::step::bulk_viscosity::BulkViscosity::step_factor`]).
 pub fn shortest_crossing(
     case: &Case,
@@ -61,7 +62,8 @@ pub fn shortest_crossing(
                 .map(|s| s.wave_speed_at(dx, anura3d_step))
                 .fold(0.0, f64::max),
         };
-        let mut t = dx / c;
+        // Mass scaling slows every wave by √f (Anura3D's c² / f); dividing by 1 changes no bit.
+        let mut t = dx / (c / case.numerics.mass_scaling.sqrt());
         if let Some(b) = &case.numerics.bulk_viscosity {
             // Bulk viscosity shortens the step; the points are at rest here.
             t *= b.step_factor(t, 0.0);

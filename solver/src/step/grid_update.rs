@@ -140,9 +140,11 @@ pub struct NodeLoads<'a, R: Real> {
     pub alpha: R,
     /// Where and against which velocity local damping acts.
     pub rule: DampingRule,
+    /// Mass scaling's factor f (1: none): the accelerations are the forces over f m.
+    pub inertia: R,
 }
 
-/// a = (f_int + f_ext + traction) / m, with local damping f ← f - α |f| sign(v) per component
+/// a = (f_int + f_ext + traction) / (f m) (f the mass scaling, 1 without), with local damping f ← f - α |f| sign(v) per component
 /// (at rest as `rule` says, see [`DampingRule`])
 /// and zero acceleration in fixed directions, over the element's [`Element::DIM`] components (a
 /// 2D section's z-acceleration is 0), `loads` giving the loads, fixities and damping.
@@ -165,6 +167,7 @@ pub fn grid_update<E: Element, R: Real>(
         fixed,
         alpha,
         rule,
+        inertia,
     } = *loads;
     let nodes = g.mass.len();
     let eps = scratch.empty_below(team, comm, &g.mass);
@@ -190,6 +193,8 @@ pub fn grid_update<E: Element, R: Real>(
         );
         for (n, (acc_n, sum)) in acc_out.iter_mut().zip(&mut sums[..len]).enumerate() {
             let m = mass[n];
+            // (Times 1 is the mass's own bits: no scaling, no change.)
+            let scaled = m * inertia;
             // Components past the element's dimension stay 0 (a section's z: no force there).
             *acc_n = [R::ZERO; 3];
             if m <= eps {
@@ -205,7 +210,7 @@ pub fn grid_update<E: Element, R: Real>(
                 let f = f_int[n][a] + ext;
                 out2 += f.f64() * f.f64();
                 ext2 += ext.f64() * ext.f64();
-                acc_n[a] = damp(rule, alpha, f, momentum[n][a]) / m;
+                acc_n[a] = damp(rule, alpha, f, momentum[n][a]) / scaled;
             }
             *sum = [out2.sqrt(), ext2.sqrt(), 0.0, 0.0];
         }
@@ -286,6 +291,11 @@ pub fn grid_update_two_phase<E: Element, R: Real>(
     g: &mut Grid<R>,
     loads: &TwoPhaseLoads<'_, R>,
 ) {
+    // Mass scaling is refused with a liquid at set-up (`SetupError::MassScaling`).
+    debug_assert!(
+        loads.mixture.inertia == R::ONE,
+        "mass scaling with a liquid"
+    );
     let nodes = g.mass.len();
     let eps = scratch.empty_below(team, comm, &g.mass);
     g.empty_below = eps;
@@ -555,6 +565,7 @@ mod tests {
             fixed,
             alpha: 0.05,
             rule,
+            inertia: 1.0,
         };
         if g.liquid.is_some() {
             let loads = TwoPhaseLoads {

@@ -237,6 +237,7 @@ mod tests {
                 fixed: &[[false; 3]],
                 alpha,
                 rule: DampingRule::Phases,
+                inertia: 1.0,
             },
             liquid_traction: &liquid_traction,
             liquid_scale: 1.0,
@@ -326,6 +327,7 @@ mod tests {
             fixed: &[[false; 3]; 2],
             alpha: 0.0,
             rule: DampingRule::Phases,
+            inertia: 1.0,
         };
         let single = crate::parallel::comm::SingleProcess;
         crate::step::grid_update::grid_update::<Tet4, _>(

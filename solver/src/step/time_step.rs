@@ -10,7 +10,8 @@
 //! The minimum does not depend on how the points are split among the threads. With bulk
 //! viscosity each point's crossing time shrinks by the factor of its volumetric strain rate
 //! (Anura3D's, which takes an element's last point's rate; the points of a linear element
-//! share it, but for an axisymmetric section's hoop term).
+//! share it, but for an axisymmetric section's hoop term). Mass scaling by f slows every wave
+//! by √f (Anura3D's c² / f).
 
 use crate::element::mesh::Mesh;
 use crate::element::Element;
@@ -34,6 +35,8 @@ pub struct CriticalStep {
     /// With bulk viscosity, each point's crossing time shrinks by its factor at the point's
     /// volumetric strain rate.
     bulk: Option<BulkViscosity>,
+    /// √f of mass scaling by f (1 without): every wave speed over it.
+    scaling_root: f64,
     /// Per thread: the shortest crossing time of its points' elements and that element.
     per_thread: Vec<(f64, u32)>,
 }
@@ -47,6 +50,7 @@ impl CriticalStep {
                 || case.numerics.drag == crate::input::case::Drag::Explicit,
             per_thread: vec![(f64::INFINITY, 0); threads],
             bulk: case.numerics.bulk_viscosity,
+            scaling_root: case.numerics.mass_scaling.sqrt(),
         }
     }
 
@@ -65,6 +69,7 @@ impl CriticalStep {
         }
         let slots = Shared::new(&mut self.per_thread);
         let (materials, anura3d, bulk) = (&self.materials, self.anura3d_speed, self.bulk);
+        let root = self.scaling_root;
         let rates = p.bulk.as_ref().map(|b| &b.rate[..]);
         team.run(|t| {
             let mut best = (f64::INFINITY, 0u32);
@@ -83,7 +88,7 @@ impl CriticalStep {
                     continue;
                 };
                 let dx = mesh.min_altitude[e as usize].f64();
-                let mut time = dx / spec.wave_speed_at(dx, anura3d);
+                let mut time = dx / (spec.wave_speed_at(dx, anura3d) / root);
                 if let (Some(b), Some(rates)) = (&bulk, rates) {
                     time *= b.step_factor(time, rates[i].f64());
                 }

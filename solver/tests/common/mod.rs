@@ -376,3 +376,14 @@ pub fn with_cps_values(text: &str, set: &[(&str, &str)]) -> String {
     }
     out
 }
+
+/// Runs a loaded case, writing its files to `.1`, through [`mpm_solve::driver::dispatch`]
+/// (its precision and element type chosen at run time).
+pub struct Write<'a>(pub &'a mpm_solve::input::case::Case, pub &'a Path);
+
+impl mpm_solve::driver::dispatch::Generic for Write<'_> {
+    type Output = Result<(), mpm_solve::driver::run::RunError>;
+    fn call<R: mpm_solve::real::Real, E: mpm_solve::element::Element>(self) -> Self::Output {
+        mpm_solve::driver::run::run::<R, E>(self.0, self.1, &Default::default()).map(|_| ())
+    }
+}

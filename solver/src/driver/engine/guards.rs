@@ -81,14 +81,16 @@ impl<R: Real, E: Element> Engine<R, E> {
     }
 
     /// |kinetic + internal + dissipated - work - initial kinetic| over the largest of those
-    /// terms (0 while all are 0), with the kinetic energy of the last step.
+    /// terms (0 while all are 0), with the kinetic energy of the last step. Under mass scaling
+    /// by f the loads' work goes into the scaled inertia: the kinetic terms count f times.
     pub fn balance_error(&self) -> f64 {
+        let f = self.config.mass_scaling;
         crate::driver::guard::balance_error(
-            self.step_kinetic,
+            f * self.step_kinetic,
             self.internal_energy(),
             self.dissipated,
             self.balance_work,
-            self.initial_kinetic,
+            f * self.initial_kinetic,
             self.stored_energy + self.liquid_initial,
         )
     }

@@ -117,6 +117,14 @@ pub enum SetupError {
          use the elements' own (gradient = \"element\")"
     )]
     Ddmp(&'static str),
+    /// Mass scaling, with a feature it is not modelled with.
+    #[error("mass scaling (f = {factor}) is not modelled {what} yet; run without it")]
+    MassScaling {
+        /// The factor.
+        factor: f64,
+        /// What the case has, as the end of the sentence.
+        what: &'static str,
+    },
     /// More than one process, with a feature that runs on one only.
     #[error("a run over {ranks} MPI ranks cannot model {what} yet; run it on one process")]
     Distributed {
@@ -175,6 +183,8 @@ pub struct StepConfig {
     pub pic_blend: f64,
     /// Axisymmetric sections: the hoop strain changes the points' volume.
     pub hoop_in_volume: bool,
+    /// Mass scaling's factor f (1: none): the nodal accelerations are the forces over f m.
+    pub mass_scaling: f64,
 }
 
 impl StepConfig {
@@ -188,6 +198,7 @@ impl StepConfig {
             damping: case.numerics.damping,
             damping_rule: case.numerics.damping_rule,
             drag: case.numerics.drag,
+            mass_scaling: case.numerics.mass_scaling,
             liquid_load_on_mixture: case.loads.liquid_load_on_mixture,
             smooth_pressure: case.numerics.smooth_pressure,
             objective_stress: case.numerics.objective_stress,

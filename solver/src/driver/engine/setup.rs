@@ -259,6 +259,25 @@ fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupE
             return Err(SetupError::Ddmp(what));
         }
     }
+    let factor = case.numerics.mass_scaling;
+    if factor != 1.0 {
+        // Anura3D scales the two-phase system's terms unevenly (its critical step's a, b and
+        // d), and its contact from the scaled rates of momentum: neither is followed yet.
+        let with = [
+            (
+                case.body
+                    .materials
+                    .iter()
+                    .flatten()
+                    .any(|m| m.liquid.is_some()),
+                "with saturated materials (dry materials only)",
+            ),
+            (case.boundary.contact.is_some(), "with contact"),
+        ];
+        if let Some(what) = first(&with) {
+            return Err(SetupError::MassScaling { factor, what });
+        }
+    }
     if ranks > 1 {
         if let Some(what) = first(&one_process_only(case)) {
             return Err(SetupError::Distributed { ranks, what });

@@ -190,6 +190,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                     fixed: &self.fixed,
                     alpha: at.damping,
                     rule: at.damping_rule,
+                    inertia: R::of(c.mass_scaling),
                 },
                 liquid_traction: &self.liquid_traction,
                 liquid_scale: at.liquid,
@@ -228,6 +229,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                     fixed: &self.fixed,
                     alpha: at.damping,
                     rule: at.damping_rule,
+                    inertia: R::of(c.mass_scaling),
                 };
                 let (team, comm) = (&self.team, &*self.comm);
                 grid_update::grid_update::<E, R>((team, comm), scratch, grid, &loads);

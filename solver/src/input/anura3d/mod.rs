@@ -308,6 +308,16 @@ fn check_settings(input: &Input) -> Result<Integration, CaseError> {
             format!("with $$HOMOGENEOUS_LOCAL_DAMPING on ({alpha}) is not modelled: Anura3D damps the force before it subtracts the viscous one; switch one of them off"),
         ));
     }
+    if let Some(f) = s.mass_scaling {
+        // Anura3D's own range check is commented out; a factor must at least divide.
+        if !(f > 0.0 && f.is_finite()) {
+            return Err(unsupported(
+                cfile,
+                "$$MASS_SCALING",
+                format!("expected '1 f' with a positive factor f, got 1 {f}"),
+            ));
+        }
+    }
     if let Some([b1, b2]) = s.bulk_viscosity {
         // Anura3D asserts both coefficients positive.
         if !(b1 > 0.0 && b2 > 0.0 && b1.is_finite() && b2.is_finite()) {
@@ -455,6 +465,7 @@ impl Parts {
                         sign: crate::step::bulk_viscosity::Quadratic::Anura3d,
                     }
                 }),
+                mass_scaling: s.mass_scaling.unwrap_or(1.0),
                 grid: None,
                 gradient: crate::input::case::Gradient::Element,
                 precision: crate::input::case::Precision::F64,

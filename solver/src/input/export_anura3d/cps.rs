@@ -28,6 +28,27 @@ pub(super) struct CpsValues<'a> {
     pub k0_surface: Option<f64>,
 }
 
+/// `$$BULK_VISCOSITY_DAMPING`'s line: `0 0.0 0.0` (off) or `1 b1 b2`.
+fn bulk_line(case: &Case) -> String {
+    match case.numerics.bulk_viscosity {
+        Some(b) => format!(
+            "1 {} {}",
+            real_to_string(b.linear),
+            real_to_string(b.quadratic)
+        ),
+        None => "0 0.0 0.0".into(),
+    }
+}
+
+/// `$$MASS_SCALING`'s line: `0 1.0` (off) or `1 f`.
+fn mass_scaling(f: f64) -> String {
+    if f == 1.0 {
+        "0 1.0".to_string()
+    } else {
+        format!("1 {}", real_to_string(f))
+    }
+}
+
 /// The CPS: the scene's controls, every other key at the inert value of Anura3D's template.
 pub(super) fn cps_file(case: &Case, v: CpsValues) -> Cps {
     let g = case.loads.gravity;
@@ -48,10 +69,7 @@ pub(super) fn cps_file(case: &Case, v: CpsValues) -> Cps {
     } else {
         "0 0.0".into()
     };
-    let bulk = match case.numerics.bulk_viscosity {
-        Some(b) => format!("1 {} {}", r(b.linear), r(b.quadratic)),
-        None => "0 0.0 0.0".into(),
-    };
+    let (bulk, scaling) = (bulk_line(case), mass_scaling(case.numerics.mass_scaling));
     let probes: Vec<String> = if v.probes.is_empty() {
         vec!["-1".into()]
     } else {
@@ -85,7 +103,7 @@ pub(super) fn cps_file(case: &Case, v: CpsValues) -> Cps {
         ("TOLERATED_ERROR_SOLID", one("0.01 0.01")),
         ("TOLERATED_ERROR_LIQUID", one("0.01 0.01")),
         ("MAXIMUM_TIME_STEPS", one("10000")),
-        ("MASS_SCALING", one("0 1.0")),
+        ("MASS_SCALING", one(&scaling)),
         ("HOMOGENEOUS_LOCAL_DAMPING", one(&damping)),
         ("BULK_VISCOSITY_DAMPING", one(&bulk)),
         ("FIX_SOLID_SKELETON", one("0")),

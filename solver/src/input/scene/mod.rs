@@ -421,6 +421,7 @@ impl Sections {
                 hoop_in_volume: true,
                 strain_smoothing: scene.strain_smoothing,
                 bulk_viscosity: self.damping.bulk,
+                mass_scaling: scene.time.mass_scaling,
                 precision: self.precision,
                 grid: self.grid,
                 gradient: self.gradient,

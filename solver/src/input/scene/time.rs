@@ -18,6 +18,7 @@ pub(super) const TABLE: Table = Table {
         key("courant", "float", "0.9", "", "Courant number of the time step, in (0, 1] (above 1 only with --force)"),
         key("output_interval", "float", "required (or `consolidation.output_tv`)", "s", "time between outputs (the last one is at `end`)"),
         key("max_steps", "integer", "none", "", "stop after this many time steps"),
+        key("mass_scaling", "float", "1", "", "Anura3D's mass scaling: the nodal accelerations are the forces over this factor times the mass, so the step grows by its square root; ≥ 1, dry materials only (run.json reports the physical kinetic energy and, under `energy.mass_scaling`, the scaled mass's)"),
     ],
 };
 
@@ -33,6 +34,12 @@ pub(super) struct Time {
     output_interval: Option<f64>,
     #[serde(default)]
     pub max_steps: Option<u64>,
+    #[serde(default = "no_scaling")]
+    pub mass_scaling: f64,
+}
+
+fn no_scaling() -> f64 {
+    1.0
 }
 
 fn default_courant() -> f64 {
@@ -46,6 +53,12 @@ pub(super) fn check_courant(t: &Time) -> Result<(), Refusal> {
         return Err(refuse(
             "time.courant",
             format!("must be in (0, 1], got {}", t.courant),
+        ));
+    }
+    if !(t.mass_scaling >= 1.0 && t.mass_scaling.is_finite()) {
+        return Err(refuse(
+            "time.mass_scaling",
+            format!("must be a finite factor ≥ 1, got {}", t.mass_scaling),
         ));
     }
     Ok(())
