@@ -9,7 +9,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
-use common::testdata;
+use common::{testdata, COLUMN_SIDES};
 use mpm_solve::driver::run::{run, RunOptions};
 use mpm_solve::element::tet4::Tet4;
 
@@ -36,19 +36,7 @@ points_per_element = {points}
 [[fixity]]
 physical = "bottom"
 fixed = [true, true, true]
-[[fixity]]
-plane = "x = 0"
-fixed = [true, false, false]
-[[fixity]]
-plane = "x = 0.1"
-fixed = [true, false, false]
-[[fixity]]
-plane = "z = 0"
-fixed = [false, false, true]
-[[fixity]]
-plane = "z = 0.1"
-fixed = [false, false, true]
-"#,
+{COLUMN_SIDES}"#,
         mesh = testdata("oedometer_tet4.msh").display()
     );
     let p = dir.join(format!("{name}.toml"));

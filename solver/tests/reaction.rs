@@ -13,7 +13,7 @@ use mpm_solve::input::case::{Case, LoadCurve, MaterialSpec};
 use mpm_solve::input::scene;
 use mpm_solve::step::prescribed::{PrescribedElement, PrescribedVelocity};
 
-use common::testdata;
+use common::{testdata, COLUMN_SIDES};
 
 /// Young's modulus (kPa) and Poisson's ratio of the column.
 const E: f64 = 1000.0;
@@ -44,19 +44,7 @@ points_per_element = 4
 [[fixity]]
 physical = "bottom"
 fixed = [true, true, true]
-[[fixity]]
-plane = "x = 0"
-fixed = [true, false, false]
-[[fixity]]
-plane = "x = 0.1"
-fixed = [true, false, false]
-[[fixity]]
-plane = "z = 0"
-fixed = [false, false, true]
-[[fixity]]
-plane = "z = 0.1"
-fixed = [false, false, true]
-{velocity}
+{COLUMN_SIDES}{velocity}
 "#,
         mesh.display()
     );

@@ -312,6 +312,22 @@ pub fn run_scene<E: mpm_solve::element::Element>(
     engine
 }
 
+/// The `[[fixity]]` tables of a 0.1 × 0.1 m column's sides on rollers (x = 0, 0.1 and
+/// z = 0, 0.1), for scenes on `oracle_column_tet4.msh` and `oedometer_tet4.msh`.
+pub const COLUMN_SIDES: &str = r#"[[fixity]]
+plane = "x = 0"
+fixed = [true, false, false]
+[[fixity]]
+plane = "x = 0.1"
+fixed = [true, false, false]
+[[fixity]]
+plane = "z = 0"
+fixed = [false, false, true]
+[[fixity]]
+plane = "z = 0.1"
+fixed = [false, false, true]
+"#;
+
 /// The scene of a laterally confined column on `oracle_column_tet4.msh` (0.1 × 1 × 0.1 m,
 /// ρ = 2000 kg/m³, E = 1000 kPa, ν = 0.3, 4 points per element, sides on rollers) under a
 /// sudden 10 kPa on its top, until `end` in `outputs` outputs at Courant 0.5: `extra` lines
@@ -339,19 +355,7 @@ points_per_element = 4
 {liquid}[[fixity]]
 physical = "bottom"
 fixed = {bottom}
-[[fixity]]
-plane = "x = 0"
-fixed = [true, false, false]
-[[fixity]]
-plane = "x = 0.1"
-fixed = [true, false, false]
-[[fixity]]
-plane = "z = 0"
-fixed = [false, false, true]
-[[fixity]]
-plane = "z = 0.1"
-fixed = [false, false, true]
-[[traction]]
+{COLUMN_SIDES}[[traction]]
 physical = "top"
 traction = [0.0, -10.0, 0.0]
 "#,
