@@ -112,6 +112,12 @@ struct Args {
     /// [default: the scene's `gradient`, else element].
     #[arg(long, value_enum)]
     basis: Option<BasisArg>,
+    /// How a two-phase case is stepped: `explicit` (every term, as Anura3D: the step follows the
+    /// pore water's wave speed) or `semi-implicit` (the pore pressure solved for on the nodes
+    /// each step: the step follows the skeleton's, several times longer; docs/design.md §4.4c)
+    /// [default: the scene's `time.scheme`, else explicit].
+    #[arg(long, value_enum)]
+    scheme: Option<SchemeArg>,
     /// Run a Courant number above 1 (refused otherwise: the explicit step is unstable; the
     /// guard rails then stop the run when it blows up).
     #[arg(long)]
@@ -262,6 +268,12 @@ enum BasisArg {
     Element,
     Ddmp,
     DdmpBlended,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum SchemeArg {
+    Explicit,
+    SemiImplicit,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -459,7 +471,7 @@ fn input_kind(path: &std::path::Path) -> anyhow::Result<Input> {
 
 /// The options that override the case's settings, as the library takes them.
 fn overrides(args: &Args) -> Overrides {
-    use mpm_solve::input::case::{Drag, Gradient, Reorder};
+    use mpm_solve::input::case::{Drag, Gradient, Reorder, Scheme};
     use mpm_solve::parallel::team::Pin;
     Overrides {
         threads: args.threads,
@@ -487,6 +499,12 @@ fn overrides(args: &Args) -> Overrides {
             BasisArg::Element => Gradient::Element,
             BasisArg::Ddmp => Gradient::Ddmp,
             BasisArg::DdmpBlended => Gradient::DdmpBlended,
+        }),
+        scheme: args.scheme.map(|s| match s {
+            SchemeArg::Explicit => Scheme::Explicit,
+            SchemeArg::SemiImplicit => Scheme::SemiImplicit {
+                tolerance: mpm_solve::step::semi_implicit::DEFAULT_TOLERANCE,
+            },
         }),
         energy_tolerance: args.energy_tolerance.map(|Tolerance(t)| t),
         probes: args.probe.clone(),

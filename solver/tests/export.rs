@@ -435,6 +435,11 @@ fn what_anura3d_cannot_reproduce_is_refused_by_item() {
             "time.max_steps",
         ),
         (
+            "oedometer.toml",
+            Box::new(|t| rest(t).replace("[time]", "[time]\nscheme = \"semi-implicit\"")),
+            "time.scheme",
+        ),
+        (
             "column_gravity.toml",
             column(|t| t.replace("points_per_element = 4", "points_per_element = 2")),
             "material \"soil\".points_per_element",

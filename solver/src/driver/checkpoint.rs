@@ -204,6 +204,7 @@ impl Fingerprint {
             strain_smoothing,
             bulk_viscosity,
             mass_scaling,
+            scheme,
             precision,
             grid,
             gradient,
@@ -270,10 +271,7 @@ impl Fingerprint {
         // Last and only where there is one: the checkpoints of cases without them keep their
         // items.
         items.extend(Self::optional(grid, gradient, absorbing, bulk_viscosity));
-        if *absorbing_rule != crate::step::absorbing::AbsorbingRule::EndOfStep {
-            items.push(("absorbing boundaries' rule", absorbing_rule));
-        }
-        items.extend((*mass_scaling != 1.0).then_some(("mass scaling", mass_scaling as _)));
+        items.extend(Self::optional_more(absorbing_rule, mass_scaling, scheme));
         Fingerprint(items.iter().map(|&(n, v)| Item::of(n, v)).collect())
     }
 
@@ -298,6 +296,26 @@ impl Fingerprint {
         }
         if let Some(b) = bulk {
             out.push(("bulk viscosity", b));
+        }
+        out
+    }
+
+    /// The fingerprint's items after [`Fingerprint::optional`]'s, each only where the case has
+    /// it.
+    fn optional_more<'a>(
+        absorbing_rule: &'a crate::step::absorbing::AbsorbingRule,
+        mass_scaling: &'a f64,
+        scheme: &'a crate::input::case::Scheme,
+    ) -> Vec<Named<'a>> {
+        let mut out: Vec<Named<'a>> = Vec::new();
+        if *absorbing_rule != crate::step::absorbing::AbsorbingRule::EndOfStep {
+            out.push(("absorbing boundaries' rule", absorbing_rule));
+        }
+        if *mass_scaling != 1.0 {
+            out.push(("mass scaling", mass_scaling));
+        }
+        if scheme.semi_implicit() {
+            out.push(("scheme (--scheme)", scheme));
         }
         out
     }

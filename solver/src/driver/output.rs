@@ -394,6 +394,7 @@ pub fn write_summary<R: Real, E: Element>(
     // Whether the point passes ran their AVX2 copies (docs/design.md §9); outside the literal
     // above, which is at the macro's recursion limit (the keys are written sorted either way).
     json["avx2_copies"] = serde_json::json!(crate::parallel::avx2::detected());
+    json["scheme"] = scheme_json(engine);
     if let Some(ranks) = ranks {
         add_ranks(&mut json, ranks, &engine.balance);
     }
@@ -481,6 +482,25 @@ fn energy_json<R: Real, E: Element>(engine: &Engine<R, E>) -> serde_json::Value 
         });
     }
     out
+}
+
+/// `run.json`'s scheme: `explicit`, or the semi-implicit scheme with what its pressure solves
+/// took (steps solved, conjugate-gradient iterations in all, per step at most and on average,
+/// the largest relative residual a step ended with, the tolerance).
+fn scheme_json<R: Real, E: Element>(engine: &Engine<R, E>) -> serde_json::Value {
+    let Some(s) = &engine.semi_implicit else {
+        return serde_json::json!({ "name": "explicit" });
+    };
+    let c = &s.counts;
+    serde_json::json!({
+        "name": "semi-implicit",
+        "pressure_solves": c.solves,
+        "iterations": c.iterations,
+        "most_iterations": c.most,
+        "mean_iterations": c.iterations as f64 / (c.solves.max(1) as f64),
+        "worst_residual": c.worst_residual,
+        "tolerance": s.tolerance,
+    })
 }
 
 /// `run.json`'s diagnosis of a diverged run.

@@ -34,6 +34,9 @@ pub enum RunError {
     /// A guard rail tripped: the run diverged (`run.json` says where and why).
     #[error(transparent)]
     Diverged(Box<crate::driver::guard::Divergence>),
+    /// The semi-implicit pressure solve did not converge.
+    #[error(transparent)]
+    Pressure(crate::step::semi_implicit::NotConverged),
     /// A Courant number above 1 without `force`.
     #[error(transparent)]
     Courant(#[from] crate::input::case::CourantError),
@@ -99,6 +102,7 @@ impl From<crate::driver::engine::StepError> for RunError {
             crate::driver::engine::StepError::Lost(l) => RunError::Lost(l),
             crate::driver::engine::StepError::Mesh(m) => RunError::Mesh(m),
             crate::driver::engine::StepError::Diverged(d) => RunError::Diverged(d),
+            crate::driver::engine::StepError::Pressure(p) => RunError::Pressure(p),
         }
     }
 }

@@ -120,6 +120,17 @@ impl MaterialSpec {
     /// ([`crate::material::liquid::LiquidSpec::wave_speed_implicit_drag`]) or, for `anura3d_step`,
     /// Anura3D's formula with its explicit-drag and consolidation terms (smaller, so as safe).
     pub fn wave_speed_at(&self, dx: f64, anura3d_step: bool) -> f64 {
+        self.step_speed(dx, anura3d_step, false)
+    }
+
+    /// The wave speed that bounds the step ([`MaterialSpec::wave_speed_at`]); under the
+    /// semi-implicit scheme (`semi_implicit`), whose pore pressure is implicit, a saturated
+    /// material's is its skeleton's, sqrt(E_oed / ((1 − n) ρs)): the solid moving through
+    /// still water, the fastest the explicit effective stress carries.
+    pub fn step_speed(&self, dx: f64, anura3d_step: bool, semi_implicit: bool) -> f64 {
+        if semi_implicit && self.liquid.is_some() {
+            return (self.oedometric() / self.density).sqrt();
+        }
         match &self.liquid {
             None => self.wave_speed(),
             Some(l) => {
@@ -367,6 +378,29 @@ pub enum Gradient {
     DdmpBlended,
 }
 
+/// How a two-phase case is stepped in time.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Scheme {
+    /// Every term explicit (Anura3D's): the step follows the undrained wave speed, the pore
+    /// water's compressibility included.
+    #[default]
+    Explicit,
+    /// The pore pressure solved for on the nodes each step, implicitly
+    /// ([`crate::step::semi_implicit`], docs/design.md §4.4c): the step follows the skeleton's
+    /// wave speed.
+    SemiImplicit {
+        /// The pressure solve's relative tolerance.
+        tolerance: f64,
+    },
+}
+
+impl Scheme {
+    /// Whether the pore pressure is solved for implicitly.
+    pub fn semi_implicit(self) -> bool {
+        matches!(self, Scheme::SemiImplicit { .. })
+    }
+}
+
 /// How the equations are integrated: damping, the stress rate and integration, the velocity
 /// update, drag, smoothing, the liquid's mass, the axisymmetric volume and the precision.
 /// Scenes and Anura3D input choose several of them differently.
@@ -409,6 +443,8 @@ pub struct Numerics {
     /// nodal acceleration is the force over f times the mass, so the critical step grows by
     /// √f; 1 when off (docs/design.md §4.4b).
     pub mass_scaling: f64,
+    /// How a two-phase case is stepped in time ([`Scheme`]).
+    pub scheme: Scheme,
     /// The background grid the case runs on, with its basis (`None`: the mesh's elements, the
     /// linear basis).
     pub grid: Option<crate::basis::grid::GridSpec>,
@@ -801,6 +837,7 @@ impl Case {
                 strain_smoothing: false,
                 bulk_viscosity: None,
                 mass_scaling: 1.0,
+                scheme: Scheme::Explicit,
                 grid: None,
                 gradient: Gradient::Element,
                 precision: Precision::F64,

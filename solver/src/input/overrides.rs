@@ -4,7 +4,9 @@
 //! fills an [`Overrides`] from its options; [`Overrides::check`] and
 //! [`Overrides::prepare_process`] run before the input is read, [`apply`] on the case read.
 
-use crate::input::case::{Case, CourantError, Drag, Gradient, Precision, Reorder, ReorderError};
+use crate::input::case::{
+    Case, CourantError, Drag, Gradient, Precision, Reorder, ReorderError, Scheme,
+};
 use crate::parallel::team::Pin;
 
 /// The most worker threads a run may ask for: each is started before the input is read, and a
@@ -31,6 +33,9 @@ pub struct Overrides {
     pub precision: Option<Precision>,
     /// The points' gradients on the mesh's elements (`--basis`; `None`: the case's).
     pub gradient: Option<Gradient>,
+    /// How a two-phase case is stepped (`--scheme`; `None`: the case's). Asking for the
+    /// semi-implicit scheme keeps a scene's own tolerance.
+    pub scheme: Option<Scheme>,
     /// The energy balance's tolerance (`--energy-tolerance`): `Some(None)` not checked,
     /// `Some(Some(share))` that share; `None`: the case's.
     pub energy_tolerance: Option<Option<f64>>,
@@ -51,6 +56,7 @@ impl Default for Overrides {
             drag: Drag::Implicit,
             precision: None,
             gradient: None,
+            scheme: None,
             energy_tolerance: None,
             probes: Vec::new(),
             force: false,
@@ -146,6 +152,10 @@ pub fn apply(mut case: Case, o: &Overrides) -> Result<Case, OverrideError> {
         }
         case.numerics.gradient = g;
     }
+    match (o.scheme, case.numerics.scheme) {
+        (Some(Scheme::SemiImplicit { .. }), Scheme::SemiImplicit { .. }) | (None, _) => {}
+        (Some(s), _) => case.numerics.scheme = s,
+    }
     case.check_courant(o.force)?;
     if let Some(t) = o.energy_tolerance {
         case.run.guards.energy_tolerance = t;
@@ -211,6 +221,7 @@ mod tests {
             drag: Drag::Explicit,
             precision: Some(Precision::F32),
             gradient: Some(Gradient::Ddmp),
+            scheme: Some(Scheme::SemiImplicit { tolerance: 1e-6 }),
             energy_tolerance: Some(Some(0.25)),
             probes: vec![7, 2, 7],
             force: false,
@@ -221,6 +232,7 @@ mod tests {
         assert_eq!(a.numerics.drag, Drag::Explicit);
         assert_eq!(a.numerics.precision, Precision::F32);
         assert_eq!(a.numerics.gradient, Gradient::Ddmp);
+        assert_eq!(a.numerics.scheme, Scheme::SemiImplicit { tolerance: 1e-6 });
         assert_eq!(a.run.guards.energy_tolerance, Some(0.25));
         assert_eq!(a.run.probes, vec![2, 5, 7]);
         assert_eq!(a.run.engine.threads, 3);
@@ -237,6 +249,24 @@ mod tests {
         assert_eq!(
             apply(case(0.5), &off).unwrap().run.guards.energy_tolerance,
             None
+        );
+        // Asking for the semi-implicit scheme keeps a case's own tolerance; asking for the
+        // explicit one sets it.
+        let mut semi = case(0.5);
+        semi.numerics.scheme = Scheme::SemiImplicit { tolerance: 1e-8 };
+        let again = Overrides {
+            scheme: Some(Scheme::SemiImplicit { tolerance: 1e-10 }),
+            ..Overrides::default()
+        };
+        let kept = apply(semi.clone(), &again).unwrap().numerics.scheme;
+        assert_eq!(kept, Scheme::SemiImplicit { tolerance: 1e-8 });
+        let back = Overrides {
+            scheme: Some(Scheme::Explicit),
+            ..Overrides::default()
+        };
+        assert_eq!(
+            apply(semi, &back).unwrap().numerics.scheme,
+            Scheme::Explicit
         );
     }
 

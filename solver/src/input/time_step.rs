@@ -32,7 +32,8 @@ pub fn critical(
 /// step is the Courant number times it. `(elements.start, ∞)` for no elements. Under
 /// [`CriticalStepRule::OccupiedEachStep`] only the elements that hold points at the start count
 /// (the engine takes the step again after every step: [`crate::step::time_step`]). Mass
-/// scaling by f lengthens each crossing time by √f; bulk
+/// scaling by f lengthens each crossing time by √f; the semi-implicit scheme takes the
+/// skeleton's speed ([`crate::input::case::MaterialSpec::step_speed`]); bulk
 /// viscosity shortens it by its factor at rest
 /// ([`crate::step::bulk_viscosity::BulkViscosity::step_factor`]).
 pub fn shortest_crossing(
@@ -45,6 +46,7 @@ pub fn shortest_crossing(
     let anura3d_step = case.time.anura3d_time_step || case.numerics.drag == Drag::Explicit;
     let mut best = (elements.start, f64::INFINITY);
     let occupied_only = case.time.critical_step == CriticalStepRule::OccupiedEachStep;
+    let semi = case.numerics.scheme.semi_implicit();
     for e in elements {
         if occupied_only && case.body.points_per_element[e] == 0 {
             // Anura3D's rule: only elements that hold points count.
@@ -53,13 +55,13 @@ pub fn shortest_crossing(
         let dx = min_altitude(e);
         let m = case.body.element_material[e] as usize;
         let c = match case.body.materials.get(m).and_then(|s| s.as_ref()) {
-            Some(s) => s.wave_speed_at(dx, anura3d_step),
+            Some(s) => s.step_speed(dx, anura3d_step, semi),
             None => case
                 .body
                 .materials
                 .iter()
                 .flatten()
-                .map(|s| s.wave_speed_at(dx, anura3d_step))
+                .map(|s| s.step_speed(dx, anura3d_step, semi))
                 .fold(0.0, f64::max),
         };
         // Mass scaling slows every wave by √f (Anura3D's c² / f); dividing by 1 changes no bit.

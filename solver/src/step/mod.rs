@@ -18,6 +18,7 @@ pub mod particle_to_grid;
 pub mod passes;
 pub mod prescribed;
 pub mod reaction;
+pub mod semi_implicit;
 pub mod smoothing;
 pub mod stress;
 pub mod tail;

@@ -37,6 +37,8 @@ pub struct CriticalStep {
     bulk: Option<BulkViscosity>,
     /// √f of mass scaling by f (1 without): every wave speed over it.
     scaling_root: f64,
+    /// The semi-implicit scheme: saturated materials at their skeleton's speed.
+    semi_implicit: bool,
     /// Per thread: the shortest crossing time of its points' elements and that element.
     per_thread: Vec<(f64, u32)>,
 }
@@ -51,6 +53,7 @@ impl CriticalStep {
             per_thread: vec![(f64::INFINITY, 0); threads],
             bulk: case.numerics.bulk_viscosity,
             scaling_root: case.numerics.mass_scaling.sqrt(),
+            semi_implicit: case.numerics.scheme.semi_implicit(),
         }
     }
 
@@ -69,7 +72,7 @@ impl CriticalStep {
         }
         let slots = Shared::new(&mut self.per_thread);
         let (materials, anura3d, bulk) = (&self.materials, self.anura3d_speed, self.bulk);
-        let root = self.scaling_root;
+        let (root, semi) = (self.scaling_root, self.semi_implicit);
         let rates = p.bulk.as_ref().map(|b| &b.rate[..]);
         team.run(|t| {
             let mut best = (f64::INFINITY, 0u32);
@@ -88,7 +91,7 @@ impl CriticalStep {
                     continue;
                 };
                 let dx = mesh.min_altitude[e as usize].f64();
-                let mut time = dx / (spec.wave_speed_at(dx, anura3d) / root);
+                let mut time = dx / (spec.step_speed(dx, anura3d, semi) / root);
                 if let (Some(b), Some(rates)) = (&bulk, rates) {
                     time *= b.step_factor(time, rates[i].f64());
                 }

@@ -53,6 +53,9 @@ pub enum StepError {
     /// A guard rail tripped (docs/design.md §4.14).
     #[error(transparent)]
     Diverged(Box<Divergence>),
+    /// The semi-implicit pressure solve did not converge.
+    #[error(transparent)]
+    Pressure(#[from] crate::step::semi_implicit::NotConverged),
 }
 
 /// The share of the energy held by initial stresses and pore pressures that the blow-up check
@@ -125,6 +128,12 @@ pub enum SetupError {
         /// What the case has, as the end of the sentence.
         what: &'static str,
     },
+    /// The semi-implicit scheme, with a feature it does not model.
+    #[error(
+        "the semi-implicit scheme (--scheme semi-implicit, time.scheme) cannot model {0} yet; \
+         run it with the explicit scheme"
+    )]
+    SemiImplicit(&'static str),
     /// More than one process, with a feature that runs on one only.
     #[error("a run over {ranks} MPI ranks cannot model {what} yet; run it on one process")]
     Distributed {
@@ -287,6 +296,8 @@ pub struct Engine<R: Real, E: Element = Tet4> {
     pub smoothing: Option<crate::step::smoothing::StrainSmoothing<R>>,
     /// The bulk viscosity's constants, when the case damps with it.
     pub bulk: Option<crate::step::bulk_viscosity::BulkDamping<R>>,
+    /// The semi-implicit scheme's pressure solve, when the case is stepped with it.
+    pub semi_implicit: Option<crate::step::semi_implicit::SemiImplicit>,
     /// Per material index: weight density / mass density (1 but for Anura3D's drained soil).
     weight_ratio: Vec<f64>,
     /// Per material index: the gravity acceleration of this step times its weight ratio.

@@ -10,8 +10,8 @@ use crate::basis::grid::Cartesian;
 use crate::element::locate::NOTHING_FOUND;
 use crate::element::mesh::Mesh;
 use crate::element::Element;
-use crate::input::case::Gradient;
 use crate::input::case::{Case, CriticalStepRule, Integration, MaterialSpec, MixedRule};
+use crate::input::case::{Drag, Gradient};
 use crate::material::law::Law;
 use crate::material::liquid::Fluid;
 use crate::parallel::comm::{Communicator, SingleProcess};
@@ -34,6 +34,7 @@ use crate::step::mixed::Mixed;
 use crate::step::moving_mesh::MovingMesh;
 use crate::step::nodal_velocity::NodalVelocity;
 use crate::step::prescribed::Prescribed;
+use crate::step::semi_implicit::SemiImplicit;
 use crate::step::smoothing::StrainSmoothing;
 use crate::step::stress::GuardSums;
 use crate::step::time_step::CriticalStep;
@@ -131,6 +132,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                 StrainSmoothing::new(mesh.nodes(), &case.body.element_material[own.clone()])
             }),
             bulk: bulk_of(case),
+            semi_implicit: SemiImplicit::of(case, &mesh),
             gravity_by_material: vec![[R::ZERO; 3]; tables.weight_ratio.len()],
             weight_ratio: tables.weight_ratio,
             grid: grid_of(mesh.nodes(), two_phase),
@@ -278,12 +280,49 @@ fn refuse_unmodelled<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupE
             return Err(SetupError::MassScaling { factor, what });
         }
     }
+    if case.numerics.scheme.semi_implicit() {
+        refuse_for_semi_implicit::<E>(case, ranks)?;
+    }
     if ranks > 1 {
         if let Some(what) = first(&one_process_only(case)) {
             return Err(SetupError::Distributed { ranks, what });
         }
     }
     Ok(())
+}
+
+/// Refuses what the semi-implicit scheme does not model: it solves for the pore pressure of
+/// saturated materials, on one process, on the mesh's linear elements (plane or 3D), with the
+/// implicit drag, and nothing after the grid update may change the accelerations it corrected.
+fn refuse_for_semi_implicit<E: Element>(case: &Case, ranks: usize) -> Result<(), SetupError> {
+    let n = &case.numerics;
+    let saturated = case
+        .body
+        .materials
+        .iter()
+        .flatten()
+        .any(|m| m.liquid.is_some());
+    let list = [
+        (
+            !saturated,
+            "a case without saturated materials (it solves for their pore pressure)",
+        ),
+        (ranks > 1, "a run over several MPI ranks"),
+        (E::AXISYMMETRIC, "an axisymmetric section"),
+        (n.grid.is_some(), "a background grid"),
+        (n.gradient != Gradient::Element, "the dual-domain gradients"),
+        (
+            n.drag == Drag::Explicit,
+            "the explicit drag (--drag explicit)",
+        ),
+        (n.bulk_viscosity.is_some(), "bulk viscosity"),
+        (n.mass_scaling != 1.0, "mass scaling"),
+    ];
+    let first = |list: &[(bool, &'static str)]| list.iter().find(|(on, _)| *on).map(|f| f.1);
+    match first(&list).or(first(&one_process_only(case))) {
+        Some(what) => Err(SetupError::SemiImplicit(what)),
+        None => Ok(()),
+    }
 }
 
 /// What runs on one process, on the mesh's elements only: whether the case asks for each.

@@ -41,6 +41,8 @@ impl<R: Real, E: Element> Engine<R, E> {
             liquid_fixed: _,
             smoothing: _,
             bulk: _,
+            // Saved below: its counts (each step's solve starts from zero).
+            semi_implicit,
             weight_ratio: _,
             gravity_by_material: _,
             input_element: _,
@@ -119,6 +121,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                     .zip(r.force.map(f64::to_bits)),
             );
         }
+        out.extend(semi_implicit.iter().flat_map(|s| s.counts.saved()));
         out.extend(
             constraints
                 .saved()
@@ -233,7 +236,12 @@ impl<R: Real, E: Element> Engine<R, E> {
             r.travel = f(at + 4 * k);
             r.force = [1, 2, 3].map(|j| f(at + 4 * k + j));
         }
-        let at = at + 4 * self.reactions.len();
+        let mut at = at + 4 * self.reactions.len();
+        if let Some(s) = &mut self.semi_implicit {
+            s.counts =
+                crate::step::semi_implicit::SolveCounts::restored([0, 1, 2, 3].map(|k| v(at + k)));
+            at += 4;
+        }
         let state: Vec<(&str, f64)> = (at..saved.scalars.len())
             .map(|k| (saved.scalars[k].0.as_str(), f(k)))
             .collect();

@@ -79,7 +79,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         self.team.take_load();
         let at = self.moment(dt);
         self.timed(Phase::MapToGrid, |e| e.map_to_grid(&at));
-        let forces = self.timed(Phase::GridUpdate, |e| e.update_grid(&at));
+        let forces = self.timed(Phase::GridUpdate, |e| e.update_grid(&at))?;
         self.timed(Phase::Constraints, |e| e.constrain(&at));
         self.timed(Phase::Remap, |e| e.remap(&at));
         let located = self.timed(Phase::Stress, |e| e.update_stress(&at));
@@ -178,8 +178,10 @@ impl<R: Real, E: Element> Engine<R, E> {
 
     /// The grid update of each body (the mixture and liquid together in two-phase cases), the
     /// accelerations' precursor cut, and the force sums of the convergence check (over both
-    /// bodies with contact), kept as the step's force errors and returned.
-    fn update_grid(&mut self, at: &Moment<R>) -> ForceSums {
+    /// bodies with contact), kept as the step's force errors and returned. Under the
+    /// semi-implicit scheme the pressure solve then corrects the accelerations (an error where
+    /// it does not converge).
+    fn update_grid(&mut self, at: &Moment<R>) -> Result<ForceSums, StepError> {
         let c = &self.config;
         let dt = R::of(at.dt);
         if self.grid.liquid.is_some() {
@@ -207,6 +209,17 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &mut self.grid,
                 &loads,
             );
+            if let Some(semi) = &mut self.semi_implicit {
+                semi.correct(
+                    (&self.team, &self.layout),
+                    &self.mesh,
+                    &self.particles,
+                    &self.fluids,
+                    &mut self.grid,
+                    (&self.fixed, &self.liquid_fixed),
+                    at.dt,
+                )?;
+            }
             let (team, comm) = (&self.team, &*self.comm);
             tail::cut_grid(
                 team,
@@ -254,7 +267,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         };
         self.force_error = forces.ratio();
         self.liquid_force_error = liquid_forces.ratio();
-        forces
+        Ok(forces)
     }
 
     /// The constraints' hooks after the grid update, in their order; then every prescribed set
@@ -332,6 +345,8 @@ impl<R: Real, E: Element> Engine<R, E> {
         // On a grid the rate is smoothed through its nodes here, or each saturated point takes
         // its own in the stress pass.
         let rate_pending = match &self.basis {
+            // The pressure solve left its rates at the nodes.
+            None if self.semi_implicit.is_some() => true,
             None => stress::update_pore_pressure(&passes, &mut self.slots, pressure),
             Some(b) if c.smooth_pressure && self.grid.liquid.is_some() => {
                 let (grid, fluids) = (&mut self.grid, &self.fluids);

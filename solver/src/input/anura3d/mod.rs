@@ -466,6 +466,7 @@ impl Parts {
                     }
                 }),
                 mass_scaling: s.mass_scaling.unwrap_or(1.0),
+                scheme: crate::input::case::Scheme::Explicit,
                 grid: None,
                 gradient: crate::input::case::Gradient::Element,
                 precision: crate::input::case::Precision::F64,

@@ -23,7 +23,7 @@ pub(super) fn refuse(item: impl Into<String>, message: impl Into<String>) -> Ref
 }
 
 /// Refuses the undrained start of a consolidation run (noting that the export runs the
-/// loading only) and a cap on the time steps.
+/// loading only), the semi-implicit scheme and a cap on the time steps.
 pub(super) fn run(case: &Case, notes: &mut Vec<String>) -> Result<(), Refusal> {
     if let Some(c) = &case.start.consolidation {
         if c.start == Start::Undrained {
@@ -45,6 +45,12 @@ pub(super) fn run(case: &Case, notes: &mut Vec<String>) -> Result<(), Refusal> {
             ));
         }
         notes.push("damping.bulk_viscosity: Anura3D (and mpm-solve on the exported GOM) adds the quadratic term as a tensile stress, helping the compression along; the scene's resists it".into());
+    }
+    if case.numerics.scheme.semi_implicit() {
+        return Err(refuse(
+            "time.scheme",
+            "Anura3D steps every term explicitly; export the scene with scheme = \"explicit\"",
+        ));
     }
     if let Some(n) = case.time.max_steps {
         return Err(refuse(

@@ -422,6 +422,7 @@ impl Sections {
                 strain_smoothing: scene.strain_smoothing,
                 bulk_viscosity: self.damping.bulk,
                 mass_scaling: scene.time.mass_scaling,
+                scheme: scene.time.scheme(),
                 precision: self.precision,
                 grid: self.grid,
                 gradient: self.gradient,

@@ -19,6 +19,8 @@ pub(super) const TABLE: Table = Table {
         key("output_interval", "float", "required (or `consolidation.output_tv`)", "s", "time between outputs (the last one is at `end`)"),
         key("max_steps", "integer", "none", "", "stop after this many time steps"),
         key("mass_scaling", "float", "1", "", "Anura3D's mass scaling: the nodal accelerations are the forces over this factor times the mass, so the step grows by its square root; ≥ 1, dry materials only (run.json reports the physical kinetic energy and, under `energy.mass_scaling`, the scaled mass's)"),
+        key("scheme", "string", "\"explicit\"", "", "`explicit` or `semi-implicit`: the pore pressure solved for on the nodes each step, so that the step follows the skeleton's wave speed instead of the pore water's (saturated materials; docs/design.md §4.4c); the command line's `--scheme` overrides it"),
+        key("pressure_tolerance", "float", "1e-8", "", "the semi-implicit pressure solve's relative residual, in (0, 1e-3]"),
     ],
 };
 
@@ -36,6 +38,36 @@ pub(super) struct Time {
     pub max_steps: Option<u64>,
     #[serde(default = "no_scaling")]
     pub mass_scaling: f64,
+    #[serde(default)]
+    scheme: SchemeName,
+    #[serde(default = "default_tolerance")]
+    pressure_tolerance: f64,
+}
+
+/// `time.scheme`'s values.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq)]
+#[serde(rename_all = "kebab-case")]
+enum SchemeName {
+    #[default]
+    Explicit,
+    SemiImplicit,
+}
+
+fn default_tolerance() -> f64 {
+    crate::step::semi_implicit::DEFAULT_TOLERANCE
+}
+
+impl Time {
+    /// The scheme the scene asks for.
+    pub fn scheme(&self) -> crate::input::case::Scheme {
+        use crate::input::case::Scheme;
+        match self.scheme {
+            SchemeName::Explicit => Scheme::Explicit,
+            SchemeName::SemiImplicit => Scheme::SemiImplicit {
+                tolerance: self.pressure_tolerance,
+            },
+        }
+    }
 }
 
 fn no_scaling() -> f64 {
@@ -59,6 +91,12 @@ pub(super) fn check_courant(t: &Time) -> Result<(), Refusal> {
         return Err(refuse(
             "time.mass_scaling",
             format!("must be a finite factor ≥ 1, got {}", t.mass_scaling),
+        ));
+    }
+    if !(t.pressure_tolerance > 0.0 && t.pressure_tolerance <= 1e-3) {
+        return Err(refuse(
+            "time.pressure_tolerance",
+            format!("must be in (0, 1e-3], got {}", t.pressure_tolerance),
         ));
     }
     Ok(())
