@@ -19,13 +19,15 @@
 //!   (M_p + Δt² D Γ Dᵀ) δp = Δt D q*,
 //!
 //! symmetric and positive definite (M_p > 0 at every node with liquid), solved by conjugate
-//! gradients with a diagonal preconditioner, matrix-free over the elements. For one material
+//! gradients with a diagonal preconditioner, matrix-free: one value per element, then a gather
+//! per node over its elements. For one material
 //! the nodal rate δp / Δt is the explicit scheme's smoothed rate (`smooth_pressure`) at the
 //! end-of-step velocities, so the two agree as Δt → 0; at a larger step the pressure is
 //! backward Euler in time, unconditionally stable, while the effective stress stays explicit.
 //!
-//! Every sum runs over elements and nodes in their order on one thread, in f64: the result is
-//! the same bits for any thread count.
+//! Every sum is in f64 and in a fixed order (a node's elements in element order, the dot
+//! products per block of nodes and the blocks in order), whichever thread forms it: the result
+//! is the same bits for any thread count.
 
 use crate::element::mesh::Mesh;
 use crate::element::Element;
@@ -44,6 +46,13 @@ const ITERATIONS_PER_UNKNOWN: usize = 2;
 
 /// The fewest iterations allowed per step.
 const MIN_ITERATIONS: usize = 200;
+
+/// Nodes (and live elements) per block of the solve's passes and sums.
+const BLOCK: usize = 1024;
+
+/// Live elements from which the solve's passes run on the thread team (below, one thread: a
+/// team run costs more than such a pass).
+const PARALLEL_FROM: usize = 4096;
 
 /// The pressure solve did not reach its tolerance.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -126,6 +135,8 @@ pub struct SemiImplicit {
     z: Vec<f64>,
     d: Vec<f64>,
     kd: Vec<f64>,
+    /// Per block of nodes, the passes' partial sums.
+    per_block: Vec<[f64; 2]>,
     /// What the solves took so far.
     pub counts: SolveCounts,
 }
@@ -165,6 +176,7 @@ impl SemiImplicit {
             z: zeros.clone(),
             d: zeros.clone(),
             kd: zeros,
+            per_block: vec![[0.0; 2]; nodes.div_ceil(BLOCK)],
             counts: SolveCounts::default(),
         }
     }
@@ -193,7 +205,7 @@ impl SemiImplicit {
         self.node_coefficients(g, (fixed, liquid_fixed), dt);
         self.right_hand_side::<E, R>(g, (fixed, liquid_fixed), dt);
         self.preconditioner(dt);
-        let (iterations, residual) = self.conjugate_gradients(dt);
+        let (iterations, residual) = self.conjugate_gradients(team, dt);
         let c = &mut self.counts;
         c.solves += 1;
         c.iterations += iterations as u64;
@@ -252,6 +264,9 @@ impl SemiImplicit {
         }
         self.compress.fill(0.0);
         self.elements.live.clear();
+        // An element that is not live keeps the value 0 through the step's passes.
+        self.elements.value.fill(0.0);
+        self.elements.take_weights(&self.weights);
         for (e, (c, w)) in self.element_compress.iter().zip(&self.weights).enumerate() {
             if w.iter().all(|&w| w == 0.0) {
                 continue;
@@ -329,10 +344,9 @@ impl SemiImplicit {
                 self.vector[j][a] = (1.0 - n) * v + n * w;
             }
         }
-        self.elements
-            .divergence(&self.weights, &self.vector, &mut self.b);
-        for b in &mut self.b {
-            *b *= dt;
+        self.elements.element_divergences(None, &self.vector);
+        for i in 0..self.b.len() {
+            self.b[i] = dt * self.elements.gather_weighted(i);
         }
     }
 
@@ -363,69 +377,136 @@ impl SemiImplicit {
     }
 
     /// Preconditioned conjugate gradients on K δp = b from δp = 0: the iterations and the
-    /// relative residual reached.
-    fn conjugate_gradients(&mut self, dt: f64) -> (usize, f64) {
+    /// relative residual reached. Each pass runs on the team where there are at least
+    /// [`PARALLEL_FROM`] live elements, else on this thread: the same sums either way (each
+    /// element's value, each node's gather in element order, the products summed per block of
+    /// [`BLOCK`] nodes and the blocks in order), so the same bits.
+    fn conjugate_gradients(&mut self, team: &Team, dt: f64) -> (usize, f64) {
+        let on = (self.elements.live.len() >= PARALLEL_FROM && team.threads > 1).then_some(team);
+        let n = self.x.len();
         self.x.fill(0.0);
-        let norm_b = dot(&self.b, &self.b).sqrt();
+        let norm_b = self.sum(on, |i, s| s.b[i] * s.b[i]).sqrt();
         if norm_b == 0.0 {
             return (0, 0.0);
         }
         self.r.copy_from_slice(&self.b);
-        precondition(&self.precond, &self.r, &mut self.z);
+        for i in 0..n {
+            self.z[i] = self.precond[i] * self.r[i];
+        }
         self.d.copy_from_slice(&self.z);
-        let mut rz = dot(&self.r, &self.z);
-        let limit = (ITERATIONS_PER_UNKNOWN * self.x.len()).max(MIN_ITERATIONS);
+        let mut rz = self.sum(on, |i, s| s.r[i] * s.z[i]);
+        let limit = (ITERATIONS_PER_UNKNOWN * n).max(MIN_ITERATIONS);
         for k in 1..=limit {
-            self.apply(dt);
-            let alpha = rz / dot(&self.d, &self.kd);
-            for i in 0..self.x.len() {
-                self.x[i] += alpha * self.d[i];
-                self.r[i] -= alpha * self.kd[i];
-            }
-            let residual = dot(&self.r, &self.r).sqrt() / norm_b;
+            let dkd = self.apply(on, dt);
+            let alpha = rz / dkd;
+            let [rr, rz_next] = self.step_vectors(on, alpha);
+            let residual = rr.sqrt() / norm_b;
             if residual <= self.tolerance {
                 return (k, residual);
             }
-            precondition(&self.precond, &self.r, &mut self.z);
-            let rz_next = dot(&self.r, &self.z);
             let beta = rz_next / rz;
             rz = rz_next;
-            for (d, &z) in self.d.iter_mut().zip(&self.z) {
-                *d = z + beta * *d;
-            }
+            let (d, z) = (Shared::new(&mut self.d), &self.z);
+            blocks(on, n, &mut self.per_block, |r| {
+                // SAFETY: block r is this call's only.
+                let d = unsafe { d.range(r.clone()) };
+                for (d, &z) in d.iter_mut().zip(&z[r]) {
+                    *d = z + beta * *d;
+                }
+                [0.0; 2]
+            });
         }
-        (limit, dot(&self.r, &self.r).sqrt() / norm_b)
+        let rr = self.sum(on, |i, s| s.r[i] * s.r[i]);
+        (limit, rr.sqrt() / norm_b)
     }
 
-    /// kd = K d = M_p d + Δt² D Γ Dᵀ d (0 at the nodes not solved for).
-    fn apply(&mut self, dt: f64) {
-        self.elements
-            .transpose_divergence(&self.weights, &self.d, &mut self.vector);
-        for (f, m) in self.vector.iter_mut().zip(&self.mobility) {
-            for a in 0..3 {
-                f[a] *= m[a];
+    /// Σ_i f(i) over the nodes, per block of [`BLOCK`] nodes, the blocks added in order.
+    fn sum(&mut self, on: Option<&Team>, f: impl Fn(usize, &Self) -> f64 + Sync) -> f64 {
+        let mut partial = std::mem::take(&mut self.per_block);
+        let this = &*self;
+        blocks(on, this.x.len(), &mut partial, |r| {
+            [r.map(|i| f(i, this)).sum(), 0.0]
+        });
+        let blocks = this.x.len().div_ceil(BLOCK);
+        let total = partial[..blocks].iter().map(|p| p[0]).sum();
+        self.per_block = partial;
+        total
+    }
+
+    /// x ← x + α d, r ← r − α K d, z = P r: returns (r·r, r·z).
+    fn step_vectors(&mut self, on: Option<&Team>, alpha: f64) -> [f64; 2] {
+        let n = self.x.len();
+        let (x, r, z) = (
+            Shared::new(&mut self.x),
+            Shared::new(&mut self.r),
+            Shared::new(&mut self.z),
+        );
+        let (d, kd, p) = (&self.d, &self.kd, &self.precond);
+        blocks(on, n, &mut self.per_block, |b| {
+            // SAFETY: block b is this call's only.
+            let (x, r, z) = unsafe { (x.range(b.clone()), r.range(b.clone()), z.range(b.clone())) };
+            let (mut rr, mut rz) = (0.0, 0.0);
+            for (k, i) in b.enumerate() {
+                x[k] += alpha * d[i];
+                r[k] -= alpha * kd[i];
+                z[k] = p[i] * r[k];
+                rr += r[k] * r[k];
+                rz += r[k] * z[k];
             }
-        }
-        self.elements
-            .divergence(&self.weights, &self.vector, &mut self.kd);
-        for i in 0..self.kd.len() {
-            self.kd[i] = if self.precond[i] > 0.0 {
-                self.compress[i] * self.d[i] + dt * dt * self.kd[i]
-            } else {
-                0.0
-            };
-        }
+            [rr, rz]
+        });
+        let blocks = n.div_ceil(BLOCK);
+        self.per_block[..blocks]
+            .iter()
+            .fold([0.0; 2], |a, p| [a[0] + p[0], a[1] + p[1]])
+    }
+
+    /// kd = K d = M_p d + Δt² D Γ Dᵀ d (0 at the nodes not solved for); returns d · kd.
+    fn apply(&mut self, on: Option<&Team>, dt: f64) -> f64 {
+        let el = &mut self.elements;
+        el.element_sums(on, &self.weights, &self.d);
+        let (q, mobility) = (Shared::new(&mut self.vector), &self.mobility);
+        let el = &self.elements;
+        blocks(on, self.x.len(), &mut self.per_block, |r| {
+            // SAFETY: block r is this call's only.
+            let q = unsafe { q.range(r.clone()) };
+            for (k, j) in r.enumerate() {
+                let g = el.gather_gradient(j);
+                q[k] = [0, 1, 2].map(|a| mobility[j][a] * g[a]);
+            }
+            [0.0; 2]
+        });
+        let el = &mut self.elements;
+        el.element_divergences(on, &self.vector);
+        let kd = Shared::new(&mut self.kd);
+        let (el, d, m, p) = (&self.elements, &self.d, &self.compress, &self.precond);
+        blocks(on, self.x.len(), &mut self.per_block, |r| {
+            // SAFETY: block r is this call's only.
+            let kd = unsafe { kd.range(r.clone()) };
+            let mut dkd = 0.0;
+            for (k, i) in r.enumerate() {
+                kd[k] = if p[i] > 0.0 {
+                    m[i] * d[i] + dt * dt * el.gather_weighted(i)
+                } else {
+                    0.0
+                };
+                dkd += d[i] * kd[k];
+            }
+            [dkd, 0.0]
+        });
+        let blocks = self.x.len().div_ceil(BLOCK);
+        self.per_block[..blocks].iter().map(|p| p[0]).sum()
     }
 
     /// The increments' nodal force f = −Dᵀ δp added to both phases' accelerations through
     /// their responses, and the liquid's nodal rate δp / Δt.
     fn apply_forces<E: Element, R: Real>(&mut self, g: &mut Grid<R>, dt: f64) {
-        self.elements
-            .transpose_divergence(&self.weights, &self.x, &mut self.vector);
+        self.elements.element_sums(None, &self.weights, &self.x);
         let gl = g.liquid.as_mut().expect("a two-phase case's nodes");
         for j in 0..g.acc.len() {
+            let force = self.elements.gather_gradient(j);
             for a in 0..E::DIM {
-                let f = -self.vector[j][a];
+                let f = -force[a];
                 let [rs, rw] = self.response[j][a];
                 g.acc[j][a] += R::of(rs * f);
                 gl.acc[j][a] += R::of(rw * f);
@@ -436,7 +517,9 @@ impl SemiImplicit {
 }
 
 /// The mesh's elements as the solve reads them, in f64 (linear elements: one gradient per
-/// node), and those that hold saturated points this step.
+/// node), those that hold saturated points this step, and each node's elements. Both operators
+/// form one value per element, then gather each node's from its elements in element order:
+/// no scattered additions, so the nodes can be shared out among threads.
 #[derive(Debug, Clone)]
 struct Elements {
     /// Per element, its nodes (the fourth repeats the first in a triangle, with weight and
@@ -446,73 +529,157 @@ struct Elements {
     grad: Vec<[[f64; 3]; 4]>,
     /// The elements with saturated points this step, in order (capacity: every element).
     live: Vec<u32>,
+    /// Where each node's entries of `incident` start (nodes + 1).
+    node_start: Vec<u32>,
+    /// Per node, 4 e + k for each element e it is corner k of, in element order.
+    incident: Vec<u32>,
+    /// Per entry of `incident`, its element.
+    inc_element: Vec<u32>,
+    /// Per entry of `incident`, ∇N_k of its element (the gathers read it in a row).
+    inc_grad: Vec<[f64; 3]>,
+    /// Per entry of `incident`, this step's W_ek.
+    inc_weight: Vec<f64>,
+    /// Per element, the operator's value (0 for an element that is not live).
+    value: Vec<f64>,
+    /// Per block of live elements, nothing: the element passes' result slots.
+    done: Vec<[f64; 2]>,
 }
 
 impl Elements {
     fn of<E: Element, R: Real>(mesh: &Mesh<E, R>) -> Self {
-        let n = mesh.elements();
+        let (n, nodes) = (mesh.elements(), mesh.nodes());
         let mut corners = vec![[0u32; 4]; n];
         let mut grad = vec![[[0.0; 3]; 4]; n];
+        let mut start = vec![0u32; nodes + 1];
         for e in 0..n {
             let (c, g) = (mesh.corners[e].as_ref(), mesh.grad[e].as_ref());
             corners[e] = [0, 1, 2, 3].map(|k| c[k.min(c.len() - 1)]);
             for k in 0..c.len() {
                 grad[e][k] = g[k].map(|v| v.f64());
+                start[c[k] as usize + 1] += 1;
             }
         }
+        for i in 0..nodes {
+            start[i + 1] += start[i];
+        }
+        let mut incident = vec![0u32; start[nodes] as usize];
+        let mut next = start.clone();
+        for e in 0..n {
+            for (k, &c) in mesh.corners[e].as_ref().iter().enumerate() {
+                incident[next[c as usize] as usize] = (4 * e + k) as u32;
+                next[c as usize] += 1;
+            }
+        }
+        let inc_element = incident.iter().map(|&ek| ek / 4).collect();
+        let inc_grad = incident
+            .iter()
+            .map(|&ek| grad[ek as usize / 4][ek as usize % 4])
+            .collect();
+        let inc_weight = vec![0.0; incident.len()];
         Elements {
             corners,
             grad,
             live: Vec::with_capacity(n),
+            node_start: start,
+            incident,
+            inc_element,
+            inc_grad,
+            inc_weight,
+            value: vec![0.0; n],
+            done: vec![[0.0; 2]; n.div_ceil(BLOCK)],
         }
     }
 
-    /// (D q)_i = Σ_e W_ei ∇·q over the live elements (linear elements: one divergence each),
-    /// in element order.
-    fn divergence(&self, weights: &[[f64; 4]], q: &[[f64; 3]], out: &mut [f64]) {
-        out.fill(0.0);
-        for &e in &self.live {
-            let e = e as usize;
-            let (c, g, w) = (&self.corners[e], &self.grad[e], &weights[e]);
-            let mut div = 0.0;
-            for j in 0..4 {
-                let q = &q[c[j] as usize];
-                div += g[j][0] * q[0] + g[j][1] * q[1] + g[j][2] * q[2];
-            }
-            for i in 0..4 {
-                out[c[i] as usize] += w[i] * div;
-            }
+    /// Node `i`'s entries of `incident`.
+    #[inline]
+    fn entries(&self, i: usize) -> std::ops::Range<usize> {
+        self.node_start[i] as usize..self.node_start[i + 1] as usize
+    }
+
+    /// Each entry's W_ek of this step's `weights`.
+    fn take_weights(&mut self, weights: &[[f64; 4]]) {
+        for (w, &ek) in self.inc_weight.iter_mut().zip(&self.incident) {
+            *w = weights[ek as usize / 4][ek as usize % 4];
         }
     }
 
-    /// (Dᵀ x)_j = Σ_e ∇N_j Σ_k W_ek x_k over the live elements, in element order.
-    fn transpose_divergence(&self, weights: &[[f64; 4]], x: &[f64], out: &mut [[f64; 3]]) {
-        out.fill([0.0; 3]);
-        for &e in &self.live {
-            let e = e as usize;
-            let (c, g, w) = (&self.corners[e], &self.grad[e], &weights[e]);
-            let s = w[0] * x[c[0] as usize]
-                + w[1] * x[c[1] as usize]
-                + w[2] * x[c[2] as usize]
-                + w[3] * x[c[3] as usize];
-            for j in 0..4 {
-                let o = &mut out[c[j] as usize];
-                for a in 0..3 {
-                    o[a] += g[j][a] * s;
+    /// Each live element's value Σ_k W_ek x_k (the element's share of Dᵀ x).
+    fn element_sums(&mut self, on: Option<&Team>, weights: &[[f64; 4]], x: &[f64]) {
+        let (value, live, corners) = (Shared::new(&mut self.value), &self.live, &self.corners);
+        blocks(on, live.len(), &mut self.done, |r| {
+            for &e in &live[r] {
+                let (e, c, w) = (e as usize, &corners[e as usize], &weights[e as usize]);
+                let s = w[0] * x[c[0] as usize]
+                    + w[1] * x[c[1] as usize]
+                    + w[2] * x[c[2] as usize]
+                    + w[3] * x[c[3] as usize];
+                // SAFETY: the live elements are distinct, each in one block.
+                unsafe { value.write(e, s) };
+            }
+            [0.0; 2]
+        });
+    }
+
+    /// Each live element's divergence of the nodal field q, Σ_j ∇N_j · q_j.
+    fn element_divergences(&mut self, on: Option<&Team>, q: &[[f64; 3]]) {
+        let (value, live) = (Shared::new(&mut self.value), &self.live);
+        let (corners, grad) = (&self.corners, &self.grad);
+        blocks(on, live.len(), &mut self.done, |r| {
+            for &e in &live[r] {
+                let (c, g) = (&corners[e as usize], &grad[e as usize]);
+                let mut div = 0.0;
+                for j in 0..4 {
+                    let q = &q[c[j] as usize];
+                    div += g[j][0] * q[0] + g[j][1] * q[1] + g[j][2] * q[2];
                 }
+                // SAFETY: the live elements are distinct, each in one block.
+                unsafe { value.write(e as usize, div) };
+            }
+            [0.0; 2]
+        });
+    }
+
+    /// (Dᵀ x)_j = Σ_e ∇N_j s_e over node j's elements, s_e from [`Elements::element_sums`].
+    #[inline]
+    fn gather_gradient(&self, j: usize) -> [f64; 3] {
+        let r = self.entries(j);
+        let mut sum = [0.0; 3];
+        for (g, &e) in self.inc_grad[r.clone()].iter().zip(&self.inc_element[r]) {
+            let s = self.value[e as usize];
+            sum[0] += g[0] * s;
+            sum[1] += g[1] * s;
+            sum[2] += g[2] * s;
+        }
+        sum
+    }
+
+    /// (D q)_i = Σ_e W_ei div_e over node i's elements, div_e from
+    /// [`Elements::element_divergences`].
+    #[inline]
+    fn gather_weighted(&self, i: usize) -> f64 {
+        let r = self.entries(i);
+        let mut sum = 0.0;
+        for (w, &e) in self.inc_weight[r.clone()].iter().zip(&self.inc_element[r]) {
+            sum += w * self.value[e as usize];
+        }
+        sum
+    }
+}
+
+/// `f` over the blocks of [`BLOCK`] of `0..n`, its results into `out`: on the team where `on`
+/// names it, else in order on this thread. Each block's result is the same either way.
+fn blocks<F: Fn(std::ops::Range<usize>) -> [f64; 2] + Sync>(
+    on: Option<&Team>,
+    n: usize,
+    out: &mut [[f64; 2]],
+    f: F,
+) {
+    match on {
+        Some(team) => team.for_blocks(n, BLOCK, out, f),
+        None => {
+            for (b, o) in out.iter_mut().enumerate().take(n.div_ceil(BLOCK)) {
+                *o = f(b * BLOCK..((b + 1) * BLOCK).min(n));
             }
         }
     }
-}
-
-/// z = P r, P diagonal.
-fn precondition(p: &[f64], r: &[f64], z: &mut [f64]) {
-    for ((z, &p), &r) in z.iter_mut().zip(p).zip(r) {
-        *z = p * r;
-    }
-}
-
-/// Σ a_i b_i, in order.
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
