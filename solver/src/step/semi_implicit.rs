@@ -202,8 +202,7 @@ impl SemiImplicit {
         dt: f64,
     ) -> Result<(), NotConverged> {
         self.element_weights(team, layout, mesh, p, fluids);
-        self.node_coefficients(g, (fixed, liquid_fixed), dt);
-        self.right_hand_side::<E, R>(g, (fixed, liquid_fixed), dt);
+        self.node_terms::<E, R>(g, (fixed, liquid_fixed), dt);
         self.preconditioner(dt);
         let (iterations, residual) = self.conjugate_gradients(team, dt);
         let c = &mut self.counts;
@@ -280,8 +279,9 @@ impl SemiImplicit {
     }
 
     /// Per node and component, each phase's acceleration per unit force (the grid update's
-    /// implicit-drag system without damping, its fixities kept) and the mixture's mobility γ.
-    fn node_coefficients<R: Real>(
+    /// implicit-drag system without damping, its fixities kept) and the mixture's mobility γ;
+    /// then b = Δt D q*, q* the mixture flux at the explicit end-of-step velocities.
+    fn node_terms<E: Element, R: Real>(
         &mut self,
         g: &Grid<R>,
         (fixed, liquid_fixed): (&[[bool; 3]], &[[bool; 3]]),
@@ -291,6 +291,7 @@ impl SemiImplicit {
         let eps = g.empty_below.f64();
         for j in 0..g.mass.len() {
             let (ms, mw) = (g.mass[j].f64(), gl.mass[j].f64());
+            self.vector[j] = [0.0; 3];
             if ms <= eps || mw <= 0.0 {
                 self.response[j] = [[0.0; 2]; 3];
                 self.mobility[j] = [0.0; 3];
@@ -311,25 +312,6 @@ impl SemiImplicit {
                 self.response[j][a] = rs_rw;
                 self.mobility[j][a] = (1.0 - n) * rs_rw[0] + n * rs_rw[1];
             }
-        }
-    }
-
-    /// b = Δt D q*, q* the mixture flux at the explicit end-of-step velocities.
-    fn right_hand_side<E: Element, R: Real>(
-        &mut self,
-        g: &Grid<R>,
-        (fixed, liquid_fixed): (&[[bool; 3]], &[[bool; 3]]),
-        dt: f64,
-    ) {
-        let gl = g.liquid.as_ref().expect("a two-phase case's nodes");
-        let eps = g.empty_below.f64();
-        for j in 0..g.mass.len() {
-            let (ms, mw) = (g.mass[j].f64(), gl.mass[j].f64());
-            self.vector[j] = [0.0; 3];
-            if ms <= eps || mw <= 0.0 {
-                continue;
-            }
-            let n = gl.mass_n[j].f64() / mw;
             for a in 0..E::DIM {
                 let v = if fixed[j][a] {
                     0.0
