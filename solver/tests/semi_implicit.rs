@@ -201,15 +201,21 @@ fn one_and_two_threads_write_the_same_bytes() {
         t.replace("points_per_element = 4", "points_per_element = 1")
             .replace("end_tv = 1.0", "end_tv = 0.1")
     });
-    let mut written = Vec::new();
+    let reports = same_bytes_on_one_and_two_threads(&input, &["--scheme", "semi-implicit"]);
+    assert_eq!(reports[0]["scheme"]["name"], "semi-implicit");
+}
+
+/// Runs `input` with `args` on one and on two threads, asserts that they write the same files
+/// (more than three), and returns both runs' `run.json`.
+fn same_bytes_on_one_and_two_threads(input: &Path, args: &[&str]) -> Vec<serde_json::Value> {
+    let dir = input.parent().unwrap();
+    let (mut written, mut reports) = (Vec::new(), Vec::new());
     for threads in ["1", "2"] {
-        let out = dir.path().join(format!("t{threads}"));
-        let o = common::solve(
-            &input,
-            &out,
-            &["--scheme", "semi-implicit", "--threads", threads],
-        );
+        let out = dir.join(format!("t{threads}"));
+        let o = common::solve(input, &out, &[args, &["--threads", threads]].concat());
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let report = std::fs::read_to_string(out.join("run.json")).unwrap();
+        reports.push(serde_json::from_str(&report).unwrap());
         written.push(common::outputs(&out));
     }
     assert!(written[0].len() > 3);
@@ -217,6 +223,7 @@ fn one_and_two_threads_write_the_same_bytes() {
         written[0] == written[1],
         "the files differ between 1 and 2 threads"
     );
+    reports
 }
 
 /// A column of 4,200 tetrahedra (past the count from which the solve's passes run on the
@@ -237,21 +244,10 @@ fn a_solve_shared_among_threads_writes_the_same_bytes() {
         .replace("physical = \"bottom\"", "plane = \"y = 0\"");
     let input = dir.path().join("tall.toml");
     std::fs::write(&input, text).unwrap();
-    let mut written = Vec::new();
-    for threads in ["1", "2"] {
-        let out = dir.path().join(format!("t{threads}"));
-        let o = common::solve(&input, &out, &["--threads", threads]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let report: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    for report in same_bytes_on_one_and_two_threads(&input, &[]) {
         assert!(report["elements"].as_u64().unwrap() >= 4096);
         assert!(report["scheme"]["iterations"].as_u64().unwrap() > 0);
-        written.push(common::outputs(&out));
     }
-    assert!(
-        written[0] == written[1],
-        "the files differ between 1 and 2 threads"
-    );
 }
 
 /// What the scheme does not model is refused by name before any output: a dry case, the

@@ -142,8 +142,7 @@ pub struct SemiImplicit {
 }
 
 impl SemiImplicit {
-    /// The solve `case` asks for on a mesh of `elements` elements and `nodes` nodes (`None`
-    /// under the explicit scheme).
+    /// The solve `case` asks for on `mesh` (`None` under the explicit scheme).
     pub fn of<E: Element, R: Real>(
         case: &crate::input::case::Case,
         mesh: &Mesh<E, R>,
@@ -179,11 +178,6 @@ impl SemiImplicit {
             per_block: vec![[0.0; 2]; nodes.div_ceil(BLOCK)],
             counts: SolveCounts::default(),
         }
-    }
-
-    /// The pressure increment of this step at each node (kPa), after [`SemiImplicit::correct`].
-    pub fn increment(&self) -> &[f64] {
-        &self.x
     }
 
     /// Solves for this step's nodal pressure increments and corrects the nodes' accelerations
