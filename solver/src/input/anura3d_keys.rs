@@ -237,25 +237,36 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (MaterialKey, "PEAK_DILATANCY_ANGLE", Modelled),
     (MaterialKey, "RESIDUAL_DILATANCY_ANGLE", Modelled),
     (MaterialKey, "SHAPE_FACTOR", Modelled),
+    // Modified Cam Clay (modified_cam_clay): Anura3D names the law but its reader takes no
+    // parameters for it (they go to an external DLL), so these keys are this project's.
+    (MaterialKey, "SHEAR_MODULUS", Modelled),
+    (MaterialKey, "LAMBDA", Modelled),
+    (MaterialKey, "KAPPA", Modelled),
+    (MaterialKey, "CRITICAL_STATE_SLOPE", Modelled),
+    (MaterialKey, "INITIAL_VOID_RATIO", Modelled),
+    (MaterialKey, "OCR", Modelled),
+    (MaterialKey, "PRECONSOLIDATION_PRESSURE", Modelled),
+    (MaterialKey, "MINIMUM_PRESSURE", Modelled),
+    (MaterialKey, "MAXIMUM_PRESSURE", Modelled),
     (
         MaterialKey,
         "MATERIAL_MODEL_DLL",
-        Ignored("external soil model; only linear_elasticity, mohr_coulomb and strain_softening_mohr_coulomb are accepted"),
+        Ignored("external soil model; only linear_elasticity, mohr_coulomb, strain_softening_mohr_coulomb and modified_cam_clay are accepted"),
     ),
     (
         MaterialKey,
         "UMAT_DIMENSION",
-        Ignored("external soil model; only linear_elasticity, mohr_coulomb and strain_softening_mohr_coulomb are accepted"),
+        Ignored("external soil model; only linear_elasticity, mohr_coulomb, strain_softening_mohr_coulomb and modified_cam_clay are accepted"),
     ),
     (
         MaterialKey,
         "MATERIAL_PARAMETER_SOLID_*",
-        Ignored("external soil model parameters; only linear_elasticity, mohr_coulomb and strain_softening_mohr_coulomb are accepted"),
+        Ignored("external soil model parameters; only linear_elasticity, mohr_coulomb, strain_softening_mohr_coulomb and modified_cam_clay are accepted"),
     ),
     (
         MaterialKey,
         "INITIAL_STATE_VARIABLE_SOLID_*",
-        Ignored("external soil model state; only linear_elasticity, mohr_coulomb and strain_softening_mohr_coulomb are accepted"),
+        Ignored("external soil model state; only linear_elasticity, mohr_coulomb, strain_softening_mohr_coulomb and modified_cam_clay are accepted"),
     ),
     (
         MaterialKey,

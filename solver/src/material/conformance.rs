@@ -7,7 +7,8 @@
 //!   of a parameter's range on its own ([`crate::material::definition::Parameter::low`],
 //!   `high`, and NaN) refused;
 //! - the elastic limit: a small increment from a stress well inside the yield surface adds the
-//!   elastic stiffness's increment;
+//!   elastic stiffness's increment (for a law with a pressure-dependent elasticity,
+//!   [`ConstitutiveLaw::elastic_tangent`], the tangent's, to second order);
 //! - consistency: after an increment whose elastic trial lies beyond the surface, the stress
 //!   lies on it or inside (within round-off scaled to the stress), for the state the update
 //!   started from (explicit updates, as strain softening) or the one it ends with;
@@ -210,9 +211,7 @@ impl<'a, D: LawDefinition> Suite<'a, D> {
 
     /// The elastic stress increment of the strain increment `de` (f64).
     fn stiffness(&self, de: &[f64; 6]) -> [f64; 6] {
-        let tr = self.lambda * (de[0] + de[1] + de[2]);
-        let g2 = 2.0 * self.shear;
-        std::array::from_fn(|c| if c < 3 { tr + g2 * de[c] } else { g2 * de[c] })
+        stiffness(self.lambda, self.shear, de)
     }
 
     /// The stress and state after each step of `path` in precision `R` (the start first).
@@ -307,8 +306,21 @@ impl<'a, D: LawDefinition> Suite<'a, D> {
                 };
                 let dir: [f64; 6] = std::array::from_fn(|_| rng.uniform());
                 let size = norm(&self.stiffness(&dir));
-                let de = dir.map(|x| R::of(x * 0.25 * room / size));
-                let want = add(&s.map(R::f64), &self.stiffness(&de.map(R::f64)));
+                // A pressure-dependent elasticity: its tangent, on an increment a thousand
+                // times smaller, with the curvature's second order allowed (4 |Δσ|² / |σ|
+                // bounds it for K ∝ p: a few thousandths of the increment).
+                let tangent = law.elastic_tangent(&s, &state);
+                let fraction = if tangent.is_some() { 2.5e-4 } else { 0.25 };
+                let de = dir.map(|x| R::of(x * fraction * room / size));
+                let (increment, curvature) = match tangent {
+                    None => (self.stiffness(&de.map(R::f64)), 0.0),
+                    Some((bulk, shear)) => {
+                        let d = stiffness(bulk - 2.0 * shear / 3.0, shear, &de.map(R::f64));
+                        let n = norm(&d);
+                        (d, 4.0 * n * n / norm(&s.map(R::f64)).max(f64::MIN_POSITIVE))
+                    }
+                };
+                let want = add(&s.map(R::f64), &increment);
                 if law
                     .yield_function(&want.map(R::of), &state)
                     .is_some_and(|f| f > R::ZERO)
@@ -317,7 +329,8 @@ impl<'a, D: LawDefinition> Suite<'a, D> {
                 }
                 let mut got = s;
                 law.update(&mut got, &de, &mut state.clone());
-                let tolerance = self.tolerances.elastic * R::EPSILON * (norm(&want) + room);
+                let tolerance =
+                    self.tolerances.elastic * R::EPSILON * (norm(&want) + room) + curvature;
                 let off = distance(&got.map(R::f64), &want);
                 if off > tolerance {
                     return Err(self.fail(
@@ -541,6 +554,14 @@ fn rotate(q: &[[f64; 3]; 3], s: &[f64; 6]) -> [f64; 6] {
             .sum()
     };
     [r(0, 0), r(1, 1), r(2, 2), r(0, 1), r(1, 2), r(2, 0)]
+}
+
+/// The stress increment of the strain increment `de` for Lamé's `lambda` and shear modulus
+/// `shear`.
+fn stiffness(lambda: f64, shear: f64, de: &[f64; 6]) -> [f64; 6] {
+    let tr = lambda * (de[0] + de[1] + de[2]);
+    let g2 = 2.0 * shear;
+    std::array::from_fn(|c| if c < 3 { tr + g2 * de[c] } else { g2 * de[c] })
 }
 
 /// The sum of two tensors.

@@ -151,4 +151,11 @@ pub trait ConstitutiveLaw<R: Real>: Debug + Clone + Copy + PartialEq + Send + Sy
     /// elastic domain, zero on the surface an update returns to, positive beyond; the largest
     /// of them where the surface has several (a cut-off). `None` for a law without one.
     fn yield_function(&self, stress: &[R; 6], state: &[R]) -> Option<R>;
+
+    /// The bulk and shear moduli (kPa) of the elastic response at `stress` and `state`, for a
+    /// law whose elasticity depends on them (pressure-dependent, as Cam Clay's); `None`
+    /// (the default): the constant ones of [`LawDefinition::elastic`].
+    fn elastic_tangent(&self, _stress: &[R; 6], _state: &[R]) -> Option<(f64, f64)> {
+        None
+    }
 }

@@ -8,8 +8,11 @@
 //! (plasticity's hardening, back stress) declares how many values it keeps per point and gets
 //! that slice of the particles' state slab at each update.
 
-use crate::material::definition::{keys_of, ConstitutiveLaw, LawDefinition, ParameterError};
+use crate::material::definition::{
+    keys_of, ConstitutiveLaw, LawDefinition, Parameter, ParameterError,
+};
 use crate::material::linear_elastic::{LinearElastic, LinearElasticSpec};
+use crate::material::modified_cam_clay::ModifiedCamClaySpec;
 use crate::material::mohr_coulomb::MohrCoulombSpec;
 use crate::material::strain_softening_mohr_coulomb::{StrainSofteningMohrCoulombSpec, Strength};
 use crate::real::Real;
@@ -53,6 +56,15 @@ macro_rules! laws {
                 const KEYS: [&str; <$spec as LawDefinition>::PARAMETERS.len()] =
                     keys_of(<$spec as LawDefinition>::PARAMETERS);
                 return Some(&KEYS);
+            })+
+            None
+        }
+
+        /// The parameters of the law `name` ([`LawDefinition::PARAMETERS`]: keys, units,
+        /// ranges, defaults); `None` for an unknown law.
+        pub fn parameter_list(name: &str) -> Option<&'static [Parameter]> {
+            $(if name == <$spec as LawDefinition>::NAME {
+                return Some(<$spec as LawDefinition>::PARAMETERS);
             })+
             None
         }
@@ -153,6 +165,8 @@ laws! {
     /// Mohr–Coulomb with exponential strain softening
     /// ([`crate::material::strain_softening_mohr_coulomb`]).
     StrainSofteningMohrCoulomb => StrainSofteningMohrCoulombSpec,
+    /// Modified Cam Clay ([`crate::material::modified_cam_clay`]).
+    ModifiedCamClay => ModifiedCamClaySpec,
 }
 
 /// Why a law cannot be built.
@@ -442,6 +456,15 @@ mod tests {
                         own.yield_function(&a.0, &a.1)
                     );
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn the_gom_reader_takes_every_key_of_every_law() {
+        for name in KNOWN {
+            for k in keys(name).unwrap() {
+                assert!(mpm_shared::model::is_material_key(k), "{name}: {k}");
             }
         }
     }

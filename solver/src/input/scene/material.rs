@@ -27,8 +27,8 @@ pub(super) const TABLE: Table = Table {
     keys: &[
         key("physical", "string", "required", "", "the material group it fills (also the material's name)"),
         key("density", "float", "required", "kg/m³", "density of the material when dry, of its grains when saturated"),
-        key("young", "float", "required", "kPa", "Young's modulus"),
-        key("poisson", "float", "required", "", "Poisson's ratio"),
+        key("young", "float", "required where the law takes it", "kPa", "Young's modulus"),
+        key("poisson", "float", "required where the law takes it", "", "Poisson's ratio"),
         key("law", "string", "\"linear_elasticity\"", "", "the constitutive law by Anura3D's name; its parameters are listed below"),
         key("points_per_element", "integer", "4 (tetrahedra), 3 (triangles)", "", "material points per element"),
         key("liquid", "table", "none (dry)", "", "the pore liquid of a saturated material: `[material.liquid]`"),
@@ -58,8 +58,8 @@ pub(super) const LIQUID_TABLE: Table = Table {
 pub(super) struct Material {
     physical: String,
     density: f64,
-    young: f64,
-    poisson: f64,
+    young: Option<f64>,
+    poisson: Option<f64>,
     /// The law by Anura3D's name (`crate::material::law::KNOWN`).
     law: String,
     /// The law parameters given (Anura3D's keys), in the order written.
@@ -88,12 +88,12 @@ struct Liquid {
 }
 
 /// The default of law parameter `key` (Anura3D's) of law `law` when the scene leaves it out:
-/// Mohr–Coulomb's dilatancy angle and tensile strength are 0; the others have none.
-pub(super) fn law_default(law: &str, key: &str) -> Option<f64> {
-    match (law, key) {
-        ("mohr_coulomb", "DILATANCY_ANGLE" | "TENSILE_STRENGTH") => Some(0.0),
-        _ => None,
-    }
+/// the registry's ([`crate::material::definition::Parameter::default`]).
+fn law_default(law: &str, key: &str) -> Option<f64> {
+    law::parameter_list(law)?
+        .iter()
+        .find(|p| p.key == key)
+        .and_then(|p| p.default)
 }
 
 /// The law parameters of every law of the registry other than the elastic constants (which
@@ -233,8 +233,8 @@ impl<'de> Visitor<'de> for MaterialVisitor {
         Ok(Material {
             physical: physical.ok_or_else(|| need("physical"))?,
             density: density.ok_or_else(|| need("density"))?,
-            young: young.ok_or_else(|| need("young"))?,
-            poisson: poisson.ok_or_else(|| need("poisson"))?,
+            young,
+            poisson,
             law: law.unwrap_or_else(|| "linear_elasticity".into()),
             parameters,
             points_per_element: points.unwrap_or_default(),
@@ -249,8 +249,8 @@ impl Material {
     /// The value the scene gives law parameter `key` (Anura3D's), if any.
     fn given(&self, key: &str) -> Option<f64> {
         match key {
-            "YOUNG_MODULUS" => Some(self.young),
-            "POISSON_RATIO" => Some(self.poisson),
+            "YOUNG_MODULUS" => self.young,
+            "POISSON_RATIO" => self.poisson,
             k => self.parameters.iter().find(|p| p.0 == k).map(|p| p.1),
         }
     }
@@ -265,8 +265,10 @@ impl Material {
                 law::KNOWN.join(", ")
             )
         })?;
+        let elastic = [("young", "YOUNG_MODULUS"), ("poisson", "POISSON_RATIO")];
         if let Some((name, _)) = law_parameters()
             .iter()
+            .chain(&elastic)
             .find(|(_, k)| self.given(k).is_some() && !keys.contains(k))
         {
             return Err(format!(
@@ -335,10 +337,10 @@ pub struct MaterialInput {
     pub physical: String,
     /// Density (kg/m³): of the material when dry, of its grains when saturated.
     pub density: f64,
-    /// Young's modulus (kPa).
-    pub young: f64,
-    /// Poisson's ratio.
-    pub poisson: f64,
+    /// Young's modulus (kPa), where the law takes it.
+    pub young: Option<f64>,
+    /// Poisson's ratio, where the law takes it.
+    pub poisson: Option<f64>,
     /// The law with all its parameters (defaults filled in).
     pub law: LawSpec,
     /// Material points per element.

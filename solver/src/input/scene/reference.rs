@@ -79,15 +79,21 @@ fn write_laws(out: &mut String) {
          refused, and so is a missing one unless it has a default.\n",
     );
     for name in law::KNOWN {
-        let keys = law::keys(name).unwrap_or_default();
+        let parameters = law::parameter_list(name).unwrap_or_default();
         let _ = write!(
             out,
-            "\n#### `law = \"{name}\"`\n\n| Key | Anura3D key | Default |\n|---|---|---|\n"
+            "\n#### `law = \"{name}\"`\n\n| Key | Anura3D key | Default | Unit | Meaning |\n|---|---|---|---|---|\n"
         );
-        for k in keys {
-            let default = super::material::law_default(name, k)
-                .map_or("required".to_string(), |v| v.to_string());
-            let _ = writeln!(out, "| `{}` | `{k}` | {default} |", scene_key(k));
+        for p in parameters {
+            let default = p.default.map_or("required".to_string(), |v| v.to_string());
+            let _ = writeln!(
+                out,
+                "| `{}` | `{}` | {default} | {} | {} |",
+                scene_key(p.key),
+                p.key,
+                cell(p.unit),
+                cell(p.meaning)
+            );
         }
     }
 }

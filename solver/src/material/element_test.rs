@@ -1,0 +1,185 @@
+//! Element tests: one material point of any registered law driven along a laboratory path,
+//! strain or stress controlled per component, as a triaxial cell or an oedometer drives a
+//! sample. The axial direction is y (the solver's vertical); compression is positive in what
+//! the tests record (p, q, strains), as soil mechanics writes it.
+//!
+//! - [`undrained_triaxial`]: isochoric axial compression (ε_xx = ε_zz = −ε_yy / 2), the
+//!   effective stress path of a saturated sample whose water is incompressible.
+//! - [`drained_triaxial`]: axial compression at constant cell pressure (σ_xx = σ_zz fixed),
+//!   the lateral strain found each step by Newton's method on the law's own response.
+//! - [`oedometer`]: axial strain alone (no lateral strain), loading and unloading.
+
+use crate::material::law::{Law, LawSpec};
+
+/// One recorded state of an element test (compression positive; strains from the start).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Record {
+    /// Axial strain ε_a.
+    pub axial: f64,
+    /// Volumetric strain ε_v.
+    pub volumetric: f64,
+    /// Mean effective stress p' (kPa).
+    pub p: f64,
+    /// Deviator q = σ_a − σ_r (kPa; negative in extension).
+    pub q: f64,
+    /// The axial stress σ_a (kPa).
+    pub axial_stress: f64,
+    /// The law's state values after the step.
+    pub state: [f64; 4],
+}
+
+/// A sample: its law, stress (tension positive, xx yy zz xy yz zx) and state.
+#[derive(Debug, Clone)]
+pub struct Sample {
+    law: Law<f64>,
+    stress: [f64; 6],
+    state: Vec<f64>,
+    axial: f64,
+    volumetric: f64,
+}
+
+impl Sample {
+    /// A sample of `law` at the isotropic-or-not effective `stress` (compression positive
+    /// principal values: radial, axial), its state not set.
+    pub fn new(law: &LawSpec, radial: f64, axial: f64) -> Self {
+        Sample {
+            law: law.build(),
+            stress: [-radial, -axial, -radial, 0.0, 0.0, 0.0],
+            state: vec![0.0; law.state_len()],
+            axial: 0.0,
+            volumetric: 0.0,
+        }
+    }
+
+    /// The current record.
+    pub fn record(&self) -> Record {
+        let s = &self.stress;
+        let mut state = [0.0; 4];
+        for (to, from) in state.iter_mut().zip(&self.state) {
+            *to = *from;
+        }
+        Record {
+            axial: self.axial,
+            volumetric: self.volumetric,
+            p: -(s[0] + s[1] + s[2]) / 3.0,
+            q: (s[0] + s[2]) / 2.0 - s[1],
+            axial_stress: -s[1],
+            state,
+        }
+    }
+
+    /// The stress after the strain increment (radial, axial; compression positive) from the
+    /// current state, without taking it.
+    fn trial(&self, radial: f64, axial: f64) -> ([f64; 6], Vec<f64>) {
+        let (mut s, mut state) = (self.stress, self.state.clone());
+        self.law.update(
+            &mut s,
+            &[-radial, -axial, -radial, 0.0, 0.0, 0.0],
+            &mut state,
+        );
+        (s, state)
+    }
+
+    /// Takes the strain increment (radial, axial; compression positive).
+    pub fn strain(&mut self, radial: f64, axial: f64) {
+        let (s, state) = self.trial(radial, axial);
+        self.take(s, state, radial, axial);
+    }
+
+    fn take(&mut self, s: [f64; 6], state: Vec<f64>, radial: f64, axial: f64) {
+        self.stress = s;
+        self.state = state;
+        self.axial += axial;
+        self.volumetric += axial + 2.0 * radial;
+    }
+
+    /// Takes the axial strain increment `axial` with the radial stress held: the radial
+    /// strain by Newton's method (a secant slope from a probe), to a thousandth of a Pa.
+    /// `None` when it does not converge in 50 iterations.
+    pub fn strain_at_radial_stress(&mut self, axial: f64) -> Option<()> {
+        let target = self.stress[0];
+        let mut radial = -axial / 2.0;
+        let mut probe = radial + 1e-7;
+        let (s, _) = self.trial(probe, axial);
+        let mut last = (probe, s[0] - target);
+        for _ in 0..50 {
+            let (s, state) = self.trial(radial, axial);
+            let r = s[0] - target;
+            if r.abs() <= 1e-6 {
+                self.take(s, state, radial, axial);
+                return Some(());
+            }
+            let slope = (r - last.1) / (radial - last.0);
+            if !(slope.is_finite() && slope != 0.0) {
+                return None;
+            }
+            last = (radial, r);
+            probe = radial - r / slope;
+            radial = probe;
+        }
+        None
+    }
+}
+
+/// An isochoric (undrained) triaxial compression of `steps` axial increments `step`.
+pub fn undrained_triaxial(sample: &mut Sample, step: f64, steps: usize) -> Vec<Record> {
+    let mut out = vec![sample.record()];
+    for _ in 0..steps {
+        sample.strain(-step / 2.0, step);
+        out.push(sample.record());
+    }
+    out
+}
+
+/// A drained triaxial compression of `steps` axial increments `step` at the sample's radial
+/// stress; it stops early where the lateral strain cannot be found (the sample has failed).
+pub fn drained_triaxial(sample: &mut Sample, step: f64, steps: usize) -> Vec<Record> {
+    let mut out = vec![sample.record()];
+    for _ in 0..steps {
+        if sample.strain_at_radial_stress(step).is_none() {
+            break;
+        }
+        out.push(sample.record());
+    }
+    out
+}
+
+/// An oedometer test: the axial strain increments of `path` in turn (positive: loading),
+/// each cut into increments no larger than `step`.
+pub fn oedometer(sample: &mut Sample, path: &[f64], step: f64) -> Vec<Record> {
+    let mut out = vec![sample.record()];
+    for &leg in path {
+        let n = (leg.abs() / step).ceil().max(1.0) as usize;
+        for _ in 0..n {
+            sample.strain(0.0, leg / n as f64);
+            out.push(sample.record());
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_elastic_sample_follows_hookes_law() {
+        let law = LawSpec::linear_elastic(1e4, 0.25).unwrap();
+        let mut s = Sample::new(&law, 100.0, 100.0);
+        let r = drained_triaxial(&mut s, 1e-4, 10);
+        let last = r.last().unwrap();
+        // Drained: Δq = E ε_a, ε_v = (1 − 2ν) ε_a.
+        assert!((last.q - 1e4 * 1e-3).abs() < 1e-6, "{last:?}");
+        assert!((last.volumetric - 0.5e-3).abs() < 1e-9, "{last:?}");
+        let mut s = Sample::new(&law, 100.0, 100.0);
+        let r = undrained_triaxial(&mut s, 1e-4, 10);
+        // Undrained: p constant, q = 3 G ε_a.
+        let last = r.last().unwrap();
+        assert!((last.p - 100.0).abs() < 1e-9 && (last.q - 3.0 * 4e3 * 1e-3).abs() < 1e-6);
+        let mut s = Sample::new(&law, 100.0, 100.0);
+        let r = oedometer(&mut s, &[1e-3, -1e-3], 1e-4);
+        assert_eq!(r.len(), 21);
+        assert!((r[10].axial_stress - 100.0 - 1.2e4 * 1e-3).abs() < 1e-6);
+        assert!((r[20].axial_stress - 100.0).abs() < 1e-9);
+    }
+}
