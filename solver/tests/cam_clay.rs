@@ -212,7 +212,9 @@ fn a_clay_column_settles_as_the_element_oedometer_says() {
         "dry column: strain {strain:.5} (element {want_strain:.5}), σ'v {sv:.3}, σ'h {sh:.3} (element {want_h:.3})"
     );
     assert_eq!(state_len, 2);
-    assert!((sv / (START.0 + LOAD) - 1.0).abs() < 1e-2, "σ'v {sv}");
+    // The points of linear tetrahedra in the lower part carry about 0.5–1 % more than the load
+    // (linear elasticity too); each point's own path is what is compared.
+    assert!((sv / (START.0 + LOAD) - 1.0).abs() < 2e-2, "σ'v {sv}");
     assert!(
         (sh / want_h - 1.0).abs() < 1e-2,
         "σ'h {sh} against {want_h}"
@@ -240,6 +242,33 @@ fn a_clay_column_settles_as_the_element_oedometer_says() {
     assert!(
         (sh32 / want_h32 - 1.0).abs() < 1e-2,
         "f32 {sh32} against {want_h32}"
+    );
+}
+
+/// The same column on a background grid (quadratic B-splines, 0.1 m cells).
+#[test]
+fn on_the_background_grid_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = scene(dir.path(), "", CLAY);
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("[time]", "[grid]\ncell = 0.1\nbasis = \"bspline2\"\n[time]");
+    std::fs::write(&path, text).unwrap();
+    let (strain, sv, sh, _) = run::<f64>(&path, &dir.path().join("grid"));
+    let (want_strain, want_h) = element_answer(sv);
+    println!(
+        "grid: strain {strain:.5} (element {want_strain:.5}), σ'v {sv:.3}, σ'h {sh:.3} (element {want_h:.3})"
+    );
+    assert!((sv / (START.0 + LOAD) - 1.0).abs() < 3e-2, "σ'v {sv}");
+    assert!(
+        (sh / want_h - 1.0).abs() < 1e-2,
+        "σ'h {sh} against {want_h}"
+    );
+    // The grid's column overshoots the load a little and comes back, and unloading recovers
+    // only κ/λ of the strain: 4 % more than the loading path's at 0.4 s of ramp, 1.3 % at 1 s.
+    assert!(
+        (strain / want_strain - 1.0).abs() < 5e-2,
+        "{strain} against {want_strain}"
     );
 }
 
