@@ -263,6 +263,27 @@ fn killed_k0_runs_resume_byte_identical() {
     });
 }
 
+/// A Modified Cam Clay column from K0 stresses: the law's state (p_c and e, set at the first
+/// step) goes through the checkpoint. (p_max = 200 kPa: a step no longer than the elastic
+/// column's, whose step counts the plans abort at.)
+#[test]
+fn killed_cam_clay_runs_resume_byte_identical() {
+    let clay = |t: String| {
+        let t = t
+            .replace(
+                "young = 10000.0\npoisson = 0.3\npoints_per_element = 1",
+                "law = \"modified_cam_clay\"\npoisson = 0.3\nlambda = 0.2\nkappa = 0.04\n\
+                 critical_state_slope = 1.0\ninitial_void_ratio = 1.2\nocr = 1.5\n\
+                 maximum_pressure = 200.0\npoints_per_element = 1\nk0 = 0.6",
+            )
+            .replace("[gravity]\n", "[gravity]\nk0_surface = 0.8\n");
+        assert!(t.contains("modified_cam_clay") && t.contains("k0_surface = 0.8"));
+        t
+    };
+    killed_and_resumed_with("column_dry", "f64", &clay);
+    killed_and_resumed_with("column_dry", "f32", &clay);
+}
+
 /// The consolidation job (two runs, the second into `workshop/`, and its records in
 /// `consolidation.csv`), killed in either run.
 #[test]
