@@ -494,6 +494,7 @@ pub fn is_material_key(k: &str) -> bool {
         "KAPPA",
         "CRITICAL_STATE_SLOPE",
         "INITIAL_VOID_RATIO",
+        "NCL_INTERCEPT",
         "OCR",
         "PRECONSOLIDATION_PRESSURE",
         "MINIMUM_PRESSURE",

@@ -20,7 +20,7 @@ use mpm_solve::material::modified_cam_clay::ModifiedCamClaySpec;
 /// constant `shear`, isotropically over-consolidated to `ocr`.
 fn clay(ocr: f64, shear: f64) -> Result<ModifiedCamClaySpec, Box<dyn Error>> {
     Ok(ModifiedCamClaySpec::new(
-        0.3, shear, 0.2, 0.04, 1.0, 1.2, ocr, 0.0, 1.0, 2000.0,
+        0.3, shear, 0.2, 0.04, 1.0, 1.2, 0.0, ocr, 0.0, 1.0, 2000.0,
     )?)
 }
 

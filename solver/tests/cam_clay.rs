@@ -136,7 +136,7 @@ fn clay() -> LawSpec {
     LawSpec::by_name("modified_cam_clay", &|k| {
         Some(match k {
             "POISSON_RATIO" => 0.3,
-            "SHEAR_MODULUS" | "PRECONSOLIDATION_PRESSURE" => 0.0,
+            "SHEAR_MODULUS" | "PRECONSOLIDATION_PRESSURE" | "NCL_INTERCEPT" => 0.0,
             "LAMBDA" => 0.2,
             "KAPPA" => 0.04,
             "CRITICAL_STATE_SLOPE" => 1.0,
@@ -359,7 +359,7 @@ fn the_scene_exports_to_a_gom_that_reads_back_the_same_law() {
         text.contains(
             "$$MATERIAL_MODEL_SOLID\nmodified_cam_clay\n$$POISSON_RATIO\n0.3\n$$SHEAR_MODULUS\n0.0\n\
              $$LAMBDA\n0.2\n$$KAPPA\n0.04\n$$CRITICAL_STATE_SLOPE\n1.0\n$$INITIAL_VOID_RATIO\n1.2\n\
-             $$OCR\n1.2\n$$PRECONSOLIDATION_PRESSURE\n0.0\n$$MINIMUM_PRESSURE\n1.0\n\
+             $$NCL_INTERCEPT\n0.0\n$$OCR\n1.2\n$$PRECONSOLIDATION_PRESSURE\n0.0\n$$MINIMUM_PRESSURE\n1.0\n\
              $$MAXIMUM_PRESSURE\n400.0\n"
         ),
         "{}",

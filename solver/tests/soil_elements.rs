@@ -9,7 +9,7 @@ use mpm_solve::material::modified_cam_clay::ModifiedCamClaySpec;
 /// A soft clay (λ = 0.2, κ = 0.04, M = 1, e0 = 1.2, ν = 0.3), isotropically over-consolidated
 /// to `ocr`.
 fn clay(ocr: f64) -> ModifiedCamClaySpec {
-    ModifiedCamClaySpec::new(0.3, 0.0, 0.2, 0.04, 1.0, 1.2, ocr, 0.0, 1.0, 2000.0).unwrap()
+    ModifiedCamClaySpec::new(0.3, 0.0, 0.2, 0.04, 1.0, 1.2, 0.0, ocr, 0.0, 1.0, 2000.0).unwrap()
 }
 
 #[test]

@@ -244,6 +244,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (MaterialKey, "KAPPA", Modelled),
     (MaterialKey, "CRITICAL_STATE_SLOPE", Modelled),
     (MaterialKey, "INITIAL_VOID_RATIO", Modelled),
+    (MaterialKey, "NCL_INTERCEPT", Modelled),
     (MaterialKey, "OCR", Modelled),
     (MaterialKey, "PRECONSOLIDATION_PRESSURE", Modelled),
     (MaterialKey, "MINIMUM_PRESSURE", Modelled),

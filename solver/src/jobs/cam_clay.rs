@@ -126,7 +126,7 @@ mod tests {
     use super::*;
 
     fn clay() -> ModifiedCamClaySpec {
-        ModifiedCamClaySpec::new(0.3, 0.0, 0.2, 0.04, 1.0, 1.2, 1.0, 0.0, 1.0, 2000.0).unwrap()
+        ModifiedCamClaySpec::new(0.3, 0.0, 0.2, 0.04, 1.0, 1.2, 0.0, 1.0, 0.0, 1.0, 2000.0).unwrap()
     }
 
     #[test]

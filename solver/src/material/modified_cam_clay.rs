@@ -49,8 +49,10 @@ pub struct ModifiedCamClaySpec {
     pub kappa: f64,
     /// Slope M of the critical state line in p–q.
     pub slope: f64,
-    /// Void ratio e0 at the start.
+    /// Void ratio e0 at the start; 0: from `ncl_intercept`.
     pub void_ratio: f64,
+    /// N, the specific volume on the normal compression line at p = 1 kPa; 0: e0 given.
+    pub ncl_intercept: f64,
     /// Isotropic over-consolidation ratio p_c0 / p_eq0 (1: normally consolidated).
     pub ocr: f64,
     /// The preconsolidation pressure p_c0 itself (kPa); 0: from `ocr`.
@@ -63,7 +65,7 @@ pub struct ModifiedCamClaySpec {
 
 const POSITIVE: (Bound, Bound) = (Bound::Open(0.0), Bound::Open(f64::INFINITY));
 
-const PARAMETERS: [Parameter; 10] = [
+const PARAMETERS: [Parameter; 11] = [
     ELASTIC_PARAMETERS[1],
     Parameter::new(
         "SHEAR_MODULUS",
@@ -90,8 +92,20 @@ const PARAMETERS: [Parameter; 10] = [
         "slope M of the critical state line in p'–q",
     )
     .range(Bound::Open(0.0), Bound::Open(3.0)),
-    Parameter::new("INITIAL_VOID_RATIO", "", "void ratio e0 at the start")
-        .range(POSITIVE.0, POSITIVE.1),
+    Parameter::new(
+        "INITIAL_VOID_RATIO",
+        "",
+        "void ratio e0 at the start, the same at every point; 0: from NCL_INTERCEPT",
+    )
+    .range(Bound::Closed(0.0), Bound::Open(f64::INFINITY))
+    .with_default(0.0),
+    Parameter::new(
+        "NCL_INTERCEPT",
+        "",
+        "N, the specific volume 1 + e on the normal compression line at p' = 1 kPa: each point's e0 from its stress and p'c0 (v = N − λ ln p'c0 + κ ln(p'c0/p'eq0)); 0: e0 given",
+    )
+    .range(Bound::Closed(0.0), Bound::Open(f64::INFINITY))
+    .with_default(0.0),
     Parameter::new(
         "OCR",
         "",
@@ -122,8 +136,9 @@ const PARAMETERS: [Parameter; 10] = [
 ];
 
 impl ModifiedCamClaySpec {
-    /// Checked: each value in its range ([`LawDefinition::PARAMETERS`]), κ < λ, not both an
-    /// OCR above 1 and a p_c0, and p_min < p_max.
+    /// Checked: each value in its range ([`LawDefinition::PARAMETERS`]), κ < λ, exactly one of
+    /// e0 and N, N above 1 + λ ln p_max (a positive void ratio on the normal compression line
+    /// up to p_max), not both an OCR above 1 and a p_c0, and p_min < p_max.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         poisson: f64,
@@ -132,6 +147,7 @@ impl ModifiedCamClaySpec {
         kappa: f64,
         slope: f64,
         void_ratio: f64,
+        ncl_intercept: f64,
         ocr: f64,
         preconsolidation: f64,
         minimum_pressure: f64,
@@ -144,6 +160,7 @@ impl ModifiedCamClaySpec {
             kappa,
             slope,
             void_ratio,
+            ncl_intercept,
             ocr,
             preconsolidation,
             minimum_pressure,
@@ -162,6 +179,17 @@ impl ModifiedCamClaySpec {
         if kappa >= lambda {
             return Err(ParameterError(format!(
                 "KAPPA must be less than LAMBDA ({lambda}), got {kappa}"
+            )));
+        }
+        if (void_ratio > 0.0) == (ncl_intercept > 0.0) {
+            return Err(ParameterError(format!(
+                "give INITIAL_VOID_RATIO ({void_ratio}) or NCL_INTERCEPT ({ncl_intercept}): exactly one of them, not 0"
+            )));
+        }
+        let lowest = 1.0 + lambda * maximum_pressure.ln();
+        if ncl_intercept > 0.0 && ncl_intercept <= lowest {
+            return Err(ParameterError(format!(
+                "NCL_INTERCEPT ({ncl_intercept}) must exceed 1 + λ ln MAXIMUM_PRESSURE ({lowest}): the void ratio on the normal compression line at p'max"
             )));
         }
         if ocr > 1.0 && preconsolidation > 0.0 {
@@ -204,9 +232,11 @@ impl LawDefinition for ModifiedCamClaySpec {
     type Law<R: Real> = ModifiedCamClay<R>;
 
     fn read(get: &dyn Fn(&str) -> Option<f64>) -> Result<Self, ParameterError> {
-        let [nu, g, lambda, kappa, m, e0, ocr, pc, pmin, pmax] =
+        let [nu, g, lambda, kappa, m, e0, big_n, ocr, pc, pmin, pmax] =
             PARAMETERS.map(|p| Self::need(get, p.key));
-        Self::new(nu?, g?, lambda?, kappa?, m?, e0?, ocr?, pc?, pmin?, pmax?)
+        Self::new(
+            nu?, g?, lambda?, kappa?, m?, e0?, big_n?, ocr?, pc?, pmin?, pmax?,
+        )
     }
 
     fn values(&self) -> Vec<f64> {
@@ -217,6 +247,7 @@ impl LawDefinition for ModifiedCamClaySpec {
             self.kappa,
             self.slope,
             self.void_ratio,
+            self.ncl_intercept,
             self.ocr,
             self.preconsolidation,
             self.minimum_pressure,
@@ -224,10 +255,17 @@ impl LawDefinition for ModifiedCamClaySpec {
         ]
     }
 
-    /// E and ν at `MAXIMUM_PRESSURE` and e0: K = (1 + e0) p_max / κ with the shear modulus.
+    /// E and ν at `MAXIMUM_PRESSURE` and e0: K = (1 + e0) p_max / κ with the shear modulus
+    /// (with N instead of e0, v = N: no point is looser than that at p ≥ 1 kPa on the normal
+    /// compression line, and an over-consolidated one only by κ ln OCR).
     fn elastic(&self) -> (f64, f64) {
         let law = self.build::<f64>();
-        let k = law.c.bulk(self.maximum_pressure, 1.0 + self.void_ratio);
+        let v = if self.void_ratio > 0.0 {
+            1.0 + self.void_ratio
+        } else {
+            self.ncl_intercept
+        };
+        let k = law.c.bulk(self.maximum_pressure, v);
         let g = law.c.shear(k);
         let young = 9.0 * k * g / (3.0 * k + g);
         (young, (3.0 * k - 2.0 * g) / (2.0 * (3.0 * k + g)))
@@ -246,6 +284,7 @@ impl LawDefinition for ModifiedCamClaySpec {
                 kappa: self.kappa,
                 slope2: self.slope * self.slope,
                 void_ratio: self.void_ratio,
+                ncl_intercept: self.ncl_intercept,
                 ocr: self.ocr,
                 preconsolidation: self.preconsolidation,
                 minimum_pressure: self.minimum_pressure,
@@ -262,6 +301,7 @@ impl LawDefinition for ModifiedCamClaySpec {
             kappa: 0.04,
             slope: 1.0,
             void_ratio: 1.2,
+            ncl_intercept: 0.0,
             ocr,
             preconsolidation,
             minimum_pressure: 1.0,
@@ -270,10 +310,17 @@ impl LawDefinition for ModifiedCamClaySpec {
         // The suite starts near p = 130 kPa (E / 1000 at p_max): lightly over-consolidated
         // (wet side), normally consolidated with a constant G, heavily over-consolidated
         // (dry side, softening).
+        // The last with N instead of e0.
+        let from_n = ModifiedCamClaySpec {
+            void_ratio: 0.0,
+            ncl_intercept: 3.3,
+            ..law(0.0, 1.2, 0.0)
+        };
         vec![
             law(0.0, 1.5, 0.0),
             law(3000.0, 1.0, 0.0),
             law(0.0, 1.0, 700.0),
+            from_n,
         ]
     }
 }
@@ -297,6 +344,7 @@ struct Constants {
     /// M².
     slope2: f64,
     void_ratio: f64,
+    ncl_intercept: f64,
     ocr: f64,
     preconsolidation: f64,
     minimum_pressure: f64,
@@ -401,7 +449,13 @@ impl Constants {
         } else {
             self.ocr * equivalent
         };
-        (pc, self.void_ratio)
+        let e = if self.void_ratio > 0.0 {
+            self.void_ratio
+        } else {
+            // On the normal compression line at p_c, then back along the swelling line to p.
+            self.ncl_intercept - self.lambda * pc.ln() + self.kappa * (pc / p).ln() - 1.0
+        };
+        (pc, e)
     }
 
     /// The update of `s`, `pc` and `v` by the strain increment's volumetric part `ev`
@@ -617,26 +671,26 @@ mod tests {
     use super::*;
 
     fn clay(ocr: f64) -> ModifiedCamClaySpec {
-        ModifiedCamClaySpec::new(0.3, 0.0, 0.2, 0.04, 1.0, 1.2, ocr, 0.0, 1.0, 2000.0).unwrap()
+        ModifiedCamClaySpec::new(0.3, 0.0, 0.2, 0.04, 1.0, 1.2, 0.0, ocr, 0.0, 1.0, 2000.0).unwrap()
     }
 
     #[test]
     fn parameters_are_checked_together() {
         let e = |r: Result<ModifiedCamClaySpec, ParameterError>| r.unwrap_err().0;
         assert!(e(ModifiedCamClaySpec::new(
-            0.3, 0.0, 0.2, 0.2, 1.0, 1.2, 1.0, 0.0, 1.0, 2000.0
+            0.3, 0.0, 0.2, 0.2, 1.0, 1.2, 0.0, 1.0, 0.0, 1.0, 2000.0
         ))
         .contains("KAPPA must be less than LAMBDA"));
         assert!(e(ModifiedCamClaySpec::new(
-            0.3, 0.0, 0.2, 0.04, 1.0, 1.2, 2.0, 300.0, 1.0, 2000.0
+            0.3, 0.0, 0.2, 0.04, 1.0, 1.2, 0.0, 2.0, 300.0, 1.0, 2000.0
         ))
         .contains("not both"));
         assert!(e(ModifiedCamClaySpec::new(
-            0.3, 0.0, 0.2, 0.04, 1.0, 1.2, 1.0, 0.0, 3000.0, 2000.0
+            0.3, 0.0, 0.2, 0.04, 1.0, 1.2, 0.0, 1.0, 0.0, 3000.0, 2000.0
         ))
         .contains("MINIMUM_PRESSURE"));
         let m = e(ModifiedCamClaySpec::new(
-            0.3, 0.0, 0.2, 0.04, 3.5, 1.2, 1.0, 0.0, 1.0, 2000.0,
+            0.3, 0.0, 0.2, 0.04, 3.5, 1.2, 0.0, 1.0, 0.0, 1.0, 2000.0,
         ));
         assert!(
             m.contains("CRITICAL_STATE_SLOPE") && m.contains("(0, 3)"),
@@ -692,6 +746,40 @@ mod tests {
             "{} {want}",
             (p / 100.0).ln()
         );
+    }
+
+    #[test]
+    fn with_n_each_point_starts_on_its_swelling_line() {
+        let spec = ModifiedCamClaySpec {
+            void_ratio: 0.0,
+            ncl_intercept: 3.0,
+            ..clay(2.0)
+        };
+        let law = spec.build::<f64>();
+        for p in [10.0, 100.0] {
+            let mut s = [-p, -p, -p, 0.0, 0.0, 0.0];
+            let mut state = [0.0, 0.0];
+            law.update(&mut s, &[0.0; 6], &mut state);
+            let want = 3.0 - 0.2 * (2.0 * p).ln() + 0.04 * 2f64.ln() - 1.0;
+            assert!((state[1] - want).abs() < 1e-12, "{state:?} {want}");
+        }
+        let e = |e0: f64, n: f64| {
+            ModifiedCamClaySpec {
+                void_ratio: e0,
+                ncl_intercept: n,
+                ..clay(1.0)
+            }
+            .elastic()
+        };
+        assert_eq!(e(0.0, 2.2), e(1.2, 0.0));
+        let refuse = |e0, n| {
+            ModifiedCamClaySpec::new(0.3, 0.0, 0.2, 0.04, 1.0, e0, n, 1.0, 0.0, 1.0, 2000.0)
+                .unwrap_err()
+                .0
+        };
+        assert!(refuse(1.2, 3.0).contains("exactly one"));
+        assert!(refuse(0.0, 0.0).contains("exactly one"));
+        assert!(refuse(0.0, 2.5).contains("must exceed 1 + λ ln MAXIMUM_PRESSURE"));
     }
 
     #[test]
