@@ -6,7 +6,8 @@
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores|auto --first-touch on|off
 //!  --order morton|random|none --precision f64|f32 --guards on|off
-//!  --law linear|mc-elastic|mc-plastic|mc-flowing --surface on|off --dim 3|2 --shear RATE
+//!  --law linear|mc-elastic|mc-plastic|mc-flowing|mcc-flowing --surface on|off --dim 3|2
+//!  --shear RATE
 //!  --points N --basis tets|linear|gimp|bspline2`
 //!
 //! `--basis` other than `tets` runs the same column, points and loads on a background grid of
@@ -25,7 +26,8 @@
 //! The Mohr-Coulomb laws print, beside the timing, the share of point-steps that end on the
 //! yield surface and the share that end there with a stress that moved (returned points), from
 //! one more run of the same steps (`--surface off` leaves that run out, so that an instruction
-//! count sees the timed run alone).
+//! count sees the timed run alone). `mcc-flowing` (Modified Cam Clay under the same uniform
+//! compression as `mc-flowing`) prints no such shares: the count is Mohr-Coulomb's.
 //!
 //! `--mpi` (built with the cargo feature `mpi`, launched by `mpirun -np N`): the same case
 //! over N ranks, each with `--threads` threads; rank 0 prints the line, with the total points
@@ -166,13 +168,39 @@ fn main() {
         // so every point returns at the first step and then sits on the yield surface, most of
         // the column moving as a rigid body under gravity (strain increments of round-off
         // size); `mc-flowing`: the same law under uniform oedometric compression (below), so
-        // that every point returns at every step.
+        // that every point returns at every step. `mcc-flowing`: Modified Cam Clay under the
+        // same compression, normally consolidated at the start (OCR 1: p_c is set at the first
+        // update to the initial stress's p_eq = p + q²/(M² p) = 208 kPa, on the yield surface),
+        // so that every point but those near the free top (which unloads) is returned at every
+        // step (p_c moved at about 96 % of the point-steps of 10 steps on the 1M-point column);
+        // ν = 0.3 with G from K (G = 0), λ = 0.2, κ = 0.04, M = 1, e0 = 1.2. The time step
+        // takes the law's stiffness at p_max = 1000 kPa (K = 55 MPa: a step 2.6 times shorter
+        // than Mohr-Coulomb's, so about 3e-6 strain per step), far above the mean stress the
+        // column reaches (at most about 135 kPa over the bench's steps), and it stays stable.
         use mpm_solve::material::law::LawSpec;
         let law = match arg(&a, "--law") {
             Some("mc-elastic") => LawSpec::mohr_coulomb(10000.0, 0.3, 30.0, 0.0, 0.0, 0.0),
             Some("mc-plastic" | "mc-flowing") => {
                 LawSpec::mohr_coulomb(10000.0, 0.3, 10.0, 0.0, 0.0, 0.0)
             }
+            Some("mcc-flowing") => LawSpec::by_name("modified_cam_clay", &|k| match k {
+                "POISSON_RATIO" => Some(0.3),
+                "SHEAR_MODULUS" | "PRECONSOLIDATION_PRESSURE" | "NCL_INTERCEPT" => Some(0.0),
+                "LAMBDA" => Some(0.2),
+                "KAPPA" => Some(0.04),
+                "CRITICAL_STATE_SLOPE" => Some(1.0),
+                "INITIAL_VOID_RATIO" => Some(1.2),
+                "OCR" => Some(1.0),
+                "MINIMUM_PRESSURE" => Some(1.0),
+                "MAXIMUM_PRESSURE" => Some(1000.0),
+                // Any other parameter at its default, as a scene leaving it out gets.
+                _ => {
+                    mpm_solve::material::law::parameter_list("modified_cam_clay")?
+                        .iter()
+                        .find(|p| p.key == k)?
+                        .default
+                }
+            }),
             _ => LawSpec::linear_elastic(10000.0, 0.3),
         }
         .unwrap();
@@ -251,7 +279,7 @@ fn main() {
     // ratio, so every trial lies beyond the surface.
     let flow = match arg(&a, "--shear") {
         Some(r) => Some(Flow::Shear(r.parse().unwrap())),
-        None => (law == "mc-flowing").then_some(Flow::Compress(0.2)),
+        None => matches!(law, "mc-flowing" | "mcc-flowing").then_some(Flow::Compress(0.2)),
     };
     // The solver's own choice of precision and element (the case's model picks `Tri3` or
     // `Tet4`), so that the bench times the engine a run of this model would get.
@@ -278,6 +306,7 @@ fn main() {
             serde_json::Value::from(result.reports.clone().unwrap_or_default())
         )
     } else if law.starts_with("mc-") && arg(&a, "--surface") != Some("off") {
+        // Mohr-Coulomb's surface only (`mcc-flowing` does not start with "mc-").
         let friction = if law == "mc-elastic" { 30.0 } else { 10.0 };
         let (on, moved) = if plane {
             on_surface::<Tri3>(&case, steps, flow, friction)
