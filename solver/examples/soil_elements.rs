@@ -105,16 +105,7 @@ fn drained(dir: &Path, summary: &mut Vec<String>) -> Result<(), Box<dyn Error>> 
         for step in [1e-4, 5e-5] {
             let mut sample = Sample::new(&LawSpec::from(spec), P0, P0);
             let path = drained_triaxial(&mut sample, step, (end / step) as usize);
-            let (mut eq, mut ev) = (0.0f64, 0.0f64);
-            for r in path.iter().skip(1) {
-                let i = reference.partition_point(|x| x.axial < r.axial).max(1);
-                let (a, b) = (&reference[i - 1], &reference[i]);
-                let t = (r.axial - a.axial) / (b.axial - a.axial);
-                let q = a.q + t * (b.q - a.q);
-                let v = a.volumetric + t * (b.volumetric - a.volumetric);
-                eq = eq.max((r.q - q).abs() / q.max(1.0));
-                ev = ev.max((r.volumetric - v).abs() / v.abs().max(1e-4));
-            }
+            let (eq, ev) = cam_clay::drained_errors(&path, &reference);
             errors.push(format!(
                 "{{\"step\": {step}, \"steps\": {}, \"worst_q\": {eq:e}, \"worst_ev\": {ev:e}}}",
                 path.len() - 1

@@ -62,17 +62,7 @@ fn drained_triaxial_follows_the_integrated_equations() {
         let steps = (end / step) as usize;
         let path = drained_triaxial(&mut sample, step, steps);
         assert_eq!(path.len(), steps + 1, "the drained test stopped early");
-        let mut worst = (0.0f64, 0.0f64);
-        for r in path.iter().skip(1) {
-            // The reference's q and ε_v at this axial strain.
-            let i = reference.partition_point(|x| x.axial < r.axial).max(1);
-            let (a, b) = (&reference[i - 1], &reference[i]);
-            let t = (r.axial - a.axial) / (b.axial - a.axial);
-            let q = a.q + t * (b.q - a.q);
-            let ev = a.volumetric + t * (b.volumetric - a.volumetric);
-            worst.0 = worst.0.max((r.q - q).abs() / q.max(1.0));
-            worst.1 = worst.1.max((r.volumetric - ev).abs() / ev.abs().max(1e-4));
-        }
+        let worst = cam_clay::drained_errors(&path, &reference);
         println!(
             "OCR {ocr}, G {g}: to ε_a = {end:.3}, worst q error {:.2e}, worst ε_v error {:.2e}",
             worst.0, worst.1

@@ -93,6 +93,28 @@ pub fn drained_triaxial(
     out
 }
 
+/// The worst relative differences of q and ε_v between the element test `path` (its start
+/// left out) and the drained `reference` interpolated linearly at each record's axial strain:
+/// q over max(q, 1 kPa), ε_v over max(|ε_v|, 1e-4).
+pub fn drained_errors(
+    path: &[crate::material::element_test::Record],
+    reference: &[DrainedPoint],
+) -> (f64, f64) {
+    let mut worst = (0.0f64, 0.0f64);
+    for r in path.iter().skip(1) {
+        let i = reference
+            .partition_point(|x| x.axial < r.axial)
+            .clamp(1, reference.len() - 1);
+        let (a, b) = (&reference[i - 1], &reference[i]);
+        let t = (r.axial - a.axial) / (b.axial - a.axial);
+        let q = a.q + t * (b.q - a.q);
+        let ev = a.volumetric + t * (b.volumetric - a.volumetric);
+        worst.0 = worst.0.max((r.q - q).abs() / q.max(1.0));
+        worst.1 = worst.1.max((r.volumetric - ev).abs() / ev.abs().max(1e-4));
+    }
+    worst
+}
+
 /// y + h k.
 fn step(y: &[f64; 3], k: &[f64; 3], h: f64) -> [f64; 3] {
     std::array::from_fn(|j| y[j] + h * k[j])
