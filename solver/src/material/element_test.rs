@@ -6,7 +6,7 @@
 //! - [`undrained_triaxial`]: isochoric axial compression (ε_xx = ε_zz = −ε_yy / 2), the
 //!   effective stress path of a saturated sample whose water is incompressible.
 //! - [`drained_triaxial`]: axial compression at constant cell pressure (σ_xx = σ_zz fixed),
-//!   the lateral strain found each step by Newton's method on the law's own response.
+//!   the lateral strain found each step by the secant method on the law's own response.
 //! - [`oedometer`]: axial strain alone (no lateral strain), loading and unloading.
 
 use crate::material::law::{Law, LawSpec};
@@ -94,14 +94,13 @@ impl Sample {
     }
 
     /// Takes the axial strain increment `axial` with the radial stress held: the radial
-    /// strain by Newton's method (a secant slope from a probe), to a thousandth of a Pa.
+    /// strain by the secant method (its first slope from a probe), to a thousandth of a Pa.
     /// `None` when it does not converge in 50 iterations.
     pub fn strain_at_radial_stress(&mut self, axial: f64) -> Option<()> {
         let target = self.stress[0];
         let mut radial = -axial / 2.0;
-        let mut probe = radial + 1e-7;
-        let (s, _) = self.trial(probe, axial);
-        let mut last = (probe, s[0] - target);
+        let (s, _) = self.trial(radial + 1e-7, axial);
+        let mut last = (radial + 1e-7, s[0] - target);
         for _ in 0..50 {
             let (s, state) = self.trial(radial, axial);
             let r = s[0] - target;
@@ -114,8 +113,7 @@ impl Sample {
                 return None;
             }
             last = (radial, r);
-            probe = radial - r / slope;
-            radial = probe;
+            radial -= r / slope;
         }
         None
     }
