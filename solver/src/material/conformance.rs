@@ -8,12 +8,15 @@
 //!   `high`, and NaN) refused;
 //! - the elastic limit: a small increment from a stress well inside the yield surface adds the
 //!   elastic stiffness's increment (for a law with a pressure-dependent elasticity,
-//!   [`ConstitutiveLaw::elastic_tangent`], the tangent's, to second order);
+//!   [`ConstitutiveLaw::elastic_tangent`], the tangent's, to second order); a law without an
+//!   elastic range ([`ConstitutiveLaw::stress_rate`], hypoplasticity) adds its rate's increment
+//!   instead, to second order, and its rate is homogeneous of degree one (rate independence);
 //! - consistency: after an increment whose elastic trial lies beyond the surface, the stress
 //!   lies on it or inside (within round-off scaled to the stress), for the state the update
 //!   started from (explicit updates, as strain softening) or the one it ends with;
 //! - objectivity: for random rotations Q, update(Q σ Qᵀ, Q Δε Qᵀ) = Q update(σ, Δε) Qᵀ to
-//!   round-off, with the same state (state values are taken to be invariants);
+//!   round-off, with the same state (the state's tensors, [`ConstitutiveLaw::state_tensors`],
+//!   rotated; the other values are invariants);
 //! - precision: each path run in f32 follows the f64 one within f32's round-off;
 //! - the checkpoint: a path run in two halves, the stress and state written and read back in
 //!   between through the particles' own encoding ([`Particles::put_point`],
@@ -306,6 +309,11 @@ impl<'a, D: LawDefinition> Suite<'a, D> {
                 };
                 let dir: [f64; 6] = std::array::from_fn(|_| rng.uniform());
                 let size = norm(&self.stiffness(&dir));
+                if law.stress_rate(&s, &state, &dir).is_some() {
+                    self.incremental(&law, (&s, &state), dir.map(|x| x * room / size))?;
+                    checked += 1;
+                    continue;
+                }
                 // A pressure-dependent elasticity: its tangent, on an increment a thousand
                 // times smaller, with the curvature's second order allowed (4 |Δσ|² / |σ|
                 // bounds it for K ∝ p: a few thousandths of the increment).
@@ -345,6 +353,54 @@ impl<'a, D: LawDefinition> Suite<'a, D> {
             return Err(self.fail(
                 Check::Elastic,
                 "no stress of the paths lay well inside the yield surface".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A law without an elastic range ([`ConstitutiveLaw::stress_rate`]) at stress `s` and
+    /// `state`, for increments along `de` (of the stress scale's size): a small increment adds
+    /// the rate's stress increment to second order (the difference falls at least three times
+    /// in one of three halvings, down to round-off), and the rate is homogeneous of degree
+    /// one (the law is rate-independent).
+    fn incremental<R: Real>(
+        &self,
+        law: &D::Law<R>,
+        (s, state): (&[R; 6], &[R]),
+        de: [f64; 6],
+    ) -> Result<(), Failure> {
+        let s64 = s.map(R::f64);
+        let round_off = self.tolerances.elastic * R::EPSILON * (norm(&s64) + self.scale);
+        // The change of stress by `de`, and its difference from the rate's increment.
+        let off_rate = |de: &[R; 6]| {
+            let rate = law
+                .stress_rate(s, state, &de.map(R::f64))
+                .expect("the law has a rate");
+            let mut got = *s;
+            law.update(&mut got, de, &mut state.to_vec());
+            let change: [f64; 6] = std::array::from_fn(|c| got[c].f64() - s64[c]);
+            (change, rate, distance(&change, &rate))
+        };
+        let de = de.map(|x| R::of(x * 1e-3));
+        let (once, rate, _) = off_rate(&de);
+        // Halved three times: second order in one halving at least (a switch of branch, as
+        // the intergranular strain's loading to unloading, may lie inside another).
+        let offs: Vec<f64> = (0..4)
+            .map(|j| off_rate(&de.map(|x| x * R::of(0.5f64.powi(j)))).2)
+            .collect();
+        if !offs.windows(2).any(|w| w[1] <= w[0] / 3.0 + round_off) {
+            return Err(self.fail(
+                Check::Elastic,
+                format!("in {}, from {s:?} (state {state:?}) by {de:?}: a change of {once:?}, not the rate's {rate:?} to second order ({offs:?} off for the increment halved 0 to 3 times)", R::NAME),
+            ));
+        }
+        let rate2 = law
+            .stress_rate(s, state, &de.map(|x| 2.0 * x.f64()))
+            .expect("the law has a rate");
+        if distance(&rate2, &rate.map(|x| 2.0 * x)) > round_off {
+            return Err(self.fail(
+                Check::Elastic,
+                format!("in {}, from {s:?} (state {state:?}): the rate of {de:?} is {rate:?}, of twice that {rate2:?}, not twice the first", R::NAME),
             ));
         }
         Ok(())
@@ -399,9 +455,11 @@ impl<'a, D: LawDefinition> Suite<'a, D> {
                 let q = rng.rotation();
                 let de = de.map(R::of).map(R::f64);
                 let mut s = rotate(&q, &s0.map(R::f64)).map(R::of);
-                let mut state = state0.clone();
+                let tensors = law.state_tensors();
+                let mut state = rotate_state(&q, state0, tensors);
                 law.update(&mut s, &rotate(&q, &de).map(R::of), &mut state);
                 let want = rotate(&q, &s1.map(R::f64));
+                let state1 = &rotate_state(&q, state1, tensors);
                 let size = norm(&s0.map(R::f64)) + norm(&self.stiffness(&de));
                 let ulps = self.tolerances.rotation * R::EPSILON;
                 let off = distance(&s.map(R::f64), &want);
@@ -562,6 +620,18 @@ fn stiffness(lambda: f64, shear: f64, de: &[f64; 6]) -> [f64; 6] {
     let tr = lambda * (de[0] + de[1] + de[2]);
     let g2 = 2.0 * shear;
     std::array::from_fn(|c| if c < 3 { tr + g2 * de[c] } else { g2 * de[c] })
+}
+
+/// The state values with the tensors starting at `tensors` rotated by `q`.
+fn rotate_state<R: Real>(q: &[[f64; 3]; 3], state: &[R], tensors: &[usize]) -> Vec<R> {
+    let mut out = state.to_vec();
+    for &at in tensors {
+        let t: [f64; 6] = std::array::from_fn(|c| state[at + c].f64());
+        for (c, v) in rotate(q, &t).into_iter().enumerate() {
+            out[at + c] = R::of(v);
+        }
+    }
+    out
 }
 
 /// The sum of two tensors.

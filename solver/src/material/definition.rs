@@ -68,6 +68,26 @@ impl Parameter {
         self
     }
 
+    /// The range in words: "(0, ∞)", "[1, ∞)".
+    pub fn range_words(&self) -> String {
+        let end = |x: f64| {
+            if x.is_infinite() {
+                "∞".to_string()
+            } else {
+                x.to_string()
+            }
+        };
+        let low = match self.low {
+            Bound::Open(x) => format!("({}", end(x)),
+            Bound::Closed(x) => format!("[{}", end(x)),
+        };
+        let high = match self.high {
+            Bound::Open(x) => format!("{})", end(x)),
+            Bound::Closed(x) => format!("{}]", end(x)),
+        };
+        format!("{low}, {high}")
+    }
+
     /// Whether `value` lies in the range on its own ([`Parameter::low`], [`Parameter::high`]).
     pub fn admits(&self, value: f64) -> bool {
         let above = match self.low {
@@ -80,6 +100,22 @@ impl Parameter {
         };
         above && below
     }
+}
+
+/// Each of `values` inside its parameter's own range ([`Parameter::admits`]), or the refusal
+/// naming the first that is not: its key, meaning, range and value.
+pub fn check_each(parameters: &[Parameter], values: &[f64]) -> Result<(), ParameterError> {
+    for (p, &v) in parameters.iter().zip(values) {
+        if !p.admits(v) {
+            return Err(ParameterError(format!(
+                "{} ({}) must be in {}, got {v}",
+                p.key,
+                p.meaning,
+                p.range_words()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The keys of `parameters`, in their order, as an array (for `law::keys`' constant slices).
@@ -121,6 +157,13 @@ pub trait LawDefinition: Debug + Clone + Copy + PartialEq + Send + Sync + 'stati
     /// The law in precision `R`.
     fn build<R: Real>(&self) -> Self::Law<R>;
 
+    /// Whether a point may start at `stress` (tension positive, kPa): the refusal says why
+    /// not (a void ratio outside the model's bounds at that pressure). Every start is
+    /// admitted by default.
+    fn check_start(&self, _stress: &[f64; 6]) -> Result<(), ParameterError> {
+        Ok(())
+    }
+
     /// Parameter sets that exercise the law (each of its branches), for the conformance suite.
     fn examples() -> Vec<Self>;
 
@@ -157,5 +200,21 @@ pub trait ConstitutiveLaw<R: Real>: Debug + Clone + Copy + PartialEq + Send + Sy
     /// (the default): the constant ones of [`LawDefinition::elastic`].
     fn elastic_tangent(&self, _stress: &[R; 6], _state: &[R]) -> Option<(f64, f64)> {
         None
+    }
+
+    /// The stress rate for the strain rate `d` at `stress` and `state`, for a law without an
+    /// elastic range (hypoplasticity's T̊ = M(σ, state, d) : d, nonlinear in `d`); `None` (the
+    /// default): the law has an elastic range or is elastic. The conformance suite checks the
+    /// update of a small increment against it.
+    fn stress_rate(&self, _stress: &[R; 6], _state: &[R], _d: &[f64; 6]) -> Option<[f64; 6]> {
+        None
+    }
+
+    /// Where symmetric tensors (six values, xx yy zz xy yz zx, tensor shear components) start
+    /// among the point's state values, for the state values that turn with the material
+    /// (hypoplasticity's intergranular strain); the others are invariants. The stress pass
+    /// co-rotates these with the stress (Jaumann), and the conformance suite rotates them.
+    fn state_tensors(&self) -> &'static [usize] {
+        &[]
     }
 }

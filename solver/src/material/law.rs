@@ -11,6 +11,7 @@
 use crate::material::definition::{
     keys_of, ConstitutiveLaw, LawDefinition, Parameter, ParameterError,
 };
+use crate::material::hypoplastic::HypoplasticSpec;
 use crate::material::linear_elastic::{LinearElastic, LinearElasticSpec};
 use crate::material::modified_cam_clay::ModifiedCamClaySpec;
 use crate::material::mohr_coulomb::MohrCoulombSpec;
@@ -123,6 +124,13 @@ macro_rules! laws {
                 }
             }
 
+            /// Whether a point may start at `stress` ([`LawDefinition::check_start`]).
+            pub fn check_start(&self, stress: &[f64; 6]) -> Result<(), LawError> {
+                match self {
+                    $(LawSpec::$variant(spec) => Ok(spec.check_start(stress)?),)+
+                }
+            }
+
             /// The law in precision `R`.
             pub fn build<R: Real>(&self) -> Law<R> {
                 match self {
@@ -153,6 +161,15 @@ macro_rules! laws {
                     Law::Void => None,
                 }
             }
+
+            /// Where the law's tensor state values start ([`ConstitutiveLaw::state_tensors`]):
+            /// the stress pass co-rotates them with the stress.
+            pub fn state_tensors(&self) -> &'static [usize] {
+                match self {
+                    $(Law::$variant(law) => law.state_tensors(),)+
+                    Law::Void => &[],
+                }
+            }
         }
     };
 }
@@ -167,6 +184,8 @@ laws! {
     StrainSofteningMohrCoulomb => StrainSofteningMohrCoulombSpec,
     /// Modified Cam Clay ([`crate::material::modified_cam_clay`]).
     ModifiedCamClay => ModifiedCamClaySpec,
+    /// Hypoplastic sand with intergranular strain ([`crate::material::hypoplastic`]).
+    Hypoplasticity => HypoplasticSpec,
 }
 
 /// Why a law cannot be built.

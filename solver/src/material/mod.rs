@@ -4,6 +4,7 @@ pub mod conformance;
 pub mod definition;
 pub mod element_test;
 pub mod error;
+pub mod hypoplastic;
 pub mod law;
 pub mod linear_elastic;
 pub mod liquid;

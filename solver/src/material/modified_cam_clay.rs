@@ -31,7 +31,7 @@
 use std::marker::PhantomData;
 
 use crate::material::definition::{
-    Bound, ConstitutiveLaw, LawDefinition, Parameter, ParameterError,
+    check_each, Bound, ConstitutiveLaw, LawDefinition, Parameter, ParameterError,
 };
 use crate::material::linear_elastic::ELASTIC_PARAMETERS;
 use crate::real::Real;
@@ -166,16 +166,7 @@ impl ModifiedCamClaySpec {
             minimum_pressure,
             maximum_pressure,
         };
-        for (p, v) in PARAMETERS.iter().zip(spec.values()) {
-            if !p.admits(v) {
-                return Err(ParameterError(format!(
-                    "{} ({}) must be in {}, got {v}",
-                    p.key,
-                    p.meaning,
-                    range_words(p)
-                )));
-            }
-        }
+        check_each(&PARAMETERS, &spec.values())?;
         if kappa >= lambda {
             return Err(ParameterError(format!(
                 "KAPPA must be less than LAMBDA ({lambda}), got {kappa}"
@@ -204,26 +195,6 @@ impl ModifiedCamClaySpec {
         }
         Ok(spec)
     }
-}
-
-/// A parameter's range in words: "(0, ∞)", "[1, ∞)".
-fn range_words(p: &Parameter) -> String {
-    let end = |x: f64| {
-        if x.is_infinite() {
-            "∞".to_string()
-        } else {
-            x.to_string()
-        }
-    };
-    let low = match p.low {
-        Bound::Open(x) => format!("({}", end(x)),
-        Bound::Closed(x) => format!("[{}", end(x)),
-    };
-    let high = match p.high {
-        Bound::Open(x) => format!("{})", end(x)),
-        Bound::Closed(x) => format!("{}]", end(x)),
-    };
-    format!("{low}, {high}")
 }
 
 impl LawDefinition for ModifiedCamClaySpec {

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 pub mod gom;
+pub mod soil_column;
 
 /// A file of the workspace's `testdata/`.
 pub fn testdata(name: &str) -> PathBuf {

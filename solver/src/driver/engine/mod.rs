@@ -90,6 +90,16 @@ pub enum SetupError {
     /// Every element is empty.
     #[error("the case has no material points (every element is empty)")]
     NoPoints,
+    /// A point's start lies outside its law's bounds (a void ratio beyond hypoplasticity's).
+    #[error("material point {id} of material {material:?} cannot start at its stress: {why}")]
+    Start {
+        /// The point's id.
+        id: u64,
+        /// Its material's name.
+        material: String,
+        /// The law's refusal.
+        why: String,
+    },
     /// A feature that axisymmetric sections do not model.
     #[error("{0} is not modelled for axisymmetric sections; they run with material-point integration (MPM-MP) and without strain smoothing")]
     Axisymmetric(&'static str),

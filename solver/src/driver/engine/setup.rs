@@ -481,7 +481,25 @@ fn place_points<E: Element, R: Real>(
     if let Some(init) = &case.start.initial_stress {
         apply_initial_stress::<E, R>(init, case, partition, &mut particles);
     }
+    check_starts(case, &particles)?;
     Ok((particles, boundary))
+}
+
+/// Each point's start admitted by its law ([`crate::material::law::LawSpec::check_start`]).
+fn check_starts<R: Real>(case: &Case, particles: &Particles<R>) -> Result<(), SetupError> {
+    for (i, stress) in particles.stress.iter().enumerate() {
+        let Some(m) = case.body.materials[particles.material[i] as usize].as_ref() else {
+            continue;
+        };
+        if let Err(why) = m.law.check_start(&stress.map(R::f64)) {
+            return Err(SetupError::Start {
+                id: particles.id[i] as u64,
+                material: m.name.clone(),
+                why: why.to_string(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Saturated points start in the case's undrained state, when it gives one.

@@ -16,7 +16,7 @@ use crate::step::contact::maps;
 use super::guard::{GuardTerms, Open};
 use super::laws::update_batch;
 use super::point::{moved, pore_change, strain_work, velocity_at, volume_factor};
-use super::strain::{add_objective, spin_increment, strain_increment};
+use super::strain::{add_objective, rotate, spin_increment, strain_increment};
 use super::{ChunkPoints, ElementView, Pass};
 
 /// `W` lanes of plain values.
@@ -97,6 +97,26 @@ fn batch<E: Element, R: Real, const W: usize, const WIDE: bool>(
     );
 }
 
+/// The Jaumann co-rotation of the tensors among the batch's points' law state (the
+/// intergranular strain; [`crate::material::law::Law::state_tensors`]) for the spin
+/// increment `spin`, as their stresses turn.
+fn co_rotate_state<E: Element, R: Real, const W: usize>(
+    cx: &Pass<'_, E, R>,
+    p: &mut ChunkPoints<'_, R>,
+    b: &Batch<W>,
+    spin: &[R; 3],
+) {
+    let k = p.k;
+    for i in b.points() {
+        for &at in cx.laws[p.material[i] as usize].state_tensors() {
+            let t: &mut [R; 6] = (&mut p.state[k * i + at..k * i + at + 6])
+                .try_into()
+                .expect("a state tensor has six values");
+            rotate(t, spin);
+        }
+    }
+}
+
 /// A batch's motion in the step: its points' positions `x` and velocities `dx`, their strain
 /// increments `de`, and the velocity gradient `l` the objective terms' spin is taken from.
 pub(super) struct Motion<'l, R: Real, const W: usize> {
@@ -125,7 +145,11 @@ pub(super) fn finish<E: Element, R: Real, const W: usize, const WIDE: bool>(
     update_batch::<E, R, W, WIDE>(cx, p, b, &mut s1, &de);
     if cx.objective {
         let ev = de[0] + de[1] + de[2];
-        add_objective::<R, L<R, W>>(t, &s0, &mut s1, &spin_increment(l, dt), ev);
+        let spin = spin_increment(l, dt);
+        add_objective::<R, L<R, W>>(t, &s0, &mut s1, &spin, ev);
+        if cx.tensor_state {
+            co_rotate_state(cx, p, b, &spin);
+        }
     }
     let v0: L<R, W> = Plain(b.at.map(|i| p.volume[i]));
     // The hoop strain changes an axisymmetric point's volume unless the case follows

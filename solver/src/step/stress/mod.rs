@@ -153,6 +153,7 @@ pub fn update_stress_and_move<E: Element, R: Real>(
         g,
         laws,
         objective,
+        tensor_state: laws.iter().any(|l| !l.state_tensors().is_empty()),
         hoop_in_volume,
         smoothing,
         dt,
@@ -209,6 +210,8 @@ struct Pass<'a, E: Element, R: Real> {
     g: &'a Grid<R>,
     laws: &'a [Law<R>],
     objective: bool,
+    /// Whether a law keeps tensors in its state, which the objective terms turn too.
+    tensor_state: bool,
     hoop_in_volume: bool,
     smoothing: Option<&'a StrainSmoothing<R>>,
     dt: R,
