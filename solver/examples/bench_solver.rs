@@ -6,7 +6,7 @@
 //! `cargo run --release -p mpm-solve --example bench_solver -- --case dry|saturated
 //!  --cells NXZ NY --steps S --reps R --threads T --pin none|cores|auto --first-touch on|off
 //!  --order morton|random|none --precision f64|f32 --guards on|off
-//!  --law linear|mc-elastic|mc-plastic|mc-flowing|mcc-flowing --surface on|off --dim 3|2
+//!  --law linear|mc-elastic|mc-plastic|mc-flowing|mcc-flowing|hypo-flowing --surface on|off --dim 3|2
 //!  --shear RATE
 //!  --points N --basis tets|linear|gimp|bspline2`
 //!
@@ -177,6 +177,9 @@ fn main() {
         // takes the law's stiffness at p_max = 1000 kPa (K = 55 MPa: a step 2.6 times shorter
         // than Mohr-Coulomb's, so about 3e-6 strain per step), far above the mean stress the
         // column reaches (at most about 135 kPa over the bench's steps), and it stays stable.
+        // `hypo-flowing`: hypoplastic Hochstetten sand with intergranular strain (e0 0.70,
+        // mobilised along the initial stress), the same compression, the time step from its
+        // stiffest state at p_max = 1000 kPa (every point integrates its rate at every step).
         use mpm_solve::material::law::LawSpec;
         let law = match arg(&a, "--law") {
             Some("mc-elastic") => LawSpec::mohr_coulomb(10000.0, 0.3, 30.0, 0.0, 0.0, 0.0),
@@ -196,6 +199,26 @@ fn main() {
                 // Any other parameter at its default, as a scene leaving it out gets.
                 _ => {
                     mpm_solve::material::law::parameter_list("modified_cam_clay")?
+                        .iter()
+                        .find(|p| p.key == k)?
+                        .default
+                }
+            }),
+            Some("hypo-flowing") => LawSpec::by_name("hypoplasticity", &|k| match k {
+                "CRITICAL_FRICTION_ANGLE" => Some(33.0),
+                "GRANULAR_HARDNESS" => Some(1.0e6),
+                "EXPONENT_N" => Some(0.25),
+                "MINIMUM_VOID_RATIO" => Some(0.55),
+                "CRITICAL_VOID_RATIO" => Some(0.95),
+                "MAXIMUM_VOID_RATIO" => Some(1.05),
+                "EXPONENT_ALPHA" => Some(0.25),
+                "EXPONENT_BETA" => Some(1.5),
+                "INITIAL_VOID_RATIO" => Some(0.7),
+                "IGS_R" => Some(1e-4),
+                "IGS_INITIAL" => Some(1.0),
+                "MAXIMUM_PRESSURE" => Some(1000.0),
+                _ => {
+                    mpm_solve::material::law::parameter_list("hypoplasticity")?
                         .iter()
                         .find(|p| p.key == k)?
                         .default
@@ -279,7 +302,8 @@ fn main() {
     // ratio, so every trial lies beyond the surface.
     let flow = match arg(&a, "--shear") {
         Some(r) => Some(Flow::Shear(r.parse().unwrap())),
-        None => matches!(law, "mc-flowing" | "mcc-flowing").then_some(Flow::Compress(0.2)),
+        None => matches!(law, "mc-flowing" | "mcc-flowing" | "hypo-flowing")
+            .then_some(Flow::Compress(0.2)),
     };
     // The solver's own choice of precision and element (the case's model picks `Tri3` or
     // `Tet4`), so that the bench times the engine a run of this model would get.

@@ -1,7 +1,10 @@
 //! The element tests of docs/validation-soil.md (`scripts/validate-soil`): Modified Cam Clay's
 //! undrained and drained triaxial compressions and its oedometer loading and unloading, each
-//! beside its reference (the closed form, an independent integration of the same equations),
-//! written as two-column CSVs for the plots and `summary.json` for the tables.
+//! beside its reference (the closed form, an independent integration of the same equations);
+//! hypoplastic sand's oedometer (a published UMAT's output, K0), drained triaxial compressions
+//! (Herle & Gudehus's peak, the critical state) and cyclic undrained shear with and without the
+//! intergranular strain; written as two-column CSVs for the plots and `summary.json` for the
+//! tables.
 //!
 //! ```text
 //! cargo run --release -p mpm-solve --example soil_elements -- OUT_DIR
@@ -11,8 +14,11 @@ use std::error::Error;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use mpm_solve::jobs::cam_clay;
-use mpm_solve::material::element_test::{drained_triaxial, oedometer, undrained_triaxial, Sample};
+use mpm_solve::jobs::{cam_clay, hypoplastic};
+use mpm_solve::material::element_test::{
+    cyclic_undrained, drained_triaxial, oedometer, undrained_triaxial, Sample,
+};
+use mpm_solve::material::hypoplastic::HypoplasticSpec;
 use mpm_solve::material::law::LawSpec;
 use mpm_solve::material::modified_cam_clay::ModifiedCamClaySpec;
 
@@ -181,6 +187,136 @@ fn oedometer_test(dir: &Path, summary: &mut Vec<String>) -> Result<(), Box<dyn E
     Ok(())
 }
 
+/// Hochstetten sand (Herle & Gudehus 1999) at e0 `e0`, with the intergranular strain (R 1e-4,
+/// m_R 5, m_T 2, β_r 0.5, χ 6, δ0 mobilised along the initial stress: `initial` 1) or
+/// without (`igs` false), integrated to a relative tolerance of 1e-5.
+fn sand(e0: f64, igs: bool, initial: f64) -> Result<HypoplasticSpec, Box<dyn Error>> {
+    let r = if igs { 1e-4 } else { 0.0 };
+    Ok(HypoplasticSpec::new(
+        [33.0, 1.0e6, 0.25, 0.55, 0.95, 1.05, 0.25, 1.5],
+        e0,
+        [r, 5.0, 2.0, 0.5, 6.0, initial],
+        1e-5,
+        1.0,
+        2000.0,
+    )?)
+}
+
+/// The OpenSees manual's UMAT example (e0 0.70, isotropic 100 kPa, δ0 = 0, 0.5 % oedometric
+/// compression in steps of 1e-4, one step back), and oedometric loading to σ'v = 400 kPa and
+/// back to 20 kPa from an isotropic 10 kPa at e0 0.6 to 0.9 without the intergranular strain:
+/// e against σ'v, K0 at 100, 200, 400 kPa.
+fn hypo_oedometer(dir: &Path, summary: &mut Vec<String>) -> Result<(), Box<dyn Error>> {
+    let spec = sand(0.70, true, 0.0)?;
+    let mut sample = Sample::new(&LawSpec::from(spec), 100.0, 100.0);
+    let path = oedometer(&mut sample, &[0.005, -1e-4], 1e-4);
+    let (a, b, c) = (path[49], path[50], path[51]);
+    summary.push(format!(
+        "{{\"test\": \"hypo_umat\", \"sigma\": {}, \"loading\": {}, \"unloading\": {}}}",
+        b.axial_stress,
+        (b.axial_stress - a.axial_stress) / 1e-4,
+        (b.axial_stress - c.axial_stress) / 1e-4
+    ));
+    for e0 in [0.6, 0.7, 0.8, 0.9] {
+        let mut sample = Sample::new(&LawSpec::from(sand(e0, false, 0.0)?), 10.0, 10.0);
+        let mut path = vec![sample.record()];
+        while sample.record().axial_stress < 400.0 {
+            sample.strain(0.0, 1e-5);
+            path.push(sample.record());
+        }
+        let top = path.len();
+        while sample.record().axial_stress > 20.0 {
+            sample.strain(0.0, -1e-6);
+            path.push(sample.record());
+        }
+        write_xy(
+            dir,
+            &format!("hypo_oedometer_{e0}.csv"),
+            "sigma_v,e",
+            path.iter().map(|r| (r.axial_stress, r.state[0])),
+        )?;
+        let k0: Vec<String> = [100.0, 200.0, 400.0]
+            .iter()
+            .map(|&sv| {
+                let r = path[path[..top].partition_point(|r| r.axial_stress < sv)];
+                format!(
+                    "[{}, {}, {}]",
+                    r.axial_stress,
+                    (r.axial_stress - r.q) / r.axial_stress,
+                    r.state[0]
+                )
+            })
+            .collect();
+        summary.push(format!(
+            "{{\"test\": \"hypo_oedometer\", \"e0\": {e0}, \"k0\": [{}], \"e_end\": {}}}",
+            k0.join(", "),
+            path.last().ok_or("no path")?.state[0]
+        ));
+    }
+    Ok(())
+}
+
+/// Drained triaxial compressions from p' = 100 kPa to 150 % axial strain at e0 0.55, 0.65,
+/// 0.75 (no intergranular strain): q / p' and ε_v against ε_a, e against p', the peak beside
+/// Herle & Gudehus's and the end beside the critical state.
+fn hypo_drained(dir: &Path, summary: &mut Vec<String>) -> Result<(), Box<dyn Error>> {
+    for e0 in [0.55, 0.65, 0.75] {
+        let spec = sand(e0, false, 0.0)?;
+        let mut sample = Sample::new(&LawSpec::from(spec), 100.0, 100.0);
+        let path = drained_triaxial(&mut sample, 1e-3, 1500);
+        let d = hypoplastic::drained_shear(&spec, &path).ok_or("no peak")?;
+        let shown = path.iter().take_while(|r| r.axial <= 0.3 + 1e-9);
+        write_xy(
+            dir,
+            &format!("hypo_drained_{e0}_phi.csv"),
+            "eps_a,phi",
+            shown.clone().map(|r| (r.axial, hypoplastic::mobilised(r))),
+        )?;
+        write_xy(
+            dir,
+            &format!("hypo_drained_{e0}_ev.csv"),
+            "eps_a,eps_v",
+            shown.map(|r| (r.axial, r.volumetric)),
+        )?;
+        write_xy(
+            dir,
+            &format!("hypo_drained_{e0}_e.csv"),
+            "eps_a,e",
+            path.iter().map(|r| (r.axial, r.state[0])),
+        )?;
+        summary.push(format!(
+            "{{\"test\": \"hypo_drained\", \"e0\": {e0}, \"peak_phi\": {}, \"peak_axial\": {}, \"peak_e\": {}, \"peak_p\": {}, \"peak_tan_nu\": {}, \"hg_phi\": {}, \"hg_tan_nu\": {}, \"end_axial\": {}, \"end_e\": {}, \"end_ec\": {}, \"end_phi\": {}, \"end_tan_nu\": {}}}",
+            d.peak_phi, d.peak_axial, d.peak_e, d.peak_p, d.peak_tan_nu, d.hg_phi, d.hg_tan_nu,
+            d.end_axial, d.end_e, d.end_ec, d.end_phi, d.end_tan_nu
+        ));
+    }
+    Ok(())
+}
+
+/// Cyclic undrained triaxial shear of loose sand (e0 0.80, p'0 = 100 kPa, q_ampl = 15 kPa),
+/// with the intergranular strain (δ0 mobilised by the isotropic compression) and without:
+/// the p'–q paths, the cycles to liquefaction and p' after each cycle.
+fn hypo_cyclic(dir: &Path, summary: &mut Vec<String>) -> Result<(), Box<dyn Error>> {
+    for igs in [true, false] {
+        let mut sample = Sample::new(&LawSpec::from(sand(0.80, igs, 1.0)?), 100.0, 100.0);
+        let c = cyclic_undrained(&mut sample, 15.0, 1e-5, 40);
+        let tag = if igs { "igs" } else { "plain" };
+        write_xy(
+            dir,
+            &format!("hypo_cyclic_{tag}.csv"),
+            "p,q",
+            c.records.iter().step_by(5).map(|r| (r.p, r.q)),
+        )?;
+        let after: Vec<String> = c.p_after_cycle.iter().map(|p| format!("{p}")).collect();
+        summary.push(format!(
+            "{{\"test\": \"hypo_cyclic\", \"igs\": {igs}, \"liquefied_at\": {}, \"p_after_cycle\": [{}]}}",
+            c.liquefied_at.map_or("null".to_string(), |n| n.to_string()),
+            after.join(", ")
+        ));
+    }
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn Error>> {
     let dir = std::env::args()
         .nth(1)
@@ -191,6 +327,9 @@ fn main() -> Result<(), Box<dyn Error>> {
     undrained(dir, &mut summary)?;
     drained(dir, &mut summary)?;
     oedometer_test(dir, &mut summary)?;
+    hypo_oedometer(dir, &mut summary)?;
+    hypo_drained(dir, &mut summary)?;
+    hypo_cyclic(dir, &mut summary)?;
     std::fs::write(
         dir.join("summary.json"),
         format!("[\n{}\n]\n", summary.join(",\n")),

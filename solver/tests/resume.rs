@@ -284,6 +284,28 @@ fn killed_cam_clay_runs_resume_byte_identical() {
     killed_and_resumed_with("column_dry", "f32", &clay);
 }
 
+/// The same with hypoplastic sand with the intergranular strain: its seven state values (e and
+/// the intergranular strain tensor, co-rotated with the stress) go through the checkpoint.
+#[test]
+fn killed_hypoplastic_runs_resume_byte_identical() {
+    let sand = |t: String| {
+        let t = t
+            .replace(
+                "young = 10000.0\npoisson = 0.3\npoints_per_element = 1",
+                "law = \"hypoplasticity\"\ncritical_friction_angle = 33.0\n\
+                 granular_hardness = 1.0e6\nexponent_n = 0.25\nminimum_void_ratio = 0.55\n\
+                 critical_void_ratio = 0.95\nmaximum_void_ratio = 1.05\nexponent_alpha = 0.25\n\
+                 exponent_beta = 1.5\ninitial_void_ratio = 0.7\nigs_r = 1.0e-4\n\
+                 igs_initial = 1.0\nmaximum_pressure = 200.0\npoints_per_element = 1\nk0 = 0.5",
+            )
+            .replace("[gravity]\n", "[gravity]\nk0_surface = 0.8\n");
+        assert!(t.contains("hypoplasticity") && t.contains("k0_surface = 0.8"));
+        t
+    };
+    killed_and_resumed_with("column_dry", "f64", &sand);
+    killed_and_resumed_with("column_dry", "f32", &sand);
+}
+
 /// The consolidation job (two runs, the second into `workshop/`, and its records in
 /// `consolidation.csv`), killed in either run.
 #[test]

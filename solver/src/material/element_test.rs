@@ -8,6 +8,8 @@
 //! - [`drained_triaxial`]: axial compression at constant cell pressure (σ_xx = σ_zz fixed),
 //!   the lateral strain found each step by the secant method on the law's own response.
 //! - [`oedometer`]: axial strain alone (no lateral strain), loading and unloading.
+//! - [`cyclic_undrained`]: isochoric axial strain reversed each time the deviator reaches
+//!   ±q_ampl (stress-controlled cyclic triaxial), until the sample liquefies.
 
 use crate::material::law::{Law, LawSpec};
 
@@ -151,6 +153,51 @@ pub fn oedometer(sample: &mut Sample, path: &[f64], step: f64) -> Vec<Record> {
         for _ in 0..n {
             sample.strain(0.0, leg / n as f64);
             out.push(sample.record());
+        }
+    }
+    out
+}
+
+/// A cyclic undrained test's outcome.
+#[derive(Debug, Clone)]
+pub struct Cyclic {
+    /// Every step's record.
+    pub records: Vec<Record>,
+    /// The cycles the sample took to liquefy, in half cycles (compression, then extension:
+    /// 0.5 is the first compression), or `None` if it did not within the cycles run.
+    pub liquefied_at: Option<f64>,
+    /// p' at the end of each full cycle (kPa).
+    pub p_after_cycle: Vec<f64>,
+}
+
+/// A stress-controlled cyclic undrained triaxial test: isochoric axial strain increments of
+/// `step`, compression first, reversed each time q reaches ±`amplitude`, for up to `cycles`
+/// cycles. The sample has liquefied when p' falls below 5 % of its start, or a half cycle's
+/// axial strain exceeds 5 % (it cannot reach the amplitude any more).
+pub fn cyclic_undrained(sample: &mut Sample, amplitude: f64, step: f64, cycles: usize) -> Cyclic {
+    let p0 = sample.record().p;
+    let mut out = Cyclic {
+        records: vec![sample.record()],
+        liquefied_at: None,
+        p_after_cycle: Vec::new(),
+    };
+    for half in 0..2 * cycles {
+        let sign = if half % 2 == 0 { 1.0 } else { -1.0 };
+        let start = sample.axial;
+        loop {
+            sample.strain(-sign * step / 2.0, sign * step);
+            let r = sample.record();
+            out.records.push(r);
+            if r.p < 0.05 * p0 || (r.axial - start).abs() > 0.05 {
+                out.liquefied_at = Some((half + 1) as f64 / 2.0);
+                return out;
+            }
+            if sign * r.q >= amplitude {
+                break;
+            }
+        }
+        if half % 2 == 1 {
+            out.p_after_cycle.push(sample.record().p);
         }
     }
     out

@@ -19,10 +19,12 @@
 //!   m_R times stiffer than the path's end; δ = 0 (a point's start by default) is the reversal.
 //!
 //! The update integrates the rate over the strain increment (the rate is homogeneous of
-//! degree one in D: the increment's pseudo-time runs from 0 to 1) by the Runge–Kutta pair of
-//! orders 2 and 3 (Simpson's rule, as Fellin & Ostermann's and the soilmodels.com code use)
-//! with error-controlled sub-steps: the difference of the two orders, relative to the stress,
-//! R and the void ratio, within `INTEGRATION_TOLERANCE`; the third-order result is taken. The
+//! degree one in D: the increment's pseudo-time runs from 0 to 1) by the explicit Runge–Kutta
+//! pair of orders 1 and 2 (Euler and Heun's modified Euler, Sloan's 1987 scheme for
+//! elastoplastic laws; two rate evaluations a sub-step where the Runge–Kutta–Fehlberg pair of
+//! orders 2 and 3 takes three, which made the law 1.5 times dearer) with error-controlled
+//! sub-steps: the difference of the two orders, relative to the stress, R and the void ratio,
+//! within `INTEGRATION_TOLERANCE`; the second-order result is taken. The
 //! first sub-step is the whole increment, so the small increments of an explicit run take one
 //! each. After each sub-step ‖δ‖ ≤ R and e_d(p) ≤ e ≤ e_i(p) are restored.
 //!
@@ -37,6 +39,7 @@
 //! monotonic compression). The time step takes the stiffest state the run can reach: the
 //! densest (e_d) at `MAXIMUM_PRESSURE`, with the intergranular strain's m_R.
 
+use std::f64::consts::SQRT_2;
 use std::marker::PhantomData;
 
 use crate::material::definition::{
@@ -414,6 +417,12 @@ struct Constants {
     fb: f64,
     /// M_c = 6 sin φ_c / (3 − sin φ_c).
     critical_ratio: f64,
+    /// The powers n, α, β, χ and β_r.
+    pow_n: Power,
+    pow_alpha: Power,
+    pow_beta: Power,
+    pow_chi: Power,
+    pow_beta_r: Power,
     void_ratio: f64,
     /// R (0: no intergranular strain), m_R, m_T, β_r, χ, ρ0.
     r: f64,
@@ -465,6 +474,61 @@ impl Point {
     }
 }
 
+/// x^e for a fixed exponent e: by multiplications and square roots where e is a multiple of
+/// ¼ up to 16 (the published parameter sets' n = 0.25, α = 0.25, β = 1.5, χ = 6, β_r = 0.5:
+/// a sixth of the general power's cost), exp(e ln x) otherwise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Power {
+    /// e = k / 4.
+    Quarters(u32),
+    /// Any other e.
+    General(f64),
+}
+
+impl Power {
+    fn of(e: f64) -> Self {
+        let k = 4.0 * e;
+        if k.fract() == 0.0 && (0.0..=64.0).contains(&k) {
+            Power::Quarters(k as u32)
+        } else {
+            Power::General(e)
+        }
+    }
+
+    /// x^e for x > 0.
+    #[inline]
+    fn of_positive(self, x: f64) -> f64 {
+        match self {
+            Power::Quarters(k) => {
+                let whole = powi(x, k / 4);
+                match k % 4 {
+                    0 => whole,
+                    2 => whole * x.sqrt(),
+                    r => {
+                        let q = x.sqrt().sqrt();
+                        whole * if r == 1 { q } else { q * q * q }
+                    }
+                }
+            }
+            Power::General(e) => (e * x.ln()).exp(),
+        }
+    }
+}
+
+/// x^k by squaring.
+#[inline]
+fn powi(mut x: f64, mut k: u32) -> f64 {
+    let mut out = 1.0;
+    while k > 0 {
+        if k & 1 == 1 {
+            out *= x;
+        }
+        x *= x;
+        k >>= 1;
+    }
+    out
+}
+
 /// A : B of two symmetric tensors (xx yy zz xy yz zx, tensor shear components).
 fn dot(a: &[f64; 6], b: &[f64; 6]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + 2.0 * (a[3] * b[3] + a[4] * b[4] + a[5] * b[5])
@@ -499,6 +563,11 @@ impl Constants {
             beta: s.beta,
             fb: s.hardness / s.exponent * (s.e_i0 / s.e_c0).powf(s.beta) / denominator,
             critical_ratio: 6.0 * sin / (3.0 - sin),
+            pow_n: Power::of(s.exponent),
+            pow_alpha: Power::of(s.alpha),
+            pow_beta: Power::of(s.beta),
+            pow_chi: Power::of(s.igs_chi),
+            pow_beta_r: Power::of(s.igs_beta_r),
             void_ratio: s.void_ratio,
             r: s.igs_r,
             mr: s.igs_mr,
@@ -511,19 +580,23 @@ impl Constants {
         }
     }
 
-    /// Bauer's factor exp(−(p_s / h_s)^n) at p_s = −tr T = 3p.
+    /// Bauer's factor exp(−(p_s / h_s)^n) at p_s = −tr T = 3p (> 0).
     fn bauer(&self, ps: f64) -> f64 {
-        (-(ps / self.hardness).powf(self.exponent)).exp()
+        if ps <= 0.0 {
+            return 1.0;
+        }
+        (-self.pow_n.of_positive(ps / self.hardness)).exp()
     }
 
     /// f_b f_e at p_s = 3p and void ratio `e`, with e_d, e_c there: (f_b f_e, e_d, e_c).
     fn factors(&self, ps: f64, e: f64) -> (f64, f64, f64) {
-        let x = (ps / self.hardness).powf(self.exponent);
+        let ratio = ps / self.hardness;
+        let x = self.pow_n.of_positive(ratio);
         let bauer = (-x).exp();
         let (ei, ec, ed) = (self.e_i0 * bauer, self.e_c0 * bauer, self.e_d0 * bauer);
         // (p_s / h_s)^(1 − n) = (p_s / h_s) / x.
-        let fb = self.fb * (1.0 + ei) / ei * (ps / self.hardness) / x;
-        (fb * (ec / e).powf(self.beta), ed, ec)
+        let fb = self.fb * (1.0 + ei) / ei * ratio / x;
+        (fb * self.pow_beta.of_positive(ec / e), ed, ec)
     }
 
     /// Lamé's λ and G of an isotropic stiffness bounding the law's stiffest response at
@@ -541,27 +614,30 @@ impl Constants {
     }
 
     /// The rate of the point's stress, intergranular strain and void ratio for the strain
-    /// rate `d`; `None` outside the compressive stresses where the rate is defined.
-    fn rate(&self, y: &Point, d: &[f64; 6]) -> Option<Point> {
+    /// rate `d`, with Bauer's factor at the point; `None` outside the compressive stresses
+    /// where the rate is defined.
+    fn rate_at(&self, y: &Point, d: &[f64; 6]) -> Option<(Point, f64)> {
         let t = &y.t;
         let tr = t[0] + t[1] + t[2];
         if !(tr < 0.0) {
             return None;
         }
-        let th: [f64; 6] = t.map(|x| x / tr);
+        let inv = 1.0 / tr;
+        let th: [f64; 6] = t.map(|x| x * inv);
         let third = 1.0 / 3.0;
         let dev: [f64; 6] = std::array::from_fn(|c| if c < 3 { th[c] - third } else { th[c] });
         let thth = dot(&th, &th);
         let dev2 = dot(&dev, &dev);
-        let tan_psi = (3.0 * dev2).sqrt();
-        // cos 3θ = −√6 tr(T̂*³) / ‖T̂*‖³, tr(A³) = 3 det A for a deviator.
-        let cos3 = if dev2 > 1e-24 {
-            (-(6f64).sqrt() * 3.0 * det(&dev) / (dev2 * dev2.sqrt())).clamp(-1.0, 1.0)
+        let t2 = 3.0 * dev2;
+        let tan_psi = t2.sqrt();
+        // tan ψ cos 3θ, with cos 3θ = −√6 tr(T̂*³) / ‖T̂*‖³ and tr(A³) = 3 det A for a
+        // deviator: −9√2 det T̂* / ‖T̂*‖² (cos 3θ kept in [−1, 1]).
+        let tan_cos = if dev2 > 1e-24 {
+            (-9.0 * SQRT_2 * det(&dev) / dev2).clamp(-tan_psi, tan_psi)
         } else {
-            -1.0
+            -tan_psi
         };
-        let t2 = tan_psi * tan_psi;
-        let denominator = 2.0 + 2f64.sqrt() * tan_psi * cos3;
+        let denominator = 2.0 + SQRT_2 * tan_cos;
         if !(denominator > 1e-10) {
             return None;
         }
@@ -569,58 +645,76 @@ impl Constants {
         if !(radicand >= 0.0) {
             return None;
         }
-        let f = radicand.sqrt() - tan_psi / (2.0 * 2f64.sqrt());
+        let f = radicand.sqrt() - tan_psi / (2.0 * SQRT_2);
         let (fbfe, ed, ec) = self.factors(-tr, y.e);
+        let bauer = ed / self.e_d0;
         let fd = if y.e > ed {
-            ((y.e - ed) / (ec - ed)).powf(self.alpha)
+            self.pow_alpha.of_positive((y.e - ed) / (ec - ed))
         } else {
             0.0
         };
         let c = fbfe / thth;
-        let (f2, a2) = (f * f, self.a2);
+        let (cf2, ca2) = (c * f * f, c * self.a2);
         // L : X = c (F² X + a² T̂ (T̂ : X)); f_d N = c a F f_d (T̂ + T̂*).
         let l = |x: &[f64; 6]| -> [f64; 6] {
-            let s = a2 * dot(&th, x);
-            std::array::from_fn(|k| c * (f2 * x[k] + s * th[k]))
+            let s = ca2 * dot(&th, x);
+            std::array::from_fn(|k| cf2 * x[k] + s * th[k])
         };
-        let nd: [f64; 6] = std::array::from_fn(|k| c * self.a * f * fd * (th[k] + dev[k]));
+        let n = c * self.a * f * fd;
+        let nd: [f64; 6] = std::array::from_fn(|k| n * (th[k] + dev[k]));
         let ld = l(d);
-        let tr_d = d[0] + d[1] + d[2];
-        let e = (1.0 + y.e) * tr_d;
+        let e = (1.0 + y.e) * (d[0] + d[1] + d[2]);
         if self.r <= 0.0 {
             let size = norm(d);
-            return Some(Point {
-                t: std::array::from_fn(|k| ld[k] + nd[k] * size),
-                delta: [0.0; 6],
-                e,
-            });
+            return Some((
+                Point {
+                    t: std::array::from_fn(|k| ld[k] + nd[k] * size),
+                    delta: [0.0; 6],
+                    e,
+                },
+                bauer,
+            ));
         }
         let size = norm(&y.delta);
+        if size == 0.0 {
+            // ρ = 0: a reversal's stiffness, δ̊ = D.
+            return Some((
+                Point {
+                    t: ld.map(|x| self.mr * x),
+                    delta: *d,
+                    e,
+                },
+                bauer,
+            ));
+        }
         let rho = (size / self.r).min(1.0);
-        let hat: [f64; 6] = if size > 0.0 {
-            y.delta.map(|x| x / size)
-        } else {
-            [0.0; 6]
-        };
+        let hat: [f64; 6] = y.delta.map(|x| x * (1.0 / size));
         let along = dot(&hat, d);
-        let rc = if rho > 0.0 { rho.powf(self.chi) } else { 0.0 };
+        let rc = self.pow_chi.of_positive(rho);
         let mix = rc * self.mt + (1.0 - rc) * self.mr;
         let lh = l(&hat);
         if along > 0.0 {
-            let rb = rho.powf(self.beta_r);
+            let rb = self.pow_beta_r.of_positive(rho);
             let w = rc * (1.0 - self.mt) * along;
-            Some(Point {
-                t: std::array::from_fn(|k| mix * ld[k] + w * lh[k] + rc * nd[k] * along),
-                delta: std::array::from_fn(|k| d[k] - rb * hat[k] * along),
-                e,
-            })
+            let wn = rc * along;
+            Some((
+                Point {
+                    t: std::array::from_fn(|k| mix * ld[k] + w * lh[k] + wn * nd[k]),
+                    delta: std::array::from_fn(|k| d[k] - rb * along * hat[k]),
+                    e,
+                },
+                bauer,
+            ))
         } else {
             let w = rc * (self.mr - self.mt) * along;
-            Some(Point {
-                t: std::array::from_fn(|k| mix * ld[k] + w * lh[k]),
-                delta: *d,
-                e,
-            })
+            Some((
+                Point {
+                    t: std::array::from_fn(|k| mix * ld[k] + w * lh[k]),
+                    delta: *d,
+                    e,
+                },
+                bauer,
+            ))
         }
     }
 
@@ -654,22 +748,26 @@ impl Constants {
         let mut done = 0.0;
         for _ in 0..MOST_SUBSTEPS {
             h = h.min(1.0 - done);
-            match self.rkf23(y, d, h) {
-                Some((next, error)) if error <= self.tolerance => {
+            // The next sub-step's factor for a local error growing as h²: 0.9 √(TOL / error),
+            // from the squares.
+            let tol2 = self.tolerance * self.tolerance;
+            let factor = |error2: f64| 0.9 * (tol2 / error2).sqrt().sqrt();
+            match self.heun(y, d, h) {
+                Some((next, error2, bauer)) if error2 <= tol2 => {
                     *y = next;
-                    self.restore_bounds(y);
+                    self.restore_bounds(y, bauer);
                     done += h;
                     if done >= 1.0 - 1e-12 {
                         return;
                     }
-                    let grow = if error > 0.0 {
-                        0.9 * (self.tolerance / error).cbrt()
-                    } else {
+                    // (At most four times longer: roots only where they may say less.)
+                    h *= if error2 * 400.0 <= tol2 {
                         4.0
+                    } else {
+                        factor(error2).clamp(0.25, 4.0)
                     };
-                    h *= grow.clamp(0.25, 4.0);
                 }
-                Some((_, error)) => h *= (0.9 * (self.tolerance / error).cbrt()).clamp(0.1, 0.5),
+                Some((_, error2, _)) => h *= factor(error2).clamp(0.1, 0.5),
                 None => h *= 0.25,
             }
             if h < SMALLEST_SUBSTEP {
@@ -682,37 +780,35 @@ impl Constants {
         self.elastic(y, &d.map(|x| x * rest));
     }
 
-    /// One sub-step `h` of the increment `d` by the Runge–Kutta pair of orders 2 and 3:
-    /// the third-order state and the relative error estimate; `None` where a stage leaves
-    /// the rate's domain.
-    fn rkf23(&self, y: &Point, d: &[f64; 6], h: f64) -> Option<(Point, f64)> {
-        let k1 = self.rate(y, d)?;
-        let k2 = self.rate(&y.plus(0.5 * h, &k1), d)?;
-        let k3 = self.rate(&Point::combine(&[(1.0, y), (-h, &k1), (2.0 * h, &k2)]), d)?;
-        let third = Point::combine(&[
-            (1.0, y),
-            (h / 6.0, &k1),
-            (4.0 * h / 6.0, &k2),
-            (h / 6.0, &k3),
-        ]);
-        // Third order minus second order (y + h k2).
-        let gap = Point::combine(&[(h / 6.0, &k1), (-2.0 * h / 6.0, &k2), (h / 6.0, &k3)]);
-        let stress = norm(&gap.t) / norm(&third.t).max(f64::MIN_POSITIVE);
+    /// One sub-step `h` of the increment `d` by the explicit Runge–Kutta pair of orders 1 and
+    /// 2 (Euler and Heun's modified Euler, as Sloan 1987 integrates elastoplastic laws): the
+    /// second-order state, the square of the relative error estimate (half the difference of
+    /// the two stages' rates) and Bauer's factor at the sub-step's start; `None` where a stage
+    /// leaves the rate's domain.
+    fn heun(&self, y: &Point, d: &[f64; 6], h: f64) -> Option<(Point, f64, f64)> {
+        let (k1, bauer) = self.rate_at(y, d)?;
+        let (k2, _) = self.rate_at(&y.plus(h, &k1), d)?;
+        let second = Point::combine(&[(1.0, y), (0.5 * h, &k1), (0.5 * h, &k2)]);
+        // Second order minus first order (y + h k1).
+        let gap = Point::combine(&[(0.5 * h, &k2), (-0.5 * h, &k1)]);
+        // The squares: no roots where the error is small.
+        let stress = dot(&gap.t, &gap.t) / dot(&second.t, &second.t).max(f64::MIN_POSITIVE);
         let igs = if self.r > 0.0 {
-            norm(&gap.delta) / self.r
+            dot(&gap.delta, &gap.delta) / (self.r * self.r)
         } else {
             0.0
         };
-        let void = gap.e.abs() / third.e;
-        let error = (stress * stress + igs * igs + void * void).sqrt();
-        if !error.is_finite() {
+        let void = gap.e * gap.e / (second.e * second.e);
+        let error2 = stress + igs + void;
+        if !error2.is_finite() {
             return None;
         }
-        Some((third, error))
+        Some((second, error2, bauer))
     }
 
-    /// ‖δ‖ ≤ R and e_d ≤ e ≤ e_i at the point's pressure.
-    fn restore_bounds(&self, y: &mut Point) {
+    /// ‖δ‖ ≤ R and e_d ≤ e ≤ e_i for Bauer's factor `bauer` (the sub-step's start's: a
+    /// bound to stay within, not a state to follow).
+    fn restore_bounds(&self, y: &mut Point, bauer: f64) {
         if self.r > 0.0 {
             let size = norm(&y.delta);
             if size > self.r {
@@ -720,7 +816,6 @@ impl Constants {
                 y.delta = y.delta.map(|x| x * s);
             }
         }
-        let bauer = self.bauer(-(y.t[0] + y.t[1] + y.t[2]));
         y.e = y.e.clamp(self.e_d0 * bauer, self.e_i0 * bauer);
     }
 
@@ -757,7 +852,7 @@ impl Constants {
             let s = cap / q;
             y.t = std::array::from_fn(|c| dev[c] * s - if c < 3 { p } else { 0.0 });
         }
-        self.restore_bounds(y);
+        self.restore_bounds(y, self.bauer(3.0 * p));
     }
 }
 
@@ -804,7 +899,7 @@ impl<R: Real> ConstitutiveLaw<R> for Hypoplastic<R> {
                 g2 * d[c] + if c < 3 { lambda * tr } else { 0.0 }
             }));
         }
-        self.c.rate(&y, d).map(|r| r.t)
+        self.c.rate_at(&y, d).map(|r| r.0.t)
     }
 
     fn state_tensors(&self) -> &'static [usize] {
@@ -833,6 +928,18 @@ mod tests {
     /// The isotropic strain increment `ev / 3` in each direction.
     fn isotropic(ev: f64) -> [f64; 6] {
         [ev / 3.0, ev / 3.0, ev / 3.0, 0.0, 0.0, 0.0]
+    }
+
+    #[test]
+    fn powers_by_quarters_agree_with_the_general_power() {
+        for e in [0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.25, 6.0, 0.13, 1.05, 5.5] {
+            let p = Power::of(e);
+            assert_eq!(matches!(p, Power::Quarters(_)), (4.0 * e).fract() == 0.0);
+            for x in [1e-6, 0.3, 1.0, 2.7, 1e3] {
+                let (got, want) = (p.of_positive(x), x.powf(e));
+                assert!((got / want - 1.0).abs() < 1e-14, "{x}^{e}: {got} {want}");
+            }
+        }
     }
 
     #[test]
