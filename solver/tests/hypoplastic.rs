@@ -178,3 +178,37 @@ fn parameters_and_starts_outside_the_bounds_are_refused_by_name() {
         "{e}"
     );
 }
+
+#[test]
+fn the_scene_exports_to_a_gom_that_reads_back_the_same_law() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = scene(dir.path(), "", &sand(true));
+    // Anura3D's loads ramp or step, and its initial stresses come from K0: the curve and the
+    // uniform stresses go.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let at = text.find("curve = ").unwrap();
+    let text: String = text[..at]
+        .lines()
+        .filter(|l| !l.starts_with("initial_stress"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&path, text).unwrap();
+    let out = dir.path().join("a3d");
+    mpm_solve::input::export_anura3d::export_scene(&path, &out).unwrap();
+    let gom = out.join("clay.GOM");
+    let text = std::fs::read_to_string(&gom).unwrap();
+    assert!(
+        text.contains(
+            "$$MATERIAL_MODEL_SOLID\nhypoplasticity\n$$CRITICAL_FRICTION_ANGLE\n33.0\n\
+             $$GRANULAR_HARDNESS\n1000000.0\n$$EXPONENT_N\n0.25\n$$MINIMUM_VOID_RATIO\n0.55\n\
+             $$CRITICAL_VOID_RATIO\n0.95\n$$MAXIMUM_VOID_RATIO\n1.05\n$$EXPONENT_ALPHA\n0.25\n\
+             $$EXPONENT_BETA\n1.5\n$$INITIAL_VOID_RATIO\n0.7\n$$IGS_R\n0.0001\n$$IGS_MR\n5.0\n\
+             $$IGS_MT\n2.0\n$$IGS_BETA_R\n0.5\n$$IGS_CHI\n6.0\n$$IGS_INITIAL\n1.0\n\
+             $$INTEGRATION_TOLERANCE\n0.0001\n$$MINIMUM_PRESSURE\n1.0\n$$MAXIMUM_PRESSURE\n400.0\n"
+        ),
+        "{}",
+        &text[text.find("$$MATERIAL_INDEX").unwrap()..][..900]
+    );
+    let (case, _) = mpm_solve::input::anura3d::load(&gom, &out.join("clay.CPS_001")).unwrap();
+    assert_eq!(case.body.materials[1].as_ref().unwrap().law, law(true));
+}
