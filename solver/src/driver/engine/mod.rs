@@ -100,6 +100,11 @@ pub enum SetupError {
         /// The law's refusal.
         why: String,
     },
+    /// A point on another MPI rank cannot start at its stress (that rank names it).
+    #[error(
+        "a material point on another rank cannot start at its stress (that rank's error names it)"
+    )]
+    StartElsewhere,
     /// A feature that axisymmetric sections do not model.
     #[error("{0} is not modelled for axisymmetric sections; they run with material-point integration (MPM-MP) and without strain smoothing")]
     Axisymmetric(&'static str),

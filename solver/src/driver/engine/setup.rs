@@ -75,6 +75,12 @@ impl<R: Real, E: Element> Engine<R, E> {
         let mesh = partition.local_mesh(global);
         let basis = basis_of(case, &mesh)?;
         let (mut particles, boundary) = place_points(case, &partition, &mesh, basis.as_ref())?;
+        // Every rank refuses if one does (the others would wait for it at the first sum).
+        let starts = check_starts(case, &particles);
+        if comm.min(if starts.is_ok() { 1.0 } else { 0.0 }) < 1.0 {
+            starts?;
+            return Err(SetupError::StartElsewhere);
+        }
         let NodeInputs {
             mut fixed,
             liquid_fixed,
@@ -481,7 +487,6 @@ fn place_points<E: Element, R: Real>(
     if let Some(init) = &case.start.initial_stress {
         apply_initial_stress::<E, R>(init, case, partition, &mut particles);
     }
-    check_starts(case, &particles)?;
     Ok((particles, boundary))
 }
 
