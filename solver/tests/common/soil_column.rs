@@ -197,3 +197,22 @@ pub fn on_the_element_path(
     );
     strain
 }
+
+/// The column scene at `path` written as Anura3D's files (without its load curve and uniform
+/// initial stresses: Anura3D's loads ramp or step, and its initial stresses come from K0) and
+/// read back: the GOM's text and the case.
+pub fn exported_and_read_back(path: &Path) -> (String, mpm_solve::input::case::Case) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let at = text.find("curve = ").unwrap();
+    let text: String = text[..at]
+        .lines()
+        .filter(|l| !l.starts_with("initial_stress"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(path, text).unwrap();
+    let out = path.with_extension("a3d");
+    mpm_solve::input::export_anura3d::export_scene(path, &out).unwrap();
+    let gom = out.join("clay.GOM");
+    let (case, _) = mpm_solve::input::anura3d::load(&gom, &out.join("clay.CPS_001")).unwrap();
+    (std::fs::read_to_string(&gom).unwrap(), case)
+}
