@@ -469,9 +469,13 @@ fn element<E: Element, R: Real, const WIDE: bool>(
     let located_from = j;
     // Mohr-Coulomb points go in batches of [`PLASTIC_WIDTH`] whatever the element and
     // precision: their return's decompositions side by side (a long chain of dependent square
-    // roots and divisions each) outweigh the spills of the rest. Other laws in the width of
-    // the element type and precision ([`batch_width`]).
-    let plastic = matches!(cx.laws[p.material[from] as usize], Law::MohrCoulomb(_));
+    // roots and divisions each) outweigh the spills of the rest. So do the hypoplastic law's
+    // (each point's update on its own, the batch's strain and motion in lanes). Other laws in
+    // the width of the element type and precision ([`batch_width`]).
+    let plastic = matches!(
+        cx.laws[p.material[from] as usize],
+        Law::MohrCoulomb(_) | Law::Hypoplasticity(_)
+    );
     let width = if plastic {
         PLASTIC_WIDTH
     } else {
