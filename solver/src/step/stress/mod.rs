@@ -43,8 +43,9 @@ use crate::step::smoothing::StrainSmoothing;
 
 use guard::Open;
 
-/// Points per batch of the elements of a Mohr-Coulomb material, whatever the element type and
-/// precision (docs/design.md §5.3); [`update_stress_and_move`] expands widths 1 and 4 only.
+/// Points per batch of the elements of a Mohr-Coulomb or hypoplastic material, whatever the
+/// element type and precision (docs/design.md §5.3); [`update_stress_and_move`] expands widths
+/// 1 and 4 only.
 pub const PLASTIC_WIDTH: usize = 4;
 
 /// What the stress pass reads and updates.
