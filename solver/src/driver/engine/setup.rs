@@ -74,13 +74,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         let own = partition.elements();
         let mesh = partition.local_mesh(global);
         let basis = basis_of(case, &mesh)?;
-        let (mut particles, boundary) = place_points(case, &partition, &mesh, basis.as_ref())?;
-        // Every rank refuses if one does (the others would wait for it at the first sum).
-        let starts = check_starts(case, &particles);
-        if comm.min(if starts.is_ok() { 1.0 } else { 0.0 }) < 1.0 {
-            starts?;
-            return Err(SetupError::StartElsewhere);
-        }
+        let (mut particles, boundary) = points_of(case, &partition, &mesh, &basis, &*comm)?;
         let NodeInputs {
             mut fixed,
             liquid_fixed,
@@ -401,12 +395,14 @@ fn partition_of<E: Element, R: Real>(
 /// The material points of the partition's elements, as placed, in their initial state (the
 /// laws' state slab, the liquid, the initial undrained state and stresses), and Anura3D's
 /// boundary points of the mixed rule (found as placed, before the points are reordered).
-fn place_points<E: Element, R: Real>(
+fn points_of<E: Element, R: Real>(
     case: &Case,
     partition: &Partition,
     mesh: &Mesh<E, R>,
-    basis: Option<&Background>,
+    basis: &Option<Background>,
+    comm: &dyn Communicator,
 ) -> Result<(Particles<R>, Vec<bool>), SetupError> {
+    let basis = basis.as_ref();
     let own = partition.elements();
     let density = |m: u32| {
         case.body.materials[m as usize]
@@ -487,11 +483,27 @@ fn place_points<E: Element, R: Real>(
     if let Some(init) = &case.start.initial_stress {
         apply_initial_stress::<E, R>(init, case, partition, &mut particles);
     }
+    check_starts(case, &particles, comm)?;
     Ok((particles, boundary))
 }
 
-/// Each point's start admitted by its law ([`crate::material::law::LawSpec::check_start`]).
-fn check_starts<R: Real>(case: &Case, particles: &Particles<R>) -> Result<(), SetupError> {
+/// Each point's start admitted by its law ([`crate::material::law::LawSpec::check_start`]), on
+/// every rank: each refuses if one does (the others would wait for it at the first sum).
+fn check_starts<R: Real>(
+    case: &Case,
+    particles: &Particles<R>,
+    comm: &dyn Communicator,
+) -> Result<(), SetupError> {
+    let here = first_refused_start(case, particles);
+    if comm.min(if here.is_ok() { 1.0 } else { 0.0 }) < 1.0 {
+        here?;
+        return Err(SetupError::StartElsewhere);
+    }
+    Ok(())
+}
+
+/// The first of this process's points whose start its law refuses.
+fn first_refused_start<R: Real>(case: &Case, particles: &Particles<R>) -> Result<(), SetupError> {
     for (i, stress) in particles.stress.iter().enumerate() {
         let Some(m) = case.body.materials[particles.material[i] as usize].as_ref() else {
             continue;
