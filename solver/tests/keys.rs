@@ -81,6 +81,7 @@ fn refused_example(kind: KeyKind, pattern: &str) -> Option<(String, String)> {
             | "APPLY_MATERIAL_UPDATE"
             | "APPLY_CONTACT_MESH_BOUNDARY"
             | "APPLY_CONTACT_VELOCITY_SCALING"
+            | "APPLY_CONTACT_NORMAL_CORRECTION"
             | "SUBMERGED_CALCULATION"
             | "RESET_DISPLACEMENTS"
             | "K0_PROCEDURE"

@@ -70,8 +70,8 @@ fn block_in_column(
         "{}$$EXTENDING_MESH_CORNER_NODES\n{extending}$$COMPRESSING_MESH_CORNER_NODES\n{compressing}$$MOVING_MESH_CORNER_NODES\n{}$$MOVING_MESH_DIRECTION\ny-direction\n$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n2\n",
         gom::prescribed_section(
             &gom::elements_of(&model, 2),
-            [0, 1, 0],
-            [0.0, if up { SPEED } else { -SPEED }, 0.0]
+            &[0, 1, 0],
+            &[0.0, if up { SPEED } else { -SPEED }, 0.0]
         ),
         corners(2.5, 3.0),
     );

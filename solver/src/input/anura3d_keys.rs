@@ -137,17 +137,13 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         RefusedUnlessInert("initial material-point velocities (with CPS $$INITIAL_VELOCITY 1); inert: an empty list"),
     ),
     // The structure of the contact algorithm (`step::contact`), read with CPS
-    // $$CONTACT_FORMULATION 1, ignored otherwise.
+    // $$CONTACT_FORMULATION 1, ignored otherwise: 3D models and 2D ones.
     (GomSection, "START_CONTACT_VOLUME", Modelled),
-    (
-        GomSection,
-        "START_BODY_CONTACT_2D",
-        Ignored("2D contact, which acts only with CPS $$CONTACT_FORMULATION 1 (refused in 2D)"),
-    ),
+    (GomSection, "START_BODY_CONTACT_2D", Modelled),
     (
         GomSection,
         "START_BOUNDARY_CONTACT_2D",
-        Ignored("2D contact, which acts only with CPS $$CONTACT_FORMULATION 1 (refused in 2D)"),
+        Ignored("Anura3D reads these rows but no computation uses them"),
     ),
     (
         GomSection,
@@ -409,7 +405,7 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
         "APPLY_MATERIAL_UPDATE",
         RefusedUnlessInert("material changes between stages; inert: 0"),
     ),
-    // Contact between a structure and the soil (`step::contact`): 3D, dry.
+    // Contact between a structure and the soil (`step::contact`): 3D and 2D, dry.
     (CpsKey, "CONTACT_FORMULATION", Modelled),
     (
         CpsKey,
@@ -439,17 +435,17 @@ pub const KEYS: &[(KeyKind, &str, KeyStatus)] = &[
     (
         CpsKey,
         "APPLY_CONTACT_NORMAL_CORRECTION",
-        Ignored("corrected normals are read for 2D contact only (refused)"),
+        RefusedUnlessInert("2D contact normals set by hand; inert: 0"),
     ),
     (
         CpsKey,
         "NUMBER_OF_CORRECTED_NORMALS",
-        Ignored("corrected normals are read for 2D contact only (refused)"),
+        Ignored("only used with $$APPLY_CONTACT_NORMAL_CORRECTION 1 (refused)"),
     ),
     (
         CpsKey,
         "NODE_NORMAL_DATA",
-        Ignored("corrected normals are read for 2D contact only (refused)"),
+        Ignored("only used with $$APPLY_CONTACT_NORMAL_CORRECTION 1 (refused)"),
     ),
     (
         CpsKey,

@@ -1,6 +1,7 @@
 //! Anura3D inputs written by the tests themselves: a box of `tetrahedral_old` elements (ten
-//! nodes, computed as four-node ones, Anura3D's 3D element) with materials, fixities, material
-//! points and extra GOM sections, and a CPS with the keys a test sets.
+//! nodes, computed as four-node ones, Anura3D's 3D element) or a rectangle of 3-node triangles
+//! (a plane-strain or axisymmetric section) with materials, fixities, material points and
+//! extra GOM sections, and a CPS with the keys a test sets.
 
 use std::path::{Path, PathBuf};
 
@@ -30,12 +31,50 @@ pub fn box_model(
     fixed: impl Fn([f64; 3]) -> [bool; 3],
 ) -> Model {
     let base = generate::box_mesh(cells, size, ElementType::Tet10);
+    with_materials(base, 4, "SURFACE", materials, material, fixed)
+}
+
+/// A rectangle of `cells` cells of two 3-node triangles, `size` metres, in plane strain or (x
+/// the radius) an axisymmetric section: element e takes material `material(centre of e)`
+/// (1-based index into `materials`, 0 for empty; 3 points per filled element), node n the
+/// fixities `fixed(position of n)` (x and y; z is 0 in 2D).
+pub fn rect_model(
+    cells: [usize; 2],
+    size: [f64; 2],
+    axisymmetric: bool,
+    materials: &[Material],
+    material: impl Fn([f64; 3]) -> i64,
+    fixed: impl Fn([f64; 3]) -> [bool; 2],
+) -> Model {
+    let mut base = generate::rect_mesh(cells, size);
+    if axisymmetric {
+        base.dimension = mpm_shared::Dimension::Axisymmetric;
+    }
+    with_materials(base, 3, "LINE", materials, material, |p| {
+        let f = fixed(p);
+        [f[0], f[1], false]
+    })
+}
+
+/// `base` with `materials`, element e of material `material(centre of e)` holding `points`
+/// points when filled, and the fixities `fixed(position of n)` of its first
+/// `base.dimension.coords()` components in `$$START_FIXITY_{kind}_SOLID`.
+fn with_materials(
+    base: Model,
+    points: i64,
+    kind: &str,
+    materials: &[Material],
+    material: impl Fn([f64; 3]) -> i64,
+    fixed: impl Fn([f64; 3]) -> [bool; 3],
+) -> Model {
+    let dim = base.dimension.coords();
     let element_material: Vec<i64> = (0..base.element_count())
         .map(|e| {
             let mut c = [0.0; 3];
-            for &n in base.element(e) {
-                for (a, v) in c.iter_mut().enumerate() {
-                    *v += base.node(n as usize)[a] / 10.0;
+            let nodes = base.element(e);
+            for &n in nodes {
+                for (a, v) in c.iter_mut().enumerate().take(dim) {
+                    *v += base.node(n as usize)[a] / nodes.len() as f64;
                 }
             }
             material(c)
@@ -84,31 +123,34 @@ pub fn box_model(
     let mut fixities = Table::new();
     for n in 0..base.node_count() {
         let p = base.node(n);
-        let f = fixed([p[0], p[1], p[2]]);
+        let mut at = [0.0; 3];
+        at[..dim].copy_from_slice(&p[..dim]);
+        let f = fixed(at);
         if f.iter().any(|&b| b) {
             fixities.push_row(
                 std::iter::once(Token::Int(n as i64 + 1))
-                    .chain(f.iter().map(|&b| Token::Int(i64::from(b)))),
+                    .chain(f[..dim].iter().map(|&b| Token::Int(i64::from(b)))),
             );
         }
     }
+    let section = format!("START_FIXITY_{kind}_SOLID");
     let fix = model
         .sections
         .iter_mut()
-        .find(|s| s.keyword == "START_FIXITY_SURFACE_SOLID")
+        .find(|s| s.keyword == section)
         .unwrap();
     fix.body = Body::Table {
         counted: true,
         refs: Refs::Nodes(1),
         rows: fixities,
     };
-    let mut points = Table::new();
+    let mut rows = Table::new();
     for &m in &element_material {
-        points.push_row([Token::Int(if m > 0 { 4 } else { 0 }), Token::Int(0)]);
+        rows.push_row([Token::Int(if m > 0 { points } else { 0 }), Token::Int(0)]);
     }
     model.sections.push(Section {
         keyword: "START_NUMBER_OF_MATERIAL_POINTS".into(),
-        body: Body::PerElement(points),
+        body: Body::PerElement(rows),
     });
     model
 }
@@ -125,16 +167,21 @@ pub fn elements_of(model: &Model, m: i64) -> Vec<usize> {
         .collect()
 }
 
-/// The corner nodes (1-based) of the box `lo`..`hi` of `model`'s nodes: those at its corners.
+/// The corner nodes (1-based) of the box `lo`..`hi` of `model`'s nodes: those at its corners
+/// (a rectangle's in 2D, whose `lo` and `hi` z are not read).
 pub fn box_corners(model: &Model, lo: [f64; 3], hi: [f64; 3]) -> Vec<usize> {
     let mut out = Vec::new();
     for n in 0..model.node_count() {
         let p = model.node(n);
-        if (0..3).all(|a| (p[a] - lo[a]).abs() < 1e-9 || (p[a] - hi[a]).abs() < 1e-9) {
+        if (0..p.len()).all(|a| (p[a] - lo[a]).abs() < 1e-9 || (p[a] - hi[a]).abs() < 1e-9) {
             out.push(n + 1);
         }
     }
-    assert_eq!(out.len(), 8, "a box's corners are nodes");
+    assert_eq!(
+        out.len(),
+        1 << model.dimension.coords(),
+        "a box's corners are nodes"
+    );
     out
 }
 
@@ -211,17 +258,19 @@ pub fn write(
 }
 
 /// `$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME` for `elements` (1-based): the components
-/// `flags` at `velocity`.
-pub fn prescribed_section(elements: &[usize], flags: [u8; 3], velocity: [f64; 3]) -> String {
+/// `flags` at `velocity` (two of each in 2D, three in 3D).
+pub fn prescribed_section(elements: &[usize], flags: &[u8], velocity: &[f64]) -> String {
     let mut s = format!(
         "$$PRESCRIBED_MATERIAL_POINT_VELOCITY_VOLUME\n{}\n",
         elements.len()
     );
     for e in elements {
-        s.push_str(&format!(
-            "{e} {} {} {} {} {} {}\n",
-            flags[0], flags[1], flags[2], velocity[0], velocity[1], velocity[2]
-        ));
+        let words: Vec<String> = std::iter::once(e.to_string())
+            .chain(flags.iter().map(u8::to_string))
+            .chain(velocity.iter().map(f64::to_string))
+            .collect();
+        s.push_str(&words.join(" "));
+        s.push('\n');
     }
     s
 }

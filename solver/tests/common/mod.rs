@@ -82,6 +82,17 @@ pub fn oracle(what: &str) -> Option<PathBuf> {
     found
 }
 
+/// The 2D Anura3D binary `ANURA3D_ORACLE_2D` names, or `None` (the comparison `what` is
+/// reported as skipped) when it is unset.
+pub fn oracle_2d(what: &str) -> Option<PathBuf> {
+    let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let found = mpm_shared::suite::anura3d_oracle_2d(&workspace).unwrap_or_else(|e| panic!("{e}"));
+    if found.is_none() {
+        mpm_shared::suite::skipped(&format!("{what} (ANURA3D_ORACLE_2D not set)"));
+    }
+    found
+}
+
 /// The worst difference, relative to each field's largest Anura3D value, of each field of
 /// `fields` over the outputs of `ours` paired with Anura3D's run in `anura`, and the number of
 /// outputs paired.

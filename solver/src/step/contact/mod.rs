@@ -1,6 +1,6 @@
 //! Anura3D's contact between a structure and the soil (CPS `$$CONTACT_FORMULATION 1` with the
-//! structure's elements in the GOM's `$$START_CONTACT_VOLUME`): Bardenhagen's two-body
-//! correction of the nodal velocities, so that a pile or a footing pushed into the soil
+//! structure's elements in the GOM's `$$START_CONTACT_VOLUME`, in 2D
+//! `$$START_BODY_CONTACT_2D`): Bardenhagen's two-body correction of the nodal velocities, so that a pile or a footing pushed into the soil
 //! neither sticks to it nor pulls it back, with Coulomb friction and adhesion on the interface.
 //!
 //! The points of the structure's material form one body (the *structure*), every other point
@@ -14,11 +14,11 @@
 //!    forces; fixed components zero) is formed beside each body's own v_b = p_b / m_b + a_b Δt,
 //!    and where the structure's velocity is prescribed both take the prescribed velocity;
 //! 2. for each body at the node whose velocity differs from the system's: with n the unit
-//!    normal out of that body (the structure's outward normal, area-weighted over its interface
-//!    faces and fixed at the start; reversed for the soil), Δv = v_b - v_s and d = Δv·n, a body
-//!    that approaches (d > 0) loses its normal relative velocity and, along the tangential
-//!    direction t of its relative velocity, d (μ + c A Δt / (m_b d)) of the tangential one, at
-//!    most all of it (full stick): v_b ← v_b - d (n + min(μ + c A Δt / (m_b d), |Δv × n| / d) t),
+//!    normal out of that body (the structure's outward normal, from its interface faces by
+//!    [`interface`]'s rules and fixed at the start; reversed for the soil), Δv = v_b - v_s
+//!    and d = Δv·n, a body that approaches (d > 0) loses its normal relative velocity and,
+//!    along the tangential direction t of its relative velocity, d (μ + c A Δt / (m_b d)) of
+//!    the tangential one, at most all of it (full stick): v_b ← v_b - d (n + min(μ + c A Δt / (m_b d), |Δv × n| / d) t),
 //!    μ and c the friction and adhesion between the structure and the node's soil material,
 //!    A the node's share of the interface faces' area; its acceleration becomes
 //!    (v_b - p_b / m_b) / Δt. A body that moves away is left alone.
@@ -29,11 +29,9 @@
 //! material around it sticks (μ = 10, c = 1000 kPa), and the friction of the node's soil
 //! material is the one of the lowest material index present around it.
 //!
-//! Modelled for dry 3D cases; the work is over the interface nodes, in a fixed order, on the
+//! Modelled for dry cases in 3D and in plane-strain and axisymmetric sections (the interface
+//! itself: [`interface`]); the work is over the interface nodes, in a fixed order, on the
 //! calling thread.
-
-use mpm_shared::model::{Body, Token};
-use mpm_shared::Model;
 
 use crate::element::mesh::Mesh;
 use crate::element::Element;
@@ -46,6 +44,11 @@ use crate::step::constraint::{Constraint, Hook};
 use crate::step::grid_update::NODE_BLOCK;
 use crate::step::moment::Moment;
 use crate::step::prescribed::Prescribed;
+
+pub mod interface;
+
+use interface::Interface;
+pub use interface::InterfaceRule;
 
 /// One body of a contact pair: the points of the structure's material, or all the others.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -78,201 +81,26 @@ pub struct ContactSpec {
     pub material: u32,
     /// The structure's elements (0-based, the case's order), ascending.
     pub elements: Vec<u32>,
+    /// The structure's elements in the order the input lists them (a 2D node's normal is
+    /// that of the last side in this order that faces the soil).
+    pub listed: Vec<u32>,
     /// Per material index: (friction coefficient, adhesion in kPa) between that material and
     /// the structure (0 for a material the rows do not name).
     pub interfaces: Vec<(f64, f64)>,
+    /// How a 2D interface node's normal and share of the interface are taken.
+    pub rule: InterfaceRule,
 }
 
 impl ContactSpec {
     /// The spec with its elements renumbered: `new_of_old[e]` is element e's new index.
     pub fn renumbered(mut self, new_of_old: &[u32]) -> Self {
-        for e in &mut self.elements {
+        for e in self.elements.iter_mut().chain(&mut self.listed) {
             *e = new_of_old[*e as usize];
         }
         self.elements.sort_unstable();
         self
     }
 }
-
-/// Reads `$$START_CONTACT_VOLUME` of `model`: rows `element n "material" μ c "material" μ c
-/// "material" μ c "material" μ c` ("NAN" for an unused slot). `element_material` is each
-/// element's material index (0: empty), `names` each material index's name. Returns the section
-/// and what is wrong with it when it is missing or the rows ask for what is not modelled:
-///
-/// * rows with different materials, frictions or adhesions (Anura3D takes the names from the
-///   first row and each face's numbers from its own row, with an off-by-one on one face side);
-/// * a structure that is not one whole material (every listed element of one material, every
-///   filled element of that material listed): the bodies here are materials;
-/// * a structure that is not the last material index (Anura3D looks up the frictions of the
-///   other materials only).
-pub fn read(
-    model: &Model,
-    element_material: &[u32],
-    names: &[(u32, String)],
-    points: &[u32],
-) -> Result<ContactSpec, (String, String)> {
-    const KEY: &str = "START_CONTACT_VOLUME";
-    let item = format!("$${KEY}");
-    let Some(section) = model.section(KEY) else {
-        return Err((
-            item,
-            "missing: contact ($$CONTACT_FORMULATION 1) needs the structure's elements".into(),
-        ));
-    };
-    let Body::Table { rows, .. } = &section.body else {
-        return Err((item, "expected a count and rows".into()));
-    };
-    let (mut elements, slots) = read_rows(rows, element_material, &item)?;
-    let material = element_material[elements[0] as usize];
-    if material == 0 {
-        return Err((
-            item,
-            format!(
-                "element {} is empty: the structure must be filled",
-                elements[0] + 1
-            ),
-        ));
-    }
-    elements.sort_unstable();
-    elements.dedup();
-    check_structure(material, &elements, element_material, points)
-        .map_err(|e| (item.clone(), e))?;
-    let last = names.iter().map(|n| n.0).max().unwrap_or(0);
-    if material != last {
-        return Err((
-            item,
-            format!(
-                "the structure is material {material}; Anura3D takes it to be the last material ({last})"
-            ),
-        ));
-    }
-    let interfaces = interfaces_of(&slots, names, last).map_err(|e| (item, e))?;
-    Ok(ContactSpec {
-        material,
-        elements,
-        interfaces,
-    })
-}
-
-/// A token as the input wrote it (a text without its quotes).
-fn token_text(t: &Token) -> String {
-    match t {
-        Token::Text(s) => s.trim_matches('"').to_string(),
-        Token::Int(i) => i.to_string(),
-        Token::Real(x) => x.to_string(),
-    }
-}
-
-/// The rows of the section `item`: each row's element (0-based, in the rows' order) and the
-/// first row's four `material friction adhesion` triples, as text, once every row was checked
-/// to name an element of the mesh (`element_material`: one per element), numbers for the
-/// frictions and adhesions and the same triples as the first row.
-fn read_rows(
-    rows: &mpm_shared::model::Table,
-    element_material: &[u32],
-    item: &str,
-) -> Result<(Vec<u32>, Vec<String>), (String, String)> {
-    let mut elements = Vec::new();
-    let mut first: Option<Vec<String>> = None;
-    for (k, r) in rows.rows().enumerate() {
-        let bad = |what: String| (item.to_string(), format!("row {}: {what}", k + 1));
-        if r.len() < 14 {
-            return Err(bad(
-                "expected 'element n' and four 'material friction adhesion' triples".into(),
-            ));
-        }
-        let e = r[0].as_int().unwrap_or(0);
-        if e < 1 || e as usize > element_material.len() {
-            return Err(bad(format!(
-                "element {} is not in the mesh (1..={})",
-                token_text(&r[0]),
-                element_material.len()
-            )));
-        }
-        elements.push(e as u32 - 1);
-        let rest: Vec<String> = r[2..14].iter().map(token_text).collect();
-        for t in [1, 2, 4, 5, 7, 8, 10, 11] {
-            if rest[t].parse::<f64>().map_or(true, |v| !v.is_finite()) {
-                return Err(bad(format!(
-                    "friction and adhesion must be numbers, got {}",
-                    rest[t]
-                )));
-            }
-        }
-        match &first {
-            None => first = Some(rest),
-            Some(f) if *f != rest => {
-                return Err(bad(
-                    "its materials, frictions or adhesions differ from row 1's; give every row the same (Anura3D mixes the rows' values face by face)".into(),
-                ))
-            }
-            Some(_) => {}
-        }
-    }
-    match first {
-        Some(slots) => Ok((elements, slots)),
-        None => Err((
-            item.to_string(),
-            "no rows: contact needs the structure's elements".into(),
-        )),
-    }
-}
-
-/// Checks that the structure is one whole material: every listed element (`elements`,
-/// ascending) of `material`, and every element of `material` that holds points listed.
-fn check_structure(
-    material: u32,
-    elements: &[u32],
-    element_material: &[u32],
-    points: &[u32],
-) -> Result<(), String> {
-    for e in 0..element_material.len() {
-        let listed = elements.binary_search(&(e as u32)).is_ok();
-        let of_it = element_material[e] == material;
-        if listed && !of_it {
-            return Err(format!(
-                "element {} is of material {}, the structure (row 1's element) of material {material}: the structure must be one material",
-                e + 1,
-                element_material[e]
-            ));
-        }
-        if of_it && !listed && points[e] > 0 {
-            return Err(format!(
-                "element {} is of the structure's material {material} but not listed: the structure must be every element of its material",
-                e + 1
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// Per material index up to `last`: (friction, adhesion) with the structure, from the first
-/// row's triples `slots` (a material by its name in `names`; "NAN" for an unused triple).
-fn interfaces_of(
-    slots: &[String],
-    names: &[(u32, String)],
-    last: u32,
-) -> Result<Vec<(f64, f64)>, String> {
-    let mut interfaces = vec![(0.0, 0.0); last as usize + 1];
-    for k in 0..4 {
-        let name = &slots[3 * k];
-        if name.eq_ignore_ascii_case("NAN") {
-            continue;
-        }
-        let Some(&(m, _)) = names.iter().find(|n| &n.1 == name) else {
-            return Err(format!(
-                "row 1 names material \"{name}\", which is not defined"
-            ));
-        };
-        let number = |t: usize| slots[3 * k + t].parse::<f64>().unwrap_or(0.0);
-        interfaces[m as usize] = (number(1), number(2));
-    }
-    Ok(interfaces)
-}
-
-/// Anura3D's numbering of a tetrahedron's sides by its corners (0-based): the side's normal
-/// (x₂ - x₁) × (x₃ - x₁) in this order points into the element.
-const SIDES: [[usize; 3]; 4] = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
 
 /// The structure's own nodal arrays in a run with contact: the second body the point passes
 /// map, the soil's being the engine's grid.
@@ -380,7 +208,7 @@ pub struct Contact<R: Real> {
 }
 
 impl<R: Real> Contact<R> {
-    /// Resolves `spec` on `mesh` (the whole mesh, the case's element order; 3D):
+    /// Resolves `spec` on `mesh` (the whole mesh, the case's element order):
     /// `element_material` says which elements are filled (material 0: empty); `driven`: the
     /// velocity prescribed on the structure's points, if any.
     pub fn new<E: Element>(
@@ -389,74 +217,11 @@ impl<R: Real> Contact<R> {
         element_material: &[u32],
         driven: Option<Prescribed<R>>,
     ) -> Self {
-        debug_assert_eq!(E::NODES, 4, "contact is modelled for tetrahedra");
-        let x = |n: u32| -> [f64; 3] { mesh.x[n as usize].map(|c| c.f64()) };
-        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-        // Interface faces: a side of a listed element whose neighbour is empty or of another
-        // material (a side on the mesh boundary is not one).
-        let mut faces: Vec<(u32, [u32; 3])> = Vec::new();
-        for &e in &spec.elements {
-            let c = mesh.corners[e as usize].as_ref();
-            for side in SIDES {
-                let nodes = side.map(|k| c[k]);
-                let neighbour = (0..E::FACES).find_map(|f| {
-                    let face = E::face(f);
-                    let same = face.len() == 3 && face.iter().all(|&j| nodes.contains(&c[j]));
-                    same.then(|| mesh.neighbour[e as usize].as_ref()[f])
-                });
-                let Some(nb) = neighbour.filter(|&nb| nb != u32::MAX) else {
-                    continue;
-                };
-                let m = element_material[nb as usize];
-                if m == 0 || m != spec.material {
-                    faces.push((e, nodes));
-                }
-            }
-        }
-        let mut nodes: Vec<u32> = faces.iter().flat_map(|f| f.1).collect();
-        nodes.sort_unstable();
-        nodes.dedup();
-        let slot = |n: u32| nodes.binary_search(&n).expect("an interface node");
-        let mut sum = vec![[0.0f64; 3]; nodes.len()];
-        let mut area = vec![0.0; nodes.len()];
-        for &(_, f) in &faces {
-            let (a, b) = (sub(x(f[1]), x(f[0])), sub(x(f[2]), x(f[0])));
-            let c = [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ];
-            let third = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() / 2.0 / 3.0;
-            for &n in &f {
-                area[slot(n)] += third;
-            }
-        }
-        // Normals: each element's last interface side only (Anura3D keeps one side per
-        // element), its unnormalised inward normal summed at its corners.
-        for (k, &(e, f)) in faces.iter().enumerate() {
-            if faces.get(k + 1).is_some_and(|next| next.0 == e) {
-                continue;
-            }
-            let (a, b) = (sub(x(f[1]), x(f[0])), sub(x(f[2]), x(f[0])));
-            let c = [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ];
-            for &n in &f {
-                let s = &mut sum[slot(n)];
-                for d in 0..3 {
-                    s[d] += c[d];
-                }
-            }
-        }
-        let normal = sum
-            .iter()
-            .map(|s| {
-                let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt() + 1e-60;
-                s.map(|c| -c / len)
-            })
-            .collect();
+        let Interface {
+            nodes,
+            normal,
+            area,
+        } = Interface::of(spec, mesh, element_material);
         // The elements around each interface node.
         let mut start = vec![0u32; nodes.len() + 1];
         let mut pairs: Vec<(usize, u32)> = Vec::new();
