@@ -240,6 +240,219 @@ fn a_pile_pushed_into_a_section_matches_the_2d_oracle() {
     }
 }
 
+/// [`pile_2d`]'s axisymmetric pile as a scene: the same mesh (the empty box above the soil a
+/// material group "air" without points), pushed down at 0.1 m/s by a velocity on its points
+/// for two load steps of 0.5 s, with `[[contact]]` (`friction`, `adhesion`) and
+/// `[moving_mesh]`; `extra` is appended to the scene.
+fn pile_scene(dir: &Path, name: &str, friction: f64, adhesion: f64, extra: &str) -> PathBuf {
+    use std::fmt::Write as _;
+    let (nx, ny, w, h) = (6usize, 16usize, 1.5, 4.0);
+    let node = |i: usize, j: usize| 1 + i + (nx + 1) * j;
+    let mut msh = String::from(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n3\n2 1 \"soil\"\n2 2 \"pile\"\n2 3 \"air\"\n$EndPhysicalNames\n",
+    );
+    writeln!(msh, "$Nodes\n{}", (nx + 1) * (ny + 1)).unwrap();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let (x, y) = (w * i as f64 / nx as f64, h * j as f64 / ny as f64);
+            writeln!(msh, "{} {x} {y} 0", node(i, j)).unwrap();
+        }
+    }
+    writeln!(msh, "$EndNodes\n$Elements\n{}", 2 * nx * ny).unwrap();
+    let mut id = 0;
+    for j in 0..ny {
+        for i in 0..nx {
+            let (x, y) = (
+                (i as f64 + 0.5) * w / nx as f64,
+                (j as f64 + 0.5) * h / ny as f64,
+            );
+            let group = match (x, y) {
+                (_, y) if y > 3.0 => 3,
+                (x, y) if x < 0.5 && y > 2.0 => 2,
+                _ => 1,
+            };
+            let (a, b, c, d) = (
+                node(i, j),
+                node(i + 1, j),
+                node(i + 1, j + 1),
+                node(i, j + 1),
+            );
+            for t in [[a, b, c], [a, c, d]] {
+                id += 1;
+                writeln!(msh, "{id} 2 2 {group} {group} {} {} {}", t[0], t[1], t[2]).unwrap();
+            }
+        }
+    }
+    msh.push_str("$EndElements\n");
+    std::fs::write(dir.join(format!("{name}.msh")), msh).unwrap();
+    let scene = format!(
+        r#"mesh = "{name}.msh"
+section = "axisymmetric"
+[time]
+end = 1.0
+output_interval = 0.5
+[gravity]
+vector = [0.0, -9.81, 0.0]
+[[material]]
+physical = "soil"
+density = 1800.0
+young = 2000.0
+poisson = 0.3
+[[material]]
+physical = "pile"
+density = 2400.0
+young = 50000.0
+poisson = 0.3
+[[material]]
+physical = "air"
+density = 1.0
+young = 1.0
+poisson = 0.0
+points_per_element = 0
+[[fixity]]
+plane = "x = 0"
+fixed = [true, false, false]
+[[fixity]]
+plane = "x = 1.5"
+fixed = [true, false, false]
+[[fixity]]
+plane = "y = 0"
+fixed = [false, true, false]
+[[velocity]]
+physical = "pile"
+velocity = [0.0, -0.1, 0.0]
+components = [false, true, false]
+[[contact]]
+structure = "pile"
+friction = {friction}
+adhesion = {adhesion}
+[moving_mesh]
+follows = "pile"
+moving = [[0.0, 2.0], [1.5, 3.0]]
+compressing = [[0.0, 0.0], [1.5, 2.0]]
+extending = [[0.0, 3.0], [1.5, 4.0]]
+{extra}"#
+    );
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, scene).unwrap();
+    path
+}
+
+/// The last row of each set of `reaction.csv` in `out`: (set, [fx, fy, fz]).
+fn last_reactions(out: &Path) -> Vec<(String, [f64; 3])> {
+    let text = std::fs::read_to_string(out.join("reaction.csv")).unwrap();
+    let mut last: Vec<(String, [f64; 3])> = Vec::new();
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let force = [6, 7, 8].map(|k| f[k].parse::<f64>().unwrap());
+        match last.iter_mut().find(|r| r.0 == f[2]) {
+            Some(r) => r.1 = force,
+            None => last.push((f[2].to_string(), force)),
+        }
+    }
+    last
+}
+
+#[test]
+fn a_scene_pushes_a_pile_with_contact_and_a_moving_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    // (friction, adhesion) → the soil's push on the pile and the jack's force, at the end.
+    let mut runs = Vec::new();
+    for (mu, c) in [(0.0, 0.0), (0.4, 0.0), (0.4, 5.0)] {
+        let scene = pile_scene(dir.path(), "pile", mu, c, "");
+        let out = dir.path().join(format!("out-{mu}-{c}"));
+        let o = common::solve(&scene, &out, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let sets = last_reactions(&out);
+        assert_eq!(sets.len(), 2, "{sets:?}");
+        assert_eq!(sets[1].0, "contact");
+        runs.push((sets[1].1, sets[0].1));
+    }
+    eprintln!("| μ, c | soil's push on the pile (kN/rad) | jack (kN/rad) |\n|---|---:|---:|");
+    for ((push, jack), label) in runs.iter().zip(["0, 0", "0.4, 0", "0.4, 5 kPa"]) {
+        eprintln!("| {label} | {:.4} | {:.4} |", push[1], jack[1]);
+    }
+    // The soil holds the pile back (pushes it up), the more with friction and adhesion, and
+    // the jack pushes down by the soil's push less the pile's weight (at a steady speed);
+    // the soil's radial push on the shaft (per radian) points to the axis.
+    let weight = 2.4 * 9.81 * 1.0 * 0.5 * 0.5 / 2.0; // per radian: ρ g L r² / 2
+    for (push, jack) in &runs {
+        assert!(push[1] > 0.0 && push[0] < 0.0, "{runs:?}");
+        assert!(
+            (jack[1] + push[1] - weight).abs() < 1e-3 * push[1],
+            "{runs:?}"
+        );
+    }
+    assert!(runs[1].0[1] > 1.05 * runs[0].0[1], "{runs:?}");
+    // Adhesion acts where the soil presses on the pile (Anura3D's rule), so it takes part of
+    // c L r (per radian) on the shaft, not all of it.
+    let full = 5.0 * 1.0 * 0.5;
+    assert!(runs[2].0[1] - runs[1].0[1] > 0.25 * full, "{runs:?}");
+}
+
+#[test]
+fn what_a_scene_cannot_pair_with_contact_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    for (extra, edit, expected) in [
+        (
+            "[[contact]]\nstructure = \"soil\"\n",
+            None,
+            "a second [[contact]]",
+        ),
+        (
+            "",
+            Some(("structure = \"pile\"", "structure = \"wall\"")),
+            "no physical surface \"wall\"",
+        ),
+        (
+            "",
+            Some(("friction = 0", "friction = -1")),
+            "friction = -1: expected a number",
+        ),
+        (
+            "[[traction]]\nphysical = \"top\"\ntraction = [0.0, -1.0, 0.0]\n",
+            None,
+            "not modelled with [[traction]]",
+        ),
+        (
+            "",
+            Some((
+                "physical = \"pile\"\nvelocity",
+                "physical = \"soil\"\nvelocity",
+            )),
+            "only the structure's may be driven",
+        ),
+        (
+            "",
+            Some((
+                "moving = [[0.0, 2.0], [1.5, 3.0]]",
+                "moving = [[0.0, 2.1], [1.5, 3.0]]",
+            )),
+            "no mesh node at the box's corner",
+        ),
+        (
+            "",
+            Some(("follows = \"pile\"", "follows = \"rock\"")),
+            "follows: no physical surface",
+        ),
+    ] {
+        let scene = pile_scene(dir.path(), "bad", 0.0, 0.0, extra);
+        if let Some((from, to)) = edit {
+            let text = std::fs::read_to_string(&scene).unwrap();
+            assert!(text.contains(from), "{from}");
+            std::fs::write(&scene, text.replacen(from, to, 1)).unwrap();
+        }
+        let o = common::solve(&scene, &dir.path().join("out"), &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{expected}: {err}");
+        assert!(
+            err.contains(expected) && err.contains("bad.toml"),
+            "{expected}: {err}"
+        );
+        assert!(!dir.path().join("out").exists());
+    }
+}
+
 #[test]
 fn a_pile_pushed_into_soil_with_friction_matches_anura3d() {
     let Some(bin) = common::oracle("contact against Anura3D") else {
@@ -297,7 +510,8 @@ fn contact_outputs_do_not_depend_on_the_thread_count() {
         drift: 0.0,
     };
     let (section, _) = pile_2d(dir.path(), "section", axi, 2, 0.4, 2.0);
-    for (input, label) in [(gom, "3D"), (section, "axisymmetric")] {
+    let scene = pile_scene(dir.path(), "scene", 0.4, 5.0, "");
+    for (input, label) in [(gom, "3D"), (section, "axisymmetric"), (scene, "scene")] {
         let (one, three) = (
             dir.path().join(format!("{label}-one")),
             dir.path().join(format!("{label}-three")),

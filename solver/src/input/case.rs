@@ -759,14 +759,24 @@ impl Case {
             .any(|m| m.liquid.is_some())
     }
 
-    /// The prescribed-velocity sets whose reactions `reaction.csv` records, in its order: the
-    /// material-point set first, then the nodal sets as given.
+    /// The sets whose reactions `reaction.csv` records, in its order: the prescribed
+    /// material-point set first, then the nodal sets as given, then, with contact, the soil's
+    /// push on the structure (`contact`).
     pub fn reactions(&self) -> Vec<crate::step::reaction::Reaction> {
         self.boundary
             .prescribed
             .iter()
             .map(|p| p.reaction())
             .chain(self.boundary.nodal_velocity.iter().map(|s| s.reaction()))
+            .chain(self.boundary.contact.iter().map(|_| {
+                crate::step::reaction::Reaction::new(
+                    crate::step::contact::CONTACT_SET,
+                    [0.0; 3],
+                    [true; 3],
+                    1.0,
+                    LoadCurve::Step,
+                )
+            }))
             .collect()
     }
 

@@ -324,6 +324,11 @@ impl<R: Real> Prescribed<R> {
         }
     }
 
+    /// The prescribed components.
+    pub fn directions(&self) -> [bool; 3] {
+        self.directions
+    }
+
     /// The reaction after the grid update: the masked components' accelerations are zeroed,
     /// so it is -Σ f over them (f = f_int + f_ext + `traction` × `tm`), by ascending node, at
     /// nodes that are not empty.

@@ -78,6 +78,7 @@ use crate::input::case::{
 
 mod absorbing;
 mod consolidation;
+mod contact;
 mod curve;
 mod damping;
 mod fixity;
@@ -87,6 +88,7 @@ mod initial_stress;
 mod keys;
 mod material;
 mod mesh;
+mod moving_mesh;
 mod numerics;
 pub mod reference;
 mod time;
@@ -123,6 +125,8 @@ pub(crate) const TOP_LEVEL: Table = Table {
         key("traction", "array of tables", "none", "", "`[[traction]]`"),
         key("velocity", "array of tables", "none", "", "`[[velocity]]`"),
         key("absorbing", "array of tables", "none", "", "`[[absorbing]]`"),
+        key("contact", "array of tables", "none", "", "`[[contact]]`"),
+        key("moving_mesh", "table", "none", "", "`[moving_mesh]`"),
         key("probes", "[integer, ...]", "none", "", "material-point ids (1-based) written to history.csv"),
         key("consolidation", "table", "none", "", "`[consolidation]`"),
     ],
@@ -173,6 +177,10 @@ struct Scene {
     velocity: Vec<velocity::Velocity>,
     #[serde(default)]
     absorbing: Vec<absorbing::Absorbing>,
+    #[serde(default)]
+    contact: Vec<contact::Contact>,
+    #[serde(default)]
+    moving_mesh: Option<moving_mesh::MovingMesh>,
     #[serde(default)]
     probes: Vec<u32>,
     #[serde(default)]
@@ -291,6 +299,18 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
     let supports = fixity::resolve(&scene.fixity, &mesh, &materials)?;
     let scene_dir = path.parent().unwrap_or(Path::new("."));
     let velocities = velocity::resolve(&scene.velocity, &mesh, &materials, scene_dir)?;
+    let contact = contact::resolve(
+        &scene.contact,
+        &mesh,
+        &materials,
+        contact::With {
+            grid: grid.is_some(),
+            tractions: !scene.traction.is_empty(),
+            nodal_velocity: !velocities.nodal.is_empty(),
+            driven: velocities.points.as_ref(),
+            strain_smoothing: scene.strain_smoothing,
+        },
+    )?;
     let gravity = gravity::resolve(scene.gravity.as_ref(), scene_dir)?;
     let loads = traction::resolve(&scene.traction, &mesh, grid.as_ref(), scene_dir)?;
     let absorbing = match (&scene.absorbing[..], &grid) {
@@ -303,6 +323,7 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
         }
         (entries, None) => absorbing::resolve(entries, &mesh, &materials)?,
     };
+    let moving_mesh = moving_mesh::resolve(scene.moving_mesh.as_ref(), &mesh, grid.is_some())?;
     let damping = damping::resolve(scene.damping.as_ref())?;
     let consolidation = consolidation::resolve(scene.consolidation.as_ref())?;
     let by_time_factor =
@@ -324,6 +345,8 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
         gravity,
         loads,
         absorbing,
+        contact,
+        moving_mesh,
         damping,
         times,
         consolidation,
@@ -345,6 +368,8 @@ struct Sections {
     gravity: ([f64; 3], LoadCurve),
     loads: traction::Loads,
     absorbing: Vec<crate::step::absorbing::AbsorbingNode>,
+    contact: Option<crate::step::contact::ContactSpec>,
+    moving_mesh: Option<crate::step::moving_mesh::MovingMeshSpec>,
     damping: damping::Resolved,
     times: time::Times,
     consolidation: Option<crate::input::case::ConsolidationSpec>,
@@ -383,8 +408,8 @@ impl Sections {
                 walls: self.supports.walls,
                 prescribed: self.velocities.points,
                 nodal_velocity: self.velocities.nodal,
-                moving_mesh: None,
-                contact: None,
+                moving_mesh: self.moving_mesh,
+                contact: self.contact,
                 absorbing: self.absorbing,
                 absorbing_rule: Default::default(),
             },

@@ -9,7 +9,7 @@ pub use super::keys::{scene_key, Key, Table};
 use crate::material::law;
 
 /// Every table of the scene, in the order the reference lists them.
-pub fn tables() -> [&'static Table; 12] {
+pub fn tables() -> [&'static Table; 14] {
     [
         &super::TOP_LEVEL,
         &super::time::TABLE,
@@ -22,6 +22,8 @@ pub fn tables() -> [&'static Table; 12] {
         &super::traction::TABLE,
         &super::velocity::TABLE,
         &super::absorbing::TABLE,
+        &super::contact::TABLE,
+        &super::moving_mesh::TABLE,
         &super::consolidation::TABLE,
     ]
 }

@@ -50,6 +50,9 @@ pub mod interface;
 use interface::Interface;
 pub use interface::InterfaceRule;
 
+/// The name of the contact's set in `reaction.csv` (the soil's push on the structure).
+pub const CONTACT_SET: &str = "contact";
+
 /// One body of a contact pair: the points of the structure's material, or all the others.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct OneBody {
@@ -205,6 +208,14 @@ pub struct Contact<R: Real> {
     start: Vec<u32>,
     /// Per interface node, the start-of-step velocity of each body (scratch).
     before: Vec<[V3<R>; 2]>,
+    /// The index of the contact's own set among the run's reactions.
+    reaction: usize,
+    /// The soil's push on the structure in the last step (kN; per radian in an axisymmetric
+    /// section): the opposite of the soil's corrections' m Δv / Δt.
+    force: [f64; 3],
+    /// Its part at the nodes where the structure's velocity is prescribed, which the
+    /// prescribed velocity's reaction carries.
+    on_driven: [f64; 3],
 }
 
 impl<R: Real> Contact<R> {
@@ -244,6 +255,11 @@ impl<R: Real> Contact<R> {
                 structure_material: spec.material,
                 structure: true,
             },
+            // The run's reactions are the prescribed points' set, if any, then the contact's
+            // (`Case::reactions`; contact refuses velocities prescribed on nodes).
+            reaction: usize::from(driven.is_some()),
+            force: [0.0; 3],
+            on_driven: [0.0; 3],
             driven,
             before: vec![[[R::ZERO; 3]; 2]; nodes.len()],
             nodes,
@@ -320,6 +336,8 @@ impl<R: Real> Contact<R> {
         } = cx;
         let (alpha, rule, dt) = (at.damping, at.damping_rule, at.dt);
         let dtr = R::of(dt);
+        self.force = [0.0; 3];
+        self.on_driven = [0.0; 3];
         for (k, &node) in self.nodes.iter().enumerate() {
             let n = node as usize;
             let (bodies, lowest) = self.bodies_around(k, layout, p);
@@ -402,9 +420,20 @@ impl<R: Real> Contact<R> {
                     normal[0] * omega[1] - normal[1] * omega[0],
                 ];
                 let g: &mut Grid<R> = if b == 0 { soil } else { structure_grid };
+                let masked = b == 0 && prescribed(node).is_some();
                 for d in 0..3 {
-                    let corrected = v[b][d].f64() - approach * (normal[d] + slip * t[d]);
+                    let change = approach * (normal[d] + slip * t[d]);
+                    let corrected = v[b][d].f64() - change;
                     g.acc[n][d] = R::of((corrected - self.before[k][b][d].f64()) / dt);
+                    if b == 0 {
+                        // The soil's correction is the structure's push: m Δv / Δt on the
+                        // soil, its opposite on the structure.
+                        let on_structure = m * change / dt;
+                        self.force[d] += on_structure;
+                        if masked {
+                            self.on_driven[d] += on_structure;
+                        }
+                    }
                 }
             }
         }
@@ -445,8 +474,18 @@ impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
         });
         if let Some(pr) = &driven {
             pr.override_accelerations(structure, cx.particles, pm);
+            // The second override holds the structure against the soil's push too.
+            let held = &mut cx.reactions[0].force;
+            for (d, on) in pr.directions().iter().enumerate() {
+                if *on {
+                    held[d] -= self.on_driven[d];
+                }
+            }
         }
         self.driven = driven;
+        let set = &mut cx.reactions[self.reaction];
+        debug_assert_eq!(set.name, CONTACT_SET);
+        set.force = self.force;
     }
 
     fn after_remap(&mut self, cx: &mut Hook<'_, R, E>) {
