@@ -13,6 +13,22 @@ use std::path::{Path, PathBuf};
 
 use common::gom;
 
+/// The soil (material 1) and the pile (material 2, the structure) of the piles here.
+const SOIL_AND_PILE: [gom::Material; 2] = [
+    gom::Material {
+        name: "soil",
+        porosity: 0.3,
+        density: 1800.0,
+        young: 2000.0,
+    },
+    gom::Material {
+        name: "pile",
+        porosity: 0.0,
+        density: 2400.0,
+        young: 50000.0,
+    },
+];
+
 /// A pile (material 2, the structure) 0.5 m wide and 1 m long, its top at the surface of a
 /// soil (material 1) 3 m deep and 1.5 m wide, on the symmetry plane x = 0, pushed down at
 /// 0.1 m/s by a velocity prescribed on its points; friction `mu` and adhesion `c` (kPa) on its
@@ -32,20 +48,7 @@ fn pile(
     let model = gom::box_model(
         [3, 8, 1],
         [1.5, 4.0, 0.5],
-        &[
-            gom::Material {
-                name: "soil",
-                porosity: 0.3,
-                density: 1800.0,
-                young: 2000.0,
-            },
-            gom::Material {
-                name: "pile",
-                porosity: 0.0,
-                density: 2400.0,
-                young: 50000.0,
-            },
-        ],
+        &SOIL_AND_PILE,
         |p| match (p[0], p[1]) {
             (_, y) if y >= 3.0 => 0,
             (x, y) if x < 0.5 && y >= 2.0 => 2,
@@ -123,20 +126,7 @@ fn pile_2d(
         [6, 16],
         [1.5, 4.0],
         push.axisymmetric,
-        &[
-            gom::Material {
-                name: "soil",
-                porosity: 0.3,
-                density: 1800.0,
-                young: 2000.0,
-            },
-            gom::Material {
-                name: "pile",
-                porosity: 0.0,
-                density: 2400.0,
-                young: 50000.0,
-            },
-        ],
+        &SOIL_AND_PILE,
         |p| match (p[0], p[1]) {
             (_, y) if y >= 3.0 => 0,
             (x, y) if x > push.left && x < push.left + 0.5 && y >= 2.0 => 2,
@@ -356,16 +346,20 @@ fn last_reactions(out: &Path) -> Vec<(String, [f64; 3])> {
 #[test]
 fn a_scene_pushes_a_pile_with_contact_and_a_moving_mesh() {
     let dir = tempfile::tempdir().unwrap();
-    // (friction, adhesion) → the soil's push on the pile and the jack's force, at the end.
-    let mut runs = Vec::new();
+    // (friction, adhesion) → the soil's push on the pile and the jack's force, at the end;
+    // the vertical push off the base (the shaft's and the top's, where the soil heaves onto
+    // the pile's top corner).
+    let (mut runs, mut shaft) = (Vec::new(), Vec::new());
     for (mu, c) in [(0.0, 0.0), (0.4, 0.0), (0.4, 5.0)] {
         let scene = pile_scene(dir.path(), "pile", mu, c, "");
         let out = dir.path().join(format!("out-{mu}-{c}"));
         let o = common::solve(&scene, &out, &[]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let sets = last_reactions(&out);
-        assert_eq!(sets.len(), 2, "{sets:?}");
+        assert_eq!(sets.len(), 3, "{sets:?}");
         assert_eq!(sets[1].0, "contact");
+        assert_eq!(sets[2].0, "contact_base");
+        shaft.push(sets[1].1[1] - sets[2].1[1]);
         runs.push((sets[1].1, sets[0].1));
     }
     eprintln!("| μ, c | soil's push on the pile (kN/rad) | jack (kN/rad) |\n|---|---:|---:|");
@@ -384,6 +378,8 @@ fn a_scene_pushes_a_pile_with_contact_and_a_moving_mesh() {
         );
     }
     assert!(runs[1].0[1] > 1.05 * runs[0].0[1], "{runs:?}");
+    // Friction on the shaft holds the pile back.
+    assert!(shaft[1] > shaft[0] + 5.0, "{shaft:?}");
     // Adhesion acts where the soil presses on the pile (Anura3D's rule), so it takes part of
     // c L r (per radian) on the shaft, not all of it.
     let full = 5.0 * 1.0 * 0.5;
@@ -657,4 +653,50 @@ fn what_contact_does_not_model_is_refused_by_name() {
             && err.contains("element 1 is not of the structure's material 2"),
         "{err}"
     );
+}
+
+#[test]
+fn a_killed_scene_with_contact_resumes_byte_identical() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = pile_scene(dir.path(), "pile", 0.4, 5.0, "");
+    let full = dir.path().join("full");
+    let o = common::solve(&scene, &full, &["--threads", "1"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Killed between outputs (the averaged reactions' windows half full), resumed on another
+    // thread count.
+    for (at, every) in [("150", "7"), ("333", "1h")] {
+        let cut = dir.path().join(format!("cut{at}"));
+        let first = common::solve(
+            &scene,
+            &cut,
+            &[
+                "--threads",
+                "2",
+                "--abort-after-step",
+                at,
+                "--checkpoint-every",
+                every,
+            ],
+        );
+        assert!(
+            !first.status.success(),
+            "the run was to abort after step {at}"
+        );
+        let resumed = std::process::Command::new(env!("CARGO_BIN_EXE_mpm-solve"))
+            .arg(&scene)
+            .args(["-q", "--resume", cut.to_str().unwrap(), "--threads", "1"])
+            .output()
+            .unwrap();
+        assert!(
+            resumed.status.success(),
+            "{}",
+            String::from_utf8_lossy(&resumed.stderr)
+        );
+        let (a, b) = (common::outputs(&full), common::outputs(&cut));
+        assert_eq!(a.len(), b.len());
+        for (f, g) in a.iter().zip(&b) {
+            assert_eq!(f.0, g.0);
+            assert!(f.1 == g.1, "killed after step {at}: {} differs", f.0);
+        }
+    }
 }

@@ -182,7 +182,7 @@ impl Output {
                 real_to_string(engine.time)
             );
             csv_text(&mut s.reaction, &r.name);
-            for v in r.displacement().iter().chain(&r.force) {
+            for v in r.displacement().iter().chain(&r.reported()) {
                 csv_real(&mut s.reaction, *v);
             }
             s.reaction.push('\n');

@@ -582,6 +582,9 @@ impl Run<'_> {
         let t1 = Instant::now();
         self.write(engine)?;
         observer.on_output(engine);
+        for r in &mut engine.reactions {
+            r.restart_window();
+        }
         // The next load step starts here.
         (self.d.next_output, self.d.taken, self.d.begun) = (k + 1, 0, engine.time);
         let last = k + 1 == self.case.time.output_times.len();

@@ -761,21 +761,26 @@ impl Case {
 
     /// The sets whose reactions `reaction.csv` records, in its order: the prescribed
     /// material-point set first, then the nodal sets as given, then, with contact, the soil's
-    /// push on the structure (`contact`).
+    /// push on the structure (`contact`) and its part on the downward-facing interface
+    /// (`contact_base`). With contact, the sets are reported as their means over the steps
+    /// since the last output (a step's contact force is an impulse over that step).
     pub fn reactions(&self) -> Vec<crate::step::reaction::Reaction> {
         self.boundary
             .prescribed
             .iter()
-            .map(|p| p.reaction())
+            .map(|p| {
+                let mut r = p.reaction();
+                if self.boundary.contact.is_some() {
+                    // The driven structure's reaction carries the contact's push: averaged as
+                    // the push is.
+                    r.window = Some(([0.0; 3], 0.0));
+                }
+                r
+            })
             .chain(self.boundary.nodal_velocity.iter().map(|s| s.reaction()))
-            .chain(self.boundary.contact.iter().map(|_| {
-                crate::step::reaction::Reaction::new(
-                    crate::step::contact::CONTACT_SET,
-                    [0.0; 3],
-                    [true; 3],
-                    1.0,
-                    LoadCurve::Step,
-                )
+            .chain(self.boundary.contact.iter().flat_map(|_| {
+                use crate::step::contact::{CONTACT_BASE_SET, CONTACT_SET};
+                [CONTACT_SET, CONTACT_BASE_SET].map(crate::step::reaction::Reaction::averaged)
             }))
             .collect()
     }

@@ -27,6 +27,10 @@ pub struct Reaction {
     /// ∫ multiplier dt so far (s), summed step by step at each step's end-of-step multiplier,
     /// as the nodes move.
     pub travel: f64,
+    /// For a set reported as its mean over the steps since the last output (contact's, whose
+    /// step-by-step values are impulses over one step, and so noisy): ∫ force dt and the time
+    /// summed since then.
+    pub window: Option<([f64; 3], f64)>,
 }
 
 impl Reaction {
@@ -45,6 +49,32 @@ impl Reaction {
             curve,
             force: [0.0; 3],
             travel: 0.0,
+            window: None,
+        }
+    }
+
+    /// A set of forces only (no prescribed motion), reported as the mean over the steps
+    /// since the last output.
+    pub fn averaged(name: &str) -> Self {
+        Reaction {
+            window: Some(([0.0; 3], 0.0)),
+            ..Reaction::new(name, [0.0; 3], [false; 3], 1.0, LoadCurve::Step)
+        }
+    }
+
+    /// The force `reaction.csv` reports: the last step's, or for an averaged set the mean
+    /// over the steps since the last output (the last step's when none has passed).
+    pub fn reported(&self) -> [f64; 3] {
+        match self.window {
+            Some((impulse, elapsed)) if elapsed > 0.0 => impulse.map(|i| i / elapsed),
+            _ => self.force,
+        }
+    }
+
+    /// Starts an averaged set's next window (after an output).
+    pub fn restart_window(&mut self) {
+        if let Some(w) = &mut self.window {
+            *w = ([0.0; 3], 0.0);
         }
     }
 
@@ -70,6 +100,12 @@ impl Reaction {
     /// Accounts one step of length `dt` ending at `t_end`.
     pub fn advance(&mut self, t_end: f64, dt: f64) {
         self.travel += self.multiplier(t_end) * dt;
+        if let Some((impulse, elapsed)) = &mut self.window {
+            for (i, f) in impulse.iter_mut().zip(self.force) {
+                *i += f * dt;
+            }
+            *elapsed += dt;
+        }
     }
 }
 

@@ -113,14 +113,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                 .zip(phase_seconds)
                 .map(|(&n, s)| (n, s.to_bits())),
         );
-        for r in reactions {
-            out.push(("reaction_travel", r.travel.to_bits()));
-            out.extend(
-                ["reaction_fx", "reaction_fy", "reaction_fz"]
-                    .into_iter()
-                    .zip(r.force.map(f64::to_bits)),
-            );
-        }
+        reaction_scalars(reactions, &mut out);
         out.extend(semi_implicit.iter().flat_map(|s| s.counts.saved()));
         out.extend(
             constraints
@@ -231,12 +224,16 @@ impl<R: Real, E: Element> Engine<R, E> {
         for (k, s) in self.phase_seconds.iter_mut().enumerate() {
             *s = f(15 + k);
         }
-        let at = 15 + PHASES.len();
-        for (k, r) in self.reactions.iter_mut().enumerate() {
-            r.travel = f(at + 4 * k);
-            r.force = [1, 2, 3].map(|j| f(at + 4 * k + j));
+        let mut at = 15 + PHASES.len();
+        for r in self.reactions.iter_mut() {
+            r.travel = f(at);
+            r.force = [1, 2, 3].map(|j| f(at + j));
+            at += 4;
+            if let Some(w) = &mut r.window {
+                *w = ([0, 1, 2].map(|j| f(at + j)), f(at + 3));
+                at += 4;
+            }
         }
-        let mut at = at + 4 * self.reactions.len();
         if let Some(s) = &mut self.semi_implicit {
             s.counts =
                 crate::step::semi_implicit::SolveCounts::restored([0, 1, 2, 3].map(|k| v(at + k)));
@@ -253,5 +250,25 @@ impl<R: Real, E: Element> Engine<R, E> {
             )));
         }
         Ok(())
+    }
+}
+
+/// The reactions' checkpoint scalars, appended to `out`: each set's travel and last force, and
+/// an averaged set's window.
+fn reaction_scalars(reactions: &[crate::step::reaction::Reaction], out: &mut Vec<(&str, u64)>) {
+    for r in reactions {
+        out.push(("reaction_travel", r.travel.to_bits()));
+        out.extend(
+            ["reaction_fx", "reaction_fy", "reaction_fz"]
+                .into_iter()
+                .zip(r.force.map(f64::to_bits)),
+        );
+        if let Some((impulse, elapsed)) = r.window {
+            out.extend(
+                ["window_ix", "window_iy", "window_iz", "window_time"]
+                    .into_iter()
+                    .zip(impulse.iter().chain([&elapsed]).map(|v| v.to_bits())),
+            );
+        }
     }
 }

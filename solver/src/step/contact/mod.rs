@@ -53,6 +53,10 @@ pub use interface::InterfaceRule;
 /// The name of the contact's set in `reaction.csv` (the soil's push on the structure).
 pub const CONTACT_SET: &str = "contact";
 
+/// The name of the set of the push's part at the interface nodes whose normal points down
+/// (n_y ≤ −1/2; a pile's base resistance) in `reaction.csv`.
+pub const CONTACT_BASE_SET: &str = "contact_base";
+
 /// One body of a contact pair: the points of the structure's material, or all the others.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct OneBody {
@@ -213,6 +217,8 @@ pub struct Contact<R: Real> {
     /// The soil's push on the structure in the last step (kN; per radian in an axisymmetric
     /// section): the opposite of the soil's corrections' m Δv / Δt.
     force: [f64; 3],
+    /// Its part at the nodes whose normal points down (n_y ≤ −1/2): a pile's base.
+    on_base: [f64; 3],
     /// Its part at the nodes where the structure's velocity is prescribed, which the
     /// prescribed velocity's reaction carries.
     on_driven: [f64; 3],
@@ -259,6 +265,7 @@ impl<R: Real> Contact<R> {
             // (`Case::reactions`; contact refuses velocities prescribed on nodes).
             reaction: usize::from(driven.is_some()),
             force: [0.0; 3],
+            on_base: [0.0; 3],
             on_driven: [0.0; 3],
             driven,
             before: vec![[[R::ZERO; 3]; 2]; nodes.len()],
@@ -316,6 +323,22 @@ impl<R: Real> Contact<R> {
         (mu, c * self.area[k])
     }
 
+    /// Adds the soil's correction `change` (its velocity's decrease) at interface node `k`,
+    /// of soil mass `m`, to the push on the structure: m Δv / Δt on the soil is its opposite
+    /// on the structure. `masked`: the structure's velocity is prescribed there.
+    fn account(&mut self, k: usize, m: f64, change: [f64; 3], dt: f64, masked: bool) {
+        for d in 0..3 {
+            let on_structure = m * change[d] / dt;
+            self.force[d] += on_structure;
+            if self.normal[k][1] <= -0.5 {
+                self.on_base[d] += on_structure;
+            }
+            if masked {
+                self.on_driven[d] += on_structure;
+            }
+        }
+    }
+
     /// The contact correction after the grid update of both bodies (`soil`, `structure`) and
     /// the first override of prescribed velocities (`prescribed(node)`: the structure's
     /// prescribed velocity there and its components, for a masked node). Corrects the bodies'
@@ -337,8 +360,10 @@ impl<R: Real> Contact<R> {
         let (alpha, rule, dt) = (at.damping, at.damping_rule, at.dt);
         let dtr = R::of(dt);
         self.force = [0.0; 3];
+        self.on_base = [0.0; 3];
         self.on_driven = [0.0; 3];
-        for (k, &node) in self.nodes.iter().enumerate() {
+        for k in 0..self.nodes.len() {
+            let node = self.nodes[k];
             let n = node as usize;
             let (bodies, lowest) = self.bodies_around(k, layout, p);
             if !bodies[0] && !bodies[1] {
@@ -420,20 +445,13 @@ impl<R: Real> Contact<R> {
                     normal[0] * omega[1] - normal[1] * omega[0],
                 ];
                 let g: &mut Grid<R> = if b == 0 { soil } else { structure_grid };
-                let masked = b == 0 && prescribed(node).is_some();
+                let change = [0, 1, 2].map(|d| approach * (normal[d] + slip * t[d]));
                 for d in 0..3 {
-                    let change = approach * (normal[d] + slip * t[d]);
-                    let corrected = v[b][d].f64() - change;
+                    let corrected = v[b][d].f64() - change[d];
                     g.acc[n][d] = R::of((corrected - self.before[k][b][d].f64()) / dt);
-                    if b == 0 {
-                        // The soil's correction is the structure's push: m Δv / Δt on the
-                        // soil, its opposite on the structure.
-                        let on_structure = m * change / dt;
-                        self.force[d] += on_structure;
-                        if masked {
-                            self.on_driven[d] += on_structure;
-                        }
-                    }
+                }
+                if b == 0 {
+                    self.account(k, m, change, dt, prescribed(node).is_some());
                 }
             }
         }
@@ -483,9 +501,11 @@ impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
             }
         }
         self.driven = driven;
-        let set = &mut cx.reactions[self.reaction];
-        debug_assert_eq!(set.name, CONTACT_SET);
-        set.force = self.force;
+        let sets = &mut cx.reactions[self.reaction..self.reaction + 2];
+        debug_assert_eq!(sets[0].name, CONTACT_SET);
+        debug_assert_eq!(sets[1].name, CONTACT_BASE_SET);
+        sets[0].force = self.force;
+        sets[1].force = self.on_base;
     }
 
     fn after_remap(&mut self, cx: &mut Hook<'_, R, E>) {
