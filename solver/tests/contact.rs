@@ -29,6 +29,31 @@ const SOIL_AND_PILE: [gom::Material; 2] = [
     },
 ];
 
+/// The GOM's contact section `key` listing the pile's `elements` (1-based) with the soil's
+/// (friction, adhesion), and the moving mesh around the pile (its box from y = 2 to 3, the
+/// soil below compressed, the empty box above stretched; `corners(lo, hi)`: the node lines of
+/// the box between those heights).
+fn contact_sections<'a>(
+    key: &str,
+    elements: impl ExactSizeIterator<Item = &'a usize>,
+    (mu, c): (f64, f64),
+    corners: &dyn Fn(f64, f64) -> String,
+) -> String {
+    let mut s = format!("$${key}\n{}\n", elements.len());
+    for e in elements {
+        s.push_str(&format!(
+            "{e} 1 \"soil\" {mu} {c} \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0\n"
+        ));
+    }
+    s.push_str(&format!(
+        "$$EXTENDING_MESH_CORNER_NODES\n{}$$COMPRESSING_MESH_CORNER_NODES\n{}$$MOVING_MESH_CORNER_NODES\n{}$$MOVING_MESH_DIRECTION\ny-direction\n$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n2\n",
+        corners(3.0, 4.0),
+        corners(0.0, 2.0),
+        corners(2.0, 3.0)
+    ));
+    s
+}
+
 /// A pile (material 2, the structure) 0.5 m wide and 1 m long, its top at the surface of a
 /// soil (material 1) 3 m deep and 1.5 m wide, on the symmetry plane x = 0, pushed down at
 /// 0.1 m/s by a velocity prescribed on its points; friction `mu` and adhesion `c` (kPa) on its
@@ -71,17 +96,11 @@ fn pile(
             .collect()
     };
     let mut extra = gom::prescribed_section(&pile, &[0, 1, 0], &[0.0, -0.1, 0.0]);
-    extra.push_str(&format!("$$START_CONTACT_VOLUME\n{}\n", pile.len()));
-    for e in &pile {
-        extra.push_str(&format!(
-            "{e} 1 \"soil\" {mu} {c} \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0\n"
-        ));
-    }
-    extra.push_str(&format!(
-        "$$EXTENDING_MESH_CORNER_NODES\n{}$$COMPRESSING_MESH_CORNER_NODES\n{}$$MOVING_MESH_CORNER_NODES\n{}$$MOVING_MESH_DIRECTION\ny-direction\n$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n2\n",
-        corners(3.0, 4.0),
-        corners(0.0, 2.0),
-        corners(2.0, 3.0)
+    extra.push_str(&contact_sections(
+        "START_CONTACT_VOLUME",
+        pile.iter(),
+        (mu, c),
+        &corners,
     ));
     extra.push_str(more);
     let steps = load_steps.to_string();
@@ -146,18 +165,12 @@ fn pile_2d(
     };
     let sideways = u8::from(push.drift != 0.0);
     let mut extra = gom::prescribed_section(&pile, &[sideways, 1], &[push.drift, -0.1]);
-    extra.push_str(&format!("$$START_BODY_CONTACT_2D\n{}\n", pile.len()));
     // Listed from the top down: the order decides a corner node's normal (Anura3D's rule).
-    for e in pile.iter().rev() {
-        extra.push_str(&format!(
-            "{e} 1 \"soil\" {mu} {c} \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0 \"NAN\" 0.0 0.0\n"
-        ));
-    }
-    extra.push_str(&format!(
-        "$$EXTENDING_MESH_CORNER_NODES\n{}$$COMPRESSING_MESH_CORNER_NODES\n{}$$MOVING_MESH_CORNER_NODES\n{}$$MOVING_MESH_DIRECTION\ny-direction\n$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n2\n",
-        corners(3.0, 4.0),
-        corners(0.0, 2.0),
-        corners(2.0, 3.0)
+    extra.push_str(&contact_sections(
+        "START_BODY_CONTACT_2D",
+        pile.iter().rev(),
+        (mu, c),
+        &corners,
     ));
     let steps = load_steps.to_string();
     gom::write(
@@ -659,44 +672,7 @@ fn what_contact_does_not_model_is_refused_by_name() {
 fn a_killed_scene_with_contact_resumes_byte_identical() {
     let dir = tempfile::tempdir().unwrap();
     let scene = pile_scene(dir.path(), "pile", 0.4, 5.0, "");
-    let full = dir.path().join("full");
-    let o = common::solve(&scene, &full, &["--threads", "1"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // Killed between outputs (the averaged reactions' windows half full), resumed on another
     // thread count.
-    for (at, every) in [("150", "7"), ("333", "1h")] {
-        let cut = dir.path().join(format!("cut{at}"));
-        let first = common::solve(
-            &scene,
-            &cut,
-            &[
-                "--threads",
-                "2",
-                "--abort-after-step",
-                at,
-                "--checkpoint-every",
-                every,
-            ],
-        );
-        assert!(
-            !first.status.success(),
-            "the run was to abort after step {at}"
-        );
-        let resumed = std::process::Command::new(env!("CARGO_BIN_EXE_mpm-solve"))
-            .arg(&scene)
-            .args(["-q", "--resume", cut.to_str().unwrap(), "--threads", "1"])
-            .output()
-            .unwrap();
-        assert!(
-            resumed.status.success(),
-            "{}",
-            String::from_utf8_lossy(&resumed.stderr)
-        );
-        let (a, b) = (common::outputs(&full), common::outputs(&cut));
-        assert_eq!(a.len(), b.len());
-        for (f, g) in a.iter().zip(&b) {
-            assert_eq!(f.0, g.0);
-            assert!(f.1 == g.1, "killed after step {at}: {} differs", f.0);
-        }
-    }
+    common::killed_and_resumed_match(&scene, dir.path(), &[("150", "7"), ("333", "1h")], "1");
 }

@@ -140,49 +140,11 @@ fn the_2d_footing_benchmark_moves_as_in_anura3d_over_four_load_steps() {
     );
 }
 
-/// The files of a run folder that must not depend on how it got there (all but run.json, the
-/// checkpoint and the lock).
-fn same_outputs(a: &Path, b: &Path) {
-    let (x, y) = (common::outputs(a), common::outputs(b));
-    assert_eq!(
-        x.iter().map(|f| &f.0).collect::<Vec<_>>(),
-        y.iter().map(|f| &f.0).collect::<Vec<_>>()
-    );
-    for (f, g) in x.iter().zip(&y) {
-        assert!(f.1 == g.1, "{} differs", f.0);
-    }
-}
-
 #[test]
 fn a_moving_mesh_run_killed_and_resumed_ends_as_the_uninterrupted_one() {
     let dir = tempfile::tempdir().unwrap();
     let (gom, _) = block_in_column(dir.path(), "block", 4, 0.25, false);
-    let full = dir.path().join("full");
-    let o = common::solve(&gom, &full, &["--threads", "1"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for (at, every) in [("150", "7"), ("230", "50")] {
-        let cut = dir.path().join(format!("cut{at}"));
-        let o = common::solve(
-            &gom,
-            &cut,
-            &[
-                "--threads",
-                "2",
-                "--abort-after-step",
-                at,
-                "--checkpoint-every",
-                every,
-            ],
-        );
-        assert!(!o.status.success(), "the run was to abort after step {at}");
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_mpm-solve"))
-            .arg(&gom)
-            .args(["-q", "--resume", cut.to_str().unwrap(), "--threads", "3"])
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        same_outputs(&full, &cut);
-    }
+    common::killed_and_resumed_match(&gom, dir.path(), &[("150", "7"), ("230", "50")], "3");
 }
 
 #[test]

@@ -183,6 +183,60 @@ pub fn solve(input: &Path, out: &Path, args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// Runs `input` whole on one thread into `dir/full`, then for each `(step, every)` of `cuts`
+/// aborts a run on two threads after that step (checkpointing every `every`) and resumes it
+/// on `threads_after`: the resumed outputs are the whole run's, byte for byte.
+pub fn killed_and_resumed_match(
+    input: &Path,
+    dir: &Path,
+    cuts: &[(&str, &str)],
+    threads_after: &str,
+) {
+    let full = dir.join("full");
+    let o = solve(input, &full, &["--threads", "1"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for &(at, every) in cuts {
+        let cut = dir.join(format!("cut{at}"));
+        let args = [
+            "--threads",
+            "2",
+            "--abort-after-step",
+            at,
+            "--checkpoint-every",
+            every,
+        ];
+        let first = solve(input, &cut, &args);
+        assert!(
+            !first.status.success(),
+            "the run was to abort after step {at}"
+        );
+        let resumed = std::process::Command::new(env!("CARGO_BIN_EXE_mpm-solve"))
+            .arg(input)
+            .args([
+                "-q",
+                "--resume",
+                cut.to_str().unwrap(),
+                "--threads",
+                threads_after,
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            resumed.status.success(),
+            "{}",
+            String::from_utf8_lossy(&resumed.stderr)
+        );
+        let (a, b) = (outputs(&full), outputs(&cut));
+        assert_eq!(
+            a.iter().map(|f| &f.0).collect::<Vec<_>>(),
+            b.iter().map(|f| &f.0).collect::<Vec<_>>()
+        );
+        for (f, g) in a.iter().zip(&b) {
+            assert!(f.1 == g.1, "killed after step {at}: {} differs", f.0);
+        }
+    }
+}
+
 /// Runs Anura3D on `dir/NAME.GOM` + `dir/NAME.CPS_001` in `dir`; fails unless it finishes.
 pub fn run_oracle(bin: &Path, dir: &Path, name: &str) {
     let out = std::process::Command::new(bin)
