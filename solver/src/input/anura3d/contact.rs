@@ -179,7 +179,6 @@ fn read_section(
     let interfaces = interfaces_of(&slots, names, last).map_err(|e| (item, e))?;
     Ok(ContactSpec {
         material,
-        elements,
         listed,
         interfaces,
         rule: InterfaceRule::Anura3d,

@@ -82,29 +82,21 @@ pub(super) fn resolve(
             ));
         }
     }
-    let m = mesh.groups.material;
-    let Some(k) = mesh.volumes.iter().position(|v| *v == entry.structure) else {
-        return Err(refuse(
-            item,
-            format!(
-                "no {m} \"{}\" in {} ({m}s: {:?})",
-                entry.structure, mesh.name, mesh.volumes
-            ),
-        ));
-    };
-    let material = k as u32 + 1;
+    let material = mesh
+        .material_group(&entry.structure)
+        .map_err(|e| refuse(&item, e))?;
     if let Some(what) = not_modelled_with(materials, &with, material) {
         return Err(refuse(item, format!("contact is not modelled {what}")));
     }
-    let elements: Vec<u32> = (0..materials.element_material.len() as u32)
+    let listed: Vec<u32> = (0..materials.element_material.len() as u32)
         .filter(|&e| materials.element_material[e as usize] == material)
         .collect();
-    if elements.is_empty() || materials.element_material.iter().all(|&e| e == material) {
+    if listed.is_empty() || materials.element_material.iter().all(|&e| e == material) {
         return Err(refuse(
             item,
             format!(
-                "the structure needs elements of its own and soil beside it ({m} \"{}\")",
-                entry.structure
+                "the structure needs elements of its own and soil beside it ({} \"{}\")",
+                mesh.groups.material, entry.structure
             ),
         ));
     }
@@ -112,8 +104,7 @@ pub(super) fn resolve(
     interfaces[material as usize] = (0.0, 0.0);
     Ok(Some(ContactSpec {
         material,
-        listed: elements.clone(),
-        elements,
+        listed,
         interfaces,
         rule: InterfaceRule::Tributary,
     }))

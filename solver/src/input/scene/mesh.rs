@@ -58,6 +58,19 @@ pub(super) struct Mesh {
 }
 
 impl Mesh {
+    /// The material index (1-based) of the material group `name`, or the message saying the
+    /// mesh has no such group and naming those it has.
+    pub fn material_group(&self, name: &str) -> Result<u32, String> {
+        let m = self.groups.material;
+        match self.volumes.iter().position(|v| v == name) {
+            Some(k) => Ok(k as u32 + 1),
+            None => Err(format!(
+                "no {m} \"{name}\" in {} ({m}s: {:?})",
+                self.name, self.volumes
+            )),
+        }
+    }
+
     /// Reads the mesh `mesh` (relative to the scene file `scene_path`).
     pub fn read(scene_path: &Path, mesh: &Path) -> Result<Self, mpm_shared::Error> {
         let path = scene_path.parent().unwrap_or(Path::new(".")).join(mesh);

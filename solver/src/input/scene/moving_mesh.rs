@@ -60,16 +60,9 @@ pub(super) fn resolve(
             "not on a background grid ([grid]); run it on the mesh's elements",
         ));
     }
-    let m = mesh.groups.material;
-    let Some(k) = mesh.volumes.iter().position(|v| *v == entry.follows) else {
-        return Err(refuse(
-            ITEM,
-            format!(
-                "follows: no {m} \"{}\" in {} ({m}s: {:?})",
-                entry.follows, mesh.name, mesh.volumes
-            ),
-        ));
-    };
+    let material = mesh
+        .material_group(&entry.follows)
+        .map_err(|e| refuse(ITEM, format!("follows: {e}")))?;
     let dim = mesh.model.dimension.coords();
     let axis = match entry.axis.as_deref().unwrap_or("y") {
         "x" => 0,
@@ -113,7 +106,7 @@ pub(super) fn resolve(
         storage,
         moving,
         axis,
-        material: k as u32 + 1,
+        material,
     }))
 }
 

@@ -109,8 +109,12 @@ fn surfaces<E: Element, R: Real>(
     debug_assert_eq!(E::NODES, 4, "3D contact is modelled for tetrahedra");
     let x = |n: u32| -> [f64; 3] { mesh.x[n as usize].map(|c| c.f64()) };
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    // Element by element, ascending (the listed order only matters in 2D).
+    let mut elements = spec.listed.clone();
+    elements.sort_unstable();
+    elements.dedup();
     let mut faces: Vec<(u32, [u32; 3])> = Vec::new();
-    for &e in &spec.elements {
+    for &e in &elements {
         let c = mesh.corners[e as usize].as_ref();
         for side in SIDES {
             let nodes = side.map(|k| c[k]);
@@ -270,13 +274,11 @@ mod tests {
         let mut listed: Vec<u32> = (0..mesh.elements() as u32)
             .filter(|&e| material[e as usize] == 2)
             .collect();
-        let elements = listed.clone();
         if descending {
             listed.reverse();
         }
         let spec = ContactSpec {
             material: 2,
-            elements,
             listed,
             interfaces: vec![(0.0, 0.0), (0.3, 1.0), (0.0, 0.0)],
             rule,

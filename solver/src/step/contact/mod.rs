@@ -86,10 +86,8 @@ pub fn maps(body: Option<OneBody>, material: u32) -> bool {
 pub struct ContactSpec {
     /// The structure's material index (that of the first listed element).
     pub material: u32,
-    /// The structure's elements (0-based, the case's order), ascending.
-    pub elements: Vec<u32>,
-    /// The structure's elements in the order the input lists them (a 2D node's normal is
-    /// that of the last side in this order that faces the soil).
+    /// The structure's elements (0-based, the case's order) in the order the input lists them
+    /// (a 2D node's normal is that of the last side in this order that faces the soil).
     pub listed: Vec<u32>,
     /// Per material index: (friction coefficient, adhesion in kPa) between that material and
     /// the structure (0 for a material the rows do not name).
@@ -101,10 +99,9 @@ pub struct ContactSpec {
 impl ContactSpec {
     /// The spec with its elements renumbered: `new_of_old[e]` is element e's new index.
     pub fn renumbered(mut self, new_of_old: &[u32]) -> Self {
-        for e in self.elements.iter_mut().chain(&mut self.listed) {
+        for e in &mut self.listed {
             *e = new_of_old[*e as usize];
         }
-        self.elements.sort_unstable();
         self
     }
 }
@@ -405,7 +402,8 @@ impl<R: Real> Contact<R> {
                     }
                 }
             }
-            if let Some((dirs, vp)) = prescribed(node) {
+            let masked = prescribed(node);
+            if let Some((dirs, vp)) = masked {
                 for d in 0..3 {
                     if dirs[d] {
                         v[1][d] = vp[d];
@@ -451,7 +449,7 @@ impl<R: Real> Contact<R> {
                     g.acc[n][d] = R::of((corrected - self.before[k][b][d].f64()) / dt);
                 }
                 if b == 0 {
-                    self.account(k, m, change, dt, prescribed(node).is_some());
+                    self.account(k, m, change, dt, masked.is_some());
                 }
             }
         }
