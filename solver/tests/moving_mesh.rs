@@ -37,12 +37,14 @@ fn block_in_column(
                 porosity: 0.3,
                 density: 1800.0,
                 young: 1000.0,
+                saturated: false,
             },
             gom::Material {
                 name: "block",
                 porosity: 0.0,
                 density: 2000.0,
                 young: 20000.0,
+                saturated: false,
             },
         ],
         |c| match c[1] {

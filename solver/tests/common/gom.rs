@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use mpm_shared::model::{Body, Refs, Section, Table, Token};
 use mpm_shared::{generate, ElementType, Model};
 
-/// A dry linear-elastic material of a generated GOM.
+/// A linear-elastic material of a generated GOM, dry or saturated.
 pub struct Material {
     /// `$$MATERIAL_NAME`.
     pub name: &'static str,
@@ -18,6 +18,41 @@ pub struct Material {
     pub density: f64,
     /// `$$YOUNG_MODULUS` (kPa).
     pub young: f64,
+    /// Saturated with water (`saturated_material_coupled`: density 1000 kg/m³, intrinsic
+    /// permeability 1e-9 m², bulk modulus 2e4 kPa, dynamic viscosity 1e-6 kPa s); the
+    /// liquid takes the solid's fixities.
+    pub saturated: bool,
+}
+
+impl Material {
+    /// The material's keys in Anura3D's order, from `$$MATERIAL_TYPE` to `$$POISSON_RATIO`.
+    fn keys(&self) -> Vec<(&'static str, String)> {
+        let kind = if self.saturated {
+            "saturated_material_coupled"
+        } else {
+            "dry_material"
+        };
+        let mut keys = vec![
+            ("MATERIAL_TYPE", kind.to_string()),
+            ("POROSITY_SOLID", self.porosity.to_string()),
+            ("DENSITY_SOLID", self.density.to_string()),
+        ];
+        if self.saturated {
+            keys.extend([
+                ("DENSITY_LIQUID", "1000".to_string()),
+                ("INTRINSIC_PERMEABILITY_LIQUID", "1e-9".to_string()),
+                ("BULK_MODULUS_LIQUID", "20000".to_string()),
+                ("DYNAMIC_VISCOSITY_LIQUID", "1e-6".to_string()),
+            ]);
+        }
+        keys.extend([
+            ("K0_VALUE_SOLID", "0.5".to_string()),
+            ("MATERIAL_MODEL_SOLID", "linear_elasticity".to_string()),
+            ("YOUNG_MODULUS", self.young.to_string()),
+            ("POISSON_RATIO", "0.3".to_string()),
+        ]);
+        keys
+    }
 }
 
 /// A box of `cells` cells of six `tetrahedral_old` elements, `size` metres: element e takes
@@ -99,18 +134,7 @@ fn with_materials(
             })
             .unwrap()
             + 2;
-        for (k, v) in [
-            ("MATERIAL_TYPE", "dry_material".to_string()),
-            ("POROSITY_SOLID", mat.porosity.to_string()),
-            ("DENSITY_SOLID", mat.density.to_string()),
-            ("K0_VALUE_SOLID", "0.5".to_string()),
-            ("MATERIAL_MODEL_SOLID", "linear_elasticity".to_string()),
-            ("YOUNG_MODULUS", mat.young.to_string()),
-            ("POISSON_RATIO", "0.3".to_string()),
-        ]
-        .into_iter()
-        .rev()
-        {
+        for (k, v) in mat.keys().into_iter().rev() {
             model.sections.insert(
                 at,
                 Section {
@@ -133,17 +157,24 @@ fn with_materials(
             );
         }
     }
-    let section = format!("START_FIXITY_{kind}_SOLID");
-    let fix = model
-        .sections
-        .iter_mut()
-        .find(|s| s.keyword == section)
-        .unwrap();
-    fix.body = Body::Table {
-        counted: true,
-        refs: Refs::Nodes(1),
-        rows: fixities,
+    let phases: &[&str] = if materials.iter().any(|m| m.saturated) {
+        &["SOLID", "LIQUID"]
+    } else {
+        &["SOLID"]
     };
+    for phase in phases {
+        let section = format!("START_FIXITY_{kind}_{phase}");
+        let fix = model
+            .sections
+            .iter_mut()
+            .find(|s| s.keyword == section)
+            .unwrap();
+        fix.body = Body::Table {
+            counted: true,
+            refs: Refs::Nodes(1),
+            rows: fixities.clone(),
+        };
+    }
     let mut rows = Table::new();
     for &m in &element_material {
         rows.push_row([Token::Int(if m > 0 { points } else { 0 }), Token::Int(0)]);

@@ -153,16 +153,50 @@ pub fn agrees_with_anura3d(
     outputs: usize,
     label: &str,
 ) -> PathBuf {
+    let fields = ["position", "displacement", "stress"];
+    agrees_in(bin, dir, name, (outputs, label), fields, &[])
+}
+
+/// [`agrees_with_anura3d`] for a saturated case: the pore pressures compared too, the drag
+/// explicit as Anura3D's.
+pub fn agrees_with_anura3d_saturated(
+    bin: &Path,
+    dir: &Path,
+    name: &str,
+    outputs: usize,
+    label: &str,
+) -> PathBuf {
+    let fields = ["position", "displacement", "stress", "pore_pressure"];
+    agrees_in(
+        bin,
+        dir,
+        name,
+        (outputs, label),
+        fields,
+        &["--drag", "explicit"],
+    )
+}
+
+/// [`agrees_with_anura3d`] over `fields`, the solver run with `args`.
+fn agrees_in<const N: usize>(
+    bin: &Path,
+    dir: &Path,
+    name: &str,
+    (outputs, label): (usize, &str),
+    fields: [&str; N],
+    args: &[&str],
+) -> PathBuf {
     run_oracle(bin, dir, name);
     let out = dir.join("ours");
-    let o = solve(&dir.join(format!("{name}.GOM")), &out, &[]);
+    let o = solve(&dir.join(format!("{name}.GOM")), &out, args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let fields = ["position", "displacement", "stress"];
     let (worst, steps) = worst_against_anura3d(dir, &out, fields);
-    eprintln!(
-        "{label}: position {:.1e}, displacement {:.1e}, stress {:.1e}",
-        worst[0], worst[1], worst[2]
-    );
+    let line: Vec<String> = fields
+        .iter()
+        .zip(&worst)
+        .map(|(f, w)| format!("{f} {w:.1e}"))
+        .collect();
+    eprintln!("{label}: {}", line.join(", "));
     assert_eq!(steps, outputs);
     for (w, f) in worst.iter().zip(fields) {
         assert!(

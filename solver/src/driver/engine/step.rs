@@ -141,7 +141,7 @@ impl<R: Real, E: Element> Engine<R, E> {
     fn map_to_grid(&mut self, at: &Moment<R>) {
         let soil = self.structure.as_ref().map(|s| s.soil());
         let structure = self.structure.as_mut().map(|s| (&mut s.grid, Some(s.body)));
-        // The liquid goes with the soil's pass (contact refuses saturated materials).
+        // The liquid goes with the soil's pass (the structure is dry).
         let mut liquid = Some(particle_to_grid::LiquidLoads {
             fluids: &self.fluids,
             gravity: at.gravity,
@@ -228,34 +228,38 @@ impl<R: Real, E: Element> Engine<R, E> {
                 &mut self.grid,
                 Nodal::Acceleration,
             );
-        } else {
-            // No loads on nodes with contact: the soil's traction array is zero for the
-            // structure too.
-            let structure = self
-                .structure
-                .as_mut()
-                .map(|s| (&mut s.scratch, &mut s.grid));
-            for (scratch, grid) in once((&mut self.grid_scratch, &mut self.grid)).chain(structure) {
-                let loads = grid_update::NodeLoads {
-                    traction: &self.traction,
-                    scale: at.traction,
-                    fixed: &self.fixed,
-                    alpha: at.damping,
-                    rule: at.damping_rule,
-                    inertia: R::of(c.mass_scaling),
-                };
-                let (team, comm) = (&self.team, &*self.comm);
-                grid_update::grid_update::<E, R>((team, comm), scratch, grid, &loads);
-                tail::cut_grid(&self.team, &*self.comm, scratch, grid, Nodal::Acceleration);
-            }
-            if let Some(s) = &mut self.structure {
-                s.force_sums(
-                    &self.team,
-                    &self.grid,
-                    &self.fixed,
-                    &mut self.grid_scratch.node_sums,
-                );
-            }
+        }
+        // The dry soil's, then the structure's (dry; no loads on nodes with contact: the soil's
+        // traction array is zero for the structure too).
+        let soil = self
+            .grid
+            .liquid
+            .is_none()
+            .then_some((&mut self.grid_scratch, &mut self.grid));
+        let structure = self
+            .structure
+            .as_mut()
+            .map(|s| (&mut s.scratch, &mut s.grid));
+        for (scratch, grid) in soil.into_iter().chain(structure) {
+            let loads = grid_update::NodeLoads {
+                traction: &self.traction,
+                scale: at.traction,
+                fixed: &self.fixed,
+                alpha: at.damping,
+                rule: at.damping_rule,
+                inertia: R::of(c.mass_scaling),
+            };
+            let (team, comm) = (&self.team, &*self.comm);
+            grid_update::grid_update::<E, R>((team, comm), scratch, grid, &loads);
+            tail::cut_grid(&self.team, &*self.comm, scratch, grid, Nodal::Acceleration);
+        }
+        if let Some(s) = &mut self.structure {
+            s.force_sums(
+                &self.team,
+                &self.grid,
+                &self.fixed,
+                &mut self.grid_scratch.node_sums,
+            );
         }
         let (forces, liquid_forces) = {
             let (layout, team, comm) = (&self.layout, &self.team, &*self.comm);
@@ -296,7 +300,7 @@ impl<R: Real, E: Element> Engine<R, E> {
                 guard: self.guards.enabled.then_some(&mut self.guard_slots[..]),
                 body,
                 begin: k == 0,
-                // The liquid goes with the soil's pass (contact refuses saturated materials).
+                // The liquid goes with the soil's pass (the structure is dry).
                 liquid: (k == 0).then_some(grid_to_particle::LiquidRemap {
                     fluids: &self.fluids,
                     fixed: &self.liquid_fixed,

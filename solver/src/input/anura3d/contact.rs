@@ -22,8 +22,8 @@ pub(super) struct ContactCase {
     pub prescribed_elements: Vec<u32>,
 }
 
-/// The contact, `None` when it is off. Refused by name what it does not model with it:
-/// saturated materials, loads on nodes or on material points, prescribed nodal
+/// The contact, `None` when it is off. Refused by name what it does not model with it: a
+/// saturated structure, loads on nodes (on the solid or the liquid) or on material points, prescribed nodal
 /// velocities and strain smoothing (Anura3D gives each of them rules of its own for the two
 /// bodies), and velocities prescribed on the soil.
 pub(super) fn read(
@@ -35,7 +35,7 @@ pub(super) fn read(
     if !switched_on(input)? {
         return Ok(None);
     }
-    if let Some(what) = not_modelled_with(input, materials, &with) {
+    if let Some(what) = not_modelled_with(input, &with) {
         return Err(unsupported(
             &input.cfile,
             KEY,
@@ -62,6 +62,21 @@ pub(super) fn read(
         &elements.points_per_element,
     )
     .map_err(|(item, why)| unsupported(&input.gfile, &item, why))?;
+    // The structure is one body of solid; the soil's liquid meets it at an impermeable wall.
+    if materials
+        .get(spec.material as usize)
+        .and_then(Option::as_ref)
+        .is_some_and(|m| m.liquid.is_some())
+    {
+        return Err(unsupported(
+            &input.gfile,
+            &format!("${key}"),
+            format!(
+                "the structure's material {} is saturated: contact models a dry structure (a saturated or dry soil beside it)",
+                spec.material
+            ),
+        ));
+    }
     // The prescribed velocity acts on the structure's nodes (Anura3D's hard entity).
     if let Some(e) = with
         .prescribed_elements
@@ -82,7 +97,7 @@ pub(super) fn read(
 }
 
 /// Whether `$$CONTACT_FORMULATION` is 1 (0 or absent: off; anything else is refused).
-fn switched_on(input: &Input) -> Result<bool, CaseError> {
+pub(super) fn switched_on(input: &Input) -> Result<bool, CaseError> {
     let value = input
         .cps
         .get("CONTACT_FORMULATION")
@@ -102,14 +117,8 @@ fn switched_on(input: &Input) -> Result<bool, CaseError> {
 
 /// What of the case the contact is not modelled with, as the end of the refusal's sentence;
 /// `None` when there is nothing.
-fn not_modelled_with(
-    input: &Input,
-    materials: &[Option<MaterialSpec>],
-    with: &ContactCase,
-) -> Option<&'static str> {
-    if materials.iter().flatten().any(|m| m.liquid.is_some()) {
-        Some("with saturated materials (dry materials only)")
-    } else if with.has_nodal_load {
+fn not_modelled_with(input: &Input, with: &ContactCase) -> Option<&'static str> {
+    if with.has_nodal_load {
         Some("with loads on nodes")
     } else if with.has_point_load {
         Some("with loads on material points")

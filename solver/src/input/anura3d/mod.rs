@@ -202,11 +202,14 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
     let probes = mpm_shared::points::cps_input_ids(&input.cps, &input.model)?;
     let steps = LoadSteps::of(&input.settings);
     let loads = loads::read(&input, steps, &materials.specs)?;
-    let prescribed = velocities::on_points(&input, &materials.specs, steps)?;
+    let with_contact = contact::switched_on(&input)?;
+    let prescribed = velocities::on_points(&input, &materials.specs, steps, with_contact)?;
     let nodal_velocity = velocities::on_nodes(&input, &materials.specs, steps)?;
     let moving_mesh = moving_mesh(&input, &materials.specs)?;
     let with = contact::ContactCase {
-        has_nodal_load: loads.traction.iter().flatten().any(|&v| v != 0.0),
+        has_nodal_load: (loads.traction.iter().chain(&loads.liquid_traction))
+            .flatten()
+            .any(|&v| v != 0.0),
         has_point_load: !loads.point_loads.is_empty(),
         has_nodal_velocity: !nodal_velocity.is_empty(),
         prescribed_elements: prescribed

@@ -11,11 +11,12 @@ use crate::step::prescribed::PrescribedVelocity;
 
 /// The prescribed material-point velocities of the GOM with the CPS `$$PRESCRIBED_VELOCITY`
 /// multiplier; `None` when there are none or the multiplier is `off` (Anura3D then ignores the
-/// rows).
+/// rows). In a case with a saturated material they are modelled `with_contact` only.
 pub(super) fn on_points(
     input: &Input,
     materials: &[Option<MaterialSpec>],
     steps: LoadSteps,
+    with_contact: bool,
 ) -> Result<Option<PrescribedVelocity>, CaseError> {
     let (model, s) = (&input.model, &input.settings);
     let (gfile, cfile) = (input.gfile.as_str(), input.cfile.as_str());
@@ -28,11 +29,12 @@ pub(super) fn on_points(
         log::warn!("{gfile}: the prescribed material-point velocities are not applied: $$PRESCRIBED_VELOCITY is off in {cfile}");
         return Ok(None);
     }
-    if materials.iter().flatten().any(|m| m.liquid.is_some()) {
+    // With contact they drive the (dry) structure, whose nodes are its own.
+    if !with_contact && materials.iter().flatten().any(|m| m.liquid.is_some()) {
         return Err(unsupported(
             gfile,
             "$$PRESCRIBED_MATERIAL_POINT_VELOCITY",
-            "prescribed velocities are not supported yet in cases with a saturated material",
+            "prescribed velocities are not supported yet in cases with a saturated material (except on a dry structure with contact, $$CONTACT_FORMULATION 1)",
         ));
     }
     let (scale, curve) = velocity_curve(s.prescribed_velocity, steps, cfile)?;

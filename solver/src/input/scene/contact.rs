@@ -112,8 +112,16 @@ pub(super) fn resolve(
 
 /// What of the scene contact is not modelled with, as the end of the refusal's sentence.
 fn not_modelled_with(materials: &Materials, with: &With<'_>, structure: u32) -> Option<String> {
-    if materials.any_saturated() {
-        return Some("with saturated materials yet (dry materials only)".into());
+    if materials
+        .specs
+        .get(structure as usize)
+        .and_then(Option::as_ref)
+        .is_some_and(|m| m.liquid.is_some())
+    {
+        return Some(
+            "for a saturated structure: give the structure a dry material (the soil beside it may be saturated)"
+                .into(),
+        );
     }
     if with.grid {
         return Some("on a background grid ([grid]) yet; run it on the mesh's elements".into());

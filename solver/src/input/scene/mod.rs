@@ -298,7 +298,13 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
     };
     let supports = fixity::resolve(&scene.fixity, &mesh, &materials)?;
     let scene_dir = path.parent().unwrap_or(Path::new("."));
-    let velocities = velocity::resolve(&scene.velocity, &mesh, &materials, scene_dir)?;
+    let with_contact = !scene.contact.is_empty();
+    let velocities = velocity::resolve(
+        &scene.velocity,
+        &mesh,
+        &materials,
+        (scene_dir, with_contact),
+    )?;
     let contact = contact::resolve(
         &scene.contact,
         &mesh,

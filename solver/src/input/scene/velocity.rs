@@ -91,7 +91,7 @@ pub(super) fn resolve(
     entries: &[Velocity],
     mesh: &Mesh,
     materials: &Materials,
-    scene_dir: &std::path::Path,
+    (scene_dir, with_contact): (&std::path::Path, bool),
 ) -> Result<Velocities, Refusal> {
     let mut out = Velocities {
         points: None,
@@ -99,19 +99,20 @@ pub(super) fn resolve(
         inputs: Vec::new(),
     };
     for v in entries {
-        let input = v.checked(mesh, materials, scene_dir)?;
+        let input = v.checked(mesh, materials, (scene_dir, with_contact))?;
         out.add(v, input, mesh, materials)?;
     }
     Ok(out)
 }
 
 impl Velocity {
-    /// The entry checked and resolved against the mesh.
+    /// The entry checked and resolved against the mesh; `with_contact`: the scene has a
+    /// `[[contact]]` (which lets a velocity drive its dry structure beside a saturated soil).
     fn checked(
         &self,
         mesh: &Mesh,
         materials: &Materials,
-        scene_dir: &std::path::Path,
+        (scene_dir, with_contact): (&std::path::Path, bool),
     ) -> Result<VelocityInput, Refusal> {
         let label = self
             .physical
@@ -137,10 +138,10 @@ impl Velocity {
                 format!("ramp must be 0 or more seconds, got {}", self.ramp),
             ));
         }
-        if materials.any_saturated() {
+        if materials.any_saturated() && !with_contact {
             return Err(refuse(
                 item,
-                "prescribed velocities are not supported yet in scenes with a saturated material",
+                "prescribed velocities are not supported yet in scenes with a saturated material (except on a dry [[contact]] structure)",
             ));
         }
         let curve = match &self.curve {

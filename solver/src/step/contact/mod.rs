@@ -29,9 +29,10 @@
 //! material around it sticks (μ = 10, c = 1000 kPa), and the friction of the node's soil
 //! material is the one of the lowest material index present around it.
 //!
-//! Modelled for dry cases in 3D and in plane-strain and axisymmetric sections (the interface
-//! itself: [`interface`]); the work is over the interface nodes, in a fixed order, on the
-//! calling thread.
+//! Modelled in 3D and in plane-strain and axisymmetric sections (the interface itself:
+//! [`interface`]), for a dry structure in a dry or saturated soil: the correction acts on the
+//! soil's solid, and before it the pore liquid is held at the impermeable wall (`liquid.rs`).
+//! The work is over the interface nodes, in a fixed order, on the calling thread.
 
 use crate::element::mesh::Mesh;
 use crate::element::Element;
@@ -46,6 +47,7 @@ use crate::step::moment::Moment;
 use crate::step::prescribed::Prescribed;
 
 pub mod interface;
+mod liquid;
 
 use interface::Interface;
 pub use interface::InterfaceRule;
@@ -143,8 +145,9 @@ impl<R: Real> Structure<R> {
     }
 
     /// The per-node force sums of Anura3D's convergence check over both bodies: |f₁ + f₂| and
-    /// |f_ext,1 + f_ext,2| over the free components of every node (written to `sums`, as the
-    /// grid update writes its own), on the team in the grid update's blocks of nodes.
+    /// |f_ext,1 + f_ext,2| over the free components of every node (written to `sums[0..2]`
+    /// over the soil's grid update's; a saturated soil's liquid terms `sums[2..4]` kept), on
+    /// the team in the grid update's blocks of nodes.
     pub fn force_sums(
         &mut self,
         team: &Team,
@@ -173,7 +176,8 @@ impl<R: Real> Structure<R> {
                     out2 += f * f;
                     ext2 += ext * ext;
                 }
-                *sum = [out2.sqrt(), ext2.sqrt(), 0.0, 0.0];
+                // The liquid's terms (a saturated soil's) stay the soil's.
+                *sum = [out2.sqrt(), ext2.sqrt(), sum[2], sum[3]];
             }
         });
     }
@@ -389,8 +393,14 @@ impl<R: Real> Contact<R> {
                     }
                     let prev = g.momentum[n][d] / m;
                     self.before[k][b][d] = prev;
-                    let f = g.f_int[n][d] + g.f_ext[n][d];
-                    force[b][d] = crate::step::grid_update::damp(rule, alpha, f, g.momentum[n][d]);
+                    force[b][d] = if g.liquid.is_some() {
+                        // A saturated soil's solid took the liquid's inertia and the two-phase
+                        // damping with its acceleration (and the liquid's wall correction).
+                        m * g.acc[n][d]
+                    } else {
+                        let f = g.f_int[n][d] + g.f_ext[n][d];
+                        crate::step::grid_update::damp(rule, alpha, f, g.momentum[n][d])
+                    };
                     v[b][d] = prev + g.acc[n][d] * dtr;
                 }
             }
@@ -472,6 +482,23 @@ impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
             .driven
             .as_ref()
             .map_or(R::ZERO, |pr| R::of(pr.multiplier(cx.at.end())));
+        if cx.soil.liquid.is_some() {
+            // The liquid is held at the wall first, the wall driven at the marked points'
+            // velocity before this step's prescribed velocity reaches them (Anura3D's order).
+            if let Some(pr) = &mut self.driven {
+                pr.mean_of_marked(cx.mesh, cx.particles);
+            }
+            let driven = &self.driven;
+            let wall = liquid::Wall {
+                nodes: &self.nodes,
+                normal: &self.normal,
+                fixed: cx.fixed,
+                liquid_fixed: cx.liquid_fixed,
+                dt: cx.at.dt,
+                prescribed: &|n| driven.as_ref().and_then(|pr| pr.masked(n)),
+            };
+            liquid::seal(&wall, cx.soil, structure);
+        }
         if let Some(pr) = &mut self.driven {
             pr.override_accelerations(structure, cx.particles, pm);
             cx.reactions[0].force = pr.reaction(structure, cx.traction, cx.at.traction);
@@ -479,15 +506,14 @@ impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
         }
         // Out of `self` while the correction reads its masked nodes.
         let driven = self.driven.take();
+        let prescribed = |n| driven.as_ref().and_then(|pr| pr.masked(n));
         let within = Within {
             layout: cx.layout,
             particles: cx.particles,
             fixed: cx.fixed,
             at: cx.at,
         };
-        self.correct(cx.soil, structure, within, &|n| {
-            driven.as_ref().and_then(|pr| pr.masked(n))
-        });
+        self.correct(cx.soil, structure, within, &prescribed);
         if let Some(pr) = &driven {
             pr.override_accelerations(structure, cx.particles, pm);
             // The second override holds the structure against the soil's push too.

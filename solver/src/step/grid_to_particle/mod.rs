@@ -80,8 +80,8 @@ pub struct Remap<'a, R: Real> {
 /// nodes); with `guard`, each block's slot then takes the liquid's n ρw V_w |w|² (twice its
 /// kinetic energy) element by element after the solid's sums of the block, the order of a
 /// liquid pass of its own. One pass computes each point's shape functions and reads its
-/// position once for both phases. The liquid goes with every body (`body` `None`): contact
-/// refuses saturated materials.
+/// position once for both phases. The liquid goes with every point (`body` `None`) or with the
+/// soil's (a contact pair's structure is dry).
 ///
 /// The linear element's basis takes the element kernels; any other, its stencils
 /// ([`crate::basis`]).
@@ -121,8 +121,8 @@ where
     } = remap;
     let liquid = liquid.filter(|_| p.liquid.is_some() && g.liquid.is_some());
     debug_assert!(
-        liquid.is_none() || body.is_none(),
-        "the liquid re-mapped with one body of a contact pair"
+        liquid.is_none() || body.map_or(true, |b| !b.structure),
+        "the liquid re-mapped with the structure of a contact pair"
     );
     let with_guard = guard.is_some();
     let (liquid_vel, volume0) = match &mut p.liquid {

@@ -101,8 +101,8 @@ pub struct MapToGrid<'a, R: Real> {
 /// force, from the points of materials with a fluid. Under mixed integration, full elements
 /// integrate the pore-pressure force at their Gauss point. One pass for both phases computes
 /// each point's shape functions and reads its position once, and each node's values are summed
-/// as the two passes summed them. The liquid is mapped with every body (`body` `None`): contact
-/// refuses saturated materials.
+/// as the two passes summed them. The liquid is mapped with every point (`body` `None`) or with the
+/// soil's (a contact pair's structure is dry).
 ///
 /// The linear element's basis takes the element kernels; any other, its stencils
 /// ([`crate::basis`]).
@@ -143,8 +143,8 @@ where
         _ => None,
     };
     debug_assert!(
-        liquid.is_none() || body.is_none(),
-        "the liquid mapped with one body of a contact pair"
+        liquid.is_none() || body.map_or(true, |b| !b.structure),
+        "the liquid mapped with the structure of a contact pair"
     );
     // The rate's weights come with the liquid's pass only.
     let pore_weights = pore_weights.filter(|_| liquid.is_some()).map(|w| {
