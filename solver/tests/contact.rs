@@ -303,7 +303,7 @@ fn pile_scene(dir: &Path, name: &str, friction: f64, adhesion: f64, extra: &str)
     let (nx, ny, w, h) = (6usize, 16usize, 1.5, 4.0);
     let node = |i: usize, j: usize| 1 + i + (nx + 1) * j;
     let mut msh = String::from(
-        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n3\n2 1 \"soil\"\n2 2 \"pile\"\n2 3 \"air\"\n$EndPhysicalNames\n",
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n5\n2 1 \"soil\"\n2 2 \"pile\"\n2 3 \"air\"\n1 4 \"head\"\n1 5 \"shaft\"\n$EndPhysicalNames\n",
     );
     writeln!(msh, "$Nodes\n{}", (nx + 1) * (ny + 1)).unwrap();
     for j in 0..=ny {
@@ -312,8 +312,18 @@ fn pile_scene(dir: &Path, name: &str, friction: f64, adhesion: f64, extra: &str)
             writeln!(msh, "{} {x} {y} 0", node(i, j)).unwrap();
         }
     }
-    writeln!(msh, "$EndNodes\n$Elements\n{}", 2 * nx * ny).unwrap();
+    // The pile's head (y = 3) and shaft (r = 0.5) as lines: two cells each.
+    writeln!(msh, "$EndNodes\n$Elements\n{}", 2 * nx * ny + 4).unwrap();
     let mut id = 0;
+    for (group, a, b) in [
+        (4, node(0, 12), node(1, 12)),
+        (4, node(1, 12), node(2, 12)),
+        (5, node(2, 8), node(2, 9)),
+        (5, node(2, 9), node(2, 10)),
+    ] {
+        id += 1;
+        writeln!(msh, "{id} 1 2 {group} {group} {a} {b}").unwrap();
+    }
     for j in 0..ny {
         for i in 0..nx {
             let (x, y) = (
@@ -468,11 +478,6 @@ fn what_a_scene_cannot_pair_with_contact_is_refused_by_name() {
             "",
             Some(("friction = 0", "friction = -1")),
             "friction = -1: expected a number",
-        ),
-        (
-            "[[traction]]\nphysical = \"top\"\ntraction = [0.0, -1.0, 0.0]\n",
-            None,
-            "not modelled with [[traction]]",
         ),
         (
             "",
@@ -659,6 +664,40 @@ fn friction_on_the_shaft_adds_to_the_settlement_of_the_soil_beside_the_pile() {
         dragged[0] > 0.0 && dragged[1] > 1.05 * dragged[0],
         "{dragged:?}"
     );
+}
+
+/// The scene's pile pushed by its jack with a pressure on its head too (`[[traction]]` with
+/// `[[contact]]`: the head's faces load the structure alone): at a steady push the jack and the
+/// soil carry the pile's weight and the load (jack + push = weight + load, as jack + push =
+/// weight without it). A load on a face between the pile and the soil is refused by name.
+#[test]
+fn a_load_on_the_pile_head_acts_on_the_structure_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = 50.0;
+    let extra = format!("[[traction]]\nphysical = \"head\"\npressure = {p}\n");
+    let scene = pile_scene(dir.path(), "loaded", 0.4, 0.0, &extra);
+    let out = dir.path().join("loaded-out");
+    let o = common::solve(&scene, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let sets = last_reactions(&out);
+    // Per radian: the head's load p r² / 2 and the weight ρ g L r² / 2.
+    let (load, weight) = (p * 0.25 / 2.0, 2.4 * 9.81 * 1.0 * 0.25 / 2.0);
+    let (jack, push) = (sets[0].1[1], sets[1].1[1]);
+    eprintln!(
+        "jack {jack:.4}, soil's push {push:.4}, weight + load {:.4} kN/rad",
+        weight + load
+    );
+    assert!(
+        (jack + push - weight - load).abs() < 1e-3 * (weight + load),
+        "{sets:?}"
+    );
+    // On a face the pile shares with the soil.
+    let extra = "[[traction]]\nphysical = \"shaft\"\npressure = 10.0\n";
+    let scene = pile_scene(dir.path(), "shaft", 0.4, 0.0, extra);
+    let o = common::solve(&scene, &dir.path().join("shaft-out"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("between the structure and the soil"), "{err}");
 }
 
 /// The scene's pile pushed into a saturated soil (an impermeable pile: the liquid keeps the

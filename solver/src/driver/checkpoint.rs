@@ -339,9 +339,10 @@ impl Fingerprint {
     }
 
     /// The fingerprint's items of the loads, in order, every field taken apart.
-    fn loads(loads: &Loading) -> [Named<'_>; 8] {
+    fn loads(loads: &Loading) -> [Named<'_>; 9] {
         let Loading {
             traction,
+            structure_traction,
             point_loads,
             traction_curve,
             liquid_traction,
@@ -352,6 +353,7 @@ impl Fingerprint {
         } = loads;
         [
             ("tractions", traction),
+            ("tractions on the structure", structure_traction),
             ("loads on material points", point_loads),
             ("traction curve", traction_curve),
             ("liquid tractions", liquid_traction),

@@ -318,8 +318,13 @@ pub struct BoundaryConditions {
 /// points, and gravity, each at multiplier 1 with the curve that scales it in time.
 #[derive(Debug, Clone)]
 pub struct Loading {
-    /// Nodal face-load forces per model node (kN) at multiplier 1.
+    /// Nodal face-load forces per model node (kN) at multiplier 1 (with contact, the soil's:
+    /// the loads on faces of the soil's elements).
     pub traction: Vec<[f64; 3]>,
+    /// With contact, the nodal face-load forces on the structure (from the loaded faces of its
+    /// elements, a pile's head) per model node (kN) at multiplier 1, which act on its nodes
+    /// alone; empty without.
+    pub structure_traction: Vec<[f64; 3]>,
     /// Loads carried by material points.
     pub point_loads: Vec<FaceLoad>,
     /// Traction multiplier (face loads on nodes and on material points).
@@ -678,6 +683,9 @@ impl Case {
         }
         let loads = &mut self.loads;
         loads.traction = by_node(&loads.traction, &o.node_new);
+        if !loads.structure_traction.is_empty() {
+            loads.structure_traction = by_node(&loads.structure_traction, &o.node_new);
+        }
         loads.liquid_traction = by_node(&loads.liquid_traction, &o.node_new);
         for load in &mut loads.point_loads {
             for n in load.corners.iter_mut() {
@@ -820,6 +828,7 @@ impl Case {
             },
             loads: Loading {
                 traction: vec![[0.0; 3]; n],
+                structure_traction: Vec::new(),
                 point_loads: Vec::new(),
                 traction_curve: LoadCurve::Step,
                 liquid_traction: vec![[0.0; 3]; n],

@@ -39,8 +39,10 @@ pub struct Hook<'a, R: Real, E: Element> {
     pub fixed: &'a [[bool; 3]],
     /// The liquid's fixed components per node (two-phase cases).
     pub liquid_fixed: &'a [[bool; 3]],
-    /// Face-load forces per node at multiplier 1.
+    /// Face-load forces per node at multiplier 1 (with contact, the soil's).
     pub traction: &'a [V3<R>],
+    /// With contact, the face loads on the structure's nodes at multiplier 1 (empty without).
+    pub structure_traction: &'a [V3<R>],
     /// The prescribed-velocity sets' reactions, in the case's order.
     pub reactions: &'a mut [Reaction],
 }

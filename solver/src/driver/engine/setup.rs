@@ -80,13 +80,20 @@ impl<R: Real, E: Element> Engine<R, E> {
             liquid_fixed,
             walls,
             traction,
+            structure_traction,
             liquid_traction,
             input_element,
             input_node,
         } = NodeInputs::of(case, &mesh, &partition);
         let reactions = case.reactions();
-        let (constraints, structure) =
+        let (constraints, mut structure) =
             constraints_of(case, &partition, &mesh, &particles, walls, &mut fixed)?;
+        if let Some(s) = structure
+            .as_mut()
+            .filter(|_| !structure_traction.is_empty())
+        {
+            s.traction = structure_traction;
+        }
         let dt = comm.min(crate::input::time_step::critical(case, own.clone(), |e| {
             mesh.min_altitude[e - own.start].f64()
         })?);
@@ -786,6 +793,8 @@ pub(super) struct NodeInputs<R: Real> {
     pub(super) liquid_fixed: Vec<[bool; 3]>,
     pub(super) walls: Vec<crate::step::wall_friction::WallNode<R>>,
     pub(super) traction: Vec<V3<R>>,
+    /// With contact, the face loads on the structure's nodes (empty without).
+    pub(super) structure_traction: Vec<V3<R>>,
     pub(super) liquid_traction: Vec<V3<R>>,
     pub(super) input_element: Vec<u32>,
     pub(super) input_node: Vec<u32>,
@@ -807,6 +816,10 @@ impl<R: Real> NodeInputs<R> {
             liquid_fixed: by_node(&|m| case.boundary.liquid_fixed[m]),
             walls: crate::step::wall_friction::wall_nodes(&case.boundary.walls, &mesh.model_node),
             traction: loads(&case.loads.traction),
+            structure_traction: match &case.loads.structure_traction[..] {
+                [] => Vec::new(),
+                t => loads(t),
+            },
             liquid_traction: loads(&case.loads.liquid_traction),
             input_element: (0..mesh.elements())
                 .map(|e| case.element_number(partition.global_element(e)) - 1)

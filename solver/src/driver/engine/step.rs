@@ -24,7 +24,7 @@ use std::time::Instant;
 use crate::element::locate::NOTHING_FOUND;
 use crate::element::Element;
 use crate::parallel::gather::exact_total;
-use crate::real::Real;
+use crate::real::{Real, V3};
 use crate::step::constraint::{Constraints, Hook};
 use crate::step::grid_update::ForceSums;
 use crate::step::moment::Moment;
@@ -121,16 +121,21 @@ impl<R: Real, E: Element> Engine<R, E> {
 
     /// The constraints and what their hooks act on, borrowed apart.
     fn hook<'a>(&'a mut self, at: &'a Moment<R>) -> (&'a mut Constraints<R, E>, Hook<'a, R, E>) {
+        let (structure, structure_traction): (_, &[V3<R>]) = match self.structure.as_mut() {
+            Some(s) => (Some(&mut s.grid), &s.traction),
+            None => (None, &[]),
+        };
         let hook = Hook {
             at,
             mesh: &mut self.mesh,
             layout: &self.layout,
             particles: &mut self.particles,
             soil: &mut self.grid,
-            structure: self.structure.as_mut().map(|s| &mut s.grid),
+            structure,
             fixed: &self.fixed,
             liquid_fixed: &self.liquid_fixed,
             traction: &self.traction,
+            structure_traction,
             reactions: &mut self.reactions,
         };
         (&mut self.constraints, hook)
@@ -229,20 +234,19 @@ impl<R: Real, E: Element> Engine<R, E> {
                 Nodal::Acceleration,
             );
         }
-        // The dry soil's, then the structure's (dry; no loads on nodes with contact: the soil's
-        // traction array is zero for the structure too).
-        let soil = self
-            .grid
-            .liquid
-            .is_none()
-            .then_some((&mut self.grid_scratch, &mut self.grid));
+        // The dry soil's, then the structure's (dry), each with its own face loads.
+        let soil = self.grid.liquid.is_none().then_some((
+            &mut self.grid_scratch,
+            &mut self.grid,
+            &self.traction[..],
+        ));
         let structure = self
             .structure
             .as_mut()
-            .map(|s| (&mut s.scratch, &mut s.grid));
-        for (scratch, grid) in soil.into_iter().chain(structure) {
+            .map(|s| (&mut s.scratch, &mut s.grid, &s.traction[..]));
+        for (scratch, grid, traction) in soil.into_iter().chain(structure) {
             let loads = grid_update::NodeLoads {
-                traction: &self.traction,
+                traction,
                 scale: at.traction,
                 fixed: &self.fixed,
                 alpha: at.damping,
@@ -256,7 +260,7 @@ impl<R: Real, E: Element> Engine<R, E> {
         if let Some(s) = &mut self.structure {
             s.force_sums(
                 &self.team,
-                &self.grid,
+                (&self.grid, &self.traction, at.traction),
                 &self.fixed,
                 &mut self.grid_scratch.node_sums,
             );
@@ -432,8 +436,14 @@ impl<R: Real, E: Element> Engine<R, E> {
             gravity: at.gravity,
         };
         let mut energy = NodalEnergy::default();
-        let grids = once(&self.grid).chain(self.structure.as_ref().map(|s| &s.grid));
-        for (k, grid) in grids.enumerate() {
+        // Each body with its own face loads.
+        let grids = once((&self.grid, &self.traction[..]))
+            .chain(self.structure.as_ref().map(|s| (&s.grid, &s.traction[..])));
+        for (k, (grid, traction)) in grids.enumerate() {
+            let loads = nodal_energy::Loads {
+                traction: (traction, at.traction),
+                ..loads
+            };
             nodal_energy::nodal_energy::<E, R>(
                 &self.team,
                 &mut self.energy_values,

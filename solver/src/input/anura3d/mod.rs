@@ -424,6 +424,7 @@ impl Parts {
             },
             loads: Loading {
                 traction: self.loads.traction,
+                structure_traction: Vec::new(),
                 point_loads: self.loads.point_loads,
                 traction_curve: self.loads.traction_curve,
                 liquid_traction: self.loads.liquid_traction,

@@ -44,8 +44,6 @@ pub(super) struct Contact {
 pub(super) struct With<'a> {
     /// A background grid.
     pub grid: bool,
-    /// `[[traction]]` entries.
-    pub tractions: bool,
     /// Velocities prescribed on nodes.
     pub nodal_velocity: bool,
     /// The velocity prescribed on material points, if any.
@@ -125,11 +123,6 @@ fn not_modelled_with(materials: &Materials, with: &With<'_>, structure: u32) -> 
     }
     if with.grid {
         return Some("on a background grid ([grid]) yet; run it on the mesh's elements".into());
-    }
-    if with.tractions {
-        return Some(
-            "with [[traction]] loads yet: a load on nodes would act on both bodies".into(),
-        );
     }
     if with.nodal_velocity {
         return Some(

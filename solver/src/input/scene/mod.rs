@@ -311,14 +311,23 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
         &materials,
         contact::With {
             grid: grid.is_some(),
-            tractions: !scene.traction.is_empty(),
             nodal_velocity: !velocities.nodal.is_empty(),
             driven: velocities.points.as_ref(),
             strain_smoothing: scene.strain_smoothing,
         },
     )?;
     let gravity = gravity::resolve(scene.gravity.as_ref(), scene_dir)?;
-    let loads = traction::resolve(&scene.traction, &mesh, grid.as_ref(), scene_dir)?;
+    let structure = contact.as_ref().map(|c| traction::Structure {
+        element_material: &materials.element_material,
+        points_per_element: &materials.points_per_element,
+        material: c.material,
+    });
+    let loads = traction::resolve(
+        &scene.traction,
+        &mesh,
+        (grid.as_ref(), structure),
+        scene_dir,
+    )?;
     let absorbing = match (&scene.absorbing[..], &grid) {
         ([], _) => Vec::new(),
         (_, Some(_)) => {
@@ -421,6 +430,7 @@ impl Sections {
             },
             loads: Loading {
                 traction: self.loads.traction,
+                structure_traction: self.loads.structure_traction,
                 point_loads: Vec::new(),
                 traction_curve: self.loads.curve,
                 liquid_traction: vec![[0.0; 3]; nodes],

@@ -80,25 +80,65 @@ impl TractionInput {
 
 /// The case's face loads and the entries behind them.
 pub(super) struct Loads {
-    /// The nodal forces of every traction at full load.
+    /// The nodal forces of every traction at full load (with contact, of the faces of the
+    /// soil's elements).
     pub traction: Vec<[f64; 3]>,
+    /// With contact, the nodal forces of the loaded faces of the structure's elements (empty
+    /// without).
+    pub structure_traction: Vec<[f64; 3]>,
     /// Their multiplier: the ramp over the longest one given, or the one curve they all give.
     pub curve: crate::step::load_curve::LoadCurve,
     /// The entries in file order.
     pub inputs: Vec<TractionInput>,
 }
 
+/// A contact's structure as the face loads see it: each element's material and number of
+/// points, and the structure's material.
+pub(super) struct Structure<'a> {
+    pub element_material: &'a [u32],
+    pub points_per_element: &'a [u32],
+    pub material: u32,
+}
+
+impl Structure<'_> {
+    /// Whether `face` (held by `elements`) loads the structure: its filled elements are the
+    /// structure's (a pile's head between the pile and an empty element); `Err` for a face
+    /// between the structure and the soil.
+    fn loads(&self, elements: &[usize]) -> Result<bool, &'static str> {
+        let filled = elements.iter().filter(|&&e| self.points_per_element[e] > 0);
+        let (mut ours, mut other) = (false, false);
+        for &e in filled {
+            if self.element_material[e] == self.material {
+                ours = true;
+            } else {
+                other = true;
+            }
+        }
+        match (ours, other) {
+            (true, true) => Err("a face between the structure and the soil: load one or the other"),
+            (ours, _) => Ok(ours),
+        }
+    }
+}
+
 /// The `[[traction]]` entries on the mesh's faces, in file order.
 /// On a background grid (`grid`), the faces' loads are integrated with the grid's functions
-/// ([`super::grid::add_face_loads`]).
+/// ([`super::grid::add_face_loads`]). With a contact's `structure`, a face of the structure's
+/// elements loads the structure alone.
 pub(super) fn resolve(
     entries: &[Traction],
     mesh: &Mesh,
-    grid: Option<&GridSpec>,
+    (grid, structure): (Option<&GridSpec>, Option<Structure<'_>>),
     scene_dir: &std::path::Path,
 ) -> Result<Loads, Refusal> {
+    let nodes = mesh.model.node_count();
     let mut out = Loads {
-        traction: vec![[0.0; 3]; mesh.model.node_count()],
+        traction: vec![[0.0; 3]; nodes],
+        structure_traction: if structure.is_some() {
+            vec![[0.0; 3]; nodes]
+        } else {
+            Vec::new()
+        },
         curve: crate::step::load_curve::LoadCurve::Step,
         inputs: Vec::with_capacity(entries.len()),
     };
@@ -118,11 +158,26 @@ pub(super) fn resolve(
             Vec::new()
         };
         let loads = input.on_faces(&outward);
-        match grid {
-            Some(g) => {
+        match (grid, &structure) {
+            (Some(g), _) => {
                 super::grid::add_face_loads(g, &mesh.model, &input.faces, &loads, &mut out.traction)
             }
-            None => add_face_loads(&mesh.model, &input.faces, &loads, &mut out.traction),
+            (None, Some(structure)) => {
+                let holders = face_elements(&mesh.model, &input.faces);
+                for (k, elements) in holders.iter().enumerate() {
+                    let ours = structure
+                        .loads(elements)
+                        .map_err(|m| refuse(tr.item(), format!("face {}: {m}", k + 1)))?;
+                    let to = if ours {
+                        &mut out.structure_traction
+                    } else {
+                        &mut out.traction
+                    };
+                    let (face, load) = (&input.faces[k..=k], &loads[k..=k]);
+                    add_face_loads(&mesh.model, face, load, to);
+                }
+            }
+            (None, None) => add_face_loads(&mesh.model, &input.faces, &loads, &mut out.traction),
         }
         ramp = ramp.max(tr.ramp);
         out.inputs.push(input);
@@ -236,6 +291,43 @@ fn real_area(model: &Model, faces: &[Vec<u32>]) -> f64 {
     } else {
         sum
     }
+}
+
+/// The elements holding each face (all the face's corners are nodes of each: one for a face on
+/// the mesh's boundary, two inside it).
+fn face_elements(model: &Model, faces: &[Vec<u32>]) -> Vec<Vec<usize>> {
+    // The elements around each node, `around[start[n]..start[n + 1]]`.
+    let mut start = vec![0usize; model.node_count() + 1];
+    for e in 0..model.element_count() {
+        for &n in model.element(e) {
+            start[n as usize + 1] += 1;
+        }
+    }
+    for n in 0..model.node_count() {
+        start[n + 1] += start[n];
+    }
+    let mut next = start.clone();
+    let mut around = vec![0usize; start[model.node_count()]];
+    for e in 0..model.element_count() {
+        for &n in model.element(e) {
+            around[next[n as usize]] = e;
+            next[n as usize] += 1;
+        }
+    }
+    faces
+        .iter()
+        .map(|f| {
+            let Some(&first) = f.first() else {
+                return Vec::new();
+            };
+            let first = first as usize;
+            around[start[first]..start[first + 1]]
+                .iter()
+                .copied()
+                .filter(|&e| f.iter().all(|c| model.element(e).contains(c)))
+                .collect()
+        })
+        .collect()
 }
 
 /// Adds the nodal forces of tractions `t` (kPa, one per face, uniform on it) on `faces`

@@ -116,6 +116,9 @@ pub struct Structure<R: Real> {
     pub body: OneBody,
     /// The structure's nodal arrays.
     pub grid: Grid<R>,
+    /// The face loads on the structure's nodes at multiplier 1 (its loaded faces'; the soil's
+    /// are the engine's).
+    pub traction: Vec<V3<R>>,
     /// The grid update's scratch for the structure's arrays.
     pub scratch: crate::step::grid_update::GridScratch<R>,
     /// The force sums' blocks of nodes (scratch).
@@ -131,6 +134,7 @@ impl<R: Real> Structure<R> {
                 structure: true,
             },
             grid: Grid::new(nodes),
+            traction: vec![[R::ZERO; 3]; nodes],
             scratch: crate::step::grid_update::GridScratch::new(nodes),
             blocks: vec![(); nodes.div_ceil(NODE_BLOCK)],
         }
@@ -145,17 +149,18 @@ impl<R: Real> Structure<R> {
     }
 
     /// The per-node force sums of Anura3D's convergence check over both bodies: |f₁ + f₂| and
-    /// |f_ext,1 + f_ext,2| over the free components of every node (written to `sums[0..2]`
-    /// over the soil's grid update's; a saturated soil's liquid terms `sums[2..4]` kept), on
-    /// the team in the grid update's blocks of nodes.
+    /// |f_ext,1 + f_ext,2| over the free components of every node, each body's face loads
+    /// (`soil_traction`, the structure's own) at multiplier `scale` in its external force
+    /// (written to `sums[0..2]` over the soil's grid update's; a saturated soil's liquid terms
+    /// `sums[2..4]` kept), on the team in the grid update's blocks of nodes.
     pub fn force_sums(
         &mut self,
         team: &Team,
-        soil: &Grid<R>,
+        (soil, soil_traction, scale): (&Grid<R>, &[V3<R>], R),
         fixed: &[[bool; 3]],
         sums: &mut [[f64; 4]],
     ) {
-        let structure = &self.grid;
+        let (structure, traction) = (&self.grid, &self.traction);
         let out = Shared::new(sums);
         team.for_blocks(soil.mass.len(), NODE_BLOCK, &mut self.blocks, |r| {
             // SAFETY: the nodes of this block are this call's only.
@@ -171,7 +176,8 @@ impl<R: Real> Structure<R> {
                     if fixed[n][d] {
                         continue;
                     }
-                    let ext = soil.f_ext[n][d].f64() + structure.f_ext[n][d].f64();
+                    let loads = scale * (soil_traction[n][d] + traction[n][d]);
+                    let ext = soil.f_ext[n][d].f64() + structure.f_ext[n][d].f64() + loads.f64();
                     let f = soil.f_int[n][d].f64() + structure.f_int[n][d].f64() + ext;
                     out2 += f * f;
                     ext2 += ext * ext;
@@ -501,7 +507,8 @@ impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
         }
         if let Some(pr) = &mut self.driven {
             pr.override_accelerations(structure, cx.particles, pm);
-            cx.reactions[0].force = pr.reaction(structure, cx.traction, cx.at.traction);
+            let loads = cx.structure_traction;
+            cx.reactions[0].force = pr.reaction(structure, loads, cx.at.traction);
             pr.mean_of_marked(cx.mesh, cx.particles);
         }
         // Out of `self` while the correction reads its masked nodes.
