@@ -669,7 +669,10 @@ fn friction_on_the_shaft_adds_to_the_settlement_of_the_soil_beside_the_pile() {
 /// The scene's pile pushed by its jack with a pressure on its head too (`[[traction]]` with
 /// `[[contact]]`: the head's faces load the structure alone): at a steady push the jack and the
 /// soil carry the pile's weight and the load (jack + push = weight + load, as jack + push =
-/// weight without it). A load on a face between the pile and the soil is refused by name.
+/// weight without it); without the jack the pile comes to rest on the soil, which then
+/// carries both (before the contact's system velocity took the face loads, it carried 7.2 of
+/// 9.19 kN/rad: the head's corner load went into the soil's correction). A load on a face
+/// between the pile and the soil is refused by name.
 #[test]
 fn a_load_on_the_pile_head_acts_on_the_structure_alone() {
     let dir = tempfile::tempdir().unwrap();
@@ -689,6 +692,33 @@ fn a_load_on_the_pile_head_acts_on_the_structure_alone() {
     );
     assert!(
         (jack + push - weight - load).abs() < 1e-3 * (weight + load),
+        "{sets:?}"
+    );
+    // The same load with no jack: the pile rests on the soil, which carries the load and the
+    // weight (damped, with a PIC blend against the ringing of a free structure's points).
+    let scene = pile_scene(
+        dir.path(),
+        "free",
+        0.4,
+        0.0,
+        &format!("{extra}[damping]\nlocal = 0.05\n"),
+    );
+    let mut text = std::fs::read_to_string(&scene).unwrap();
+    let velocity = "[[velocity]]\nphysical = \"pile\"\nvelocity = [0.0, -0.1, 0.0]\n\
+                    components = [false, true, false]\n";
+    assert!(text.contains(velocity) && text.contains("end = 1.0"));
+    text = text
+        .replacen(velocity, "", 1)
+        .replacen("end = 1.0", "end = 4.0", 1);
+    std::fs::write(&scene, format!("pic_blend = 0.05\n{text}")).unwrap();
+    let out = dir.path().join("free-out");
+    let o = common::solve(&scene, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let sets = last_reactions(&out);
+    let push = sets[0].1[1];
+    eprintln!("a free pile at rest: soil's push {push:.4} kN/rad");
+    assert!(
+        (push - weight - load).abs() < 2e-3 * (weight + load),
         "{sets:?}"
     );
     // On a face the pile shares with the soil.

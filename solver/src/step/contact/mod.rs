@@ -189,12 +189,14 @@ impl<R: Real> Structure<R> {
     }
 }
 
-/// What the contact correction reads besides the two bodies' nodes.
+/// What the contact correction reads besides the two bodies' nodes: each body's face loads
+/// at multiplier 1 (the soil's, the structure's), which the step's `at.traction` scales.
 struct Within<'a, R: Real, E: Element> {
     layout: &'a Layout<R, E>,
     particles: &'a Particles<R>,
     fixed: &'a [[bool; 3]],
     at: &'a Moment<R>,
+    loads: [&'a [V3<R>]; 2],
 }
 
 /// The contact of a run, resolved on its mesh: the interface between the structure
@@ -363,6 +365,7 @@ impl<R: Real> Contact<R> {
             particles: p,
             fixed,
             at,
+            loads,
         } = cx;
         let (alpha, rule, dt) = (at.damping, at.damping_rule, at.dt);
         let dtr = R::of(dt);
@@ -404,7 +407,9 @@ impl<R: Real> Contact<R> {
                         // damping with its acceleration (and the liquid's wall correction).
                         m * g.acc[n][d]
                     } else {
-                        let f = g.f_int[n][d] + g.f_ext[n][d];
+                        // As the grid update forms it: the face loads are the body's own.
+                        let ext = g.f_ext[n][d] + at.traction * loads[b][n][d];
+                        let f = g.f_int[n][d] + ext;
                         crate::step::grid_update::damp(rule, alpha, f, g.momentum[n][d])
                     };
                     v[b][d] = prev + g.acc[n][d] * dtr;
@@ -519,6 +524,7 @@ impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
             particles: cx.particles,
             fixed: cx.fixed,
             at: cx.at,
+            loads: [cx.traction, cx.structure_traction],
         };
         self.correct(cx.soil, structure, within, &prescribed);
         if let Some(pr) = &driven {
