@@ -730,6 +730,75 @@ fn a_load_on_the_pile_head_acts_on_the_structure_alone() {
     assert!(err.contains("between the structure and the soil"), "{err}");
 }
 
+/// The pile as a rigid body (`rigid = true`), free, loaded on its head, damped: its points
+/// keep one velocity (they neither strain nor ring, in pure FLIP), and it comes to rest on the
+/// soil, which then carries the load and the pile's weight.
+#[test]
+fn a_rigid_pile_moves_as_one_body_and_rests_on_the_soil() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = 50.0;
+    let extra =
+        format!("[[traction]]\nphysical = \"head\"\npressure = {p}\n[damping]\nlocal = 0.05\n");
+    let scene = pile_scene(dir.path(), "rigid", 0.4, 0.0, &extra);
+    let mut text = std::fs::read_to_string(&scene).unwrap();
+    let velocity = "[[velocity]]\nphysical = \"pile\"\nvelocity = [0.0, -0.1, 0.0]\n\
+                    components = [false, true, false]\n";
+    for from in [velocity, "end = 1.0", "adhesion = 0\n"] {
+        assert!(text.contains(from), "{from}");
+    }
+    text = text
+        .replacen(velocity, "", 1)
+        .replacen("end = 1.0", "end = 4.0", 1)
+        .replacen("adhesion = 0\n", "adhesion = 0\nrigid = true\n", 1);
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.path().join("rigid-out");
+    let o = common::solve(&scene, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (load, weight) = (p * 0.25 / 2.0, 2.4 * 9.81 * 1.0 * 0.25 / 2.0);
+    let sets = last_reactions(&out);
+    let push = sets[0].1[1];
+    eprintln!(
+        "a rigid pile at rest: soil's push {push:.4} kN/rad (load + weight {:.4})",
+        load + weight
+    );
+    assert!(
+        (push - weight - load).abs() < 2e-3 * (weight + load),
+        "{sets:?}"
+    );
+    let pvd = mpm_shared::vtu_read::read_pvd_file(&out.join("run.pvd")).unwrap();
+    for set in &pvd {
+        let vtu = mpm_shared::vtu_read::read_vtu_file(&out.join(&set.file)).unwrap();
+        let (material, v, stress) = (
+            vtu.point_data("material").unwrap(),
+            vtu.point_data("velocity").unwrap(),
+            vtu.point_data("stress").unwrap(),
+        );
+        let pile: Vec<usize> = (0..material.len())
+            .filter(|&i| material.get(i, 0) == 2.0)
+            .collect();
+        for c in 0..2 {
+            let (lo, hi) = pile.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &i| {
+                (lo.min(v.get(i, c)), hi.max(v.get(i, c)))
+            });
+            assert!(
+                hi - lo < 1e-9,
+                "t = {}: velocity {c} spans {lo} to {hi}",
+                set.time
+            );
+        }
+        let worst = pile
+            .iter()
+            .flat_map(|&i| (0..4).map(move |c| (i, c)))
+            .map(|(i, c)| stress.get(i, c).abs())
+            .fold(0.0f64, f64::max);
+        assert!(
+            worst < 1e-6,
+            "t = {}: a rigid pile's stress {worst} kPa",
+            set.time
+        );
+    }
+}
+
 /// The scene's pile pushed into a saturated soil (an impermeable pile: the liquid keeps the
 /// wall's normal velocity), damped, against the same scene with the pile held still: the
 /// pile's push raises the pore pressure under its tip at every output (measured: 4 to 30 kPa

@@ -80,20 +80,13 @@ impl<R: Real, E: Element> Engine<R, E> {
             liquid_fixed,
             walls,
             traction,
-            structure_traction,
             liquid_traction,
             input_element,
             input_node,
         } = NodeInputs::of(case, &mesh, &partition);
         let reactions = case.reactions();
-        let (constraints, mut structure) =
+        let (constraints, structure) =
             constraints_of(case, &partition, &mesh, &particles, walls, &mut fixed)?;
-        if let Some(s) = structure
-            .as_mut()
-            .filter(|_| !structure_traction.is_empty())
-        {
-            s.traction = structure_traction;
-        }
         let dt = comm.min(crate::input::time_step::critical(case, own.clone(), |e| {
             mesh.min_altitude[e - own.start].f64()
         })?);
@@ -552,7 +545,7 @@ fn apply_undrained_state<R: Real>(case: &Case, particles: &mut Particles<R>) {
 /// The case's constraints, in the order their hooks run: walls, velocities prescribed on
 /// points (with contact: the structure's, inside the contact), contact, velocities
 /// prescribed on nodes (their components marked in `fixed`), the moving mesh; and, with
-/// contact, the structure's own nodes.
+/// contact, the structure's own nodes (with its face loads, when the case gives them).
 fn constraints_of<E: Element, R: Real>(
     case: &Case,
     partition: &Partition,
@@ -589,7 +582,13 @@ fn constraints_of<E: Element, R: Real>(
                 &case.body.element_material,
                 prescribed,
             ));
-            Some(Structure::new(spec.material, mesh.nodes()))
+            let mut structure = Structure::new(spec.material, mesh.nodes());
+            let loads = &case.loads.structure_traction;
+            if !loads.is_empty() {
+                let of = |m: &u32| loads[*m as usize].map(R::of);
+                structure.traction = mesh.model_node.iter().map(of).collect();
+            }
+            Some(structure)
         }
         None => {
             if let Some(pr) = prescribed {
@@ -793,8 +792,6 @@ pub(super) struct NodeInputs<R: Real> {
     pub(super) liquid_fixed: Vec<[bool; 3]>,
     pub(super) walls: Vec<crate::step::wall_friction::WallNode<R>>,
     pub(super) traction: Vec<V3<R>>,
-    /// With contact, the face loads on the structure's nodes (empty without).
-    pub(super) structure_traction: Vec<V3<R>>,
     pub(super) liquid_traction: Vec<V3<R>>,
     pub(super) input_element: Vec<u32>,
     pub(super) input_node: Vec<u32>,
@@ -816,10 +813,6 @@ impl<R: Real> NodeInputs<R> {
             liquid_fixed: by_node(&|m| case.boundary.liquid_fixed[m]),
             walls: crate::step::wall_friction::wall_nodes(&case.boundary.walls, &mesh.model_node),
             traction: loads(&case.loads.traction),
-            structure_traction: match &case.loads.structure_traction[..] {
-                [] => Vec::new(),
-                t => loads(t),
-            },
             liquid_traction: loads(&case.loads.liquid_traction),
             input_element: (0..mesh.elements())
                 .map(|e| case.element_number(partition.global_element(e)) - 1)

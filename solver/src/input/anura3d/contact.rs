@@ -191,6 +191,7 @@ fn read_section(
         listed,
         interfaces,
         rule: InterfaceRule::Anura3d,
+        rigid: false,
     })
 }
 

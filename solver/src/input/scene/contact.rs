@@ -20,12 +20,14 @@ pub(super) const TABLE: Table = Table {
             own; where they meet (the structure's sides that border the soil or an empty \
             element, on the initial mesh) a body that approaches the other loses its normal \
             relative velocity and as much of its tangential one as friction and adhesion take. \
-            One structure per scene; dry materials; one process. The interface is the initial \
-            one: a structure that moves across the mesh needs `[moving_mesh]`.",
+            One structure per scene, dry (the soil may be saturated: the structure is then \
+            impermeable); one process. The interface is the initial one: a structure that \
+            moves across the mesh needs `[moving_mesh]`.",
     keys: &[
         key("structure", "string", "required", "", "the structure's material group (a physical volume in 3D, a physical surface in 2D)"),
         key("friction", "float", "0 (smooth)", "", "Coulomb coefficient μ between the structure and the soil"),
         key("adhesion", "float", "0", "kPa", "adhesion c: a tangential force up to c A at an interface node while the bodies press together there, A the node's share of the interface (per radian in an axisymmetric section)"),
+        key("rigid", "bool", "false", "", "the structure moves as one rigid body in translation (no rotation) under its weight, its loads and the soil's push, instead of deforming with its material's law"),
     ],
 };
 
@@ -38,6 +40,8 @@ pub(super) struct Contact {
     friction: f64,
     #[serde(default)]
     adhesion: f64,
+    #[serde(default)]
+    rigid: bool,
 }
 
 /// What a scene with contact may not hold, checked against its other sections.
@@ -105,6 +109,7 @@ pub(super) fn resolve(
         listed,
         interfaces,
         rule: InterfaceRule::Tributary,
+        rigid: entry.rigid,
     }))
 }
 

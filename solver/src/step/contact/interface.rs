@@ -282,6 +282,7 @@ mod tests {
             listed,
             interfaces: vec![(0.0, 0.0), (0.3, 1.0), (0.0, 0.0)],
             rule,
+            rigid: false,
         };
         (mesh, material, spec)
     }

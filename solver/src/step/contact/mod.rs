@@ -48,6 +48,7 @@ use crate::step::prescribed::Prescribed;
 
 pub mod interface;
 mod liquid;
+mod rigid;
 
 use interface::Interface;
 pub use interface::InterfaceRule;
@@ -96,6 +97,8 @@ pub struct ContactSpec {
     pub interfaces: Vec<(f64, f64)>,
     /// How a 2D interface node's normal and share of the interface are taken.
     pub rule: InterfaceRule,
+    /// The structure moves as one rigid body (in translation), not as a deformable one.
+    pub rigid: bool,
 }
 
 impl ContactSpec {
@@ -205,6 +208,8 @@ struct Within<'a, R: Real, E: Element> {
 pub struct Contact<R: Real> {
     /// Which points are the structure.
     structure: OneBody,
+    /// The structure moves as one rigid body (`rigid.rs`).
+    rigid: bool,
     /// The velocity prescribed on the structure's points, when the case drives it (a pile
     /// pushed at a given speed): its overrides run around the correction, in Anura3D's order.
     driven: Option<Prescribed<R>>,
@@ -270,6 +275,7 @@ impl<R: Real> Contact<R> {
                 structure_material: spec.material,
                 structure: true,
             },
+            rigid: spec.rigid,
             // The run's reactions are the prescribed points' set, if any, then the contact's
             // (`Case::reactions`; contact refuses velocities prescribed on nodes).
             reaction: usize::from(driven.is_some()),
@@ -432,6 +438,10 @@ impl<R: Real> Contact<R> {
                     }
                 }
             }
+            if self.rigid && bodies[1] {
+                // The rigid body is the stiffer one: the soil meets its velocity (`rigid.rs`).
+                system = v[1];
+            }
             let (mu, c) = self.interface_at(k, lowest);
             for b in 0..2 {
                 if !bodies[b] || (0..3).all(|d| v[b][d] == system[d]) {
@@ -446,25 +456,8 @@ impl<R: Real> Contact<R> {
                 }
                 let m = masses[b].f64();
                 let adhesion = c * dt / (m * (approach + 1e-60));
-                let cross = [
-                    dv[1] * normal[2] - dv[2] * normal[1],
-                    dv[2] * normal[0] - dv[0] * normal[2],
-                    dv[0] * normal[1] - dv[1] * normal[0],
-                ];
-                let size = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
-                let omega = if size != 0.0 {
-                    cross.map(|c| c / size)
-                } else {
-                    [0.0; 3]
-                };
-                let slip = (mu + adhesion).min(size / approach);
-                let t = [
-                    normal[1] * omega[2] - normal[2] * omega[1],
-                    normal[2] * omega[0] - normal[0] * omega[2],
-                    normal[0] * omega[1] - normal[1] * omega[0],
-                ];
+                let change = velocity_change(dv, normal, approach, mu + adhesion);
                 let g: &mut Grid<R> = if b == 0 { soil } else { structure_grid };
-                let change = [0, 1, 2].map(|d| approach * (normal[d] + slip * t[d]));
                 for d in 0..3 {
                     let corrected = v[b][d].f64() - change[d];
                     g.acc[n][d] = R::of((corrected - self.before[k][b][d].f64()) / dt);
@@ -475,6 +468,31 @@ impl<R: Real> Contact<R> {
             }
         }
     }
+}
+
+/// The decrease of an approaching body's velocity (relative velocity `dv` to the system,
+/// outward unit normal `normal`, normal approach d = `approach` > 0): its normal part and, along
+/// the tangential direction t of `dv`, `limit` d of the tangential part, at most all of it:
+/// d (n + min(limit, |dv × n| / d) t).
+fn velocity_change(dv: [f64; 3], normal: [f64; 3], approach: f64, limit: f64) -> [f64; 3] {
+    let cross = [
+        dv[1] * normal[2] - dv[2] * normal[1],
+        dv[2] * normal[0] - dv[0] * normal[2],
+        dv[0] * normal[1] - dv[1] * normal[0],
+    ];
+    let size = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
+    let omega = if size != 0.0 {
+        cross.map(|c| c / size)
+    } else {
+        [0.0; 3]
+    };
+    let slip = limit.min(size / approach);
+    let t = [
+        normal[1] * omega[2] - normal[2] * omega[1],
+        normal[2] * omega[0] - normal[0] * omega[2],
+        normal[0] * omega[1] - normal[1] * omega[0],
+    ];
+    [0, 1, 2].map(|d| approach * (normal[d] + slip * t[d]))
 }
 
 impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
@@ -493,6 +511,13 @@ impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
             .driven
             .as_ref()
             .map_or(R::ZERO, |pr| R::of(pr.multiplier(cx.at.end())));
+        let body = self.rigid.then(|| {
+            let (loads, damping) = (
+                (cx.structure_traction, cx.at.traction),
+                (cx.at.damping_rule, cx.at.damping),
+            );
+            rigid::as_one_body(structure, cx.fixed, loads, damping)
+        });
         if cx.soil.liquid.is_some() {
             // The liquid is held at the wall first, the wall driven at the marked points'
             // velocity before this step's prescribed velocity reaches them (Anura3D's order).
@@ -538,6 +563,10 @@ impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
             }
         }
         self.driven = driven;
+        if let Some((body, _)) = &body {
+            // The soil's push moves the whole body.
+            rigid::pushed(structure, body, self.force);
+        }
         let sets = &mut cx.reactions[self.reaction..self.reaction + 2];
         debug_assert_eq!(sets[0].name, CONTACT_SET);
         debug_assert_eq!(sets[1].name, CONTACT_BASE_SET);
