@@ -106,7 +106,7 @@ fn draw(
     (lo, hi): (f64, f64),
 ) -> Result<(), Box<dyn std::error::Error>> {
     use plotters::prelude::*;
-    let text = crate::jobs::consolidation::font().is_some();
+    let text = crate::jobs::plot::font().is_some();
     let root = BitMapBackend::new(path, (1400, 650)).into_drawing_area();
     root.fill(&WHITE)?;
     let (left, right) = root.split_horizontally(700);

@@ -8,6 +8,7 @@ use crate::driver::engine::Engine;
 use crate::driver::run::{run_with, Both, RunError, RunOptions, Unobserved};
 use crate::element::Element;
 use crate::input::case::Case;
+use crate::jobs::plot::{chart, font, legend, Panel, Words};
 use crate::jobs::terzaghi;
 use crate::material::liquid::LiquidSpec;
 use crate::real::Real;
@@ -436,33 +437,6 @@ pub fn run_job_with<R: Real, E: Element>(
     Ok((engine, tracker, workshop))
 }
 
-/// A TrueType font for the plot's text, from the usual system places (DejaVu Sans or
-/// Liberation Sans); `None` when there is none, and the plot is then drawn without text.
-pub(crate) fn font() -> Option<&'static [u8]> {
-    use std::sync::OnceLock;
-    static FONT: OnceLock<Option<&'static [u8]>> = OnceLock::new();
-    *FONT.get_or_init(|| {
-        [
-            "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-            "/usr/share/fonts/TTF/DejaVuSans.ttf",
-            "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-            "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-            "/Library/Fonts/Arial.ttf",
-        ]
-        .iter()
-        .find_map(|p| std::fs::read(p).ok())
-        .map(|bytes| {
-            let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-            let _ = plotters::style::register_font(
-                "sans-serif",
-                plotters::style::FontStyle::Normal,
-                bytes,
-            );
-            bytes
-        })
-    })
-}
-
 /// Writes `consolidation.png` into `dir` (atomically): pore-pressure isochrones against
 /// Terzaghi on the left (points of the default run as dots, Terzaghi as lines), settlement
 /// against time on the right; `name` (the case) heads both.
@@ -472,13 +446,9 @@ pub fn write_png(
     default: &Tracker,
     workshop: Option<&Tracker>,
 ) -> mpm_shared::Result<()> {
-    let path = dir.join("consolidation.png");
-    let tmp = dir.join(".consolidation.tmp.png");
-    draw(&tmp, name, default, workshop).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        mpm_shared::Error::io(&path, std::io::Error::other(e.to_string()))
-    })?;
-    std::fs::rename(&tmp, &path).map_err(|e| mpm_shared::Error::io(&path, e))
+    crate::jobs::plot::write_png(&dir.join("consolidation.png"), |tmp| {
+        draw(tmp, name, default, workshop)
+    })
 }
 
 /// Draws the figure of [`write_png`] into `path`: the isochrones on the left half, the
@@ -497,76 +467,6 @@ fn draw(
     draw_isochrones(&left, name, default, text)?;
     draw_settlement(&right, name, default, workshop, text)?;
     root.present()?;
-    Ok(())
-}
-
-/// One half of the figure.
-type Panel<'a> =
-    plotters::drawing::DrawingArea<plotters::backend::BitMapBackend<'a>, plotters::coord::Shift>;
-
-/// A plot of one half: real numbers on both axes.
-type Chart<'a, 'b> = plotters::chart::ChartContext<
-    'a,
-    plotters::backend::BitMapBackend<'b>,
-    plotters::coord::cartesian::Cartesian2d<
-        plotters::coord::types::RangedCoordf64,
-        plotters::coord::types::RangedCoordf64,
-    >,
->;
-
-/// The captions and axis descriptions of a plot.
-struct Words<'a> {
-    caption: String,
-    x: &'a str,
-    y: &'a str,
-}
-
-/// A plot on `area` over `x` by `y` with a mesh, and with its `words` where `text` (a font
-/// was found); without text, no labels and no mesh lines.
-fn chart<'b>(
-    area: &Panel<'b>,
-    x: std::ops::Range<f64>,
-    y: std::ops::Range<f64>,
-    words: Words,
-    text: bool,
-) -> Result<Chart<'b, 'b>, Box<dyn std::error::Error>> {
-    use plotters::prelude::*;
-    let mut chart = ChartBuilder::on(area);
-    chart.margin(20);
-    if text {
-        chart
-            .caption(words.caption, ("sans-serif", 22))
-            .x_label_area_size(40)
-            .y_label_area_size(50);
-    }
-    let mut chart = chart.build_cartesian_2d(x, y)?;
-    if text {
-        chart
-            .configure_mesh()
-            .x_desc(words.x)
-            .y_desc(words.y)
-            .draw()?;
-    } else {
-        chart.configure_mesh().disable_mesh().draw()?;
-    }
-    Ok(chart)
-}
-
-/// The legend of `chart` at `position`, where `text` (a font was found).
-fn legend<'a>(
-    chart: &mut Chart<'a, 'a>,
-    position: plotters::chart::SeriesLabelPosition,
-    text: bool,
-) -> Result<(), Box<dyn std::error::Error>> {
-    use plotters::prelude::*;
-    if text {
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(position)
-            .draw()?;
-    }
     Ok(())
 }
 
