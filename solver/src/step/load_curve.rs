@@ -34,10 +34,13 @@ pub enum LoadCurve {
     /// there ([`LoadCurve::stopped`]).
     File(Arc<[(f64, f64)]>),
     /// Hammer blows (see [`Blow`]), each normalised by its peak Z v₀, one every `interval`
-    /// seconds from t = 0, `count` of them; 0 after the last one's interval.
+    /// seconds from t = `first`, `count` of them; 0 before the first and after the last one's
+    /// interval.
     Blows {
         /// One blow's force over Z v₀.
         blow: Blow,
+        /// The time of the first blow (s).
+        first: f64,
         /// Seconds between blows.
         interval: f64,
         /// Number of blows.
@@ -117,9 +120,11 @@ impl LoadCurve {
             },
             LoadCurve::Blows {
                 blow,
+                first,
                 interval,
                 count,
             } => {
+                let t = t - first;
                 let k = (t / interval).floor();
                 if k < 0.0 || k >= f64::from(count) {
                     0.0
@@ -235,6 +240,7 @@ mod tests {
         // Z / m = 100 /s: e^-1 after 10 ms; a blow every 0.5 s, two of them.
         let c = LoadCurve::Blows {
             blow: Blow::new(2.0, 200.0, None),
+            first: 0.0,
             interval: 0.5,
             count: 2,
         };
@@ -244,6 +250,7 @@ mod tests {
         assert_eq!(c.at(1.0), 0.0);
         let once = LoadCurve::Blows {
             blow: Blow::new(2.0, 200.0, None),
+            first: 0.0,
             interval: f64::INFINITY,
             count: 1,
         };
@@ -252,6 +259,21 @@ mod tests {
         let dt = 1e-6;
         let impulse: f64 = (0..400_000).map(|i| c.at((i as f64 + 0.5) * dt) * dt).sum();
         assert!((impulse - 2.0 / 200.0).abs() < 1e-7, "{impulse}");
+    }
+
+    #[test]
+    fn blows_start_at_the_first_blows_time() {
+        let c = LoadCurve::Blows {
+            blow: Blow::new(2.0, 200.0, None),
+            first: 0.25,
+            interval: 0.5,
+            count: 2,
+        };
+        assert_eq!(c.at(0.2), 0.0, "before the first blow");
+        assert_eq!(c.at(0.25), 1.0);
+        assert_eq!(c.at(0.75), 1.0, "the second blow");
+        assert!((c.at(0.26) - (-1.0f64).exp()).abs() < 1e-15);
+        assert_eq!(c.at(1.25), 0.0, "after the last one's interval");
     }
 
     #[test]

@@ -140,6 +140,9 @@ pub(super) struct Hammer {
     /// Seconds between blows (required with more than one).
     #[serde(default)]
     pub interval: Option<f64>,
+    /// The time of the first blow (s): the model may settle under its weight before it.
+    #[serde(default)]
+    pub first: f64,
 }
 
 fn one_blow() -> u32 {
@@ -190,8 +193,15 @@ impl Hammer {
                 ))
             }
         };
+        if !(self.first.is_finite() && self.first >= 0.0) {
+            return Err(refuse(
+                format!("{item}.first"),
+                format!("{}: expected a time of 0 or more", self.first),
+            ));
+        }
         let curve = LoadCurve::Blows {
             blow: Blow::new(self.ram_mass, self.impedance, self.cushion),
+            first: self.first,
             interval,
             count: self.blows,
         };

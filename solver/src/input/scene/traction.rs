@@ -24,7 +24,7 @@ pub(super) const TABLE: Table = Table {
         key("pressure", "float", "none", "kPa", "or a pressure normal to each face, pushing into the body (a tunnel's or a pile's wall)"),
         key("ramp", "float", "0 (sudden)", "s", "time to reach the full load"),
         key("curve", "[[float, float], ...] or string", "none", "s, –", super::curve::CURVE_HELP),
-        key("hammer", "table", "none", "", "blows of a ram pushing into the body: `{ ram_mass = t, velocity = m/s, impedance = kN·s/m, cushion = kN/m (optional), blows = 1, interval = s }`; F(t) = Z v₀ exp(−Z t / m) per blow (through a cushion, its spring-dashpot response), as a pressure F / A over the group's area A"),
+        key("hammer", "table", "none", "", "blows of a ram pushing into the body: `{ ram_mass = t, velocity = m/s, impedance = kN·s/m, cushion = kN/m (optional), blows = 1, interval = s, first = s (0) }`; the first blow at `first`, then one every `interval`; F(t) = Z v₀ exp(−Z t / m) per blow (through a cushion, its spring-dashpot response), as a pressure F / A over the group's area A"),
     ],
 };
 
