@@ -95,6 +95,97 @@ pub struct Plan {
     pub wall_seconds: f64,
     /// The steps timed on this machine, where the plan was calibrated.
     pub calibration: Option<Calibration>,
+    /// How far the mesh lets a structure travel (a moving mesh, or contact on a fixed one).
+    pub mesh_limits: Option<MeshLimits>,
+}
+
+/// How far the mesh lets a structure travel before the run stops being sound.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MeshLimits {
+    /// A moving mesh: the time step stays the initial mesh's, so a box ahead of the structure
+    /// may shrink only to the Courant number of its length. Per storage box, its span along
+    /// the axis (m) and that travel, (1 − Courant) × its length.
+    Moving {
+        /// The axis (0: x, 1: y, 2: z).
+        axis: usize,
+        /// The Courant number the step takes.
+        courant: f64,
+        /// Per storage box: [from, to] along the axis, and the travel towards it (m).
+        boxes: Vec<([f64; 2], f64)>,
+    },
+    /// Contact on a fixed mesh: the interface is the initial one, so the structure may move a
+    /// fraction of its smallest cell (m) only.
+    Fixed {
+        /// The structure's smallest element altitude (m).
+        cell: f64,
+    },
+}
+
+impl MeshLimits {
+    /// The limits of `case`, whose elements' smallest altitudes are `altitude`; `None` without
+    /// a moving mesh or contact.
+    fn of(case: &Case, altitude: &[f64]) -> Option<Self> {
+        let b = &case.boundary;
+        if let Some(m) = &b.moving_mesh {
+            let boxes = m
+                .storage
+                .iter()
+                .map(|corners| {
+                    let along = corners.iter().map(|&n| case.model.node(n as usize)[m.axis]);
+                    let lo = along.clone().fold(f64::INFINITY, f64::min);
+                    let hi = along.fold(f64::NEG_INFINITY, f64::max);
+                    ([lo, hi], (1.0 - case.time.courant).max(0.0) * (hi - lo))
+                })
+                .collect();
+            return Some(MeshLimits::Moving {
+                axis: m.axis,
+                courant: case.time.courant,
+                boxes,
+            });
+        }
+        let contact = b.contact.as_ref()?;
+        // The case's elements are the model's, in its order.
+        let cell = case
+            .body
+            .element_material
+            .iter()
+            .zip(altitude)
+            .filter(|(&m, _)| m == contact.material)
+            .map(|(_, &a)| a)
+            .fold(f64::INFINITY, f64::min);
+        Some(MeshLimits::Fixed { cell })
+    }
+}
+
+impl fmt::Display for MeshLimits {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            MeshLimits::Moving {
+                axis,
+                courant,
+                boxes,
+            } => {
+                let name = ["x", "y", "z"][(*axis).min(2)];
+                write!(f, "  mesh limits: the time step stays the initial mesh's (Courant {courant}), so the structure may travel")?;
+                for (k, ([lo, hi], travel)) in boxes.iter().enumerate() {
+                    let sep = if k == 0 { "" } else { "; or" };
+                    write!(
+                        f,
+                        "{sep} {travel:.3} m into the box from {name} = {} to {} m",
+                        mpm_shared::text::real_to_string(*lo),
+                        mpm_shared::text::real_to_string(*hi)
+                    )?;
+                }
+                write!(f, " (its cells then shrink to {courant} of their length; beyond, the step is not stable)")
+            }
+            MeshLimits::Fixed { cell } => write!(
+                f,
+                "  mesh limits: contact on a fixed mesh: the interface is the initial one, so the \
+                 structure may move a fraction of its smallest cell ({cell:.3} m) only; add \
+                 [moving_mesh] for a longer travel"
+            ),
+        }
+    }
 }
 
 /// Steps of the case timed on this machine (`mpm_solve::driver::calibrate`), with the threads,
@@ -259,6 +350,7 @@ pub fn plan(case: &Case, threads: usize) -> Result<Plan, PlanError> {
         precision: case.numerics.precision,
         wall_seconds,
         calibration: None,
+        mesh_limits: MeshLimits::of(case, &altitude),
     })
 }
 
@@ -417,6 +509,9 @@ impl fmt::Display for Plan {
             units::bytes(self.memory_bytes),
             self.precision.name()
         )?;
+        if let Some(m) = &self.mesh_limits {
+            writeln!(f, "{m}")?;
+        }
         match self.calibration {
             Some(c) => write!(
                 f,
