@@ -594,6 +594,9 @@ fn solve(case: Case, args: &Args, overrides: &Overrides) -> anyhow::Result<()> {
         return check_only(&case, plan, &limits);
     };
     plan.check(&limits, Some(out))?;
+    if let Some(m) = &plan.mesh_limits {
+        say!("{}", m.to_string().trim_start());
+    }
     run_in(&case, &plan, out, args)
 }
 
@@ -891,6 +894,30 @@ fn execute<R: Real, E: Element>(
             "consolidation report: {}",
             out.join("consolidation.csv").display()
         );
+        return Ok(());
+    }
+    if let Some(mut report) = mpm_solve::jobs::driving::Report::of(case, out) {
+        use mpm_solve::driver::run::Both;
+        let engine = mpm_solve::driver::run::run_with::<R, E>(
+            case,
+            out,
+            options,
+            &mut Both(&mut report, &mut reporter),
+        )?;
+        if let Some(e) = report.take_error() {
+            return Err(e).context("writing the driving report");
+        }
+        done(&engine, engine.particles.len() as u64, out);
+        if let Some(b) = report.blows.last() {
+            say!(
+                "driving: {} blow{}, tip {:.3} m below the ground, last set {:.1} mm; report: {}",
+                b.blow,
+                if b.blow == 1 { "" } else { "s" },
+                b.tip_depth,
+                b.set * 1e3,
+                out.join("driving.csv").display()
+            );
+        }
         return Ok(());
     }
     let engine = mpm_solve::driver::run::run_with::<R, E>(case, out, options, &mut reporter)?;
