@@ -523,15 +523,17 @@ fn a_pile_pushed_into_soil_with_friction_matches_anura3d() {
     let Some(bin) = common::oracle("contact against Anura3D") else {
         return;
     };
-    for (mu, c) in [(0.4, 2.0), (0.0, 0.0)] {
+    // With strain smoothing each material's volumetric strain takes its own body's nodes.
+    let smoothing: &[(&str, &str)] = &[("STRAIN_SMOOTHING", "1")];
+    for (mu, c, cps) in [(0.4, 2.0, &[][..]), (0.0, 0.0, &[]), (0.4, 0.0, smoothing)] {
         let dir = tempfile::tempdir().unwrap();
-        pile(dir.path(), "pile", 3, mu, c, &[], "");
+        pile(dir.path(), "pile", 3, mu, c, cps, "");
         common::agrees_with_anura3d(
             &bin,
             dir.path(),
             "pile",
             3,
-            &format!("pile pushed, μ = {mu}, c = {c}"),
+            &format!("pile pushed, μ = {mu}, c = {c}, {cps:?}"),
         );
     }
 }
@@ -554,6 +556,16 @@ fn a_pile_pushed_into_saturated_soil_matches_anura3d() {
             &format!("pile pushed into saturated soil, μ = {mu}"),
         );
     }
+    let dir = tempfile::tempdir().unwrap();
+    let smoothing: &[(&str, &str)] = &[("STRAIN_SMOOTHING", "1")];
+    pile_in(dir.path(), "wet", 3, (0.4, 0.0), (smoothing, ""), true);
+    common::agrees_with_anura3d_saturated(
+        &bin,
+        dir.path(),
+        "wet",
+        3,
+        "pile pushed into saturated soil, μ = 0.4, with strain smoothing",
+    );
 }
 
 #[test]
@@ -892,12 +904,7 @@ type Edit<'a> = (&'a str, &'a dyn Fn(String) -> String, &'a str);
 #[test]
 fn what_contact_does_not_model_is_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [Refusal; 3] = [
-        (
-            "smoothing",
-            &[("STRAIN_SMOOTHING", "1")],
-            "contact is not modelled with $$STRAIN_SMOOTHING 1",
-        ),
+    let cases: [Refusal; 2] = [
         (
             "scaling",
             &[("APPLY_CONTACT_VELOCITY_SCALING", "1")],
@@ -950,6 +957,33 @@ fn what_contact_does_not_model_is_refused_by_name() {
             "{name}: {err}"
         );
     }
+    // Strain smoothing with the moving mesh following the soil: Anura3D would smooth the
+    // structure with the soil's displacements.
+    let (gom, _) = pile(
+        dir.path(),
+        "smooth_soil",
+        1,
+        0.4,
+        0.0,
+        &[("STRAIN_SMOOTHING", "1")],
+        "",
+    );
+    let text = std::fs::read_to_string(&gom).unwrap();
+    let follows = "$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n2\n";
+    assert!(text.contains(follows));
+    std::fs::write(
+        &gom,
+        text.replace(follows, "$$MOVING_MESH_REFERENCE_MATERIAL_INDEX\n1\n"),
+    )
+    .unwrap();
+    let o = common::solve(&gom, &dir.path().join("smooth_soil_out"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("$$STRAIN_SMOOTHING")
+            && err.contains("needs the moving mesh to follow the structure's material 2"),
+        "{err}"
+    );
     // A velocity prescribed on a soil element: with contact it acts on the structure's nodes.
     let (gom, _) = pile(dir.path(), "soil_pushed", 1, 0.4, 0.0, &[], "");
     let text = std::fs::read_to_string(&gom).unwrap();

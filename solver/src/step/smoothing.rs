@@ -63,17 +63,27 @@ impl<R: Real> StrainSmoothing<R> {
 
     /// Computes the nodal smoothed strain increments of this step from the nodal velocities of
     /// both phases (`g.vel`, and the liquid's when the case has one), over the elements
-    /// holding points of `p`.
+    /// holding points of `p`. With contact, `structure` gives the structure's own nodes and its
+    /// material: that material's strain takes the structure's velocities (as Anura3D takes
+    /// each material's body's displacements), the others the soil's `g`.
     pub fn compute<E: Element>(
         &mut self,
         passes: &Passes<'_, R, E>,
         slots: &mut Slots<R>,
         (p, g): (&Particles<R>, &Grid<R>),
+        structure: Option<(&Grid<R>, u32)>,
         dt: R,
     ) {
         let (team, layout, mesh) = (passes.team, passes.layout, passes.mesh);
         let (column, columns) = (&self.column, self.columns);
         let wvel = g.liquid.as_ref().map(|l| &l.vel);
+        // The structure's column and nodal velocities (no column: none).
+        let (own, own_vel) = structure.map_or((usize::MAX, None), |(sg, m)| {
+            (
+                column.get(m as usize).copied().unwrap_or(usize::MAX),
+                Some(&sg.vel),
+            )
+        });
         for lo in (0..columns).step_by(PER_PASS) {
             let hi = (lo + PER_PASS).min(columns);
             layout.scatter::<PASS_WIDTH, _>(team, slots, |e, points, four| {
@@ -88,7 +98,7 @@ impl<R: Real> StrainSmoothing<R> {
                     return;
                 }
                 let grad = mesh.grad[e].as_ref();
-                let (mut es, mut ew) = (R::ZERO, R::ZERO);
+                let (mut es, mut ew, mut es_own) = (R::ZERO, R::ZERO, R::ZERO);
                 for k in 0..E::NODES {
                     let node = mesh.corners[e].as_ref()[k] as usize;
                     let v = g.vel[node];
@@ -100,13 +110,24 @@ impl<R: Real> StrainSmoothing<R> {
                             ew += w[node][a] * grad[k][a];
                         }
                     }
+                    if let Some(sv) = own_vel {
+                        for a in 0..3 {
+                            es_own += sv[node][a] * grad[k][a];
+                        }
+                    }
                 }
                 let ve = mesh.volume[e];
-                let (es, ew) = (es * dt * ve, ew * dt * ve);
+                let (es, ew, es_own) = (es * dt * ve, ew * dt * ve, es_own * dt * ve);
                 for (j, _) in present.iter().enumerate().filter(|(_, &on)| on) {
+                    // The structure is dry: its liquid term is 0.
+                    let (s, w) = if lo + j == own {
+                        (es_own, R::ZERO)
+                    } else {
+                        (es, ew)
+                    };
                     for slot in node_slots::<E, R>(four, PASS_WIDTH) {
-                        slot[3 * j] += es;
-                        slot[3 * j + 1] += ew;
+                        slot[3 * j] += s;
+                        slot[3 * j + 1] += w;
                         slot[3 * j + 2] += ve;
                     }
                 }

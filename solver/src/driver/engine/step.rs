@@ -339,7 +339,12 @@ impl<R: Real, E: Element> Engine<R, E> {
         let c = &self.config;
         let passes = Passes::new(&self.team, &self.layout, &self.mesh, &*self.comm);
         if let Some(sm) = &mut self.smoothing {
-            sm.compute(&passes, &mut self.slots, (&self.particles, &self.grid), dt);
+            let structure = self
+                .structure
+                .as_ref()
+                .map(|s| (&s.grid, s.body.structure_material));
+            let pg = (&self.particles, &self.grid);
+            sm.compute(&passes, &mut self.slots, pg, structure, dt);
         }
         let pressure = stress::PorePressure {
             particles: &mut self.particles,

@@ -18,13 +18,15 @@ pub(super) struct ContactCase {
     pub has_nodal_load: bool,
     pub has_point_load: bool,
     pub has_nodal_velocity: bool,
+    /// The material the moving mesh follows, if there is one.
+    pub moving_mesh_follows: Option<u32>,
     /// Elements (0-based) whose points have a prescribed velocity.
     pub prescribed_elements: Vec<u32>,
 }
 
 /// The contact, `None` when it is off. Refused by name what it does not model with it: a
-/// saturated structure, loads on nodes (on the solid or the liquid) or on material points, prescribed nodal
-/// velocities and strain smoothing (Anura3D gives each of them rules of its own for the two
+/// saturated structure, loads on nodes (on the solid or the liquid) or on material points and
+/// prescribed nodal velocities (Anura3D gives each of them rules of its own for the two
 /// bodies), and velocities prescribed on the soil.
 pub(super) fn read(
     input: &Input,
@@ -35,7 +37,7 @@ pub(super) fn read(
     if !switched_on(input)? {
         return Ok(None);
     }
-    if let Some(what) = not_modelled_with(input, &with) {
+    if let Some(what) = not_modelled_with(&with) {
         return Err(unsupported(
             &input.cfile,
             KEY,
@@ -73,6 +75,19 @@ pub(super) fn read(
             &format!("${key}"),
             format!(
                 "the structure's material {} is saturated: contact models a dry structure (a saturated or dry soil beside it)",
+                spec.material
+            ),
+        ));
+    }
+    // Anura3D smooths each material's strain with its body's displacements, and takes the
+    // structure's body from the moving mesh's reference material: without it, the structure
+    // would be smoothed with the soil's.
+    if strain_smoothing(&input.cps) && with.moving_mesh_follows != Some(spec.material) {
+        return Err(unsupported(
+            &input.cfile,
+            "$$STRAIN_SMOOTHING",
+            format!(
+                "with contact, strain smoothing needs the moving mesh to follow the structure's material {} (Anura3D takes the structure's body for the smoothing from the moving mesh)",
                 spec.material
             ),
         ));
@@ -117,15 +132,13 @@ pub(super) fn switched_on(input: &Input) -> Result<bool, CaseError> {
 
 /// What of the case the contact is not modelled with, as the end of the refusal's sentence;
 /// `None` when there is nothing.
-fn not_modelled_with(input: &Input, with: &ContactCase) -> Option<&'static str> {
+fn not_modelled_with(with: &ContactCase) -> Option<&'static str> {
     if with.has_nodal_load {
         Some("with loads on nodes")
     } else if with.has_point_load {
         Some("with loads on material points")
     } else if with.has_nodal_velocity {
         Some("with prescribed nodal velocities")
-    } else if strain_smoothing(&input.cps) {
-        Some("with $$STRAIN_SMOOTHING 1")
     } else {
         None
     }

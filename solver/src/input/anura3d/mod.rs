@@ -212,6 +212,7 @@ pub fn load(gom: &Path, cps_path: &Path) -> Result<(Case, Settings), CaseError> 
             .any(|&v| v != 0.0),
         has_point_load: !loads.point_loads.is_empty(),
         has_nodal_velocity: !nodal_velocity.is_empty(),
+        moving_mesh_follows: moving_mesh.as_ref().map(|m| m.material),
         prescribed_elements: prescribed
             .as_ref()
             .map(|p| p.rows.iter().map(|r| r.element).collect())

@@ -52,8 +52,6 @@ pub(super) struct With<'a> {
     pub nodal_velocity: bool,
     /// The velocity prescribed on material points, if any.
     pub driven: Option<&'a PrescribedVelocity>,
-    /// Strain smoothing.
-    pub strain_smoothing: bool,
 }
 
 /// The scene's contact: `None` without `[[contact]]`, else the spec, or what cannot be used.
@@ -134,9 +132,6 @@ fn not_modelled_with(materials: &Materials, with: &With<'_>, structure: u32) -> 
             "with velocities prescribed on nodes ([[velocity]] on a boundary group or a plane)"
                 .into(),
         );
-    }
-    if with.strain_smoothing {
-        return Some("with strain_smoothing".into());
     }
     let element_material = &materials.element_material;
     match with.driven {

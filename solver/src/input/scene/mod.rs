@@ -313,7 +313,6 @@ fn resolve_sections(path: &Path, scene: &Scene, mut mesh: mesh::Mesh) -> Result<
             grid: grid.is_some(),
             nodal_velocity: !velocities.nodal.is_empty(),
             driven: velocities.points.as_ref(),
-            strain_smoothing: scene.strain_smoothing,
         },
     )?;
     let gravity = gravity::resolve(scene.gravity.as_ref(), scene_dir)?;
