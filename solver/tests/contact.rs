@@ -154,6 +154,8 @@ struct Push {
     drift: f64,
     /// The soil saturated (the liquid fixed where the solid is).
     saturated: bool,
+    /// Anura3D's strain smoothing (plane strain only).
+    smoothing: bool,
 }
 
 /// [`pile`]'s problem as a section, plane strain or axisymmetric: the soil 1.5 m wide and 3 m
@@ -214,6 +216,7 @@ fn pile_2d(
             ("CONTACT_FORMULATION", "1"),
             ("HOMOGENEOUS_LOCAL_DAMPING", "0 0.05"),
             ("GRAVITY_VECTOR", "0.0 -1.0"),
+            ("STRAIN_SMOOTHING", if push.smoothing { "1" } else { "0" }),
             // Mixed integration is not modelled for axisymmetric sections.
             (
                 "COMPUTATION_METHOD",
@@ -243,12 +246,14 @@ fn a_pile_pushed_into_a_section_matches_the_2d_oracle() {
             left: 0.0,
             drift: 0.0,
             saturated: false,
+            smoothing: false,
         },
         Push {
             axisymmetric: true,
             left: 0.0,
             drift: 0.0,
             saturated: false,
+            smoothing: false,
         },
     );
     let sideways = Push {
@@ -256,6 +261,7 @@ fn a_pile_pushed_into_a_section_matches_the_2d_oracle() {
         left: 0.5,
         drift: 0.02,
         saturated: false,
+        smoothing: false,
     };
     for (push, mu, c, label) in [
         (plane, 0.4, 0.0, "plane strain, on the symmetry plane"),
@@ -263,6 +269,15 @@ fn a_pile_pushed_into_a_section_matches_the_2d_oracle() {
         (axi, 0.4, 0.0, "axisymmetric"),
         (axi, 0.0, 0.0, "axisymmetric"),
         (sideways, 0.4, 2.0, "plane strain, pushed sideways"),
+        (
+            Push {
+                smoothing: true,
+                ..plane
+            },
+            0.4,
+            0.0,
+            "plane strain, on the symmetry plane, strain smoothing",
+        ),
     ] {
         let dir = tempfile::tempdir().unwrap();
         pile_2d(dir.path(), "pile", push, 3, mu, c);
@@ -281,6 +296,7 @@ fn a_pile_pushed_into_a_section_matches_the_2d_oracle() {
             left: 0.0,
             drift: 0.0,
             saturated: true,
+            smoothing: false,
         };
         let dir = tempfile::tempdir().unwrap();
         pile_2d(dir.path(), "wet", push, 3, 0.4, 0.0);
@@ -606,6 +622,7 @@ fn contact_outputs_do_not_depend_on_the_thread_count() {
         left: 0.0,
         drift: 0.0,
         saturated: false,
+        smoothing: false,
     };
     let (section, _) = pile_2d(dir.path(), "section", axi, 2, 0.4, 2.0);
     let scene = pile_scene(dir.path(), "scene", 0.4, 5.0, "");
