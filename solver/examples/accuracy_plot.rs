@@ -103,22 +103,6 @@ fn pareto(runs: &[&Run]) -> Vec<(f64, f64)> {
     front
 }
 
-/// Registers a system TrueType font for the text; without one the plot has no text.
-fn font() -> bool {
-    [
-        "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-        "/usr/share/fonts/TTF/DejaVuSans.ttf",
-        "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-        "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-    ]
-    .iter()
-    .find_map(|p| std::fs::read(p).ok())
-    .is_some_and(|bytes| {
-        let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok()
-    })
-}
-
 /// A decade range enclosing `values`.
 fn decades(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
@@ -219,7 +203,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         return Err("usage: accuracy_plot RESULTS.csv OUT_PREFIX".into());
     };
     let runs = read_runs(Path::new(csv_path))?;
-    let text = font();
+    let text = mpm_solve::jobs::plot::font().is_some();
     let mut problems: Vec<&str> = runs.iter().map(|r| r.problem.as_str()).collect();
     problems.sort_unstable();
     problems.dedup();

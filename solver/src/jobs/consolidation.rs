@@ -312,20 +312,14 @@ impl<R: Real, E: Element> crate::driver::run::Observer<R, E> for Observer {
             v.extend([*tv, points.len() as f64]);
             v.extend(points.iter().flat_map(|&(a, b)| [a, b]));
         }
-        v.iter().flat_map(|x| x.to_bits().to_le_bytes()).collect()
+        crate::jobs::state_bytes(&v)
     }
 
     fn restore(&mut self, state: &[u8]) -> Result<(), String> {
         let Some(t) = &mut self.tracker else {
             return Ok(());
         };
-        if state.len() % 8 != 0 {
-            return Err("consolidation records of a ragged length".into());
-        }
-        let v: Vec<f64> = state
-            .chunks_exact(8)
-            .map(|c| f64::from_bits(u64::from_le_bytes(c.try_into().unwrap_or_default())))
-            .collect();
+        let v = crate::jobs::state_values(state, "consolidation records")?;
         let mut it = v.into_iter();
         let count = |it: &mut std::vec::IntoIter<f64>, per: usize| {
             let n = it.next().ok_or("consolidation records cut short")?;

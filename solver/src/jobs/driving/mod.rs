@@ -663,17 +663,11 @@ impl<R: Real, E: Element> Observer<R, E> for Report {
             v.push(rows.len() as f64);
             v.extend(rows.iter().flat_map(|r| r.values()));
         }
-        v.iter().flat_map(|x| x.to_bits().to_le_bytes()).collect()
+        crate::jobs::state_bytes(&v)
     }
 
     fn restore(&mut self, state: &[u8]) -> Result<(), String> {
-        if state.len() % 8 != 0 {
-            return Err("a driving report of a ragged length".into());
-        }
-        let v: Vec<f64> = state
-            .chunks_exact(8)
-            .map(|c| f64::from_bits(u64::from_le_bytes(c.try_into().unwrap_or_default())))
-            .collect();
+        let v = crate::jobs::state_values(state, "a driving report")?;
         let short = || "a driving report cut short".to_string();
         let head = v.get(..9).ok_or_else(short)?;
         let mut at = 9;
