@@ -536,3 +536,66 @@ impl fmt::Display for Plan {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::input::case::MaterialSpec;
+    use crate::step::contact::{ContactSpec, InterfaceRule};
+    use mpm_shared::generate::box_mesh;
+    use mpm_shared::ElementType;
+
+    /// A box of 2 × 2 × 2 cubes of 0.5 m, each split into six tetrahedra, all of material 1.
+    fn case() -> Case {
+        let model = box_mesh([2, 2, 2], [1.0, 1.0, 1.0], ElementType::Tet4);
+        let material = MaterialSpec::new("pile", 2000.0, 1e4, 0.3).unwrap();
+        let fixed = vec![[false; 3]; model.node_count()];
+        Case::single_material("box", model, material, 1, fixed)
+    }
+
+    #[test]
+    fn contact_on_a_fixed_mesh_reports_the_structures_smallest_cell() {
+        let mut c = case();
+        assert_eq!(
+            plan(&c, 1).unwrap().mesh_limits,
+            None,
+            "no contact, no limit"
+        );
+        c.boundary.contact = Some(ContactSpec {
+            material: 1,
+            listed: vec![0],
+            interfaces: vec![(0.0, 0.0); 2],
+            rule: InterfaceRule::Tributary,
+            rigid: false,
+        });
+        let p = plan(&c, 1).unwrap();
+        let Some(MeshLimits::Fixed { cell }) = p.mesh_limits.clone() else {
+            panic!("{:?}", p.mesh_limits);
+        };
+        // The smallest altitude of a cube's sixth tetrahedron is below its side and above a
+        // third of it.
+        assert!(cell > 0.5 / 3.0 && cell < 0.5, "{cell}");
+        assert!(
+            p.to_string()
+                .contains("mesh limits: contact on a fixed mesh"),
+            "{p}"
+        );
+    }
+
+    #[test]
+    fn a_moving_mesh_reports_the_travel_into_each_box() {
+        let limits = MeshLimits::Moving {
+            axis: 1,
+            courant: 0.4,
+            boxes: vec![([0.0, 7.0], 4.2), ([14.5, 15.0], 0.3)],
+        };
+        let text = limits.to_string();
+        assert!(
+            text.contains(
+                "4.200 m into the box from y = 0.0 to 7.0 m; or 0.300 m into the box from y = 14.5 to 15.0 m"
+            ),
+            "{text}"
+        );
+        assert!(text.contains("shrink to 0.4 of their length"), "{text}");
+    }
+}

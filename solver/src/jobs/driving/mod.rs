@@ -705,3 +705,98 @@ impl<R: Real, E: Element> Observer<R, E> for Report {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_square_or_a_cube_split_into_simplices_has_its_side_as_size() {
+        let h = 0.25;
+        let tri = [[0.0, 0.0], [h, 0.0], [h, h]];
+        assert!((element_size(tri.iter().map(|c| &c[..]), 2) - h).abs() < 1e-15);
+        let tet = [[0.0, 0.0, 0.0], [h, 0.0, 0.0], [h, h, 0.0], [h, h, h]];
+        assert!((element_size(tet.iter().map(|c| &c[..]), 3) - h).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_blow_that_does_not_drive_has_no_blow_count() {
+        let b = BlowRecord::from_values(&[
+            3.0, 0.3, 2.0, 0.004, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0,
+        ]);
+        assert_eq!(b.blows_per_metre(), 250.0);
+        assert!(BlowRecord { set: -1e-4, ..b }.blows_per_metre().is_nan());
+        assert_eq!(BlowRecord::from_values(&b.values()), b);
+    }
+
+    /// A report with some state of its own, as a run would leave it.
+    fn report() -> Report {
+        let row = |t: f64| TraceRow::from_values(&[t, 10.0 * t, 0.5, 0.01, 3.0, 1.0, f64::NAN]);
+        Report {
+            dir: PathBuf::from("out"),
+            name: "pile".into(),
+            geometry: Geometry {
+                material: 2,
+                ground: 10.0,
+                tip: 8.0,
+                extent: ([0.75, 1.0], [0.0, 0.0]),
+                cell: 0.25,
+                inner: Some(0.75),
+                ring: 2.0 * std::f64::consts::PI,
+            },
+            schedule: Schedule {
+                first: 0.1,
+                interval: 0.1,
+                count: 10,
+            },
+            head: vec![3, 4],
+            head_load: 100.0,
+            curve: LoadCurve::Step,
+            sets: Some((1, 2)),
+            pore0: Vec::new(),
+            going: Going {
+                index: 2,
+                window: Window {
+                    time: 2e-5,
+                    sums: [1.0, 2.0, 3.0, 4.0],
+                },
+                rows: vec![row(1e-4), row(2e-4)],
+                energy: 5.5,
+                start: [0.02, 1.97],
+            },
+            first: vec![row(1e-4)],
+            blows: vec![BlowRecord::from_values(&[1.0; 13]); 2],
+            failed: None,
+        }
+    }
+
+    #[test]
+    fn the_report_goes_through_a_checkpoint_whole() {
+        use crate::driver::run::Observer;
+        type O = dyn Observer<f64, crate::element::tet4::Tet4>;
+        let a = report();
+        let state = <Report as Observer<f64>>::save(&a);
+        let mut b = report();
+        b.going = Going::default();
+        b.first.clear();
+        b.blows.clear();
+        (&mut b as &mut O).restore(&state).unwrap();
+        assert_eq!(b.going.rows.len(), 2);
+        // NaN fields compare through their bits.
+        assert_eq!(<Report as Observer<f64>>::save(&b), state);
+        assert_eq!(
+            (b.going.index, b.going.energy, b.going.start),
+            (2, 5.5, [0.02, 1.97])
+        );
+        assert_eq!(b.blows, a.blows);
+        assert!((&mut b as &mut O)
+            .restore(&state[..state.len() - 8])
+            .is_err());
+        assert!((&mut b as &mut O)
+            .restore(&state[..state.len() - 3])
+            .is_err());
+        assert!((&mut b as &mut O)
+            .restore(&[state.clone(), vec![0; 8]].concat())
+            .is_err());
+    }
+}
