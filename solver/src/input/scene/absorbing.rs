@@ -20,7 +20,8 @@ pub(super) const TABLE: Table = Table {
             element of density ρ gives its corners a dashpot a ρ V_p A along its normal and \
             b ρ V_s A across it, and a spring ρ V² A / δ (V_p, V_s the element's P- and S-wave \
             speeds); in a saturated element also the liquid's a ρ_w V_w A and K_w A / δ along the \
-            normal (faces normal to an axis). Give exactly one of `physical` and `plane`. One \
+            normal (faces normal to an axis). Faces of elements without material points (the \
+            air above the ground) take none. Give exactly one of `physical` and `plane`. One \
             process.",
     keys: &[
         key("physical", "string", "none", "", "the physical boundary group"),
@@ -67,7 +68,15 @@ pub(super) fn resolve(
         let faces = entry.faces(mesh)?;
         let owners = faces::boundary_owners(&mesh.model, &faces)
             .map_err(|m| refuse(entry.item(), format!("{m} in {}", mesh.name)))?;
+        let before = rows.len();
         for (face, (element, inner)) in faces.iter().zip(owners) {
+            // An element without points (the air above the ground) has no material to send
+            // the wave into: its faces take no dashpot. With them, a soil point that strayed
+            // into such a cell at the monopile job's far side was crushed (on a node of almost
+            // no mass the dashpot and spring, not the soil, set the velocity).
+            if materials.points_per_element[element] == 0 {
+                continue;
+            }
             let index = materials.element_material[element] as usize;
             let Some(m) = materials.specs.get(index).and_then(|m| m.as_ref()) else {
                 return Err(refuse(
@@ -106,6 +115,15 @@ pub(super) fn resolve(
                     liquid,
                 ));
             }
+        }
+        if rows.len() == before {
+            return Err(refuse(
+                entry.item(),
+                format!(
+                    "selects only faces of elements without material points in {}: nothing there absorbs",
+                    mesh.name
+                ),
+            ));
         }
     }
     Ok(merged(rows))
