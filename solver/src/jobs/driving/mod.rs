@@ -619,10 +619,12 @@ impl<R: Real, E: Element> Observer<R, E> for Report {
 
     fn on_step(&mut self, engine: &Engine<R, E>) {
         // Before the first blow the pile settles; the first blow's set is counted from the
-        // penetration at its start.
+        // penetration at its start, taken in the last step before it (not in every step).
         if engine.time <= self.schedule.first {
-            let (penetration, _) = self.penetration_and_tip(engine);
-            self.going.start = [penetration, self.plug_length(engine, penetration)];
+            if engine.time + engine.dt > self.schedule.first {
+                let (penetration, _) = self.penetration_and_tip(engine);
+                self.going.start = [penetration, self.plug_length(engine, penetration)];
+            }
             return;
         }
         if self.going.index >= self.schedule.count {
