@@ -5,9 +5,9 @@
 //! An *interface side* is a side of one of the structure's elements whose neighbour is empty or
 //! of another material (a side on the mesh boundary is not one).
 //!
-//! * 3D (Anura3D's rule): each node takes a third of the area of its interface triangles; its
-//!   normal sums the unnormalised normals of each element's last interface side (Anura3D keeps
-//!   one side per element).
+//! * 3D: each node takes a third of the area of its interface triangles; its normal sums the
+//!   unnormalised normals of each element's last interface side ([`InterfaceRule::Anura3d`]:
+//!   Anura3D keeps one side per element) or of all of them ([`InterfaceRule::Tributary`]).
 //! * 2D, [`InterfaceRule::Anura3d`]: the sides are taken element by element in the order the
 //!   input lists them, each element's sides in Anura3D's order (corners 1–2, 3–1, 2–3); each
 //!   node takes the whole length of every interface side it ends (not half: Anura3D's count,
@@ -25,15 +25,16 @@ use crate::real::Real;
 
 use super::ContactSpec;
 
-/// How a 2D interface node's normal and share of the interface are taken (3D inputs have one
-/// rule, Anura3D's, which is the tributary area).
+/// How the interface is taken: Anura3D's rules (its inputs) or a scene's, which also holds the
+/// structure's inside against soil that slipped past the interface (`Contact::correct`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum InterfaceRule {
-    /// Anura3D's: a node takes the whole length of each interface side it ends and the normal
-    /// of the last listed side that faces soil (its inputs).
+    /// Anura3D's: in 2D a node takes the whole length of each interface side it ends and the
+    /// normal of the last listed side that faces soil; in 3D the normal of each element's last
+    /// interface side (its inputs).
     Anura3d,
-    /// The tributary length (per radian in an axisymmetric section) and the length-weighted
-    /// mean normal (scenes).
+    /// The tributary length (per radian in an axisymmetric section) and the length- or
+    /// area-weighted mean normal (scenes).
     Tributary,
 }
 
@@ -142,10 +143,12 @@ fn surfaces<E: Element, R: Real>(
             area[slot(n)] += third;
         }
     }
-    // Each element's last interface side only, its unnormalised inward normal summed at its
-    // corners.
+    // Anura3D's: each element's last interface side only, its unnormalised inward normal
+    // summed at its corners; a scene's: every side (the area-weighted mean, so that a corner
+    // of the structure pushes along the bisector of its faces).
     for (k, &(e, f)) in faces.iter().enumerate() {
-        if faces.get(k + 1).is_some_and(|next| next.0 == e) {
+        let later = faces.get(k + 1).is_some_and(|next| next.0 == e);
+        if later && spec.rule == InterfaceRule::Anura3d {
             continue;
         }
         let c = inward(f);

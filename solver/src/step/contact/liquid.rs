@@ -51,7 +51,9 @@ pub(super) fn seal<R: Real>(wall: &Wall<'_, R>, soil: &mut Grid<R>, structure: &
         let Some(v_wall) = wall_velocity(wall, structure, node) else {
             continue;
         };
-        let normal = wall.normal[k];
+        let Some(normal) = super::free_normal(wall.normal[k], wall.liquid_fixed[n]) else {
+            continue;
+        };
         let mut w0 = [0.0; 3];
         let mut w = [0.0; 3];
         for d in 0..3 {

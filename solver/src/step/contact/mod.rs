@@ -29,6 +29,11 @@
 //! material around it sticks (μ = 10, c = 1000 kPa), and the friction of the node's soil
 //! material is the one of the lowest material index present around it.
 //!
+//! Every input: the normal is taken within the node's free directions (`free_normal`: a
+//! symmetry plane through the structure). A scene's: at the structure's nodes off the
+//! interface (in a section, more than one cell inside it), where soil points have slipped in,
+//! both bodies take the system velocity.
+//!
 //! Modelled in 3D and in plane-strain and axisymmetric sections (the interface itself:
 //! [`interface`]), for a dry structure in a dry or saturated soil: the correction acts on the
 //! soil's solid, and before it the pore liquid is held at the impermeable wall (`liquid.rs`).
@@ -224,8 +229,10 @@ pub struct Contact<R: Real> {
     /// Elements around each interface node: `around[start[k]..start[k + 1]]`.
     around: Vec<u32>,
     start: Vec<u32>,
-    /// Per interface node, the start-of-step velocity of each body (scratch).
-    before: Vec<[V3<R>; 2]>,
+    /// The structure's nodes that hold soil to it, ascending: in 3D all off the interface, in
+    /// a section those more than one cell inside (a scene's; none for Anura3D's inputs, whose
+    /// bodies pass through each other there).
+    inside: Vec<u32>,
     /// The index of the contact's own set among the run's reactions.
     reaction: usize,
     /// The soil's push on the structure in the last step (kN; per radian in an axisymmetric
@@ -253,6 +260,26 @@ impl<R: Real> Contact<R> {
             normal,
             area,
         } = Interface::of(spec, mesh, element_material);
+        // The structure's nodes that hold soil to it: in 3D every node off the interface; in
+        // a section those more than one cell inside it (the corners of its elements that
+        // share no element with an interface node): design §4.19.
+        let mut inside: Vec<u32> = Vec::new();
+        if spec.rule == InterfaceRule::Tributary {
+            let mut near: Vec<u32> = Vec::new();
+            for &e in &spec.listed {
+                let c = mesh.corners[e as usize].as_ref();
+                if E::DIM == 2 && c.iter().any(|n| nodes.binary_search(n).is_ok()) {
+                    near.extend(c);
+                } else {
+                    inside.extend(c);
+                }
+            }
+            near.sort_unstable();
+            near.dedup();
+            inside.sort_unstable();
+            inside.dedup();
+            inside.retain(|n| nodes.binary_search(n).is_err() && near.binary_search(n).is_err());
+        }
         // The elements around each interface node.
         let mut start = vec![0u32; nodes.len() + 1];
         let mut pairs: Vec<(usize, u32)> = Vec::new();
@@ -283,7 +310,7 @@ impl<R: Real> Contact<R> {
             on_base: [0.0; 3],
             on_driven: [0.0; 3],
             driven,
-            before: vec![[[R::ZERO; 3]; 2]; nodes.len()],
+            inside,
             nodes,
             normal,
             area,
@@ -338,14 +365,15 @@ impl<R: Real> Contact<R> {
         (mu, c * self.area[k])
     }
 
-    /// Adds the soil's correction `change` (its velocity's decrease) at interface node `k`,
-    /// of soil mass `m`, to the push on the structure: m Δv / Δt on the soil is its opposite
-    /// on the structure. `masked`: the structure's velocity is prescribed there.
-    fn account(&mut self, k: usize, m: f64, change: [f64; 3], dt: f64, masked: bool) {
+    /// Adds the soil's correction `change` (its velocity's decrease), of soil mass `m`, to the
+    /// push on the structure: m Δv / Δt on the soil is its opposite on the structure. `base`:
+    /// the node's normal points down (the base's set); `masked`: the structure's velocity is
+    /// prescribed there.
+    fn account(&mut self, m: f64, change: [f64; 3], dt: f64, base: bool, masked: bool) {
         for d in 0..3 {
             let on_structure = m * change[d] / dt;
             self.force[d] += on_structure;
-            if self.normal[k][1] <= -0.5 {
+            if base {
                 self.on_base[d] += on_structure;
             }
             if masked {
@@ -354,11 +382,78 @@ impl<R: Real> Contact<R> {
         }
     }
 
+    /// Each body's start-of-step and updated velocity at node `n`, the system's velocity and
+    /// the structure's prescribed components there (module description, step 1): what the
+    /// correction starts from at an interface node and at a node inside the structure.
+    fn at_node(
+        &self,
+        n: usize,
+        bodies: [&Grid<R>; 2],
+        cx: &Within<'_, R, impl Element>,
+        prescribed: &dyn Fn(u32) -> Option<([bool; 3], V3<R>)>,
+    ) -> AtNode<R> {
+        let (fixed, at, loads) = (cx.fixed, cx.at, cx.loads);
+        let dtr = R::of(at.dt);
+        let mut out = AtNode {
+            before: [[0.0; 3]; 2],
+            v: [[R::ZERO; 3]; 2],
+            system: [R::ZERO; 3],
+            masses: [bodies[0].mass[n], bodies[1].mass[n]],
+            masked: prescribed(n as u32),
+        };
+        let mut force = [[R::ZERO; 3]; 2];
+        let (mut mass, mut momentum) = (R::ZERO, [R::ZERO; 3]);
+        for (b, g) in bodies.into_iter().enumerate() {
+            let m = g.mass[n];
+            mass += m;
+            for d in 0..3 {
+                momentum[d] += g.momentum[n][d];
+            }
+            if m <= g.empty_below {
+                continue;
+            }
+            for d in 0..3 {
+                if fixed[n][d] {
+                    continue;
+                }
+                let prev = g.momentum[n][d] / m;
+                out.before[b][d] = prev.f64();
+                force[b][d] = if g.liquid.is_some() {
+                    // A saturated soil's solid took the liquid's inertia and the two-phase
+                    // damping with its acceleration (and the liquid's wall correction).
+                    m * g.acc[n][d]
+                } else {
+                    // As the grid update forms it: the face loads are the body's own.
+                    let ext = g.f_ext[n][d] + at.traction * loads[b][n][d];
+                    let f = g.f_int[n][d] + ext;
+                    crate::step::grid_update::damp(at.damping_rule, at.damping, f, g.momentum[n][d])
+                };
+                out.v[b][d] = prev + g.acc[n][d] * dtr;
+            }
+        }
+        if mass > R::ZERO {
+            for d in 0..3 {
+                if !fixed[n][d] {
+                    out.system[d] = momentum[d] / mass + (force[0][d] + force[1][d]) / mass * dtr;
+                }
+            }
+        }
+        if let Some((dirs, vp)) = out.masked {
+            for d in 0..3 {
+                if dirs[d] {
+                    out.v[1][d] = vp[d];
+                    out.system[d] = vp[d];
+                }
+            }
+        }
+        out
+    }
+
     /// The contact correction after the grid update of both bodies (`soil`, `structure`) and
     /// the first override of prescribed velocities (`prescribed(node)`: the structure's
     /// prescribed velocity there and its components, for a masked node). Corrects the bodies'
-    /// accelerations at the interface nodes (see the module's description), with the local
-    /// damping of the step `at`.
+    /// accelerations at the interface nodes and, for a scene, inside the structure (see the
+    /// module's description), with the local damping of the step `at`.
     fn correct<E: Element>(
         &mut self,
         soil: &mut Grid<R>,
@@ -366,78 +461,18 @@ impl<R: Real> Contact<R> {
         cx: Within<'_, R, E>,
         prescribed: &dyn Fn(u32) -> Option<([bool; 3], V3<R>)>,
     ) {
-        let Within {
-            layout,
-            particles: p,
-            fixed,
-            at,
-            loads,
-        } = cx;
-        let (alpha, rule, dt) = (at.damping, at.damping_rule, at.dt);
-        let dtr = R::of(dt);
+        let dt = cx.at.dt;
         self.force = [0.0; 3];
         self.on_base = [0.0; 3];
         self.on_driven = [0.0; 3];
         for k in 0..self.nodes.len() {
-            let node = self.nodes[k];
-            let n = node as usize;
-            let (bodies, lowest) = self.bodies_around(k, layout, p);
+            let n = self.nodes[k] as usize;
+            let (bodies, lowest) = self.bodies_around(k, cx.layout, cx.particles);
             if !bodies[0] && !bodies[1] {
                 continue;
             }
-            // Each body's start-of-step velocity, damped force and updated velocity.
-            let mut v = [[R::ZERO; 3]; 2];
-            let mut force = [[R::ZERO; 3]; 2];
-            let (mut mass, mut momentum) = (R::ZERO, [R::ZERO; 3]);
-            let masses = [soil.mass[n], structure_grid.mass[n]];
-            for b in 0..2 {
-                let g: &Grid<R> = if b == 0 { soil } else { structure_grid };
-                let m = g.mass[n];
-                mass += m;
-                for d in 0..3 {
-                    momentum[d] += g.momentum[n][d];
-                }
-                if m <= g.empty_below {
-                    self.before[k][b] = [R::ZERO; 3];
-                    continue;
-                }
-                for d in 0..3 {
-                    if fixed[n][d] {
-                        self.before[k][b][d] = R::ZERO;
-                        continue;
-                    }
-                    let prev = g.momentum[n][d] / m;
-                    self.before[k][b][d] = prev;
-                    force[b][d] = if g.liquid.is_some() {
-                        // A saturated soil's solid took the liquid's inertia and the two-phase
-                        // damping with its acceleration (and the liquid's wall correction).
-                        m * g.acc[n][d]
-                    } else {
-                        // As the grid update forms it: the face loads are the body's own.
-                        let ext = g.f_ext[n][d] + at.traction * loads[b][n][d];
-                        let f = g.f_int[n][d] + ext;
-                        crate::step::grid_update::damp(rule, alpha, f, g.momentum[n][d])
-                    };
-                    v[b][d] = prev + g.acc[n][d] * dtr;
-                }
-            }
-            let mut system = [R::ZERO; 3];
-            if mass > R::ZERO {
-                for d in 0..3 {
-                    if !fixed[n][d] {
-                        system[d] = momentum[d] / mass + (force[0][d] + force[1][d]) / mass * dtr;
-                    }
-                }
-            }
-            let masked = prescribed(node);
-            if let Some((dirs, vp)) = masked {
-                for d in 0..3 {
-                    if dirs[d] {
-                        v[1][d] = vp[d];
-                        system[d] = vp[d];
-                    }
-                }
-            }
+            let node = self.at_node(n, [soil, structure_grid], &cx, prescribed);
+            let AtNode { v, mut system, .. } = node;
             if self.rigid && bodies[1] {
                 // The rigid body is the stiffer one: the soil meets its velocity (`rigid.rs`).
                 system = v[1];
@@ -447,27 +482,97 @@ impl<R: Real> Contact<R> {
                 if !bodies[b] || (0..3).all(|d| v[b][d] == system[d]) {
                     continue;
                 }
+                let Some(free) = free_normal(self.normal[k], cx.fixed[n]) else {
+                    continue;
+                };
                 let sign = if b == 0 { -1.0 } else { 1.0 };
-                let normal = self.normal[k].map(|c| sign * c);
+                let normal = free.map(|c| sign * c);
                 let dv: [f64; 3] = [0, 1, 2].map(|d| (v[b][d] - system[d]).f64());
                 let approach = dv[0] * normal[0] + dv[1] * normal[1] + dv[2] * normal[2];
                 if approach <= 0.0 {
                     continue;
                 }
-                let m = masses[b].f64();
+                let m = node.masses[b].f64();
                 let adhesion = c * dt / (m * (approach + 1e-60));
                 let change = velocity_change(dv, normal, approach, mu + adhesion);
                 let g: &mut Grid<R> = if b == 0 { soil } else { structure_grid };
                 for d in 0..3 {
                     let corrected = v[b][d].f64() - change[d];
-                    g.acc[n][d] = R::of((corrected - self.before[k][b][d].f64()) / dt);
+                    g.acc[n][d] = R::of((corrected - node.before[b][d]) / dt);
                 }
                 if b == 0 {
-                    self.account(k, m, change, dt, masked.is_some());
+                    let base = self.normal[k][1] <= -0.5;
+                    self.account(m, change, dt, base, node.masked.is_some());
+                }
+            }
+        }
+        // Inside the structure the soil has no place: soil points that slipped past the
+        // interface move with the structure there (single-velocity nodes), rather than
+        // through it on a grid of their own few points' mass.
+        for i in 0..self.inside.len() {
+            let n = self.inside[i] as usize;
+            let grids: [&Grid<R>; 2] = [soil, structure_grid];
+            if grids.iter().any(|g| g.mass[n] <= g.empty_below) {
+                continue;
+            }
+            let AtNode {
+                before,
+                v,
+                mut system,
+                masses,
+                masked,
+            } = self.at_node(n, grids, &cx, prescribed);
+            if self.rigid {
+                system = v[1];
+            }
+            for b in 0..2 {
+                let change: [f64; 3] = [0, 1, 2].map(|d| (v[b][d] - system[d]).f64());
+                let g: &mut Grid<R> = if b == 0 { soil } else { structure_grid };
+                for d in 0..3 {
+                    if !cx.fixed[n][d] {
+                        g.acc[n][d] = R::of((system[d].f64() - before[b][d]) / dt);
+                    }
+                }
+                if b == 0 {
+                    self.account(masses[0].f64(), change, dt, false, masked.is_some());
                 }
             }
         }
     }
+}
+
+/// Each body's velocities at a node, as [`Contact::at_node`] forms them.
+#[derive(Debug, Clone, Copy)]
+struct AtNode<R: Real> {
+    /// Start-of-step velocities (zero in fixed components).
+    before: [[f64; 3]; 2],
+    /// Updated velocities (the structure's prescribed components where it is driven).
+    v: [V3<R>; 2],
+    /// The system's velocity.
+    system: V3<R>,
+    /// The bodies' nodal masses.
+    masses: [R; 2],
+    /// The structure's prescribed components and velocity, where it is driven.
+    masked: Option<([bool; 3], V3<R>)>,
+}
+
+/// The unit normal `normal` within the node's free directions (its components along the
+/// `fixed` ones removed, the rest rescaled), or `None` when it has none there.
+///
+/// A fixed component is one no body moves in, so the non-penetration condition lives in the
+/// others: where a symmetry plane or an axis cuts the structure, the wall's normal at the
+/// nodes on it leans across the plane (the faces beside it), and the whole normal would both
+/// leave part of the approach uncorrected and write an acceleration into the fixed component,
+/// which the points then take (FLIP) and keep, step after step, across the plane. Anura3D
+/// keeps the whole normal (its inputs' interface nodes on a fixed component lean the same way).
+pub(super) fn free_normal(normal: [f64; 3], fixed: [bool; 3]) -> Option<[f64; 3]> {
+    if !fixed.iter().any(|&f| f) {
+        return Some(normal);
+    }
+    let kept = [0, 1, 2].map(|d| if fixed[d] { 0.0 } else { normal[d] });
+    let size = (kept[0] * kept[0] + kept[1] * kept[1] + kept[2] * kept[2]).sqrt();
+    // A normal all but across the fixed directions leaves no direction to correct along.
+    (size > 1e-6).then(|| kept.map(|c| c / size))
 }
 
 /// The decrease of an approaching body's velocity (relative velocity `dv` to the system,
@@ -597,5 +702,49 @@ impl<R: Real, E: Element> Constraint<R, E> for Contact<R> {
 
     fn as_any(&self) -> &dyn std::any::Any {
         self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_normal_keeps_only_its_free_directions() {
+        let n = [0.6, 0.0, 0.8];
+        assert_eq!(
+            free_normal(n, [false; 3]),
+            Some(n),
+            "nothing fixed: unchanged"
+        );
+        // On a symmetry plane z = 0 the wall's normal lies in the plane.
+        assert_eq!(free_normal(n, [false, false, true]), Some([1.0, 0.0, 0.0]));
+        let got = free_normal([0.6, -0.48, 0.64], [false, false, true]).unwrap();
+        assert!(
+            (got[0] - 0.78086880944).abs() < 1e-9 && got[2] == 0.0,
+            "{got:?}"
+        );
+        assert!((got[0] * got[0] + got[1] * got[1] - 1.0).abs() < 1e-12);
+        // On the axis (x and z fixed) a radial normal leaves nothing to correct.
+        assert_eq!(free_normal([0.6, 0.0, 0.8], [true, false, true]), None);
+        assert_eq!(
+            free_normal([0.0, -1.0, 0.0], [true, false, true]),
+            Some([0.0, -1.0, 0.0])
+        );
+    }
+
+    #[test]
+    fn an_approaching_body_loses_its_normal_relative_velocity() {
+        // Normal approach only: the whole relative velocity goes.
+        let c = velocity_change([0.0, -2.0, 0.0], [0.0, -1.0, 0.0], 2.0, 0.0);
+        assert_eq!(c, [0.0, -2.0, 0.0]);
+        // With slip along x, frictionless: the tangential part stays.
+        let c = velocity_change([1.0, -2.0, 0.0], [0.0, -1.0, 0.0], 2.0, 0.0);
+        assert_eq!(c, [0.0, -2.0, 0.0]);
+        // Friction 0.25 takes 0.25 × 2 of the tangential 1; friction 1 takes all of it.
+        let c = velocity_change([1.0, -2.0, 0.0], [0.0, -1.0, 0.0], 2.0, 0.25);
+        assert!((c[0] - 0.5).abs() < 1e-15 && c[1] == -2.0, "{c:?}");
+        let c = velocity_change([1.0, -2.0, 0.0], [0.0, -1.0, 0.0], 2.0, 1.0);
+        assert!((c[0] - 1.0).abs() < 1e-15, "{c:?}");
     }
 }
